@@ -1,0 +1,28 @@
+# `make bench` and `make test` set up a local virtual environment themselves.
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+OUT ?= bench-out
+
+.PHONY: install test bench lint clean
+
+install: $(STAMP)
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[dev]'
+	touch $(STAMP)
+
+test: $(STAMP)
+	MUJOCO_GL=egl $(PY) -m pytest -q
+
+bench: $(STAMP)
+	MUJOCO_GL=egl $(VENV)/bin/torquebench bench --out $(OUT)
+
+lint: $(STAMP)
+	$(VENV)/bin/ruff check harness identification planning tests benchmarks
+
+clean:
+	rm -rf $(VENV) $(OUT)

@@ -1,0 +1,1 @@
+"""torquebench harness: robots, data generation, baseline, replay, reports, CLI."""

@@ -1,0 +1,56 @@
+"""The `torquebench` command line (also `python -m harness`).
+
+Each subcommand lives in harness/commands/<name>.py with `register(subparsers)`
+adding its parser and setting `func(args) -> int`. User errors print one line
+and exit 2; no output file is left behind.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from harness.errors import UserError
+
+COMMANDS = ["generate", "identify", "predict", "plan", "replay", "closeloop", "bench"]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="torquebench",
+        description="Data-driven torque identification and energy-optimal planning, benchmarked "
+        "against Pinocchio and replayed in MuJoCo.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+    for name in COMMANDS:
+        try:
+            module = importlib.import_module(f"harness.commands.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name != f"harness.commands.{name}":
+                raise
+            continue
+        module.register(sub)
+    return parser
+
+
+def _user_errors() -> tuple[type[BaseException], ...]:
+    errors: list[type[BaseException]] = [UserError, FileNotFoundError]
+    for module, name in (("identification", "IdentificationError"), ("planning", "PlanningError")):
+        cls = getattr(importlib.import_module(module), name, None)
+        if cls is not None:
+            errors.append(cls)
+    return tuple(errors)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except _user_errors() as exc:
+        print(f"torquebench {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Energy-optimal, obstacle-avoiding trajectory planning (paper III.B, III.G)."""
