@@ -95,8 +95,8 @@ def load_mujoco(name_or_path: str | Path, scene: bool = False) -> mujoco.MjModel
         try:
             return mujoco.MjModel.from_xml_path(str(path))
         except ValueError as exc:
-            first = str(exc).strip().splitlines()[0] if str(exc).strip() else "parse error"
-            raise UserError(f"invalid MJCF {path}: {first}") from None
+            detail = " ".join(str(exc).split()) or "parse error"
+            raise UserError(f"invalid MJCF {path}: {detail}") from None
     robot = get_robot(str(name_or_path))
     if robot.mjcf is not None:
         target = robot.scene if scene and robot.scene else robot.mjcf

@@ -1,0 +1,135 @@
+"""Torque data for identification, from MuJoCo.
+
+`inverse`: MuJoCo inverse dynamics (mj_inverse) along an excitation trajectory,
+plus non-zero-mean Gaussian torque noise.
+`measured`: MuJoCo forward simulation through the plant's actuators under a
+tracking controller; the user sees encoder angles and noisy actuator torques
+and estimates qd, qdd from the angles (harness.measurement).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from harness.errors import UserError
+from harness.excitation import FourierExcitation, design_excitation, normalized_condition
+from harness.measurement import SensorConfig, encoder, estimate_derivatives, rel_rmse, torque_noise
+from harness.pinocchio_baseline import PinocchioModel
+from harness.plant import Plant, load_plant
+
+MIN_SAMPLES = 10
+SAMPLE_RATE = 200.0  # Hz, rate of the data handed to identification
+
+
+@dataclass(frozen=True)
+class Dataset:
+    """Time series of one experiment; arrays (n, dof), SI units."""
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    tau: np.ndarray
+    tau_clean: np.ndarray
+    meta: dict
+    truth: dict = field(default_factory=dict)  # q/qd/qdd the simulator had (measured mode)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The npz payload of the CLI contract (plus true states where known)."""
+        out = {k: getattr(self, k) for k in ("t", "q", "qd", "qdd", "tau", "tau_clean")}
+        out.update({f"{k}_true": v for k, v in self.truth.items()})
+        out["meta"] = np.array(json.dumps(self.meta))
+        return out
+
+
+def _condition_fn(plant: Plant, rate: float, samples: int):
+    """Excitation quality: normalized condition of the plant's base regressor."""
+    pmodel = plant.pinocchio()
+    t = np.linspace(0.0, samples / rate, min(samples, 400), endpoint=False)
+    if pmodel is None or pmodel.nv != plant.dof:
+        return lambda exc: normalized_condition(np.hstack(exc.evaluate(t)))
+    baseline = PinocchioModel(pmodel)
+
+    def condition(exc: FourierExcitation) -> float:
+        Y = baseline.regressor(*exc.evaluate(t)).reshape(-1, 10 * (pmodel.njoints - 1))
+        return normalized_condition(base_columns(Y))
+
+    return condition
+
+
+def base_columns(Y: np.ndarray, tol: float = 1e-8) -> np.ndarray:
+    """Columns of Y spanning its range (QR with pivoting): the base-parameter regressor."""
+    from scipy.linalg import qr
+
+    Yn = Y / np.maximum(np.linalg.norm(Y, axis=0), 1e-300)
+    _, r, piv = qr(Yn, mode="economic", pivoting=True)
+    rank = int(np.sum(np.abs(np.diag(r)) > tol * abs(r[0, 0])))
+    return Y[:, np.sort(piv[:rank])]
+
+
+def _validate(samples: int, noise: float, bias: float) -> None:
+    if samples < MIN_SAMPLES:
+        raise UserError(f"--samples must be at least {MIN_SAMPLES}, got {samples}")
+    if not np.isfinite(noise) or noise < 0:
+        raise UserError(f"--noise must be a finite fraction >= 0, got {noise}")
+    if not np.isfinite(bias):
+        raise UserError(f"--bias must be finite, got {bias}")
+
+
+def inverse_torques(model: mujoco.MjModel, q, qd, qdd) -> np.ndarray:
+    """mj_inverse generalized forces (n, nv) along a trajectory."""
+    data = mujoco.MjData(model)
+    tau = np.empty_like(q)
+    for k in range(len(q)):
+        data.qpos[:], data.qvel[:], data.qacc[:] = q[k], qd[k], qdd[k]
+        mujoco.mj_inverse(model, data)
+        tau[k] = data.qfrc_inverse
+    return tau
+
+
+def generate(
+    plant: str,
+    samples: int = 4000,
+    noise: float = 0.05,
+    seed: int = 0,
+    mode: str = "inverse",
+    bias: float = 0.2,
+    sensors: SensorConfig | None = None,
+) -> Dataset:
+    """One dataset of `samples` points at SAMPLE_RATE Hz; noise is a fraction of torque std."""
+    _validate(samples, noise, bias)
+    p = load_plant(plant)
+    lo, hi = p.limits()
+    exc, cond = design_excitation(lo, hi, seed, _condition_fn(p, SAMPLE_RATE, samples))
+    t = np.arange(samples) / SAMPLE_RATE
+    rng = np.random.default_rng(seed + 1)
+    meta = dict(plant=str(plant), mode=mode, noise=noise, bias=bias, seed=seed, dof=p.dof,
+                samples=samples, rate=SAMPLE_RATE, regressor_condition=cond)
+    if mode == "inverse":
+        q, qd, qdd = exc.evaluate(t)
+        tau_clean = inverse_torques(p.model, q, qd, qdd)
+        truth: dict = {}
+    elif mode == "measured":
+        from harness.tracking import simulate_measured
+
+        q, qd, qdd, tau_clean, truth, stats = simulate_measured(p, exc, t, sensors or SensorConfig(), rng)
+        meta.update(stats)
+    else:
+        raise UserError(f"--mode must be 'inverse' or 'measured', got '{mode}'")
+    tau = tau_clean + torque_noise(tau_clean, noise, bias, rng)
+    return Dataset(t, q, qd, qdd, tau, tau_clean, meta, truth)
+
+
+def state_errors(p: Plant, est: tuple, true: tuple) -> dict:
+    """Relative RMS errors of estimated qd, qdd and of the torque they imply."""
+    out = {"qd_rel_rmse": rel_rmse(est[1], true[1]).tolist(),
+           "qdd_rel_rmse": rel_rmse(est[2], true[2]).tolist()}
+    pmodel = p.pinocchio()
+    if pmodel is not None and pmodel.nv == p.dof:
+        baseline = PinocchioModel(pmodel)
+        out["tau_from_states_rel_rmse"] = rel_rmse(baseline.torque(*est), baseline.torque(*true)).tolist()
+    return out
