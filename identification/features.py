@@ -1,0 +1,95 @@
+"""Named features: products of joint-state monomials and trigonometric factors.
+
+A feature is  prod_k m_k(q, qd, qdd)  *  prod_l trig_l(c_l . q)^p_l, e.g.
+`qd1*qd2*sin(2*q2+q3)`. It evaluates on arrays of shape (n, dof) and, with the
+same code path, on CasADi column vectors, so an identified model is one
+expression for both the harness and the planner.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+STATES = ("q", "qd", "qdd")
+
+
+@dataclass(frozen=True, order=True)
+class Trig:
+    """func(sum_i coeffs[i] * q_i) ** power, func in {'sin', 'cos'}."""
+
+    func: str
+    coeffs: tuple[int, ...]
+    power: int = 1
+
+    def angle_name(self) -> str:
+        parts = []
+        for i, c in enumerate(self.coeffs):
+            if c == 0:
+                continue
+            sign = "-" if c < 0 else ("+" if parts else "")
+            mag = "" if abs(c) == 1 else f"{abs(c)}*"
+            parts.append(f"{sign}{mag}q{i + 1}")
+        return "".join(parts) or "0"
+
+    def name(self) -> str:
+        base = f"{self.func}({self.angle_name()})"
+        return base if self.power == 1 else f"{base}^{self.power}"
+
+
+@dataclass(frozen=True, order=True)
+class Feature:
+    """A library column: motion monomial (state, joint) factors times trig factors.
+
+    `motion` entries are (state, joint) with state in STATES and joint 0-based;
+    repeated entries are powers. An empty feature is the constant 1.
+    """
+
+    motion: tuple[tuple[str, int], ...] = ()
+    trig: tuple[Trig, ...] = ()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "motion", tuple(sorted(self.motion)))
+        object.__setattr__(self, "trig", tuple(sorted(self.trig)))
+
+    @property
+    def name(self) -> str:
+        counts: dict[str, int] = {}
+        for s, j in self.motion:
+            counts[f"{s}{j + 1}"] = counts.get(f"{s}{j + 1}", 0) + 1
+        factors = [k if p == 1 else f"{k}^{p}" for k, p in counts.items()]
+        factors += [t.name() for t in self.trig]
+        return "*".join(factors) or "1"
+
+    def evaluate(self, q, qd, qdd, lib=np):
+        """Value of the feature. numpy: arrays (n, dof) -> (n,); casadi: vectors -> scalar.
+
+        `lib` supplies sin/cos (numpy or casadi); indexing is [:, j] for numpy
+        arrays and [j] for CasADi column vectors.
+        """
+        states = {"q": q, "qd": qd, "qdd": qdd}
+        pick = (lambda x, j: x[:, j]) if lib is np else (lambda x, j: x[j])
+        value = 1.0
+        for state, j in self.motion:
+            value = value * pick(states[state], j)
+        for t in self.trig:
+            angle = 0.0
+            for j, c in enumerate(t.coeffs):
+                if c:
+                    angle = angle + c * pick(q, j)
+            value = value * getattr(lib, t.func)(angle) ** t.power
+        if lib is np and np.ndim(value) == 0:
+            value = np.full(len(q), float(value))
+        return value
+
+
+def motion(*factors: str) -> tuple[tuple[str, int], ...]:
+    """Parse 'qd1', 'qdd3' ... (1-based joints, as printed) into motion factors."""
+    out = []
+    for f in factors:
+        state = f.rstrip("0123456789")
+        if state not in STATES or state == f:
+            raise ValueError(f"bad motion factor {f!r}")
+        out.append((state, int(f[len(state):]) - 1))
+    return tuple(out)

@@ -1,0 +1,131 @@
+"""Library generation from prior knowledge (paper II.E), derived, not guessed.
+
+Torque is the Euler-Lagrange operator applied to a Lagrangian, and a
+Lagrangian is a linear combination of *atoms*: kinetic qd_i qd_j f(c . q) and
+potential f(c . q), f in {1, cos, sin}. Which atoms occur is the prior
+knowledge each simple structure teaches:
+
+- 1-DOF pendulum: qd1^2; potential cos/sin q1.
+- planar 2-DOF arm: qd_i qd_j x {1, cos, sin of the relative angle q2};
+  potential cos/sin of the absolute angles q1, q1+q2.
+- spatial 2-DOF arm (vertical then horizontal axis): qd1^2 x {1, cos 2q2,
+  sin 2q2} (the link's inertia about the vertical axis), qd1 qd2 x cos/sin q2
+  (products of inertia), qd2^2; potential cos/sin q2.
+
+A 3-DOF arm is a spatial base carrying a planar chain, so its atoms compose
+the two: the planar atoms on the chain, and the spatial atoms with the one
+elevation angle replaced by every pair of link elevations (the base inertia
+is quadratic in the links' horizontal reach, so cos^2 th becomes cos(th_a +/-
+th_b)). `derive` then applies the Euler-Lagrange operator to the atoms; the
+features it produces are the library. `symmetric_links=True` keeps only the
+atoms of links whose centre of mass lies on the link axis with principal axes
+along it (the paper's arm); False adds the sine companions a general inertia
+tensor needs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import combinations_with_replacement
+
+from identification.features import Feature, Trig
+from identification.library import Library
+
+_DERIVATIVE = {"cos": "sin", "sin": "cos"}
+
+
+@dataclass(frozen=True)
+class Atom:
+    """One Lagrangian term: qd_i qd_j * f(coeffs . q) (kinetic) or f(coeffs . q) (potential)."""
+
+    velocities: tuple[int, ...]  # () for potential, (i, j) for kinetic
+    func: str | None = None  # None: the constant 1
+    coeffs: tuple[int, ...] = ()
+
+    def trig(self, func: str | None = None) -> tuple[Trig, ...]:
+        f = func or self.func
+        return () if f is None else (Trig(f, self.coeffs),)
+
+
+def _euler_lagrange(atom: Atom, joint: int) -> set[Feature]:
+    """Features of d/dt dL/dqd_joint - dL/dq_joint for L = atom (coefficients dropped)."""
+    out: set[Feature] = set()
+    slope = _DERIVATIVE.get(atom.func) if atom.func else None
+    moving = [k for k, c in enumerate(atom.coeffs) if c]
+    if atom.velocities:
+        i, j = atom.velocities
+        if joint in (i, j):
+            other = j if joint == i else i
+            out.add(Feature((("qdd", other),), atom.trig()))
+            if slope:
+                out |= {Feature((("qd", other), ("qd", k)), atom.trig(slope)) for k in moving}
+        if slope and joint in moving:
+            out.add(Feature((("qd", i), ("qd", j)), atom.trig(slope)))
+    elif slope and joint in moving:
+        out.add(Feature((), atom.trig(slope)))
+    return out
+
+
+def derive(atoms: list[Atom], dof: int, name: str) -> tuple[Library, tuple[frozenset, ...]]:
+    """The library spanned by the Euler-Lagrange torques of atoms, and each joint's features."""
+    per_joint = tuple(frozenset().union(*(_euler_lagrange(a, m) for a in atoms))
+                      for m in range(dof))
+    features = sorted(frozenset().union(*per_joint), key=lambda f: f.name)
+    return Library(name, dof, tuple(features)), per_joint
+
+
+def _funcs(symmetric: bool) -> tuple[str, ...]:
+    return ("cos",) if symmetric else ("cos", "sin")
+
+
+def pendulum_atoms() -> list[Atom]:
+    """1-DOF pendulum about a horizontal axis."""
+    return [Atom((0, 0))] + [Atom((), f, (1,)) for f in ("cos", "sin")]
+
+
+def planar_atoms(dof: int = 2, first: int = 0, total: int | None = None,
+                 symmetric: bool = True) -> list[Atom]:
+    """Planar chain of `dof` parallel joints starting at joint `first` of a `total`-joint arm."""
+    total = total or dof
+    chain = range(first, first + dof)
+
+    def vec(joints):
+        return tuple(1 if k in joints else 0 for k in range(total))
+
+    atoms = []
+    for i, j in combinations_with_replacement(chain, 2):
+        atoms.append(Atom((i, j)))
+        for a, b in combinations_with_replacement(chain, 2):  # relative angle of links a, b
+            if a < b:
+                atoms += [Atom((i, j), f, vec(range(a + 1, b + 1))) for f in _funcs(symmetric)]
+    for link in chain:  # gravity: absolute angle of each link
+        atoms += [Atom((), f, vec(range(first, link + 1))) for f in ("cos", "sin")]
+    return atoms
+
+
+def spatial_atoms(total: int = 2, symmetric: bool = True) -> list[Atom]:
+    """Vertical joint 0 carrying a planar chain of joints 1..total-1 (elevation angles)."""
+    elevations = [tuple(1 if 1 <= k <= link else 0 for k in range(total))
+                  for link in range(1, total)]
+    atoms = [Atom((0, 0))]
+    for a, b in combinations_with_replacement(range(len(elevations)), 2):
+        plus = tuple(x + y for x, y in zip(elevations[a], elevations[b], strict=True))
+        minus = tuple(y - x for x, y in zip(elevations[a], elevations[b], strict=True))
+        for vec in (plus, minus):
+            if any(vec):
+                atoms += [Atom((0, 0), f, vec) for f in _funcs(symmetric)]
+    if not symmetric:  # products of inertia couple the base to the chain
+        atoms += [Atom((0, k), f, e) for k in range(1, total) for e in elevations
+                  for f in ("cos", "sin")]
+    return atoms
+
+
+def prior_knowledge_library(dof: int = 3, symmetric_links: bool = True) -> Library:
+    """The library of a vertical-base arm with a planar chain, composed from the simple
+    structures: spatial atoms on the base plus planar atoms on joints 2..dof."""
+    if dof < 2:
+        return derive(pendulum_atoms(), 1, "prior-1dof")[0]
+    atoms = spatial_atoms(dof, symmetric_links)
+    atoms += planar_atoms(dof - 1, first=1, total=dof, symmetric=symmetric_links)
+    suffix = "" if symmetric_links else "-general"
+    return derive(atoms, dof, f"prior-{dof}dof{suffix}")[0]
