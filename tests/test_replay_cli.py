@@ -1,0 +1,78 @@
+"""`torquebench replay`: REPLAY.json on good input, one-line errors and no file on bad input."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from harness.cli import main
+from tests.test_replay import quintic_plan
+
+
+def _write(path, payload):
+    path.write_text(json.dumps(payload))
+    return path
+
+
+def test_replay_writes_contract_fields(tmp_path):
+    plan = _write(tmp_path / "plan.json", {**quintic_plan(), "energy": 0.48})
+    out = tmp_path / "replay.json"
+    assert main(["replay", "--plan", str(plan), "--out", str(out)]) == 0
+    result = json.loads(out.read_text())
+    for key in ("energy", "min_clearance", "tracking_rms", "surface_clearance", "energy_planned"):
+        assert np.isfinite(result[key])
+    assert result["energy_planned"] == 0.48
+
+
+def _bad_plans():
+    good = quintic_plan()
+    out_of_limits = dict(good, q=(np.array(good["q"]) + [0.0, 0.0, 1.0]).tolist())
+    nan = dict(good, qd=[[float("nan")] * 3] + good["qd"][1:])
+    short = dict(good, qdd=good["qdd"][:-1])
+    backwards = dict(good, t=good["t"][::-1])
+    return {
+        "missing": ({k: v for k, v in good.items() if k not in ("qd", "obstacle")},
+                    "missing field(s): qd, obstacle"),
+        "limits": (out_of_limits, "limits of joint 3"),
+        "nan": (nan, "'qd' contains NaN"),
+        "short": (short, "'qdd' has 199 samples"),
+        "backwards": (backwards, "strictly increasing"),
+        "not-object": ([1, 2, 3], "JSON object"),
+    }
+
+
+@pytest.mark.parametrize("case", sorted(_bad_plans()))
+def test_bad_plan_is_one_line_exit_2_and_no_file(tmp_path, capsys, case):
+    payload, message = _bad_plans()[case]
+    plan = _write(tmp_path / "plan.json", payload)
+    out = tmp_path / "replay.json"
+    assert main(["replay", "--plan", str(plan), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and message in err, err
+    assert not out.exists()
+    assert list(tmp_path.iterdir()) == [plan]
+
+
+def test_unreadable_plan_and_plant(tmp_path, capsys):
+    plan = tmp_path / "plan.json"
+    plan.write_text("{not json")
+    assert main(["replay", "--plan", str(plan), "--out", str(tmp_path / "r.json")]) == 2
+    assert "not valid JSON" in capsys.readouterr().err
+    _write(plan, quintic_plan())
+    args = ["replay", "--plan", str(plan), "--plant", str(tmp_path / "no.xml"),
+            "--out", str(tmp_path / "r.json")]
+    assert main(args) == 2
+    assert "plant file not found" in capsys.readouterr().err
+
+
+def test_video_is_rendered_or_skipped_with_a_warning(tmp_path, capsys):
+    plan = _write(tmp_path / "plan.json", quintic_plan(samples=50, duration=0.5))
+    video = tmp_path / "replay.mp4"
+    args = ["replay", "--plan", str(plan), "--out", str(tmp_path / "r.json"), "--video", str(video)]
+    assert main(args) == 0
+    if not video.exists():
+        assert "video skipped" in capsys.readouterr().err
+    else:
+        assert video.stat().st_size > 1000
