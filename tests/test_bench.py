@@ -104,3 +104,21 @@ def test_report_json_has_no_nan(tmp_path):
     outcome = SectionOutcome("x", "ok", results={"a": float("nan"), "b": np.arange(2)})
     payload = write_report(tmp_path, [outcome], {}, {"robot": "r"})
     assert payload["sections"]["x"]["results"] == {"a": None, "b": [0, 1]}
+
+
+def test_readme_sections_are_replaced_in_place_and_idempotent(tmp_path):
+    from harness.report import SectionOutcome, write_report
+    from harness.report_readme import update_readme
+
+    outcome = SectionOutcome("replay", "ok")
+    write_report(tmp_path, [outcome], {"replay": {"energy_J": 0.5}}, {"robot": "r"})
+    readme = tmp_path / "README.md"
+    readme.write_text("# T\n\n## Latest benchmark\n\nold table\n\n## Commands\n\nkeep me\n")
+    update_readme(tmp_path, readme)
+    first = readme.read_text()
+    assert "old table" not in first and "| replay | energy_J | 0.5 |" in first
+    assert first.index("## Latest benchmark") < first.index("## Commands") < first.index(
+        "## Reading the report")
+    assert "keep me" in first
+    update_readme(tmp_path, readme)
+    assert readme.read_text() == first

@@ -1,0 +1,87 @@
+"""Copy a bench run's headline into README.md.
+
+    python -m harness.report_readme [BENCH_DIR] [README]
+
+Replaces (or appends) the README sections "## Latest benchmark" (the headline
+table of BENCH_DIR/report.json) and "## Reading the report" (fixed text);
+everything else in the README is left as it is.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import sys
+from pathlib import Path
+
+from harness.report_headline import headline_markdown
+
+READING = """\
+`torquebench bench --out DIR` (or `make bench`, DIR = `bench-out`) writes:
+
+- `DIR/report.md`: one section per stage in data-flow order (identification,
+  planning, replay, closeloop), each with its tables and figures. A stage that
+  raised is marked **FAILED** with its error and the command exits 1; a stage
+  whose code does not exist yet says "Section not available yet".
+- `DIR/report.json`: the same as data. `headline` holds every headline number
+  by section; `sections.<name>` holds `status` (`ok`, `failed`, `not
+  available`), `seconds`, `results`, `figures` and `error`.
+- `DIR/headline.md`: the table above; `python -m harness.report_readme DIR`
+  copies it into this README.
+- `DIR/figures/*.png` and, where OpenGL rendering works (`MUJOCO_GL=egl`),
+  `DIR/replay_<plan>.mp4`.
+
+How to read the replay numbers: each plan is executed in MuJoCo through the
+motor actuators by Pinocchio feedforward + PD at the 0.5 ms timestep, while
+the obstacle moves as a mocap body. `energy_replayed_J` is ∫|Σ τᵢ q̇ᵢ| dt of
+the torques the actuators actually applied; `energy_planned_J` is the
+planner's own figure, so their gap is the cost of the model's error plus
+tracking. `min_clearance_m` is the smallest distance from the obstacle centre
+to the link segments (the paper's d1, d2, compared with the threshold λ);
+`surface_clearance_m` is MuJoCo's `mj_geomDistance` between the link capsules
+and the obstacle sphere. `energy_ratio_identified_over_closed_form_*` above 1
+means the identified model's plan costs more than the closed-form plan (the
+paper's Fig. 11 found slightly more). Acceptance per plan: tracking RMS ≤ 1
+mrad, replayed energy within 2 % of planned, clearance ≥ λ − 5 mm.
+"""
+
+
+def replace_section(text: str, title: str, body: str) -> str:
+    """text with the '## title' section's body replaced, or the section appended."""
+    section = f"## {title}\n\n{body.strip()}\n"
+    pattern = re.compile(rf"^## {re.escape(title)}\n.*?(?=^## |\Z)", re.S | re.M)
+    if pattern.search(text):
+        return pattern.sub(lambda _: section + "\n", text, count=1).rstrip() + "\n"
+    return (text.rstrip() + "\n\n" if text.strip() else "") + section
+
+
+def latest_benchmark(report: dict, source: str) -> str:
+    """The '## Latest benchmark' body: provenance line and the headline table."""
+    state = "all sections ok" if report.get("ok") else "**some sections failed**"
+    missing = [n for n, s in report.get("sections", {}).items() if s["status"] == "not available"]
+    note = f"; not available yet: {', '.join(missing)}" if missing else ""
+    quick = " --quick" if report.get("quick") else ""
+    return (f"From `torquebench bench{quick}` ({source}/report.json, "
+            f"{report.get('elapsed_s', 0):.0f} s, {state}{note}).\n\n"
+            + headline_markdown(report.get("headline", {})))
+
+
+def update_readme(bench_dir: Path, readme: Path) -> None:
+    """Rewrite the two report sections of readme from bench_dir/report.json."""
+    report = json.loads((bench_dir / "report.json").read_text())
+    text = readme.read_text() if readme.exists() else ""
+    text = replace_section(text, "Latest benchmark", latest_benchmark(report, bench_dir.name))
+    text = replace_section(text, "Reading the report", READING)
+    readme.write_text(text)
+
+
+def main(argv: list[str]) -> int:
+    bench_dir = Path(argv[0]) if argv else Path("bench-out")
+    readme = Path(argv[1]) if len(argv) > 1 else Path("README.md")
+    update_readme(bench_dir, readme)
+    print(f"updated {readme} from {bench_dir / 'report.json'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
