@@ -63,6 +63,7 @@ def replay_numbers(results: dict) -> dict:
     out = {}
     for name, r in results.get("plans", {}).items():
         out[f"{name}.energy_planned_J"] = r["energy_planned"]
+        out[f"{name}.energy_plan_dense_J"] = r["energy_reference"]
         out[f"{name}.energy_replayed_J"] = r["energy"]
         out[f"{name}.min_clearance_m"] = r["min_clearance"]
         out[f"{name}.surface_clearance_m"] = r["surface_clearance"]

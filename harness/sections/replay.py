@@ -37,6 +37,10 @@ def checks(result: ReplayResult) -> dict[str, bool]:
     out = {
         "tracking_rms_le_1mrad": result.tracking_rms <= TRACKING_LIMIT,
         "energy_within_2pct": abs(result.energy_error) <= ENERGY_TOLERANCE,
+        # The planner's own figure may be a coarse quadrature (paper: N = 10 samples);
+        # this separates replay fidelity from that quadrature error.
+        "energy_within_2pct_of_dense_plan": abs(result.energy / result.energy_reference - 1)
+        <= ENERGY_TOLERANCE,
     }
     if result.threshold > 0:
         out["clearance_ge_threshold_minus_5mm"] = (
@@ -65,7 +69,8 @@ def _row(name: str, r: ReplayResult, ok: dict[str, bool]) -> str:
     surface = "–" if r.surface_clearance is None else f"{r.surface_clearance * 1e3:.1f}"
     failed = [k for k, v in ok.items() if not v]
     verdict = "FAIL: " + ", ".join(failed) if failed else "pass"
-    return (f"| {name} | {r.energy_planned:.4f} | {r.energy:.4f} | {100 * r.energy_error:+.2f} % "
+    return (f"| {name} | {r.energy_planned:.4f} | {r.energy_reference:.4f} | {r.energy:.4f} "
+            f"| {100 * r.energy_error:+.2f} % "
             f"| {r.min_clearance * 1e3:.1f} | {surface} | {r.threshold * 1e3:.0f} "
             f"| {r.tracking_rms * 1e3:.3f} | {r.max_tracking_error * 1e3:.3f} | {verdict} |")
 
@@ -73,12 +78,15 @@ def _row(name: str, r: ReplayResult, ok: dict[str, bool]) -> str:
 def markdown(results: dict[str, ReplayResult], verdicts: dict, side: dict | None) -> str:
     lines = [
         "Each plan is executed by MuJoCo forward simulation (0.5 ms steps) through the motor "
-        "actuators, tracked by Pinocchio feedforward + PD; the obstacle moves as a mocap body.",
+        "actuators, tracked by Pinocchio feedforward + PD; the obstacle moves as a mocap body. "
+        "'energy planned' is the planner's own figure; 'energy of plan, dense' integrates "
+        "|Σ τ q̇| of the closed-form torques along the planned trajectory every 0.5 ms.",
         "",
-        "| plan | energy planned [J] | energy replayed [J] | deviation | min clearance "
+        "| plan | energy planned [J] | energy of plan, dense [J] | energy replayed [J] "
+        "| deviation from planned | min clearance "
         "centre–segment [mm] | min surface distance [mm] | λ [mm] | tracking RMS [mrad] "
         "| max error [mrad] | acceptance |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
         *(_row(name, r, verdicts[name]) for name, r in results.items()),
     ]
     if side:
