@@ -26,8 +26,9 @@ from planning.config import PlannerConfig, Scenario
 from planning.solver import ObstacleForecast, Planner
 
 
-def paper_plan(model, config: PlannerConfig = PlannerConfig(), scenario: Scenario = Scenario()):
+def paper_plan(model, config: PlannerConfig | None = None, scenario: Scenario | None = None):
     """PLAN.json-shaped dict of one cold solve of the paper's scenario."""
+    config, scenario = config or PlannerConfig(), scenario or Scenario()
     obstacle = scenario.obstacle
     forecast = ObstacleForecast(obstacle.sample_times, obstacle.position(obstacle.sample_times))
     segment = Planner(model, config).solve(
