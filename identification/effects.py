@@ -1,0 +1,115 @@
+"""A dictionary of named physical effects a declared torque model may lack.
+
+Each candidate is one column of torque per joint: the torque the actuator must
+add to the declared model's for a unit coefficient of the effect. Units of the
+coefficient follow the CLI contract:
+
+- `viscous`  tau_j = b qd_j                     b in N m s/rad
+- `coulomb`  tau_j = f tanh(qd_j / eps)          f in N m (smooth sign, eps in rad/s)
+- `armature` tau_j = a qdd_j                    a in kg m^2
+- `offset`   tau_j = c                          c in N m
+- `spring`   tau_j = k q_j                      k in N m/rad (passive -k (q - q_ref), q_ref = 0;
+                                                a non-zero q_ref shows up as an offset)
+- `payload`  tau = m * tau_unit(q, qd, qdd)     m in kg, a point mass at the end effector;
+                                                tau_unit couples all joints.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+JOINT_EFFECTS = ("viscous", "coulomb", "armature", "offset", "spring")
+UNITS = {"viscous": "N m s/rad", "coulomb": "N m", "armature": "kg m^2", "offset": "N m",
+         "spring": "N m/rad", "payload": "kg"}
+COULOMB_EPS = 0.02  # rad/s, width of the smooth sign; MuJoCo's soft dry friction is about this sharp
+
+PayloadTorque = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class Effect:
+    """A named effect on a joint (1..dof); `joint` is 0 for `payload`, which acts on all."""
+
+    effect: str
+    joint: int
+
+    @property
+    def label(self) -> str:
+        return self.effect if self.effect == "payload" else f"{self.effect}@{self.joint}"
+
+
+@dataclass(frozen=True)
+class EffectTerm:
+    """An effect with its coefficient (units in UNITS)."""
+
+    effect: str
+    joint: int
+    coefficient: float
+
+
+def joint_signal(effect: str, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+                 eps: float = COULOMB_EPS) -> np.ndarray:
+    """The (n, dof) per-joint signal of a joint effect for unit coefficient."""
+    if effect == "viscous":
+        return qd
+    if effect == "coulomb":
+        return np.tanh(qd / eps)
+    if effect == "armature":
+        return qdd
+    if effect == "offset":
+        return np.ones_like(q)
+    if effect == "spring":
+        return q
+    raise ValueError(f"unknown joint effect '{effect}'")
+
+
+@dataclass(frozen=True)
+class EffectDictionary:
+    """Candidate effects and their torque columns on a dataset.
+
+    columns[:, :, i] is the (n, dof) torque of effects[i] at unit coefficient.
+    """
+
+    effects: tuple[Effect, ...]
+    columns: np.ndarray
+
+    def index(self, effect: Effect) -> int:
+        return self.effects.index(effect)
+
+
+def build_dictionary(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+                     payload: PayloadTorque | None = None,
+                     eps: float = COULOMB_EPS) -> EffectDictionary:
+    """All joint effects on every joint, plus the end-effector payload when given."""
+    n, dof = q.shape
+    effects: list[Effect] = []
+    cols: list[np.ndarray] = []
+    for name in JOINT_EFFECTS:
+        signal = joint_signal(name, q, qd, qdd, eps)
+        for j in range(dof):
+            col = np.zeros((n, dof))
+            col[:, j] = signal[:, j]
+            effects.append(Effect(name, j + 1))
+            cols.append(col)
+    if payload is not None:
+        effects.append(Effect("payload", 0))
+        cols.append(np.asarray(payload(q, qd, qdd), dtype=float).reshape(n, dof))
+    return EffectDictionary(tuple(effects), np.stack(cols, axis=2))
+
+
+def effect_torque(terms: tuple[EffectTerm, ...], q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+                  payload: PayloadTorque | None = None, eps: float = COULOMB_EPS) -> np.ndarray:
+    """Sum of the terms' torques (n, dof) in N m."""
+    tau = np.zeros_like(q)
+    for term in terms:
+        if term.effect == "payload":
+            if payload is None:
+                raise ValueError("a payload term needs the payload torque function")
+            tau += term.coefficient * payload(q, qd, qdd)
+        else:
+            tau[:, term.joint - 1] += term.coefficient * joint_signal(
+                term.effect, q, qd, qdd, eps)[:, term.joint - 1]
+    return tau

@@ -1,0 +1,112 @@
+"""Which effects explain a residual: forward selection with BIC on all joints at once.
+
+The residual of every joint is stacked into one regression, each joint's rows
+weighted by 1 / (its white-noise level), so joint-coupled candidates (the
+payload) and per-joint candidates compete on the same footing. Forward
+selection adds the candidate that lowers the weighted residual sum of squares
+most while the Bayesian information criterion
+BIC = N log(RSS / N) + k log N (N = stacked rows, k = selected terms) falls.
+A selected term is then only *named* if its torque is not negligible next to
+the noise on the joints it acts on (`min_size`, in units of noise sigma): with
+thousands of samples BIC alone would name tiny artefacts of the
+velocity/acceleration estimates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from identification.effects import EffectDictionary, EffectTerm
+
+MIN_SIZE = 0.1  # named effects must have an RMS torque >= 0.1 noise sigma on their joint
+
+
+@dataclass(frozen=True)
+class Selection:
+    """Selected effects, their least-squares coefficients and the BIC path."""
+
+    terms: tuple[EffectTerm, ...]
+    bic_path: tuple[tuple[str, float], ...]  # (label added, BIC after adding); first = empty model
+    sizes: dict[str, float]  # label -> RMS torque of the term / noise sigma on its joint(s)
+
+
+def _weighted(residual: np.ndarray, columns: np.ndarray, sigma: np.ndarray):
+    w = 1.0 / np.maximum(sigma, 1e-12)
+    y = (residual * w).ravel()
+    X = (columns * w[None, :, None]).reshape(-1, columns.shape[2])
+    return y, X
+
+
+def _lstsq(X: np.ndarray, y: np.ndarray, idx: list[int]) -> tuple[np.ndarray, float]:
+    if not idx:
+        return np.zeros(0), float(y @ y)
+    coef, *_ = np.linalg.lstsq(X[:, idx], y, rcond=None)
+    r = y - X[:, idx] @ coef
+    return coef, float(r @ r)
+
+
+def _bic(rss: float, n: int, k: int) -> float:
+    return n * np.log(max(rss, 1e-300) / n) + k * np.log(n)
+
+
+def forward_select(y: np.ndarray, X: np.ndarray, max_terms: int = 8) -> tuple[list[int], list]:
+    """Greedy forward selection by BIC; returns column indices and the (index, BIC) path."""
+    n = len(y)
+    norms = np.linalg.norm(X, axis=0)
+    usable = [i for i in range(X.shape[1]) if norms[i] > 0]
+    chosen: list[int] = []
+    best = _bic(_lstsq(X, y, [])[1], n, 0)
+    path: list = [(None, best)]
+    while len(chosen) < max_terms:
+        trials = [(_bic(_lstsq(X, y, chosen + [i])[1], n, len(chosen) + 1), i)
+                  for i in usable if i not in chosen]
+        if not trials:
+            break
+        bic, i = min(trials)
+        if bic >= best:
+            break
+        chosen.append(i)
+        best = bic
+        path.append((i, bic))
+    return chosen, path
+
+
+def term_sizes(columns: np.ndarray, idx: list[int], coef: np.ndarray,
+               sigma: np.ndarray) -> np.ndarray:
+    """RMS torque of each term over the joints it acts on, in units of their noise sigma."""
+    out = []
+    for i, c in zip(idx, coef, strict=True):
+        tau = c * columns[:, :, i]
+        active = np.any(columns[:, :, i] != 0, axis=0)
+        out.append(float(np.max(np.sqrt(np.mean(tau[:, active] ** 2, axis=0)) / sigma[active])))
+    return np.array(out)
+
+
+def select_effects(residual: np.ndarray, dictionary: EffectDictionary, sigma: np.ndarray,
+                   min_size: float = MIN_SIZE, max_terms: int = 8) -> Selection:
+    """Select and fit the effects that explain residual (n, dof), noise sigma (dof,) in N m."""
+    y, X = _weighted(residual, dictionary.columns, sigma)
+    idx, path = forward_select(y, X, max_terms)
+    coef, _ = _lstsq(X, y, idx)
+    sizes = term_sizes(dictionary.columns, idx, coef, sigma)
+    keep = [i for i, s in zip(idx, sizes, strict=True) if s >= min_size]
+    coef, _ = _lstsq(X, y, keep)
+    labels = dictionary.effects
+    terms = tuple(EffectTerm(labels[i].effect, labels[i].joint, float(c))
+                  for i, c in zip(keep, coef, strict=True))
+    return Selection(
+        terms=terms,
+        bic_path=tuple(("" if i is None else labels[i].label, float(b)) for i, b in path),
+        sizes={labels[i].label: float(s) for i, s in zip(idx, sizes, strict=True)},
+    )
+
+
+def refit(residual: np.ndarray, dictionary: EffectDictionary, sigma: np.ndarray,
+          chosen: list) -> tuple[EffectTerm, ...]:
+    """Weighted least-squares coefficients of a given set of effects (no selection)."""
+    y, X = _weighted(residual, dictionary.columns, sigma)
+    idx = [dictionary.index(e) for e in chosen]
+    coef, _ = _lstsq(X, y, idx)
+    return tuple(EffectTerm(e.effect, e.joint, float(c)) for e, c in zip(chosen, coef, strict=True))
