@@ -47,28 +47,36 @@ class Dataset:
 
 
 def _condition_fn(plant: Plant, rate: float, samples: int):
-    """Excitation quality: normalized condition of the plant's base regressor."""
+    """Excitation quality: the worse of the normalized conditions of the plant's
+    base regressor (Pinocchio) and of the paper's feature library (3-DOF)."""
     pmodel = plant.pinocchio()
     t = np.linspace(0.0, samples / rate, min(samples, 400), endpoint=False)
-    if pmodel is None or pmodel.nv != plant.dof:
-        return lambda exc: normalized_condition(np.hstack(exc.evaluate(t)))
-    baseline = PinocchioModel(pmodel)
+    baseline = PinocchioModel(pmodel) if pmodel is not None and pmodel.nv == plant.dof else None
+    base: list[np.ndarray] = []  # base-parameter columns: structural, found on the first candidate
 
     def condition(exc: FourierExcitation) -> float:
-        Y = baseline.regressor(*exc.evaluate(t)).reshape(-1, 10 * (pmodel.njoints - 1))
-        return normalized_condition(base_columns(Y))
+        states = exc.evaluate(t)
+        conds = [library_report(*states).get("library_condition", 0.0)]
+        if baseline is not None:
+            Y = baseline.regressor(*states).reshape(-1, 10 * (pmodel.njoints - 1))
+            if not base:
+                base.append(base_columns(Y))
+            conds.append(normalized_condition(Y[:, base[0]]))
+        else:
+            conds.append(normalized_condition(np.hstack(states)))
+        return max(conds)
 
     return condition
 
 
 def base_columns(Y: np.ndarray, tol: float = 1e-8) -> np.ndarray:
-    """Columns of Y spanning its range (QR with pivoting): the base-parameter regressor."""
+    """Indices of columns of Y spanning its range (QR with pivoting): base parameters."""
     from scipy.linalg import qr
 
     Yn = Y / np.maximum(np.linalg.norm(Y, axis=0), 1e-300)
     _, r, piv = qr(Yn, mode="economic", pivoting=True)
     rank = int(np.sum(np.abs(np.diag(r)) > tol * abs(r[0, 0])))
-    return Y[:, np.sort(piv[:rank])]
+    return np.sort(piv[:rank])
 
 
 def _validate(samples: int, noise: float, bias: float) -> None:
@@ -108,7 +116,7 @@ def generate(
     t = np.arange(samples) / SAMPLE_RATE
     rng = np.random.default_rng(seed + 1)
     meta = dict(plant=str(plant), mode=mode, noise=noise, bias=bias, seed=seed, dof=p.dof,
-                samples=samples, rate=SAMPLE_RATE, regressor_condition=cond)
+                samples=samples, rate=SAMPLE_RATE, excitation_condition=cond)
     if mode == "inverse":
         q, qd, qdd = exc.evaluate(t)
         tau_clean = inverse_torques(p.model, q, qd, qdd)
@@ -120,8 +128,22 @@ def generate(
         meta.update(stats)
     else:
         raise UserError(f"--mode must be 'inverse' or 'measured', got '{mode}'")
+    meta.update(library_report(q, qd, qdd))
     tau = tau_clean + torque_noise(tau_clean, noise, bias, rng)
     return Dataset(t, q, qd, qdd, tau, tau_clean, meta, truth)
+
+
+def library_report(q, qd, qdd) -> dict:
+    """Rank and normalized condition of the paper's 75-feature library on this data (3-DOF)."""
+    if q.shape[1] != 3:
+        return {}
+    from identification.libraries import paper_library
+    from identification.library import conditioning
+
+    library = paper_library()
+    cond = conditioning(library.evaluate(q, qd, qdd), library.names)
+    return {"library": library.name, "library_rank": cond.rank, "library_size": cond.size,
+            "library_condition": cond.condition}
 
 
 def state_errors(p: Plant, est: tuple, true: tuple) -> dict:

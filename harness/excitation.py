@@ -78,7 +78,7 @@ def design_excitation(
     upper: np.ndarray,
     seed: int,
     condition: Callable[[FourierExcitation], float],
-    candidates: int = 12,
+    candidates: int = 16,
     **kwargs,
 ) -> tuple[FourierExcitation, float]:
     """The best-conditioned of `candidates` seeded random excitations, with its condition."""

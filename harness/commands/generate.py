@@ -25,14 +25,21 @@ def run(args) -> int:
     write_npz(args.out, **ds.arrays())
     meta = ds.meta
     line = (f"wrote {args.out}: {args.samples} samples, mode {args.mode}, "
-            f"noise {args.noise:g}, library condition {meta.get('library_condition', float('nan')):.3g}, "
-            f"base-regressor condition {meta['regressor_condition']:.3g}")
+            f"noise {args.noise:g}, {_library(meta)}, "
+            f"excitation design condition {meta['excitation_condition']:.3g}")
     print(line)
     if args.mode == "measured":
         print("  estimated-state error (rel RMS per joint): "
               f"qd {_fmt(meta['qd_rel_rmse'])}, qdd {_fmt(meta['qdd_rel_rmse'])}, "
               f"torque from states {_fmt(meta.get('tau_from_states_rel_rmse', []))}", file=sys.stdout)
     return 0
+
+
+def _library(meta: dict) -> str:
+    if "library_condition" not in meta:
+        return "no library for this dof"
+    return (f"{meta['library']} library rank {meta['library_rank']}/{meta['library_size']}, "
+            f"normalized condition {meta['library_condition']:.3g}")
 
 
 def _fmt(values) -> str:

@@ -1,0 +1,110 @@
+"""`torquebench generate`: data from MuJoCo, cross-checked against Pinocchio."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from harness.datagen import generate
+from harness.excitation import random_excitation
+from harness.pinocchio_baseline import PinocchioModel
+from harness.robots import load_pinocchio
+
+
+def run_cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "harness", *args], capture_output=True,
+                          text=True, cwd=cwd)
+
+
+def test_excitation_derivatives_match_finite_differences():
+    exc = random_excitation(np.array([-1.0, 0.0]), np.array([1.0, 3.0]), np.random.default_rng(3))
+    t, h = np.linspace(0, 20, 50), 1e-5
+    q, qd, qdd = exc.evaluate(t)
+    qp, qdp, _ = exc.evaluate(t + h)
+    qm, qdm, _ = exc.evaluate(t - h)
+    np.testing.assert_allclose(qd, (qp - qm) / (2 * h), atol=1e-7)
+    np.testing.assert_allclose(qdd, (qdp - qdm) / (2 * h), atol=1e-6)
+    q_period, _, _ = exc.evaluate(np.linspace(0, exc.period, 2001))
+    np.testing.assert_allclose(q_period.min(axis=0), [-0.9, 0.15], atol=1e-3)
+    np.testing.assert_allclose(q_period.max(axis=0), [0.9, 2.85], atol=1e-3)
+
+
+def test_inverse_mode_torques_are_pinocchio_rnea_and_noise_is_as_declared():
+    ds = generate("lynxmotion", samples=4000, noise=0.05, seed=0, mode="inverse", bias=0.2)
+    baseline = PinocchioModel(load_pinocchio("lynxmotion"))
+    np.testing.assert_allclose(ds.tau_clean, baseline.torque(ds.q, ds.qd, ds.qdd), atol=1e-9)
+    noise = ds.tau - ds.tau_clean
+    sigma = 0.05 * ds.tau_clean.std(axis=0)
+    np.testing.assert_allclose(noise.std(axis=0), sigma, rtol=0.05)
+    assert np.all(np.abs(noise.mean(axis=0) - 0.2 * sigma) < 4 * sigma / np.sqrt(4000))
+    lo, hi = np.array([-np.pi / 2, 0, -np.pi]), np.array([np.pi / 2, np.pi, 0])
+    assert np.all(ds.q > lo) and np.all(ds.q < hi)
+    # the default dataset makes the paper's 75-feature library full rank
+    assert ds.meta["library_rank"] == ds.meta["library_size"] == 75
+    assert np.isfinite(ds.meta["library_condition"])
+
+
+def test_measured_mode_estimates_states_well_enough_for_torque():
+    ds = generate("lynxmotion", samples=2000, noise=0.05, seed=1, mode="measured")
+    assert set(ds.truth) == {"q", "qd", "qdd"}
+    # independent recomputation of the acceptance figure from the returned arrays
+    baseline = PinocchioModel(load_pinocchio("lynxmotion"))
+    tau_est = baseline.torque(ds.q, ds.qd, ds.qdd)
+    tau_true = baseline.torque(ds.truth["q"], ds.truth["qd"], ds.truth["qdd"])
+    err = np.linalg.norm(tau_est - tau_true, axis=0) / np.linalg.norm(tau_true, axis=0)
+    np.testing.assert_allclose(err, ds.meta["tau_from_states_rel_rmse"], rtol=1e-9)
+    assert np.all(err <= 0.02)
+    # what the motor applied is what the rigid body needs at the true states
+    np.testing.assert_allclose(ds.tau_clean, tau_true, atol=1e-6 * np.abs(tau_true).max())
+    assert 0 < max(ds.meta["qdd_rel_rmse"]) < 0.05  # estimated, not copied from the simulator
+
+
+def test_generate_cli_writes_the_contract(tmp_path):
+    out = tmp_path / "d.npz"
+    res = run_cli("generate", "--samples", "300", "--noise", "0.01", "--seed", "4", "--out", str(out))
+    assert res.returncode == 0, res.stderr
+    with np.load(out) as npz:
+        assert {"t", "q", "qd", "qdd", "tau", "tau_clean", "meta"} <= set(npz.files)
+        meta = json.loads(str(npz["meta"]))
+        assert npz["tau"].shape == (300, 3)
+    assert meta["plant"] == "lynxmotion" and meta["mode"] == "inverse" and meta["dof"] == 3
+    assert meta["noise"] == 0.01 and meta["seed"] == 4 and "library_condition" in meta
+    assert "condition" in res.stdout
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--plant", "missing.xml"], "plant file not found"),
+    (["--plant", "no_such_robot"], "unknown robot"),
+    (["--plant", "BAD"], "invalid MJCF"),
+    (["--noise", "-0.1"], "--noise"),
+    (["--samples", "9"], "at least 10"),
+])
+def test_generate_bad_input_is_one_line_and_no_file(tmp_path, args, message):
+    bad = tmp_path / "bad.xml"
+    bad.write_text("<mujoco><worldbody><body></mujoco>")
+    args = [str(bad) if a == "BAD" else a for a in args]
+    out = tmp_path / "out.npz"
+    res = run_cli("generate", *args, "--out", str(out))
+    assert res.returncode == 2
+    assert message in res.stderr and len(res.stderr.strip().splitlines()) == 1
+    assert not out.exists() and list(tmp_path.iterdir()) == [bad]
+
+
+def test_predict_pinocchio_reproduces_clean_torque(tmp_path):
+    data, pred = tmp_path / "d.npz", tmp_path / "p.npz"
+    assert run_cli("generate", "--samples", "200", "--out", str(data)).returncode == 0
+    res = run_cli("predict", "--model", "pinocchio", "--data", str(data), "--out", str(pred))
+    assert res.returncode == 0, res.stderr
+    with np.load(data) as d, np.load(pred) as p:
+        np.testing.assert_allclose(p["tau"], d["tau_clean"], atol=1e-12)
+
+
+def test_predict_rejects_nan_states(tmp_path):
+    data, pred = tmp_path / "d.npz", tmp_path / "p.npz"
+    q = np.zeros((20, 3))
+    q[3, 1] = np.nan
+    np.savez(data, q=q, qd=np.zeros((20, 3)), qdd=np.zeros((20, 3)))
+    res = run_cli("predict", "--model", "pinocchio", "--data", str(data), "--out", str(pred))
+    assert res.returncode == 2 and "NaN" in res.stderr and not pred.exists()
