@@ -8,6 +8,7 @@ expression for both the harness and the planner.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -93,3 +94,46 @@ def motion(*factors: str) -> tuple[tuple[str, int], ...]:
             raise ValueError(f"bad motion factor {f!r}")
         out.append((state, int(f[len(state):]) - 1))
     return tuple(out)
+
+
+_ANGLE_TERM = re.compile(r"([+-]?)(\d*)\*?q(\d+)")
+_TRIG = re.compile(r"^(sin|cos)\(([^()]*)\)(?:\^(\d+))?$")
+_MOTION = re.compile(r"^(qdd|qd|q)(\d+)(?:\^(\d+))?$")
+
+
+def _split_factors(name: str) -> list[str]:
+    """Split at '*' outside parentheses."""
+    parts, depth, start = [], 0, 0
+    for k, ch in enumerate(name):
+        depth += {"(": 1, ")": -1}.get(ch, 0)
+        if ch == "*" and depth == 0:
+            parts.append(name[start:k])
+            start = k + 1
+    return parts + [name[start:]]
+
+
+def parse_feature(name: str, dof: int) -> Feature:
+    """The Feature printed as `name` (inverse of Feature.name), e.g. 'qd1^2*sin(2*q2+q3)'."""
+    if name.strip() == "1":
+        return Feature()
+    motions: list[tuple[str, int]] = []
+    trigs: list[Trig] = []
+    for factor in _split_factors(name.replace(" ", "")):
+        m, t = _MOTION.match(factor), _TRIG.match(factor)
+        if m and 1 <= int(m.group(2)) <= dof:
+            motions += [(m.group(1), int(m.group(2)) - 1)] * int(m.group(3) or 1)
+        elif t:
+            coeffs = [0] * dof
+            angle = t.group(2)
+            terms = list(_ANGLE_TERM.finditer(angle))
+            if not terms or "".join(x.group(0) for x in terms) != angle:
+                raise ValueError(f"cannot parse angle {angle!r} in feature {name!r}")
+            for x in terms:
+                j = int(x.group(3)) - 1
+                if not 0 <= j < dof:
+                    raise ValueError(f"joint q{j + 1} out of range in feature {name!r}")
+                coeffs[j] += (-1 if x.group(1) == "-" else 1) * int(x.group(2) or 1)
+            trigs.append(Trig(t.group(1), tuple(coeffs), int(t.group(3) or 1)))
+        else:
+            raise ValueError(f"cannot parse factor {factor!r} in feature {name!r}")
+    return Feature(tuple(motions), tuple(trigs))

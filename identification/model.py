@@ -1,0 +1,103 @@
+"""The identified torque model: per joint, named terms and coefficients.
+
+Implements TorqueModel. The fitted intercept (a constant sensor bias in the
+data) is stored as `offset` but is NOT part of the torque: the model predicts
+the torque the robot needs, not what a biased sensor reads. MODEL.json
+follows the CLI contract: {"dof", "joints": [{"terms", "coefficients",
+"offset"}], "metrics", "library"}.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from identification.errors import IdentificationError
+from identification.features import Feature, parse_feature
+from identification.torque_model import as_states
+
+
+@dataclass(frozen=True)
+class JointModel:
+    """tau_j = sum_k coefficients[k] * terms[k](q, qd, qdd)  (N m)."""
+
+    terms: tuple[str, ...]
+    coefficients: tuple[float, ...]
+    offset: float = 0.0  # fitted sensor bias, N m (not in the torque)
+
+    def equation(self, joint: int, digits: int = 6) -> str:
+        body = " + ".join(f"{c:.{digits}g}*{t}" for c, t in zip(self.coefficients, self.terms,
+                                                                 strict=True))
+        return f"tau{joint} = {body or '0'}".replace("+ -", "- ")
+
+
+@dataclass(frozen=True)
+class IdentifiedModel:
+    """A sparse torque model; `torque` on arrays, `symbolic_torque` on CasADi vectors."""
+
+    dof: int
+    joints: tuple[JointModel, ...]
+    library: str = ""
+
+    def _features(self, j: int) -> list[Feature]:
+        return [parse_feature(t, self.dof) for t in self.joints[j].terms]
+
+    def torque(self, q, qd, qdd) -> np.ndarray:
+        """Torques (n, dof) in N m at states of shape (n, dof)."""
+        q, qd, qdd = as_states(q, qd, qdd, self.dof)
+        tau = np.zeros_like(q)
+        for j, joint in enumerate(self.joints):
+            for f, c in zip(self._features(j), joint.coefficients, strict=True):
+                tau[:, j] += c * f.evaluate(q, qd, qdd)
+        return tau
+
+    def symbolic_torque(self, q, qd, qdd):
+        """CasADi (dof, 1) expression of the same model (SX or MX inputs)."""
+        import casadi
+
+        rows = []
+        for j, joint in enumerate(self.joints):
+            expr = 0
+            for f, c in zip(self._features(j), joint.coefficients, strict=True):
+                expr = expr + c * f.evaluate(q, qd, qdd, lib=casadi)
+            rows.append(expr)
+        return casadi.vertcat(*rows)
+
+    def equations(self) -> list[str]:
+        return [jm.equation(j + 1) for j, jm in enumerate(self.joints)]
+
+    def to_dict(self) -> dict:
+        return {"dof": self.dof, "library": self.library,
+                "joints": [{"terms": list(jm.terms), "coefficients": list(jm.coefficients),
+                            "offset": jm.offset} for jm in self.joints]}
+
+
+def model_from_dict(payload: dict) -> IdentifiedModel:
+    """Inverse of IdentifiedModel.to_dict (extra keys such as metrics are ignored)."""
+    try:
+        dof = int(payload["dof"])
+        joints = tuple(JointModel(tuple(j["terms"]), tuple(float(c) for c in j["coefficients"]),
+                                  float(j.get("offset", 0.0))) for j in payload["joints"])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise IdentificationError(f"malformed model: {exc!r}") from None
+    if len(joints) != dof or any(len(j.terms) != len(j.coefficients) for j in joints):
+        raise IdentificationError("malformed model: joints/terms/coefficients lengths disagree")
+    model = IdentifiedModel(dof, joints, str(payload.get("library", "")))
+    try:
+        for j in range(dof):
+            model._features(j)
+    except ValueError as exc:
+        raise IdentificationError(f"malformed model: {exc}") from None
+    return model
+
+
+def load_model(path: str | Path) -> IdentifiedModel:
+    """Read a MODEL.json written by `torquebench identify`."""
+    try:
+        payload = json.loads(Path(path).read_text())
+    except (OSError, json.JSONDecodeError) as exc:
+        raise IdentificationError(f"cannot read model {path}: {exc}") from None
+    return model_from_dict(payload)
