@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import importlib
 import sys
+import threading
 import time
 import traceback
+from contextlib import contextmanager
 from pathlib import Path
 
 from harness.errors import UserError
@@ -21,6 +23,7 @@ from harness.report_headline import headline
 from harness.robots import DEFAULT_ROBOT
 
 SECTIONS = ("identification", "planning", "replay", "closeloop")
+HEARTBEAT = 30.0  # s between "still running" lines of a long section
 
 
 class Progress:
@@ -35,6 +38,22 @@ class Progress:
 
     def __call__(self, message: str) -> None:
         print(f"[{self.elapsed:6.1f} s] {message}", file=sys.stderr, flush=True)
+
+    @contextmanager
+    def heartbeat(self, name: str):
+        """Print '<name>: still running' every HEARTBEAT seconds until the block ends."""
+        done = threading.Event()
+
+        def beat() -> None:
+            while not done.wait(HEARTBEAT):
+                self(f"{name}: still running")
+
+        thread = threading.Thread(target=beat, daemon=True)
+        thread.start()
+        try:
+            yield
+        finally:
+            done.set()
 
 
 def register(subparsers) -> None:
@@ -79,7 +98,8 @@ def run_section(name: str, progress: Progress, out_dir: Path, quick: bool,
     progress(f"{name}: started")
     start = time.perf_counter()
     try:
-        raw = module.run(out_dir, quick=quick, **kwargs)
+        with progress.heartbeat(name):
+            raw = module.run(out_dir, quick=quick, **kwargs)
         if not isinstance(raw, dict):
             raise TypeError(f"section returned {type(raw).__name__}, expected dict")
     except Exception as exc:
