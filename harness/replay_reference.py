@@ -93,10 +93,10 @@ def plan_reference(plan: dict) -> PlanReference:
     if missing:
         raise UserError(f"plan is missing field(s): {', '.join(missing)}")
     t = _array(plan, "t")
-    if t.ndim != 1 or len(t) < 2:
-        raise UserError(f"plan field 't' must be a list of at least 2 times, got shape {t.shape}")
-    if np.any(np.diff(t) <= 0):
-        raise UserError("plan field 't' must be strictly increasing")
+    if t.ndim != 1 or len(np.unique(t)) < 2:
+        raise UserError(f"plan field 't' must hold at least 2 distinct times, got {t.shape}")
+    if np.any(np.diff(t) < 0):
+        raise UserError("plan field 't' must be increasing")
     q = _array(plan, "q")
     if q.ndim != 2 or len(q) != len(t):
         raise UserError(f"plan field 'q' has shape {q.shape}, expected ({len(t)}, dof)")
@@ -108,7 +108,21 @@ def plan_reference(plan: dict) -> PlanReference:
     threshold = float(_array(plan, "threshold"))
     optional = {k: float(plan[k]) for k in ("energy", "min_clearance")
                 if isinstance(plan.get(k), int | float)}
-    return PlanReference(t=t, q=q, threshold=threshold, **arrays, **optional)
+    keep = _distinct_times(t, q, arrays["qd"])
+    arrays = {key: x[keep] for key, x in arrays.items()}
+    return PlanReference(t=t[keep], q=q[keep], threshold=threshold, **arrays, **optional)
+
+
+def _distinct_times(t: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    """Indices to keep: a sample repeated at a segment boundary (same t, q, qd) counts once,
+    the later one (the new segment's acceleration) wins."""
+    repeated = np.flatnonzero(np.diff(t) == 0)
+    same = np.all(np.isclose(q[repeated], q[repeated + 1], atol=1e-9), axis=1) & np.all(
+        np.isclose(qd[repeated], qd[repeated + 1], atol=1e-6), axis=1)
+    if not np.all(same):
+        k = repeated[~same][0]
+        raise UserError(f"plan has two different states at t = {t[k]:.6g} s")
+    return np.setdiff1d(np.arange(len(t)), repeated)
 
 
 def check_joint_limits(reference: PlanReference, ranges: np.ndarray, limited: np.ndarray) -> None:

@@ -106,3 +106,16 @@ def test_damped_plant_without_obstacle_body_still_replays(tmp_path, feedforward)
     assert result.tracking_rms < 1e-3
     assert result.surface_clearance is None
     assert result.energy > 1.02 * result.energy_reference  # the plant spends more than planned
+
+
+def test_repeated_boundary_sample_counts_once_and_conflicts_are_rejected():
+    from harness.errors import UserError
+
+    plan = quintic_plan(samples=11)
+    k = 5
+    doubled = {key: (v[: k + 1] + v[k:] if isinstance(v, list) else v) for key, v in plan.items()}
+    ref = plan_reference(doubled)
+    assert len(ref.t) == 11
+    doubled["q"][k + 1] = [0.0, 0.0, 0.0]
+    with pytest.raises(UserError, match="two different states"):
+        plan_reference(doubled)

@@ -38,7 +38,7 @@ def _bad_plans():
         "limits": (out_of_limits, "limits of joint 3"),
         "nan": (nan, "'qd' contains NaN"),
         "short": (short, "'qdd' has 199 samples"),
-        "backwards": (backwards, "strictly increasing"),
+        "backwards": (backwards, "must be increasing"),
         "not-object": ([1, 2, 3], "JSON object"),
     }
 
