@@ -10,12 +10,16 @@ as the user's data; the simulator's own states are returned separately as truth.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import mujoco
 import numpy as np
 
 from harness.errors import UserError
 from harness.excitation import FourierExcitation
 from harness.measurement import SensorConfig, encoder, estimate_derivatives
+
+SAMPLE_RATE = 200.0  # Hz, must match harness.datagen.SAMPLE_RATE
 
 OMEGA, ZETA = 30.0, 1.0  # rad/s, closed-loop bandwidth and damping of the tracking error
 
@@ -31,8 +35,14 @@ def _sensor_slices(model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray] | Non
     return None
 
 
-def _actuation(model: mujoco.MjModel) -> np.ndarray:
-    """Map from joint torque to ctrl: inverse of the actuator moment (one motor per dof)."""
+def _actuation(model: mujoco.MjModel) -> np.ndarray | None:
+    """Map from joint torque to ctrl: inverse of the actuator moment (one motor per dof).
+
+    None for a plant without actuators: torques then go in as ideal joint torques
+    (qfrc_applied), e.g. robots compiled from a URDF.
+    """
+    if model.nu == 0:
+        return None
     if model.nu != model.nv:
         raise UserError(f"measured mode needs one actuator per joint (nu={model.nu}, nv={model.nv})")
     data = mujoco.MjData(model)
@@ -47,10 +57,15 @@ def simulate_measured(plant, exc: FourierExcitation, t_out: np.ndarray, cfg: Sen
                       rng: np.random.Generator):
     """Simulate, sense, estimate; returns q, qd, qdd, tau_clean at t_out, truth, stats."""
     model = plant.model
-    sim_dt = 1.0 / cfg.sensing_rate
-    steps_per = int(round(sim_dt / model.opt.timestep))
-    if steps_per < 1 or abs(steps_per * model.opt.timestep - sim_dt) > 1e-12:
-        raise UserError(f"plant timestep {model.opt.timestep} does not divide the sensing period {sim_dt}")
+    period = 1.0 / SAMPLE_RATE
+    if abs(period / model.opt.timestep - round(period / model.opt.timestep)) > 1e-9:
+        # e.g. MuJoCo's 2 ms default on URDF robots: refine so sensor samples land on the grid
+        model.opt.timestep = period / np.ceil(period / model.opt.timestep)
+    steps_per = max(1, int(round(1.0 / (cfg.sensing_rate * model.opt.timestep))))
+    while round(period / model.opt.timestep) % steps_per:
+        steps_per -= 1
+    sim_dt = steps_per * model.opt.timestep
+    cfg = replace(cfg, sensing_rate=1.0 / sim_dt)
     n_sense = int(round(t_out[-1] * cfg.sensing_rate)) + 1
     t_sense = np.arange(n_sense) * sim_dt
     to_ctrl = _actuation(model)
@@ -67,13 +82,17 @@ def simulate_measured(plant, exc: FourierExcitation, t_out: np.ndarray, cfg: Sen
         mujoco.mj_forward(model, data)
         pd = OMEGA**2 * (q_ref[k] - data.qpos) + 2 * ZETA * OMEGA * (qd_ref[k] - data.qvel)
         tau = ref_data.qfrc_inverse + _mass_matrix(model, data) @ pd
-        data.ctrl[:] = to_ctrl @ tau
+        if to_ctrl is None:
+            data.qfrc_applied[:] = tau
+        else:
+            data.ctrl[:] = to_ctrl @ tau
         mujoco.mj_forward(model, data)  # sensors and qacc at this instant
         q_true[k], qd_true[k], qdd_true[k] = data.qpos, data.qvel, data.qacc
         if sensors is not None:
             q_read[k], tau_read[k] = data.sensordata[sensors[0]], data.sensordata[sensors[1]]
         else:
-            q_read[k], tau_read[k] = data.qpos, data.qfrc_actuator
+            q_read[k] = data.qpos
+            tau_read[k] = data.qfrc_applied if to_ctrl is None else data.qfrc_actuator
         for _ in range(steps_per):
             mujoco.mj_step(model, data)
     if not np.all(np.isfinite(q_true)):
