@@ -17,7 +17,7 @@ import numpy as np
 
 from harness.errors import UserError
 from harness.excitation import FourierExcitation, design_excitation, normalized_condition
-from harness.measurement import SensorConfig, encoder, estimate_derivatives, rel_rmse, torque_noise
+from harness.measurement import SensorConfig, rel_rmse, torque_noise
 from harness.pinocchio_baseline import PinocchioModel
 from harness.plant import Plant, load_plant
 
