@@ -60,7 +60,7 @@ def path_figure(traces: dict[str, ReplayTrace], path: Path) -> Path:
     for i, (name, tr) in enumerate(traces.items()):
         ax.plot(*tr.end_effector.T, color=f"C{i}", label=f"{name}: end effector")
     first = next(iter(traces.values()))
-    ax.plot(*first.obstacle.T, color="k", lw=2, label="obstacle centre")
+    ax.plot(*first.obstacle.T, color="k", lw=2, label="obstacle centre (dot: t = 0)")
     ax.scatter(*first.obstacle[0], color="k", marker="o", s=15)
     ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]",
            title="Replayed paths and obstacle (cf. paper Fig. 9)")
