@@ -69,12 +69,15 @@ def generic_library(dof: int, order: int = 1, max_coeff: int = 1,
                     trig_joints: tuple[int, ...] | None = None) -> Library:
     """Polynomial x trig library for a structure nobody knows.
 
-    Every mechanical motion factor (see `mechanical_motions`) times 1 and every
+    Every mechanical motion factor (see `mechanical_motions`; q_i only when
+    order = 0, a polynomial library) times 1 and every
     trig monomial of order <= `order` of every joint-angle sum with coefficients
     |c| <= max_coeff over `trig_joints` (default all joints).
     """
     trigs: list[tuple[Trig, ...]] = [()]
-    for angle in angle_sums(dof, max_coeff, trig_joints):
+    for angle in angle_sums(dof, max_coeff, trig_joints) if order else []:
         trigs += trig_monomials(angle, order)
-    feats = [Feature(m, t) for m in mechanical_motions(dof) for t in trigs]
+    # positions only without trig terms: q_i next to sin(q_i) is nearly collinear
+    feats = [Feature(m, t) for m in mechanical_motions(dof, positions=order == 0) for t in trigs
+             if m or t]  # the constant is the regression's intercept, not a feature
     return Library(f"generic-{dof}dof-o{order}c{max_coeff}", dof, tuple(feats))

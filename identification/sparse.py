@@ -101,12 +101,13 @@ class SparseRegression:
             warnings.simplefilter("ignore", ConvergenceWarning)
             alphas, coefs, _ = lasso_path(xs[~mask], yc[~mask], alphas=self.n_alphas,
                                           eps=self.alpha_ratio, max_iter=5000, tol=1e-8)
-        cands = []
+        cands, memo = [], {}
         for a, c in zip(alphas, coefs.T, strict=True):
             start = tuple(np.flatnonzero(c)) or (int(np.argmax(np.abs(xs[~mask].T @ yc[~mask]))),)
             for r in self.pass_rates:
-                support, err = self._prune(start, fit, val, r, floor)
-                cands.append(Candidate(float(a), r, support, err))
+                if (start, r) not in memo:  # neighbouring alphas often share a support
+                    memo[start, r] = self._prune(start, fit, val, r, floor)
+                cands.append(Candidate(float(a), r, *memo[start, r]))
         best = min(c.validation_mse for c in cands)
         good = [c for c in cands if c.validation_mse <= best * (1 + self.tolerance) + floor]
         chosen = min(good, key=lambda c: (len(c.support), c.validation_mse))
