@@ -79,7 +79,7 @@ def true_effects(plant: mujoco.MjModel, declared: mujoco.MjModel | None = None,
             terms.append(EffectTerm(effect, int(j) + 1, float(have[j] - base[j])))
     extra_mass = float(plant.body_mass.sum() - declared.body_mass.sum())
     if extra_mass > 0:
-        terms.append(EffectTerm("payload", 0, extra_mass))
+        terms.append(EffectTerm("payload", plant.nv, extra_mass))
     outside = bool(np.any(plant.tendon_stiffness > 0) or np.any(plant.tendon_damping > 0)
                    or np.any(plant.body_gravcomp > 0))
     return tuple(terms), outside

@@ -23,7 +23,7 @@ import numpy as np
 
 from identification.closeloop_model import ExtendedModel
 from identification.effects import EffectTerm, PayloadTorque, build_dictionary
-from identification.effects_selection import Selection, select_effects
+from identification.effects_selection import Selection, refine_coulomb, select_effects
 from identification.errors import IdentificationError
 from identification.residual import JointDiagnostics, diagnose, noise_sigma
 from identification.torque_model import TorqueModel, as_states
@@ -75,6 +75,19 @@ def _check(q, qd, qdd, tau, tau_clean, dof: int, holdout: float):
     return q, qd, qdd, tau, tau_clean, split
 
 
+def _trace(residual, dictionary, sigma, q, qd, qdd, payload):
+    """Select, refine Coulomb shapes, and select again on the refined dictionary, so that
+    a default-shaped friction column does not drag in a compensating term."""
+    selection = select_effects(residual, dictionary, sigma)
+    terms = refine_coulomb(residual, dictionary, sigma, selection.terms, q, qd, qdd)
+    shapes = {t.joint: (t.lead, t.eps) for t in terms if t.effect == "coulomb"}
+    if not shapes:
+        return selection, terms
+    dictionary = build_dictionary(q, qd, qdd, payload, shapes)
+    selection = select_effects(residual, dictionary, sigma)
+    return selection, refine_coulomb(residual, dictionary, sigma, selection.terms, q, qd, qdd)
+
+
 def close_loop(declared: TorqueModel, q, qd, qdd, tau, tau_clean, holdout: float = 0.25,
                payload: PayloadTorque | None = None, symbolic_payload=None) -> CloseLoopResult:
     """Trace the declared model's residual on measured data to named effects and add them."""
@@ -86,13 +99,13 @@ def close_loop(declared: TorqueModel, q, qd, qdd, tau, tau_clean, holdout: float
     dictionary = build_dictionary(q[train], qd[train], qdd[train], payload)
     signals = {e.label: dictionary.columns[:, :, i] for i, e in enumerate(dictionary.effects)}
     sigma = noise_sigma(residual)
-    selection = select_effects(residual, dictionary, sigma)
-    model = ExtendedModel(declared, selection.terms, payload, symbolic_payload)
+    selection, terms = _trace(residual, dictionary, sigma, q[train], qd[train], qdd[train], payload)
+    model = ExtendedModel(declared, terms, payload, symbolic_payload)
     tau_after = model.torque(q, qd, qdd)
     after = tau[train] - tau_after[train]
     diags_after = tuple(diagnose(after))
     return CloseLoopResult(
-        terms=selection.terms,
+        terms=terms,
         selection=selection,
         error_before=rel_error(tau_declared[held], tau_clean[held]),
         error_after=rel_error(tau_after[held], tau_clean[held]),

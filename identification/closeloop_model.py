@@ -6,7 +6,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from identification.effects import COULOMB_EPS, EffectTerm, PayloadTorque, effect_torque
+from identification.effects import EffectTerm, PayloadTorque, effect_torque
 from identification.torque_model import TorqueModel, as_states
 
 
@@ -20,11 +20,10 @@ class ExtendedModel:
 
     def __init__(self, declared: TorqueModel, terms: tuple[EffectTerm, ...],
                  payload: PayloadTorque | None = None,
-                 symbolic_payload: Callable | None = None, eps: float = COULOMB_EPS):
+                 symbolic_payload: Callable | None = None):
         self.declared = declared
         self.terms = tuple(terms)
         self.dof = declared.dof
-        self.eps = eps
         self._payload = payload
         self._symbolic_payload = symbolic_payload
 
@@ -32,7 +31,7 @@ class ExtendedModel:
         """Declared torque plus the effects, (n, dof) in N m."""
         q, qd, qdd = as_states(q, qd, qdd, self.dof)
         return self.declared.torque(q, qd, qdd) + effect_torque(
-            self.terms, q, qd, qdd, self._payload, self.eps)
+            self.terms, q, qd, qdd, self._payload)
 
     def symbolic_torque(self, q, qd, qdd):
         """CasADi form: the declared model's expression plus each effect's."""
@@ -46,7 +45,8 @@ class ExtendedModel:
                 tau = tau + t.coefficient * self._symbolic_payload(q, qd, qdd)
                 continue
             j = t.joint - 1
-            signal = {"viscous": qd[j], "coulomb": ca.tanh(qd[j] / self.eps),
+            coulomb = ca.tanh((qd[j] + t.lead * qdd[j]) / t.eps) if t.effect == "coulomb" else 0
+            signal = {"viscous": qd[j], "coulomb": coulomb,
                       "armature": qdd[j], "offset": 1.0, "spring": q[j]}[t.effect]
             unit = ca.DM.zeros(self.dof, 1)
             unit[j] = 1.0

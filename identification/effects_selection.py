@@ -18,9 +18,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from identification.effects import EffectDictionary, EffectTerm
+from identification.effects import (
+    COULOMB_SHAPES,
+    Effect,
+    EffectDictionary,
+    EffectTerm,
+    joint_signal,
+)
 
-MIN_SIZE = 0.1  # named effects must have an RMS torque >= 0.1 noise sigma on their joint
+MIN_SIZE = 0.25  # named effects must have an RMS torque >= 0.25 noise sigma on their joint
 
 
 @dataclass(frozen=True)
@@ -110,3 +116,33 @@ def refit(residual: np.ndarray, dictionary: EffectDictionary, sigma: np.ndarray,
     idx = [dictionary.index(e) for e in chosen]
     coef, _ = _lstsq(X, y, idx)
     return tuple(EffectTerm(e.effect, e.joint, float(c)) for e, c in zip(chosen, coef, strict=True))
+
+
+def refine_coulomb(residual: np.ndarray, dictionary: EffectDictionary, sigma: np.ndarray,
+                   terms: tuple[EffectTerm, ...], q: np.ndarray, qd: np.ndarray,
+                   qdd: np.ndarray) -> tuple[EffectTerm, ...]:
+    """Pick each selected Coulomb term's shape (lead, eps) from COULOMB_SHAPES by the
+    weighted residual sum of squares of the whole refit, one joint at a time."""
+    chosen = [Effect(t.effect, t.joint) for t in terms]
+    if not any(e.effect == "coulomb" for e in chosen):
+        return terms
+    cols = np.stack([dictionary.columns[:, :, dictionary.index(e)] for e in chosen], axis=2)
+    shapes = {t.joint: (t.lead, t.eps) for t in terms if t.effect == "coulomb"}
+    for k, e in enumerate(chosen):
+        if e.effect != "coulomb":
+            continue
+        best = None
+        for lead, eps in COULOMB_SHAPES:
+            cols[:, :, k] = 0.0
+            cols[:, e.joint - 1, k] = joint_signal("coulomb", q, qd, qdd, lead, eps)[:, e.joint - 1]
+            y, X = _weighted(residual, cols, sigma)
+            rss = _lstsq(X, y, list(range(len(chosen))))[1]
+            if best is None or rss < best[0]:
+                best = (rss, lead, eps)
+        shapes[e.joint] = best[1:]
+        cols[:, e.joint - 1, k] = joint_signal("coulomb", q, qd, qdd, *shapes[e.joint])[:, e.joint - 1]
+    y, X = _weighted(residual, cols, sigma)
+    coef, _ = _lstsq(X, y, list(range(len(chosen))))
+    return tuple(EffectTerm(e.effect, e.joint, float(c), *shapes.get(e.joint, (t.lead, t.eps)))
+                 if e.effect == "coulomb" else EffectTerm(e.effect, e.joint, float(c))
+                 for e, c, t in zip(chosen, coef, terms, strict=True))
