@@ -31,7 +31,7 @@ from harness.datagen import Dataset, generate
 from harness.robots import DEFAULT_ROBOT, load_pinocchio
 from harness.torque_models import load_torque_model
 from identification import TorqueModel
-from identification.closeloop import CloseLoopResult, close_loop, rel_error
+from identification.closeloop import CloseLoopResult, close_loop, is_unexplained, rel_error
 from identification.closeloop_model import ExtendedModel
 from identification.effects import Effect, EffectTerm, build_dictionary
 from identification.effects_selection import refine_coulomb, refit
@@ -58,6 +58,7 @@ class CloseLoopRun:
             "error_before": r.error_before.tolist(),
             "error_after": r.error_after.tolist(),
             "unexplained": bool(r.unexplained),
+            "unexplained_joints": [d.joint for d in r.diagnostics_after if is_unexplained([d])],
             "declared": self.declared,
             "plant": self.plant,
             "error_definition": "held-out relative RMS ||tau_hat - tau_clean|| / ||tau_clean|| "

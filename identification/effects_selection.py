@@ -57,17 +57,31 @@ def _bic(rss: float, n: int, k: int) -> float:
     return n * np.log(max(rss, 1e-300) / n) + k * np.log(n)
 
 
-def forward_select(y: np.ndarray, X: np.ndarray, max_terms: int = 8) -> tuple[list[int], list]:
-    """Greedy forward selection by BIC; returns column indices and the (index, BIC) path."""
+def _trial(X, y, idx, passive):
+    """BIC of the fit on idx, or inf if a passive effect would come out negative."""
+    coef, rss = _lstsq(X, y, idx)
+    if np.any(coef[passive[idx]] < 0):
+        return np.inf
+    return _bic(rss, len(y), len(idx))
+
+
+def forward_select(y: np.ndarray, X: np.ndarray, passive: np.ndarray | None = None,
+                   max_terms: int = 8) -> tuple[list[int], list]:
+    """Greedy forward selection by BIC; returns column indices and the (index, BIC) path.
+
+    passive[i]: column i is a passive physical effect whose coefficient cannot be
+    negative (damping, dry friction, rotor inertia, stiffness, mass); a step that
+    would make one negative is not taken - the data contradict that explanation.
+    """
     n = len(y)
+    passive = np.zeros(X.shape[1], bool) if passive is None else np.asarray(passive, bool)
     norms = np.linalg.norm(X, axis=0)
     usable = [i for i in range(X.shape[1]) if norms[i] > 0]
     chosen: list[int] = []
     best = _bic(_lstsq(X, y, [])[1], n, 0)
     path: list = [(None, best)]
     while len(chosen) < max_terms:
-        trials = [(_bic(_lstsq(X, y, chosen + [i])[1], n, len(chosen) + 1), i)
-                  for i in usable if i not in chosen]
+        trials = [(_trial(X, y, chosen + [i], passive), i) for i in usable if i not in chosen]
         if not trials:
             break
         bic, i = min(trials)
@@ -94,7 +108,8 @@ def select_effects(residual: np.ndarray, dictionary: EffectDictionary, sigma: np
                    min_size: float = MIN_SIZE, max_terms: int = 8) -> Selection:
     """Select and fit the effects that explain residual (n, dof), noise sigma (dof,) in N m."""
     y, X = _weighted(residual, dictionary.columns, sigma)
-    idx, path = forward_select(y, X, max_terms)
+    passive = np.array([e.effect != "offset" for e in dictionary.effects])
+    idx, path = forward_select(y, X, passive, max_terms)
     coef, _ = _lstsq(X, y, idx)
     sizes = term_sizes(dictionary.columns, idx, coef, sigma)
     keep = [i for i, s in zip(idx, sizes, strict=True) if s >= min_size]

@@ -1,0 +1,46 @@
+"""`torquebench closeloop`: trace a plant's measured residual to missing effects, add them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from harness.closeloop import run_closeloop
+from harness.errors import UserError
+from harness.io import write_json
+
+
+def register(sub) -> None:
+    p = sub.add_parser("closeloop", help="residual -> missing effect -> add it -> error before/after")
+    p.add_argument("--plant", required=True, help="MJCF of the arm (may carry undeclared effects)")
+    p.add_argument("--out", required=True, help="output directory (closeloop.json)")
+    p.add_argument("--samples", type=int, default=4000)
+    p.add_argument("--noise", type=float, default=0.05, help="torque noise std / torque std")
+    p.add_argument("--bias", type=float, default=0.0,
+                   help="torque-sensor bias in noise stds (non-zero: named as an offset)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--holdout", type=float, default=0.25)
+    p.add_argument("--declared", default="pinocchio",
+                   help="declared model: 'pinocchio', 'identified' (fitted on the training "
+                   "part) or MODEL.json")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    if not 0.0 < args.holdout < 1.0:
+        raise UserError(f"--holdout must be in (0, 1), got {args.holdout}")
+    loop = run_closeloop(args.plant, args.samples, args.noise, args.seed, args.bias,
+                         args.holdout, args.declared)
+    if loop.result.model.dof != loop.data.q.shape[1]:
+        raise UserError("declared model and plant have different numbers of joints")
+    out = Path(args.out) / "closeloop.json"
+    write_json(out, loop.to_json())
+    r = loop.result
+    for t in r.terms:
+        print(f"  joint {t.joint}: {t.effect} {t.coefficient:.5g}")
+    if not r.terms:
+        print("  no missing effect named")
+    fmt = ", ".join
+    print(f"  error before [{fmt(f'{e:.3e}' for e in r.error_before)}] "
+          f"after [{fmt(f'{e:.3e}' for e in r.error_after)}] unexplained {str(r.unexplained).lower()}")
+    print(f"wrote {out}")
+    return 0
