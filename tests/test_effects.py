@@ -1,0 +1,115 @@
+"""Effect dictionary, payload torque, extended model and selection on synthetic residuals."""
+
+from __future__ import annotations
+
+import casadi as ca
+import mujoco
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from harness.closeloop_payload import PayloadTorque
+from harness.closeloop_plants import Variant, variant_text
+from harness.datagen import inverse_torques
+from harness.pinocchio_baseline import PinocchioModel
+from harness.robots import load_pinocchio
+from identification.closeloop_model import ExtendedModel
+from identification.effects import EffectTerm, build_dictionary, effect_torque
+from identification.effects_selection import select_effects
+from identification.residual import ljung_box, noise_sigma
+
+
+def _states(n=600, seed=0):
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0, 6, n)[:, None]
+    w = rng.uniform(0.5, 2.0, (3, 3))
+    q = sum(np.sin(w[k] * t + k) for k in range(3)) * 0.5 + np.array([0, 1.5, -1.5])
+    qd = sum(w[k] * np.cos(w[k] * t + k) for k in range(3)) * 0.5
+    qdd = sum(-w[k] ** 2 * np.sin(w[k] * t + k) for k in range(3)) * 0.5
+    return q, qd, qdd
+
+
+@pytest.fixture(scope="module")
+def pmodel():
+    return load_pinocchio("lynxmotion")
+
+
+def test_payload_torque_matches_mujoco_payload_body(pmodel):
+    """Unit payload x mass = MuJoCo's inverse-dynamics difference of a plant with that body."""
+    q, qd, qdd = _states(50)
+    plain = mujoco.MjModel.from_xml_string(variant_text(Variant()))
+    loaded = mujoco.MjModel.from_xml_string(variant_text(Variant(payload=0.07)))
+    expected = inverse_torques(loaded, q, qd, qdd) - inverse_torques(plain, q, qd, qdd)
+    got = 0.07 * PayloadTorque(pmodel)(q, qd, qdd)
+    np.testing.assert_allclose(got, expected, atol=1e-7)
+
+
+def test_payload_torque_is_rnea_difference(pmodel):
+    """Pinocchio cross-check: link3 inertia plus a point mass at the end effector."""
+    q, qd, qdd = _states(20)
+    heavy = pmodel.copy()
+    heavy.inertias[3] = heavy.inertias[3] + pin.Inertia(0.2, np.array([0.187, 0, 0]), np.zeros((3, 3)))
+    diff = PinocchioModel(heavy).torque(q, qd, qdd) - PinocchioModel(pmodel).torque(q, qd, qdd)
+    np.testing.assert_allclose(0.2 * PayloadTorque(pmodel)(q, qd, qdd), diff, atol=1e-12)
+
+
+def test_joint_effects_match_mujoco_passive_forces():
+    """mj_inverse of a plant with damping, armature and stiffness = declared + effect torques."""
+    q, qd, qdd = _states(50)
+    v = Variant((("viscous", 1, 0.03), ("armature", 2, 0.004), ("spring", 3, 0.2)))
+    plant = mujoco.MjModel.from_xml_string(variant_text(v))
+    base = mujoco.MjModel.from_xml_string(variant_text(Variant()))
+    terms = (EffectTerm("viscous", 1, 0.03), EffectTerm("armature", 2, 0.004),
+             EffectTerm("spring", 3, 0.2))
+    expected = inverse_torques(plant, q, qd, qdd) - inverse_torques(base, q, qd, qdd)
+    np.testing.assert_allclose(effect_torque(terms, q, qd, qdd), expected, atol=1e-10)
+
+
+def test_extended_model_symbolic_equals_numeric(pmodel):
+    payload = PayloadTorque(pmodel)
+    terms = (EffectTerm("viscous", 1, 0.02), EffectTerm("coulomb", 2, 0.05, 0.01, 0.02),
+             EffectTerm("armature", 3, 0.003), EffectTerm("offset", 1, -0.1),
+             EffectTerm("spring", 2, 0.3), EffectTerm("payload", 3, 0.08))
+    model = ExtendedModel(PinocchioModel(pmodel), terms, payload, payload.symbolic)
+    q, qd, qdd = _states(5)
+    x = [ca.SX.sym(n, 3) for n in ("q", "qd", "qdd")]
+    f = ca.Function("tau", x, [model.symbolic_torque(*x)])
+    for k in range(5):
+        np.testing.assert_allclose(np.asarray(f(q[k], qd[k], qdd[k])).ravel(),
+                                   model.torque(q[k:k + 1], qd[k:k + 1], qdd[k:k + 1])[0], atol=1e-10)
+
+
+@pytest.mark.parametrize("effect,joint,value", [
+    ("viscous", 1, 0.02), ("coulomb", 2, 0.05), ("armature", 3, 0.01), ("offset", 2, 0.04),
+    ("spring", 3, 0.1), ("payload", 3, 0.05)])
+def test_selection_names_the_planted_effect(pmodel, effect, joint, value):
+    """Synthetic residual = one effect + 2 % white noise: that effect, within 2 %."""
+    q, qd, qdd = _states(1500)
+    payload = PayloadTorque(pmodel)
+    dictionary = build_dictionary(q, qd, qdd, payload)
+    tau = effect_torque((EffectTerm(effect, joint, value),), q, qd, qdd, payload)
+    sigma = 0.02 * np.maximum(tau.std(axis=0), 1e-3) + 1e-4
+    residual = tau + np.random.default_rng(1).normal(size=tau.shape) * sigma
+    sel = select_effects(residual, dictionary, noise_sigma(residual))
+    assert [(t.effect, t.joint) for t in sel.terms] == [(effect, joint)]
+    assert sel.terms[0].coefficient == pytest.approx(value, rel=0.02)
+
+
+def test_selection_names_nothing_in_white_noise(pmodel):
+    q, qd, qdd = _states(1500)
+    residual = np.random.default_rng(2).normal(size=q.shape) * 0.01
+    sel = select_effects(residual, build_dictionary(q, qd, qdd, PayloadTorque(pmodel)),
+                         noise_sigma(residual))
+    assert sel.terms == ()
+
+
+def test_ljung_box_and_noise_level():
+    rng = np.random.default_rng(3)
+    white = rng.normal(size=3000)
+    ar = np.zeros(3000)
+    for k in range(1, 3000):
+        ar[k] = 0.5 * ar[k - 1] + white[k]
+    assert ljung_box(white)[1] > 1e-3
+    assert ljung_box(ar)[1] < 1e-6
+    smooth = np.sin(np.linspace(0, 20, 3000))[:, None]
+    assert noise_sigma(smooth + 0.05 * white[:, None])[0] == pytest.approx(0.05, rel=0.05)
