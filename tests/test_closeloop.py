@@ -1,0 +1,84 @@
+"""Closing the loop on measured MuJoCo data (issue #6 acceptance)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from harness.cli import main
+from harness.closeloop import run_closeloop
+from harness.closeloop_acceptance import checks, coefficient_errors
+from harness.closeloop_plants import DECLARED_MJCF, Variant, write_variant
+
+SINGLE = [
+    Variant((("viscous", 1, 0.01),), name="viscous1"),
+    Variant((("coulomb", 2, 0.05),), name="coulomb2"),
+    Variant((("armature", 3, 0.01),), name="armature3"),
+    Variant((("spring", 2, 0.2),), name="spring2"),
+    Variant(payload=0.1, name="payload"),
+]
+EVERY_JOINT = [Variant(((e, j, v),), name=f"{e}{j}") for e, v in
+               (("viscous", 0.02), ("coulomb", 0.05), ("armature", 0.01), ("spring", 0.2))
+               for j in (1, 2, 3)]
+
+
+def _assert_accepted(loop):
+    ok = checks(loop)
+    assert all(ok.values()), (ok, coefficient_errors(loop), loop.to_json()["effects"])
+
+
+@pytest.mark.parametrize("variant", SINGLE, ids=lambda v: v.name)
+def test_single_effect_named_on_its_joint(tmp_path, variant):
+    loop = run_closeloop(write_variant(variant, tmp_path))
+    assert not loop.result.unexplained
+    assert [(t.effect, t.joint) for t in loop.result.terms] == [
+        (t.effect, t.joint) for t in loop.truth]
+    _assert_accepted(loop)
+
+
+def test_control_plant_names_nothing():
+    loop = run_closeloop(DECLARED_MJCF)
+    assert loop.result.terms == ()
+    assert loop.result.unexplained is False
+
+
+def test_effect_outside_dictionary_is_unexplained():
+    loop = run_closeloop(DECLARED_MJCF.parent / "lynxmotion_coupled.xml")
+    assert loop.outside_dictionary
+    assert loop.result.unexplained is True
+
+
+def test_cli_writes_contract(tmp_path):
+    out = tmp_path / "cl"
+    rc = main(["closeloop", "--plant", str(DECLARED_MJCF.parent / "lynxmotion_friction.xml"),
+               "--out", str(out)])
+    assert rc == 0
+    report = json.loads((out / "closeloop.json").read_text())
+    assert {"effects", "error_before", "error_after", "unexplained"} <= report.keys()
+    named = {(e["effect"], e["joint"]): e["coefficient"] for e in report["effects"]}
+    assert set(named) == {("viscous", 1), ("coulomb", 2), ("viscous", 3)}
+    assert named[("coulomb", 2)] == pytest.approx(0.05, rel=0.1)
+    assert report["unexplained"] is False
+    assert len(report["error_before"]) == len(report["error_after"]) == 3
+
+
+def test_cli_bad_plant_is_one_line_and_no_output(tmp_path, capsys):
+    rc = main(["closeloop", "--plant", str(tmp_path / "missing.xml"), "--out", str(tmp_path / "o")])
+    assert rc == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "plant file not found" in err[0]
+    assert not (tmp_path / "o" / "closeloop.json").exists()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("variant", EVERY_JOINT, ids=lambda v: v.name)
+def test_every_effect_on_every_joint(tmp_path, variant):
+    _assert_accepted(run_closeloop(write_variant(variant, tmp_path)))
+
+
+@pytest.mark.slow
+def test_combination_of_five_effects(tmp_path):
+    v = Variant((("viscous", 1, 0.01), ("coulomb", 2, 0.05), ("armature", 3, 0.005),
+                 ("spring", 3, 0.1)), payload=0.05, name="combo")
+    _assert_accepted(run_closeloop(write_variant(v, tmp_path)))
