@@ -1,0 +1,70 @@
+"""Configuration of the planner and of a planning scenario (defaults: the paper's)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from math import pi
+
+import numpy as np
+
+from planning.errors import PlanningError
+from planning.kinematics import ArmGeometry
+from planning.obstacle import LinearObstacle
+
+
+@dataclass(frozen=True)
+class PlannerConfig:
+    """How trajectories are scored and constrained.
+
+    threshold: lambda (m); penalty_weight: alpha (J/m^2 per obstacle sample);
+    energy_samples: N; obstacle_slots: how many obstacle samples one solve sees (the
+    ones that can come within the threshold, see planning.screening);
+    limits in rad, enforced at limit_samples interior points of every segment.
+    """
+
+    threshold: float = 0.08
+    penalty_weight: float = 200.0
+    energy_samples: int = 10
+    obstacle_slots: int = 24
+    rest_at_goal: bool = False
+    lower: tuple[float, ...] = (-pi / 2, 0.0, -pi)
+    upper: tuple[float, ...] = (pi / 2, pi, 0.0)
+    limit_samples: int = 20
+    geometry: ArmGeometry = field(default_factory=ArmGeometry)
+    hessian: str = "exact"  # or "limited-memory"
+    jit: bool = False  # compile the NLP's functions to C (needs a C compiler)
+    max_iterations: int = 300
+    power_smoothing: float = 0.0  # W; 0: exact epigraph of |P|, > 0: sqrt(P^2 + eps^2) - eps
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """Where the arm goes and what crosses its way (rad, rad/s, s, m)."""
+
+    start: tuple[float, float, float] = (pi / 2, pi / 5, -pi / 4)
+    goal: tuple[float, float, float] = (-pi / 2, 2 * pi / 5, -pi / 3)
+    duration: float = 2.0
+    obstacle: LinearObstacle | None = LinearObstacle((0.15, 0.40, 0.22), (0.18, -0.35, 0.28), 2.0)
+    start_velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    def validate(self, config: PlannerConfig) -> None:
+        """Raise PlanningError on input no plan can satisfy."""
+        values = np.concatenate([self.start, self.goal, self.start_velocity, [self.duration]])
+        if not np.all(np.isfinite(values)):
+            raise PlanningError("start, goal, start velocity and duration must be finite")
+        if not self.duration > 0:
+            raise PlanningError(f"duration must be > 0 s, got {self.duration}")
+        lower, upper = np.asarray(config.lower), np.asarray(config.upper)
+        for name, q in (("start", self.start), ("goal", self.goal)):
+            q = np.asarray(q, float)
+            if len(q) != len(lower):
+                raise PlanningError(f"{name} must have {len(lower)} joint angles, got {len(q)}")
+            bad = np.flatnonzero((q < lower - 1e-9) | (q > upper + 1e-9))
+            if bad.size:
+                i = bad[0]
+                raise PlanningError(
+                    f"{name} q{i + 1} = {q[i]:.4f} rad is outside the joint limits "
+                    f"[{lower[i]:.4f}, {upper[i]:.4f}]"
+                )
+        if self.obstacle is not None and abs(self.obstacle.duration - self.duration) > 1e-12:
+            raise PlanningError("the obstacle path must span the motion's duration")

@@ -1,0 +1,18 @@
+"""Energy of a joint trajectory under a torque model (paper eqs. 15, 18), in joules."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from identification import TorqueModel
+
+
+def power(model: TorqueModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+    """Mechanical power sum_i tau_i qd_i (W) at each of n states (n, dof)."""
+    return np.sum(model.torque(q, qd, qdd) * qd, axis=1)
+
+
+def absolute_energy(model: TorqueModel, t: np.ndarray, q, qd, qdd) -> float:
+    """Integral of |P| dt (J) by the trapezoid rule on the time grid t (s)."""
+    p = np.abs(power(model, q, qd, qdd))
+    return float(np.sum(0.5 * (p[1:] + p[:-1]) * np.diff(t)))

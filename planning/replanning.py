@@ -1,0 +1,116 @@
+"""Dynamic re-planning, paper Algorithm 2.
+
+The obstacle is observed at K samples t_k = k T / K. At each sample its future
+path is predicted (constant velocity from the last two observations); when the
+current plan would bring a link within the threshold of that prediction, the
+arm re-plans from its current state (position, velocity, remaining time). The
+executed trajectory is the concatenation of the segments actually followed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from planning.clearance import link_clearances
+from planning.config import Scenario
+from planning.errors import PlanningError
+from planning.obstacle import predict_linear
+from planning.screening import screen
+from planning.solver import ObstacleForecast, Planner, SegmentPlan
+
+TRIGGER_TOLERANCE = 1e-3  # m: predicted dips smaller than this do not trigger a re-plan
+
+
+@dataclass(frozen=True)
+class Execution:
+    """What the arm did: the segments followed and when each was planned (s)."""
+
+    segments: tuple[SegmentPlan, ...]
+    replan_times: tuple[float, ...]
+    solve_ms: tuple[float, ...]  # wall time of every solve (incl. re-screening rounds)
+    failures: tuple[str, ...]  # IPOPT statuses of failed solves
+
+
+def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goal,
+                 forecast: ObstacleForecast | None, warm: SegmentPlan | None = None,
+                 rounds: int = 3) -> tuple[SegmentPlan, float]:
+    """Solve with the obstacle samples screened on a reference; re-screen on the result.
+
+    Without a warm start the unobstructed optimum is solved first and serves as the
+    reference. Returns the plan and the total wall time (ms) of the solves it took.
+    """
+    config, total, plan = planner.config, 0.0, warm
+    if plan is None:
+        plan = planner.solve(q0, qd0, duration, goal, None, t_begin)
+        total = plan.solve_ms
+        if forecast is None:
+            return plan, total
+    reference, chosen = plan.trajectory.restrict(t_begin, duration), set()
+    for round_ in range(rounds):
+        subset = screen(forecast, reference, config.geometry, config.threshold,
+                        config.obstacle_slots) if forecast is not None else None
+        times = set() if subset is None else set(subset.times)
+        if round_ > 0 and times <= chosen:
+            break
+        if round_ == 0 and not times and warm is None:
+            break  # nothing comes near the unobstructed optimum: it is the plan
+        chosen |= times
+        plan = planner.solve(q0, qd0, duration, goal, subset, t_begin, warm=plan)
+        total += plan.solve_ms
+        reference = plan.trajectory
+    return plan, total
+
+
+def check_start(planner: Planner, scenario: Scenario) -> None:
+    """Raise PlanningError if the arm starts within the threshold of the obstacle."""
+    if scenario.obstacle is None:
+        return
+    clearance = link_clearances(planner.config.geometry, np.asarray([scenario.start]),
+                                scenario.obstacle.position(0.0)).min()
+    if clearance < planner.config.threshold:
+        raise PlanningError(f"start is inside the obstacle threshold: clearance "
+                            f"{clearance:.4f} m < {planner.config.threshold} m")
+
+
+def execute(planner: Planner, scenario: Scenario, replan: bool = True) -> Execution:
+    """Run Algorithm 2 on the scenario; replan=False follows the first plan throughout."""
+    scenario.validate(planner.config)
+    check_start(planner, scenario)
+    obstacle, goal, T = scenario.obstacle, scenario.goal, scenario.duration
+    forecast = None if obstacle is None else _forecast(obstacle, 0.0)
+    plan, ms = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0, T, goal,
+                            forecast)
+    segments, times, solve_ms = [plan], [0.0], [ms]
+    failures = [] if plan.success else [plan.status]
+    if obstacle is None or not replan:
+        return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures))
+    for t in obstacle.sample_times[:-1]:
+        forecast = _forecast(obstacle, t)
+        if _predicted_clearance(planner, plan, forecast) >= planner.config.threshold \
+                - TRIGGER_TOLERANCE:
+            continue
+        q, qd, _ = plan.trajectory.state(t)
+        new, ms = plan_segment(planner, q[0], qd[0], t, T - t, goal, forecast, warm=plan)
+        solve_ms.append(ms)
+        if not new.success:
+            failures.append(new.status)
+            continue  # keep following the last good plan; the result is flagged
+        plan = new
+        segments.append(plan)
+        times.append(float(t))
+    return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures))
+
+
+def _forecast(obstacle, t: float) -> ObstacleForecast:
+    """Prediction at time t of the obstacle at the remaining samples, from what was seen."""
+    seen = np.concatenate([[0.0], obstacle.sample_times])
+    seen = seen[seen <= t + 1e-12][-2:]
+    future = obstacle.sample_times[obstacle.sample_times > t + 1e-12]
+    return ObstacleForecast(future, predict_linear(seen, obstacle.position(seen), future))
+
+
+def _predicted_clearance(planner: Planner, plan: SegmentPlan, forecast: ObstacleForecast):
+    q = plan.trajectory.state(forecast.times)[0]
+    return link_clearances(planner.config.geometry, q, forecast.centres).min()
