@@ -34,7 +34,7 @@ UNITS = {"viscous": "N m s/rad", "coulomb": "N m", "armature": "kg m^2", "offset
 COULOMB_EPS = 0.01  # rad/s, default width of the smooth sign
 COULOMB_LEAD = 0.01  # s, default lead of the switching velocity
 COULOMB_SHAPES = tuple((lead, eps) for lead in (0.0, 0.005, 0.01, 0.015, 0.02, 0.03)
-                       for eps in (0.003, 0.01, 0.02, 0.05))  # grid refined over
+                       for eps in (0.003, 0.01, 0.02, 0.05, 0.1))  # grid refined over
 
 PayloadTorque = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
