@@ -74,13 +74,18 @@ def _figure_links(outcome: SectionOutcome, out_dir: Path) -> list[str]:
 
 
 def _section_markdown(outcome: SectionOutcome, out_dir: Path) -> list[str]:
-    title = TITLES.get(outcome.name, outcome.name)
+    body = outcome.markdown.strip()
+    if body.startswith("## "):  # the section brought its own title
+        title, _, body = body.partition("\n")
+        title = title[3:].strip()
+    else:
+        title = TITLES.get(outcome.name, outcome.name)
     lines = [f"## {title}", ""]
     if outcome.status == "not available":
         return lines + ["_Section not available yet._", ""]
     if outcome.status == "failed":
         return lines + [f"**FAILED** after {outcome.seconds:.1f} s: `{outcome.error}`", ""]
-    lines += [f"_{outcome.seconds:.1f} s_", "", outcome.markdown.strip(), ""]
+    lines += [f"_{outcome.seconds:.1f} s_", "", body.strip(), ""]
     return lines + [link for link in _figure_links(outcome, out_dir)] + [""]
 
 

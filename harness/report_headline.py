@@ -35,11 +35,29 @@ def fallback(results: dict) -> dict:
     """Error-like numbers of a section that declared no headline."""
     found = {}
     for path, value in _leaves(results):
+        if "checks" in path.lower():
+            continue
         if any(k in path.lower() for k in FALLBACK_KEYS) and _is_number_or_numbers(value):
             found[path] = value
             if len(found) == MAX_FALLBACK:
                 break
     return found
+
+
+def identification_numbers(results: dict) -> dict:
+    """Held-out relative error per joint, sparse model vs oracle, at every noise level."""
+    out, levels = {}, results.get("levels") or {}
+    try:  # levels are fractions of the torque std (0.05) or percents (5)
+        scale = 100.0 if max(float(k) for k in levels) <= 1 else 1.0
+    except ValueError:
+        return out
+    for level, entry in levels.items():
+        joints = entry.get("joints", []) if isinstance(entry, dict) else []
+        if joints and all("rel" in j and "oracle" in j for j in joints):
+            pct = f"{float(level) * scale:g}"
+            out[f"noise {pct} %: sparse rel err"] = [j["rel"] for j in joints]
+            out[f"noise {pct} %: oracle rel err"] = [j["oracle"] for j in joints]
+    return out
 
 
 def planning_numbers(plans: dict) -> dict:
@@ -82,6 +100,8 @@ def headline(section_results: dict[str, dict], plans: dict) -> dict[str, dict]:
     for name, results in section_results.items():
         own = results.get("headline") if isinstance(results, dict) else None
         numbers = dict(own) if isinstance(own, dict) else {}
+        if name == "identification":
+            numbers.update(identification_numbers(results))
         if name == "planning":
             numbers.update(planning_numbers(plans))
         elif name == "replay":

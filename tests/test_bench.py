@@ -122,3 +122,15 @@ def test_readme_sections_are_replaced_in_place_and_idempotent(tmp_path):
     assert "keep me" in first
     update_readme(tmp_path, readme)
     assert readme.read_text() == first
+
+
+def test_identification_headline_and_section_titles(tmp_path):
+    from harness.report import SectionOutcome, report_markdown
+    from harness.report_headline import identification_numbers
+
+    levels = {"0.05": {"joints": [{"rel": 0.004, "oracle": 0.003}] * 3}}
+    numbers = identification_numbers({"levels": levels})
+    assert numbers["noise 5 %: sparse rel err"] == [0.004] * 3
+    outcome = SectionOutcome("identification", "ok", markdown="## Own title\n\nbody")
+    md = report_markdown([outcome], {}, {"robot": "r"}, tmp_path)
+    assert "## Own title" in md and md.count("## ") == 2  # headline + the section's own title
