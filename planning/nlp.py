@@ -4,8 +4,13 @@ Decision variables x = [free quartic coefficients (dof x 3, row-major), e (N)]:
 e_i >= |P(i/N)| is the epigraph of the absolute power, so the objective
 sigma/N sum e_i + alpha sum_k w_k (max(0, lambda - D1_k)^2 + max(0, lambda - D2_k)^2)
 is smooth enough for exact derivatives. Parameters p = [q0, qd0, sigma, q_end,
-obstacle centres (3 K), their normalized times s_k (K), weights w_k (K)], so a
+obstacle centres (3 K), their normalized times s_k (K), weights w_k (K), the
+normalized times of each joint's turning points (dof x 3)], so a
 re-plan changes only numbers: the solver is built once and warm-started.
+
+Joint limits hold at fixed interior samples and, exactly, at the turning points
+of a reference motion (where a polynomial peaks); the solver re-solves until the
+turning points of its own solution are the ones constrained.
 """
 
 from __future__ import annotations
@@ -16,7 +21,9 @@ import numpy as np
 from identification import TorqueModel
 from planning.clearance import symbolic_link_clearances
 from planning.config import PlannerConfig
-from planning.trajectory import power_basis
+from planning.trajectory import DEGREE, power_basis
+
+EXTREMA = DEGREE - 1  # a quartic turns at most 3 times
 
 
 class PlanningNLP:
@@ -32,7 +39,9 @@ class PlanningNLP:
         q0, qd0, sigma, goal = (ca.SX.sym(s, d) for s, d in
                                 (("q0", dof), ("qd0", dof), ("sigma", 1), ("goal", dof)))
         obstacle, s_obs, weight = ca.SX.sym("obs", 3, k), ca.SX.sym("s_obs", k), ca.SX.sym("w", k)
-        self.p = ca.vertcat(q0, qd0, sigma, goal, ca.vec(obstacle), s_obs, weight)
+        extremum = ca.SX.sym("s_lim", dof, EXTREMA)
+        self.p = ca.vertcat(q0, qd0, sigma, goal, ca.vec(obstacle), s_obs, weight,
+                            ca.vec(extremum))
         coefficients = ca.horzcat(q0, qd0 * sigma, free)  # (dof, 5), column p -> s**p
 
         def state(s):
@@ -69,6 +78,12 @@ class PlanningNLP:
             g.append(_poly(coefficients, float(s), 0))
             lbg += list(config.lower)
             ubg += list(config.upper)
+        for j in range(dof):  # limits at the motion's own turning points (parameters)
+            for m in range(EXTREMA):
+                g.append(_poly(coefficients[j, :], _newton(coefficients[j, :],
+                                                            extremum[j, m]), 0))
+                lbg.append(config.lower[j])
+                ubg.append(config.upper[j])
         self.g = ca.vertcat(*g)
         self.lbg, self.ubg = np.array(lbg), np.array(ubg)
 
@@ -78,6 +93,16 @@ class PlanningNLP:
         g = ca.Function("constraints", [self.x, self.p], [self.g, ca.jacobian(self.g, self.x)])
         parts = ca.Function("objective_parts", [self.x, self.p], [self.energy, self.penalty])
         return f, g, parts
+
+
+def _newton(coefficients, s):
+    """One Newton step from s towards the turning point q'(s) = 0 of this motion, clamped
+    to [0, 1]: a reference turning point that is slightly off still constrains the
+    current peak to second order. Without curvature (|q''| tiny) s stays put."""
+    slope, curvature = _poly(coefficients, s, 1), _poly(coefficients, s, 2)
+    safe = ca.fabs(curvature) > 1e-3
+    step = ca.if_else(safe, slope / ca.if_else(safe, curvature, 1.0), 0.0)
+    return ca.fmin(ca.fmax(s - step, 0.0), 1.0)
 
 
 def _poly(coefficients, s, derivative: int):

@@ -21,6 +21,7 @@ from planning.screening import screen
 from planning.solver import ObstacleForecast, Planner, SegmentPlan
 
 TRIGGER_TOLERANCE = 1e-3  # m: predicted dips smaller than this do not trigger a re-plan
+LIMIT_SETTLED = 1e-8  # rad: a plan within this of the limits at its turning points is kept
 
 
 @dataclass(frozen=True)
@@ -35,7 +36,7 @@ class Execution:
 
 def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goal,
                  forecast: ObstacleForecast | None, warm: SegmentPlan | None = None,
-                 rounds: int = 3) -> tuple[SegmentPlan, float]:
+                 rounds: int = 4) -> tuple[SegmentPlan, float]:
     """Solve with the obstacle samples screened on a reference; re-screen on the result.
 
     Without a warm start the unobstructed optimum is solved first and serves as the
@@ -45,22 +46,30 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     if plan is None:
         plan = planner.solve(q0, qd0, duration, goal, None, t_begin)
         total = plan.solve_ms
-        if forecast is None:
-            return plan, total
     reference, chosen = plan.trajectory.restrict(t_begin, duration), set()
     for round_ in range(rounds):
         subset = screen(forecast, reference, config.geometry, config.threshold,
                         config.obstacle_slots) if forecast is not None else None
         times = set() if subset is None else set(subset.times)
-        if round_ > 0 and times <= chosen:
-            break
-        if round_ == 0 and not times and warm is None:
-            break  # nothing comes near the unobstructed optimum: it is the plan
+        settled = times <= chosen and limit_excess(plan, config) <= LIMIT_SETTLED
+        if settled and (round_ > 0 or warm is None):
+            break  # the constraints that matter at this solution were the ones imposed
         chosen |= times
-        plan = planner.solve(q0, qd0, duration, goal, subset, t_begin, warm=plan)
+        plan = planner.solve(q0, qd0, duration, goal, subset, t_begin, warm=plan,
+                             turning=reference.turning_points())
         total += plan.solve_ms
         reference = plan.trajectory
     return plan, total
+
+
+def limit_excess(plan: SegmentPlan, config) -> float:
+    """Worst excursion (rad) beyond the joint limits at the plan's turning points."""
+    trajectory = plan.trajectory
+    worst = 0.0
+    for j, times in enumerate(trajectory.turning_points()):
+        q = trajectory.state(trajectory.t_begin + times * trajectory.duration)[0][:, j]
+        worst = max(worst, np.max(config.lower[j] - q), np.max(q - config.upper[j]))
+    return float(worst)
 
 
 def check_start(planner: Planner, scenario: Scenario) -> None:

@@ -60,7 +60,7 @@ class Planner:
         self._warm = ca.nlpsol("plan_warm", "ipopt", problem, dict(options, **_WARM))
 
     def parameters(self, q0, qd0, duration: float, goal, forecast: ObstacleForecast | None,
-                   t_begin: float = 0.0) -> np.ndarray:
+                   t_begin: float = 0.0, turning: np.ndarray | None = None) -> np.ndarray:
         """Pack the parameter vector p; obstacle samples outside (t_begin, t_end] weigh 0."""
         k = self.config.obstacle_slots
         centres, s_obs, weight = np.zeros((k, 3)), np.zeros(k), np.zeros(k)
@@ -69,7 +69,10 @@ class Planner:
             keep = np.flatnonzero((s > 1e-12) & (s <= 1 + 1e-12))[-k:]
             m = len(keep)
             centres[:m], s_obs[:m], weight[:m] = forecast.centres[keep], s[keep], 1.0
-        return np.concatenate([q0, qd0, [duration], goal, centres.ravel(), s_obs, weight])
+        if turning is None:
+            turning = np.full((self.model.dof, 3), 0.5)
+        return np.concatenate([q0, qd0, [duration], goal, centres.ravel(), s_obs, weight,
+                               np.asarray(turning).ravel(order="F")])
 
     def initial_guess(self, q0, qd0, duration: float, goal) -> np.ndarray:
         """A cubic that reaches the goal at rest, and zero power slacks."""
@@ -84,9 +87,14 @@ class Planner:
         return 0 if self.config.power_smoothing > 0 else self.config.energy_samples
 
     def solve(self, q0, qd0, duration: float, goal, forecast: ObstacleForecast | None = None,
-              t_begin: float = 0.0, warm: SegmentPlan | None = None) -> SegmentPlan:
-        """Plan from (q0, qd0) at t_begin to goal at t_begin + duration."""
-        p = self.parameters(q0, qd0, duration, goal, forecast, t_begin)
+              t_begin: float = 0.0, warm: SegmentPlan | None = None,
+              turning: np.ndarray | None = None) -> SegmentPlan:
+        """Plan from (q0, qd0) at t_begin to goal at t_begin + duration.
+
+        turning: normalized times (dof, 3) where the joint limits are enforced in
+        addition to the fixed samples (see PlanningNLP).
+        """
+        p = self.parameters(q0, qd0, duration, goal, forecast, t_begin, turning)
         args = {"p": p, "lbg": self.nlp.lbg, "ubg": self.nlp.ubg}
         if warm is None:
             solver, args["x0"] = self._cold, self.initial_guess(q0, qd0, duration, goal)

@@ -56,6 +56,17 @@ class QuarticTrajectory:
             power_basis(s, 2) @ c / self.duration**2,
         )
 
+    def turning_points(self) -> np.ndarray:
+        """Normalized times (dof, 3) in (0, 1) where each joint's velocity vanishes;
+        unused entries are 0.5 (an ordinary interior point)."""
+        out = np.full((len(self.coefficients), DEGREE - 1), 0.5)
+        for j, c in enumerate(self.coefficients):
+            roots = np.polynomial.Polynomial(c).deriv().roots()
+            real = roots[np.abs(roots.imag) < 1e-9].real
+            real = np.sort(real[(real > 1e-6) & (real < 1 - 1e-6)])
+            out[j, : len(real)] = real
+        return out
+
     def restrict(self, t_begin: float, duration: float) -> QuarticTrajectory:
         """The same motion re-expressed on [t_begin, t_begin + duration] (exact: a
         quartic in s is a quartic in any affinely shifted normalized time)."""

@@ -1,0 +1,104 @@
+"""The executed trajectory, sampled, scored and checked: what PLAN.json holds."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from identification import TorqueModel
+from planning.clearance import link_clearances
+from planning.config import PlannerConfig, Scenario
+from planning.energy import absolute_energy
+from planning.replanning import Execution
+
+CLEARANCE_TOLERANCE = 2e-3  # m below the threshold still counted as avoided (penalty is soft)
+END_TOLERANCE = 1e-6  # rad
+LIMIT_TOLERANCE = 1e-6  # rad
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """Executed motion on a time grid that contains every obstacle sample time."""
+
+    t: np.ndarray  # (n,) s
+    q: np.ndarray  # (n, dof) rad
+    qd: np.ndarray  # rad/s
+    qdd: np.ndarray  # rad/s^2
+    obstacle: np.ndarray  # (n, 3) m, the obstacle centre at t
+    clearance: np.ndarray  # (n, 2) m, link 2 and link 3
+    sample_clearance: np.ndarray  # (K,) m, min over links at the obstacle sample times
+    energy: float  # J, integral of |P| on t under the planning model
+    end_error: float  # rad, max |q(T) - goal|
+    limit_violation: float  # rad, worst excursion beyond the joint limits
+    execution: Execution
+    feasible: bool
+    problems: tuple[str, ...]
+
+
+def sample_execution(execution: Execution, t: np.ndarray):
+    """q, qd, qdd of the concatenated segments at times t (each segment from its start)."""
+    starts = np.array([s.trajectory.t_begin for s in execution.segments])
+    which = np.searchsorted(starts, t, side="right") - 1
+    states = [np.empty((len(t), len(execution.segments[0].trajectory.coefficients)))
+              for _ in range(3)]
+    for i, segment in enumerate(execution.segments):
+        mask = which == i
+        if mask.any():
+            for out, value in zip(states, segment.trajectory.state(t[mask]), strict=True):
+                out[mask] = value
+    return tuple(states)
+
+
+def evaluate(execution: Execution, scenario: Scenario, model: TorqueModel,
+             config: PlannerConfig, refine: int = 5) -> PlanResult:
+    """Sample the execution (refine points per obstacle sample interval) and check it."""
+    samples = scenario.obstacle.samples if scenario.obstacle else 200
+    t = np.linspace(0.0, scenario.duration, refine * samples + 1)
+    q, qd, qdd = sample_execution(execution, t)
+    obstacle = scenario.obstacle.position(t) if scenario.obstacle else np.full((len(t), 3), np.nan)
+    clearance = (link_clearances(config.geometry, q, obstacle) if scenario.obstacle
+                 else np.full((len(t), 2), np.inf))
+    sample_clearance = clearance[refine::refine].min(axis=1)
+    end_error = float(np.max(np.abs(q[-1] - np.asarray(scenario.goal))))
+    limit = float(max(0.0, np.max(np.asarray(config.lower) - q), np.max(q - np.asarray(config.upper))))
+    problems = [f"solver failed: {status}" for status in execution.failures]
+    if end_error > END_TOLERANCE:
+        problems.append(f"end-position error {end_error:.2e} rad > {END_TOLERANCE:.0e}")
+    if limit > LIMIT_TOLERANCE:
+        problems.append(f"joint limits exceeded by {limit:.2e} rad")
+    if sample_clearance.min() < config.threshold - CLEARANCE_TOLERANCE:
+        problems.append(f"clearance {sample_clearance.min():.4f} m < threshold "
+                        f"{config.threshold} m - {CLEARANCE_TOLERANCE} m")
+    return PlanResult(t, q, qd, qdd, obstacle, clearance, sample_clearance,
+                      absolute_energy(model, t, q, qd, qdd), end_error, limit, execution,
+                      not problems, tuple(problems))
+
+
+def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
+            model_name: str) -> dict:
+    """The PLAN.json payload (CLI contract keys plus descriptive extras)."""
+    segments = result.execution.segments
+    return {
+        "coefficients": [s.trajectory.coefficients for s in segments],
+        "coefficient_order": "per segment (dof, 5): column p multiplies s**p, "
+                             "s = (t - t_begin) / duration",
+        "segments": [{"t_begin": s.trajectory.t_begin, "duration": s.trajectory.duration,
+                      "objective_energy": s.energy, "penalty": s.penalty,
+                      "iterations": s.iterations, "status": s.status} for s in segments],
+        "t": result.t, "q": result.q, "qd": result.qd, "qdd": result.qdd,
+        "obstacle": result.obstacle if scenario.obstacle else None,
+        "clearance": result.clearance if scenario.obstacle else None,
+        "threshold": config.threshold, "penalty_weight": config.penalty_weight,
+        "energy_samples": config.energy_samples,
+        "energy": result.energy,
+        "min_clearance": float(result.sample_clearance.min()) if scenario.obstacle else None,
+        "replans": len(segments) - 1,
+        "replan_times": result.execution.replan_times,
+        "solve_ms": result.execution.solve_ms,
+        "end_error": result.end_error, "limit_violation": result.limit_violation,
+        "feasible": result.feasible, "problems": result.problems,
+        "duration": scenario.duration, "start": scenario.start, "goal": scenario.goal,
+        "start_velocity": scenario.start_velocity, "rest_at_goal": config.rest_at_goal,
+        "model": model_name,
+    }
