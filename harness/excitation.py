@@ -46,7 +46,7 @@ def random_excitation(
     lower: np.ndarray,
     upper: np.ndarray,
     rng: np.random.Generator,
-    harmonics: int = 10,
+    harmonics: int = 20,
     f0: float = 0.05,
     fill: float = 0.9,
 ) -> FourierExcitation:
