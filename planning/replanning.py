@@ -83,11 +83,17 @@ def check_start(planner: Planner, scenario: Scenario) -> None:
                             f"{clearance:.4f} m < {planner.config.threshold} m")
 
 
-def execute(planner: Planner, scenario: Scenario, replan: bool = True) -> Execution:
-    """Run Algorithm 2 on the scenario; replan=False follows the first plan throughout."""
+def execute(planner: Planner, scenario: Scenario, replan: bool = True,
+            avoid: bool = True) -> Execution:
+    """Run Algorithm 2 on the scenario.
+
+    replan=False follows the first plan throughout; avoid=False ignores the obstacle
+    (the energy-optimal motion without obstacle, paper Fig. 9 red line).
+    """
     scenario.validate(planner.config)
-    check_start(planner, scenario)
-    obstacle, goal, T = scenario.obstacle, scenario.goal, scenario.duration
+    obstacle, goal, T = scenario.obstacle if avoid else None, scenario.goal, scenario.duration
+    if avoid:
+        check_start(planner, scenario)
     forecast = None if obstacle is None else _forecast(obstacle, 0.0)
     plan, ms = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0, T, goal,
                             forecast)
