@@ -1,0 +1,117 @@
+"""Planner building blocks cross-checked against independent computations."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from harness.pinocchio_baseline import PinocchioModel
+from harness.robots import load_mujoco, load_pinocchio
+from planning.clearance import link_clearances, segment_distance
+from planning.config import PlannerConfig
+from planning.kinematics import ArmGeometry
+from planning.nlp import PlanningNLP
+from planning.obstacle import LinearObstacle, predict_linear
+from planning.solver import ObstacleForecast, Planner
+from planning.trajectory import QuarticTrajectory
+
+RNG = np.random.default_rng(7)
+
+
+def test_forward_kinematics_matches_mujoco_sites():
+    model = load_mujoco("lynxmotion")
+    data = mujoco.MjData(model)
+    geometry = ArmGeometry()
+    for q in RNG.uniform([-1.5, 0, -3], [1.5, 3, 0], (10, 3)):
+        data.qpos[:] = q
+        mujoco.mj_kinematics(model, data)
+        shoulder, elbow, end = (p[0] for p in geometry.points(q))
+        for name, point in (("shoulder", shoulder), ("elbow", elbow), ("end_effector", end)):
+            assert np.allclose(data.site(name).xpos, point, atol=1e-12), name
+
+
+def test_segment_distance_matches_dense_sampling():
+    a, b = RNG.normal(size=(50, 3)), RNG.normal(size=(50, 3))
+    p = RNG.normal(size=(50, 3)) * 2
+    u = np.linspace(0, 1, 20001)
+    brute = [np.min(np.linalg.norm(a[i] + u[:, None] * (b[i] - a[i]) - p[i], axis=1))
+             for i in range(50)]
+    assert np.allclose(segment_distance(p, a, b), brute, atol=1e-7)
+
+
+def test_segment_not_infinite_line():
+    """Beyond the end effector the distance is to the tip, not to the extended line."""
+    geometry = ArmGeometry()
+    q = np.array([[0.0, 0.0, 0.0]])  # arm straight out along +x at shoulder height
+    beyond = np.array([geometry.l2 + geometry.l3 + 0.1, 0.0, geometry.d1])
+    assert np.isclose(link_clearances(geometry, q, beyond)[0, 1], 0.1)
+
+
+def test_quartic_derivatives_restriction_and_turning_points():
+    trajectory = QuarticTrajectory(0.3, 1.7, RNG.normal(size=(3, 5)))
+    t = np.linspace(0.4, 1.9, 9)
+    q, qd, qdd = trajectory.state(t)
+    h = 1e-6
+    assert np.allclose(qd, (trajectory.state(t + h)[0] - trajectory.state(t - h)[0]) / (2 * h),
+                       atol=1e-6)
+    assert np.allclose(qdd, (trajectory.state(t + h)[1] - trajectory.state(t - h)[1]) / (2 * h),
+                       atol=1e-5)
+    part = trajectory.restrict(1.1, 0.9)
+    assert all(np.allclose(x, y, atol=1e-12) for x, y in zip(trajectory.state(t[4:]),
+                                                              part.state(t[4:]), strict=True))
+    for j, times in enumerate(trajectory.turning_points()):
+        inside = times[(times != 0.5)]
+        if inside.size:
+            velocity = trajectory.state(0.3 + 1.7 * inside)[1][:, j]
+            assert np.allclose(velocity, 0, atol=1e-9)
+
+
+def test_linear_prediction_is_exact_for_a_linear_obstacle():
+    obstacle = LinearObstacle((0.1, 0.4, 0.2), (0.2, -0.3, 0.3), 2.0)
+    seen = obstacle.sample_times[3:5]
+    future = obstacle.sample_times[5:]
+    assert np.allclose(predict_linear(seen, obstacle.position(seen), future),
+                       obstacle.position(future), atol=1e-14)
+
+
+@pytest.fixture(scope="module")
+def nlp_functions():
+    model = PinocchioModel(load_pinocchio("lynxmotion"))
+    config = PlannerConfig(obstacle_slots=8)
+    planner = Planner(model, config)
+    q0, goal = np.array([1.2, 0.6, -0.8]), np.array([-1.0, 1.2, -1.0])
+    arm = QuarticTrajectory.from_free(0.0, 2.0, q0, np.zeros(3),
+                                      RNG.normal(scale=0.3, size=(3, 3)))
+    times = np.linspace(0.25, 2.0, 8)
+    # obstacle centres 5 cm from the end effector: the penalty is active
+    _, _, tip = config.geometry.points(arm.state(times)[0])
+    forecast = ObstacleForecast(times, tip + np.array([0.0, 0.05, 0.0]))
+    turning = np.array([[0.3, 0.6, 0.9]] * 3)
+    p = planner.parameters(q0, np.array([0.1, -0.2, 0.3]), 2.0, goal, forecast, 0.0, turning)
+    x = np.concatenate([arm.coefficients[:, 2:].ravel(), RNG.uniform(0.1, 1, 10)])
+    return PlanningNLP(model, config).functions(), x, p
+
+
+def _central_difference(fun, x, h=1e-6):
+    columns = []
+    for i in range(len(x)):
+        e = np.zeros_like(x)
+        e[i] = h
+        columns.append((np.asarray(fun(x + e)) - np.asarray(fun(x - e))).ravel() / (2 * h))
+    return np.stack(columns, axis=-1)
+
+
+def test_objective_gradient_matches_finite_differences(nlp_functions):
+    (objective, _, parts), x, p = nlp_functions
+    assert float(parts(x, p)[1]) > 1e-3  # the obstacle penalty is part of the check
+    gradient = np.asarray(objective(x, p)[1]).ravel()
+    numeric = _central_difference(lambda y: objective(y, p)[0], x).ravel()
+    assert np.allclose(gradient, numeric, rtol=1e-6, atol=1e-6)
+
+
+def test_constraint_jacobian_matches_finite_differences(nlp_functions):
+    (_, constraints, _), x, p = nlp_functions
+    jacobian = np.asarray(constraints(x, p)[1])
+    numeric = _central_difference(lambda y: constraints(y, p)[0], x)
+    assert np.allclose(jacobian, numeric, rtol=1e-6, atol=1e-6)

@@ -1,0 +1,123 @@
+"""The paper's scenario end to end, bad input, and the `plan` command."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from harness.cli import main
+from harness.pinocchio_baseline import PinocchioModel
+from harness.robots import load_pinocchio
+from planning import PlanningError
+from planning.config import PlannerConfig, Scenario
+from planning.energy import absolute_energy
+from planning.replanning import execute
+from planning.result import evaluate
+from planning.solver import Planner
+
+
+def _heavier(scale: float) -> PinocchioModel:
+    """A stand-in 'identified' model: the arm with every link's inertia scaled."""
+    model = load_pinocchio("lynxmotion")
+    for j in range(1, model.njoints):
+        inertia = model.inertias[j]
+        model.inertias[j] = pin.Inertia(inertia.mass * scale, inertia.lever,
+                                        inertia.inertia * scale)
+    return PinocchioModel(model)
+
+
+@pytest.fixture(scope="module")
+def baseline():
+    return PinocchioModel(load_pinocchio("lynxmotion"))
+
+
+@pytest.fixture(scope="module")
+def paper(baseline):
+    planner = Planner(baseline)
+    scenario = Scenario()
+    free = evaluate(execute(planner, scenario, avoid=False), scenario, baseline, planner.config)
+    avoided = evaluate(execute(planner, scenario), scenario, baseline, planner.config)
+    return planner, scenario, free, avoided
+
+
+def test_paper_scenario_reaches_goal_and_keeps_clearance(paper):
+    planner, scenario, free, avoided = paper
+    assert avoided.feasible, avoided.problems
+    assert avoided.end_error <= 1e-6
+    needed = free.sample_clearance < planner.config.threshold
+    assert needed.any()  # the unobstructed optimum would pass too close
+    assert np.all(avoided.sample_clearance[needed] >= planner.config.threshold - 2e-3)
+    assert len(avoided.execution.segments) >= 2  # Algorithm 2 re-planned
+    assert avoided.limit_violation <= 1e-6
+
+
+def test_executed_trajectory_is_continuous_at_replans(paper):
+    _, _, _, avoided = paper
+    segments = avoided.execution.segments
+    for previous, segment in zip(segments, segments[1:]):
+        t = segment.trajectory.t_begin
+        for old, new in zip(previous.trajectory.state(t)[:2], segment.trajectory.state(t)[:2]):
+            assert np.allclose(old, new, atol=1e-12)  # same position and velocity
+    assert np.max(np.abs(np.diff(avoided.q, axis=0))) < 0.05  # no jumps on the 2 ms grid
+
+
+def test_stand_in_model_energy_close_to_baseline(paper, baseline):
+    planner, scenario, _, reference = paper
+    model = _heavier(1.01)
+    result = evaluate(execute(Planner(model), scenario), scenario, model, planner.config)
+    assert result.feasible, result.problems
+    energy = absolute_energy(baseline, result.t, result.q, result.qd, result.qdd)
+    assert abs(energy - reference.energy) / reference.energy < 0.02
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"goal": (2.0, 1.0, -1.0)}, "outside the joint limits"),
+    ({"duration": 0.0}, "duration must be > 0"),
+    ({"duration": -1.0}, "duration must be > 0"),
+    ({"start": (np.nan, 0.5, -0.5)}, "finite"),
+])
+def test_bad_input_is_an_error(baseline, change, message):
+    scenario = dataclasses.replace(Scenario(obstacle=None), **change)
+    with pytest.raises(PlanningError, match=message):
+        execute(Planner(baseline), scenario)
+
+
+def test_start_inside_threshold_is_an_error(paper):
+    planner, scenario, _, _ = paper
+    obstacle = dataclasses.replace(scenario.obstacle, start=(0.0, 0.15, 0.2))
+    with pytest.raises(PlanningError, match="inside the obstacle threshold"):
+        execute(planner, dataclasses.replace(scenario, obstacle=obstacle))
+
+
+def test_solver_failure_is_flagged(baseline):
+    config = PlannerConfig(max_iterations=2)
+    scenario = Scenario()
+    result = evaluate(execute(Planner(baseline, config), scenario), scenario, baseline, config)
+    assert not result.feasible
+    assert any("solver failed" in p for p in result.problems)
+
+
+def test_plan_command_writes_the_contract(tmp_path):
+    out = tmp_path / "plan.json"
+    assert main(["plan", "--model", "pinocchio", "--out", str(out)]) == 0
+    plan = json.loads(out.read_text())
+    for key in ("coefficients", "t", "q", "qd", "qdd", "obstacle", "threshold", "energy",
+                "min_clearance", "replans", "solve_ms"):
+        assert key in plan
+    t = np.asarray(plan["t"])
+    assert len(t) == len(plan["q"]) == len(plan["obstacle"])
+    samples = 2.0 * np.arange(1, 201) / 200
+    assert np.all(np.min(np.abs(t[:, None] - samples[None]), axis=0) < 1e-12)
+    assert plan["replans"] == len(plan["coefficients"]) - 1
+    assert len(plan["solve_ms"]) == plan["replans"] + 1
+
+
+def test_plan_command_bad_input_exits_2_without_file(tmp_path, capsys):
+    out = tmp_path / "plan.json"
+    assert main(["plan", "--model", "pinocchio", "--goal", "0,4,-1", "--out", str(out)]) == 2
+    assert not out.exists()
+    assert "outside the joint limits" in capsys.readouterr().err
