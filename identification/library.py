@@ -18,6 +18,7 @@ class Library:
     name: str
     dof: int
     features: tuple[Feature, ...]
+    atoms: tuple = ()  # Lagrangian atoms (prior_knowledge.Atom) it was derived from, if any
 
     def __post_init__(self) -> None:
         unique = tuple(dict.fromkeys(self.features))

@@ -4,7 +4,7 @@ Implements TorqueModel. The fitted intercept (a constant sensor bias in the
 data) is stored as `offset` but is NOT part of the torque: the model predicts
 the torque the robot needs, not what a biased sensor reads. MODEL.json
 follows the CLI contract: {"dof", "joints": [{"terms", "coefficients",
-"offset"}], "metrics", "library"}.
+"offset"}], "metrics", "library", "method"} (+ "lagrangian" for the coupled method).
 """
 
 from __future__ import annotations
@@ -41,6 +41,7 @@ class IdentifiedModel:
     dof: int
     joints: tuple[JointModel, ...]
     library: str = ""
+    method: str = ""  # "coupled" (one Lagrangian, shared atoms) or "per-joint" (the paper)
 
     def _features(self, j: int) -> list[Feature]:
         return [parse_feature(t, self.dof) for t in self.joints[j].terms]
@@ -70,7 +71,7 @@ class IdentifiedModel:
         return [jm.equation(j + 1) for j, jm in enumerate(self.joints)]
 
     def to_dict(self) -> dict:
-        return {"dof": self.dof, "library": self.library,
+        return {"dof": self.dof, "library": self.library, "method": self.method,
                 "joints": [{"terms": list(jm.terms), "coefficients": list(jm.coefficients),
                             "offset": jm.offset} for jm in self.joints]}
 
@@ -85,7 +86,8 @@ def model_from_dict(payload: dict) -> IdentifiedModel:
         raise IdentificationError(f"malformed model: {exc!r}") from None
     if len(joints) != dof or any(len(j.terms) != len(j.coefficients) for j in joints):
         raise IdentificationError("malformed model: joints/terms/coefficients lengths disagree")
-    model = IdentifiedModel(dof, joints, str(payload.get("library", "")))
+    model = IdentifiedModel(dof, joints, str(payload.get("library", "")),
+                            str(payload.get("method", "")))
     try:
         for j in range(dof):
             model._features(j)

@@ -47,23 +47,45 @@ class Atom:
         return () if f is None else (Trig(f, self.coeffs),)
 
 
-def _euler_lagrange(atom: Atom, joint: int) -> set[Feature]:
-    """Features of d/dt dL/dqd_joint - dL/dq_joint for L = atom (coefficients dropped)."""
-    out: set[Feature] = set()
-    slope = _DERIVATIVE.get(atom.func) if atom.func else None
-    moving = [k for k, c in enumerate(atom.coeffs) if c]
+    @property
+    def name(self) -> str:
+        """The atom as printed, e.g. 'qd1*qd2*cos(q3)' or 'sin(q2+q3)'."""
+        return Feature(tuple(("qd", k) for k in self.velocities), self.trig()).name
+
+
+def atom_torque(atom: Atom, joint: int) -> dict[Feature, float]:
+    """d/dt dL/dqd_joint - dL/dq_joint for L = atom, as {feature: factor}.
+
+    L = qd_i qd_j f(c.q):  dL/dqd_joint = (1 + [i == j]) qd_other f, whose time
+    derivative is qdd_other f + qd_other f'(c.q) sum_k c_k qd_k; dL/dq_joint =
+    c_joint qd_i qd_j f'. Potential L = f(c.q): torque -c_joint f'. f' of cos
+    is -sin, of sin is cos.
+    """
+    out: dict[Feature, float] = {}
+
+    def add(feature: Feature, value: float) -> None:
+        out[feature] = out.get(feature, 0.0) + value
+
+    sign = {"cos": -1.0, "sin": 1.0}.get(atom.func or "", 0.0)
+    slope = atom.trig(_DERIVATIVE[atom.func]) if atom.func else ()
     if atom.velocities:
         i, j = atom.velocities
         if joint in (i, j):
-            other = j if joint == i else i
-            out.add(Feature((("qdd", other),), atom.trig()))
-            if slope:
-                out |= {Feature((("qd", other), ("qd", k)), atom.trig(slope)) for k in moving}
-        if slope and joint in moving:
-            out.add(Feature((("qd", i), ("qd", j)), atom.trig(slope)))
-    elif slope and joint in moving:
-        out.add(Feature((), atom.trig(slope)))
-    return out
+            other, mult = (j if joint == i else i), (2.0 if i == j else 1.0)
+            add(Feature((("qdd", other),), atom.trig()), mult)
+            for k, c in enumerate(atom.coeffs):
+                if c and sign:
+                    add(Feature((("qd", other), ("qd", k)), slope), mult * c * sign)
+        if sign and atom.coeffs[joint]:
+            add(Feature((("qd", i), ("qd", j)), slope), -atom.coeffs[joint] * sign)
+    elif sign and atom.coeffs[joint]:
+        add(Feature((), slope), -atom.coeffs[joint] * sign)
+    return {f: v for f, v in out.items() if v != 0.0}
+
+
+def _euler_lagrange(atom: Atom, joint: int) -> set[Feature]:
+    """Features of the atom's torque on `joint` (factors dropped)."""
+    return set(atom_torque(atom, joint))
 
 
 def derive(atoms: list[Atom], dof: int, name: str) -> tuple[Library, tuple[frozenset, ...]]:
@@ -71,7 +93,7 @@ def derive(atoms: list[Atom], dof: int, name: str) -> tuple[Library, tuple[froze
     per_joint = tuple(frozenset().union(*(_euler_lagrange(a, m) for a in atoms))
                       for m in range(dof))
     features = sorted(frozenset().union(*per_joint), key=lambda f: f.name)
-    return Library(name, dof, tuple(features)), per_joint
+    return Library(name, dof, tuple(features), tuple(atoms)), per_joint
 
 
 def _funcs(symmetric: bool) -> tuple[str, ...]:
@@ -120,12 +142,18 @@ def spatial_atoms(total: int = 2, symmetric: bool = True) -> list[Atom]:
     return atoms
 
 
+def arm_atoms(dof: int = 3, symmetric_links: bool = True) -> list[Atom]:
+    """Atoms of a vertical-base arm with a planar chain: spatial atoms on the base plus
+    planar atoms on joints 2..dof (a pendulum for dof = 1), duplicates removed."""
+    if dof < 2:
+        return pendulum_atoms()
+    atoms = spatial_atoms(dof, symmetric_links)
+    atoms += planar_atoms(dof - 1, first=1, total=dof, symmetric=symmetric_links)
+    return list(dict.fromkeys(atoms))
+
+
 def prior_knowledge_library(dof: int = 3, symmetric_links: bool = True) -> Library:
     """The library of a vertical-base arm with a planar chain, composed from the simple
     structures: spatial atoms on the base plus planar atoms on joints 2..dof."""
-    if dof < 2:
-        return derive(pendulum_atoms(), 1, "prior-1dof")[0]
-    atoms = spatial_atoms(dof, symmetric_links)
-    atoms += planar_atoms(dof - 1, first=1, total=dof, symmetric=symmetric_links)
-    suffix = "" if symmetric_links else "-general"
-    return derive(atoms, dof, f"prior-{dof}dof{suffix}")[0]
+    suffix = "" if symmetric_links or dof < 2 else "-general"
+    return derive(arm_atoms(dof, symmetric_links), dof, f"prior-{dof}dof{suffix}")[0]

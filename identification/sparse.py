@@ -95,15 +95,25 @@ class SparseRegression:
         scale = theta[~mask].std(0)
         scale[scale == 0] = 1.0
         xs, yc = (theta - mean_x) / scale, y - mean_y
-        fit, val = _Normal(xs[~mask], yc[~mask]), _Normal(xs[mask], yc[mask])
-        floor = 1e-14 * float(yc @ yc) / len(yc)
+        chosen = self.select(xs[~mask], yc[~mask], xs[mask], yc[mask])
+        self._refit(theta, y, chosen.support)
+        return self
+
+    def select(self, x_fit: np.ndarray, y_fit: np.ndarray, x_val: np.ndarray,
+               y_val: np.ndarray) -> Candidate:
+        """The chosen (alpha, pass rate, support) on centred, column-scaled fit/validation data.
+
+        Sets candidates_, alphas_, alpha_ and pass_rate_.
+        """
+        fit, val = _Normal(x_fit, y_fit), _Normal(x_val, y_val)
+        floor = 1e-14 * float(y_fit @ y_fit) / len(y_fit)
         with warnings.catch_warnings():  # tiny alphas on exact data converge slowly; harmless
             warnings.simplefilter("ignore", ConvergenceWarning)
-            alphas, coefs, _ = lasso_path(xs[~mask], yc[~mask], alphas=self.n_alphas,
+            alphas, coefs, _ = lasso_path(x_fit, y_fit, alphas=self.n_alphas,
                                           eps=self.alpha_ratio, max_iter=5000, tol=1e-8)
         cands, memo = [], {}
         for a, c in zip(alphas, coefs.T, strict=True):
-            start = tuple(np.flatnonzero(c)) or (int(np.argmax(np.abs(xs[~mask].T @ yc[~mask]))),)
+            start = tuple(np.flatnonzero(c)) or (int(np.argmax(np.abs(x_fit.T @ y_fit))),)
             for r in self.pass_rates:
                 if (start, r) not in memo:  # neighbouring alphas often share a support
                     memo[start, r] = self._prune(start, fit, val, r, floor)
@@ -113,8 +123,7 @@ class SparseRegression:
         chosen = min(good, key=lambda c: (len(c.support), c.validation_mse))
         self.candidates_, self.alphas_ = cands, alphas
         self.alpha_, self.pass_rate_ = chosen.alpha, chosen.pass_rate
-        self._refit(theta, y, chosen.support)
-        return self
+        return chosen
 
     def _refit(self, theta: np.ndarray, y: np.ndarray, support) -> None:
         """Unbiased least squares of the kept terms plus intercept on all samples."""

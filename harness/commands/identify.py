@@ -14,6 +14,7 @@ from identification import (IdentificationError, LibraryRankWarning, generic_lib
                             paper_library, prior_knowledge_library)
 
 LIBRARIES = ("prior", "paper", "generic")
+METHODS = ("auto", "coupled", "per-joint")
 
 
 def register(sub) -> None:
@@ -25,6 +26,10 @@ def register(sub) -> None:
     p.add_argument("--library", choices=LIBRARIES, default="prior",
                    help="prior: derived from simple structures (3-DOF arm); paper: the published "
                    "75 features; generic: polynomial x trig (any dof)")
+    p.add_argument("--method", choices=METHODS, default="auto",
+                   help="coupled: one Lagrangian, atoms shared by all joints (needs the prior "
+                   "library); per-joint: the paper's regression of each joint alone; auto: "
+                   "coupled when the library allows it")
     p.set_defaults(func=run)
 
 
@@ -57,11 +62,15 @@ def run(args) -> int:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LibraryRankWarning)
         result = identify(data["q"], data["qd"], data["qdd"], data["tau"], library,
-                          args.holdout, data.get("tau_clean"))
+                          args.holdout, data.get("tau_clean"),
+                          method=None if args.method == "auto" else args.method)
     for w in caught:
         if issubclass(w.category, LibraryRankWarning):
             print(f"torquebench identify: warning: {w.message}", file=sys.stderr)
-    write_json(args.out, {**result.model.to_dict(), "metrics": result.metrics()})
+    payload = {**result.model.to_dict(), "metrics": result.metrics()}
+    if result.lagrangian():
+        payload["lagrangian"] = result.lagrangian()
+    write_json(args.out, payload)
     for line in result.model.equations():
         print(line)
     rel = ", ".join(f"{x:.3e}" for x in result.heldout_rel_rmse)
