@@ -5,7 +5,8 @@ e_i >= |P(i/N)| is the epigraph of the absolute power, so the objective
 sigma/N sum e_i + alpha sum_k w_k (max(0, lambda - D1_k)^2 + max(0, lambda - D2_k)^2)
 is smooth enough for exact derivatives. Parameters p = [q0, qd0, sigma, q_end,
 obstacle centres (3 K), their normalized times s_k (K), weights w_k (K), the
-normalized times of each joint's turning points (dof x 3)], so a
+normalized times of each joint's turning points (dof x 3) and 0/1 flags (dof x 3)
+saying which of them are real], so a
 re-plan changes only numbers: the solver is built once and warm-started.
 
 Joint limits hold at fixed interior samples and, exactly, at the turning points
@@ -39,9 +40,9 @@ class PlanningNLP:
         q0, qd0, sigma, goal = (ca.SX.sym(s, d) for s, d in
                                 (("q0", dof), ("qd0", dof), ("sigma", 1), ("goal", dof)))
         obstacle, s_obs, weight = ca.SX.sym("obs", 3, k), ca.SX.sym("s_obs", k), ca.SX.sym("w", k)
-        extremum = ca.SX.sym("s_lim", dof, EXTREMA)
+        extremum, newton = ca.SX.sym("s_lim", dof, EXTREMA), ca.SX.sym("newton", dof, EXTREMA)
         self.p = ca.vertcat(q0, qd0, sigma, goal, ca.vec(obstacle), s_obs, weight,
-                            ca.vec(extremum))
+                            ca.vec(extremum), ca.vec(newton))
         coefficients = ca.horzcat(q0, qd0 * sigma, free)  # (dof, 5), column p -> s**p
 
         def state(s):
@@ -80,8 +81,8 @@ class PlanningNLP:
             ubg += list(config.upper)
         for j in range(dof):  # limits at the motion's own turning points (parameters)
             for m in range(EXTREMA):
-                g.append(_poly(coefficients[j, :], _newton(coefficients[j, :],
-                                                            extremum[j, m]), 0))
+                g.append(_poly(coefficients[j, :], _newton(coefficients[j, :], extremum[j, m],
+                                                            newton[j, m]), 0))
                 lbg.append(config.lower[j])
                 ubg.append(config.upper[j])
         self.g = ca.vertcat(*g)
@@ -95,13 +96,14 @@ class PlanningNLP:
         return f, g, parts
 
 
-def _newton(coefficients, s):
-    """One Newton step from s towards the turning point q'(s) = 0 of this motion, clamped
-    to [0, 1]: a reference turning point that is slightly off still constrains the
-    current peak to second order. Without curvature (|q''| tiny) s stays put."""
+def _newton(coefficients, s, use):
+    """One Newton step from s towards the turning point q'(s) = 0 of this motion (when
+    use = 1), at most 0.1 long and clamped to [0, 1]: a reference turning point that is
+    slightly off still constrains the current peak to second order."""
     slope, curvature = _poly(coefficients, s, 1), _poly(coefficients, s, 2)
     safe = ca.fabs(curvature) > 1e-3
     step = ca.if_else(safe, slope / ca.if_else(safe, curvature, 1.0), 0.0)
+    step = ca.fmin(ca.fmax(use * step, -0.1), 0.1)
     return ca.fmin(ca.fmax(s - step, 0.0), 1.0)
 
 

@@ -67,6 +67,9 @@ def limit_excess(plan: SegmentPlan, config) -> float:
     trajectory = plan.trajectory
     worst = 0.0
     for j, times in enumerate(trajectory.turning_points()):
+        times = times[np.isfinite(times)]
+        if not times.size:
+            continue
         q = trajectory.state(trajectory.t_begin + times * trajectory.duration)[0][:, j]
         worst = max(worst, np.max(config.lower[j] - q), np.max(q - config.upper[j]))
     return float(worst)

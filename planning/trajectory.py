@@ -58,8 +58,8 @@ class QuarticTrajectory:
 
     def turning_points(self) -> np.ndarray:
         """Normalized times (dof, 3) in (0, 1) where each joint's velocity vanishes;
-        unused entries are 0.5 (an ordinary interior point)."""
-        out = np.full((len(self.coefficients), DEGREE - 1), 0.5)
+        unused entries are NaN."""
+        out = np.full((len(self.coefficients), DEGREE - 1), np.nan)
         for j, c in enumerate(self.coefficients):
             roots = np.polynomial.Polynomial(c).deriv().roots()
             real = roots[np.abs(roots.imag) < 1e-9].real

@@ -1,0 +1,52 @@
+"""Solve-time measurements: cold plans and warm re-plans one obstacle sample apart."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from planning.config import Scenario
+from planning.replanning import _forecast, plan_segment
+from planning.solver import Planner, SegmentPlan
+
+
+@dataclass(frozen=True)
+class Timings:
+    """Wall times in ms: every cold plan and every re-plan of the sweep."""
+
+    cold_ms: tuple[float, ...]
+    replan_ms: tuple[float, ...]
+    replan_failures: int
+
+    def summary(self) -> dict:
+        replan = np.asarray(self.replan_ms)
+        return {"cold_median_ms": float(np.median(self.cold_ms)),
+                "cold_max_ms": float(np.max(self.cold_ms)),
+                "replan_median_ms": float(np.median(replan)),
+                "replan_p95_ms": float(np.percentile(replan, 95)),
+                "replan_max_ms": float(np.max(replan)), "replans_timed": len(replan),
+                "replan_failures": self.replan_failures}
+
+
+def measure(planner: Planner, scenario: Scenario, cold_repeats: int = 5,
+            stride: int = 1) -> tuple[Timings, SegmentPlan]:
+    """Cold plans of the whole motion, then a re-plan at every `stride`-th obstacle sample,
+    each warm-started from the previous plan with the obstacle one sample further."""
+    obstacle, goal, T = scenario.obstacle, scenario.goal, scenario.duration
+    cold, plan = [], None
+    for _ in range(cold_repeats):
+        plan, ms = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0, T, goal,
+                                _forecast(obstacle, obstacle.sample_times[0]))
+        cold.append(ms)
+    replans, failures = [], 0
+    for t in obstacle.sample_times[:-1:stride]:
+        q, qd, _ = plan.trajectory.state(t)
+        new, ms = plan_segment(planner, q[0], qd[0], t, T - t, goal, _forecast(obstacle, t),
+                               warm=plan)
+        replans.append(ms)
+        if new.success:
+            plan = new
+        else:
+            failures += 1
+    return Timings(tuple(cold), tuple(replans), failures), plan
