@@ -6,6 +6,8 @@
 - coefficients: each within 10 % of the plant's value.
 - improved: held-out error after <= 1/5 of before on every joint an effect acts on.
 - near_noise_floor: error after <= 1.5 x the noise floor (oracle refit) on every joint.
+Reported beside them, not required: `near_truth_error`, error after <= 1.5 x the error of
+the true effects at the plant's own coefficients (harness.closeloop, `truth_error`).
 - unexplained: equals "the plant carries an effect outside the dictionary".
 """
 
@@ -51,3 +53,11 @@ def checks(run: CloseLoopRun) -> dict[str, bool]:
         out["improved"] = bool(np.all(r.error_after[joints] * IMPROVEMENT <= r.error_before[joints]))
     out["near_noise_floor"] = bool(np.all(r.error_after <= FLOOR_FACTOR * run.noise_floor))
     return out
+
+
+def floor_criteria(run: CloseLoopRun) -> dict[str, bool]:
+    """Which reference error the error after is within FLOOR_FACTOR of, on every joint:
+    the oracle refit (`noise_floor`, required) and the true coefficients (`truth_error`)."""
+    after = run.result.error_after
+    return {name: bool(np.all(after <= FLOOR_FACTOR * ref)) for name, ref in
+            (("noise_floor", run.noise_floor), ("truth_error", run.truth_error)) if ref is not None}

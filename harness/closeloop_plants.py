@@ -64,10 +64,20 @@ def write_variant(variant: Variant, directory: Path) -> Path:
     return path
 
 
+def friction_shape(plant: mujoco.MjModel, dof: int, friction: float) -> tuple[float, float]:
+    """(lead s, eps rad/s) of MuJoCo's regularized frictionloss on a dof (identification.effects):
+    lead = 1 / b, b = 2 / (dmax timeconst); eps = R f / b, R = (1 - dmin) / dmin * invweight0."""
+    dmin, dmax = plant.dof_solimp[dof, :2]
+    timeconst = max(plant.dof_solref[dof, 0], 2 * plant.opt.timestep)  # MuJoCo's lower bound
+    b = 2.0 / (dmax * timeconst)
+    return 1.0 / b, float((1 - dmin) / dmin * plant.dof_invweight0[dof] * friction / b)
+
+
 def true_effects(plant: mujoco.MjModel, declared: mujoco.MjModel | None = None,
                  ) -> tuple[tuple[EffectTerm, ...], bool]:
-    """Effects the plant carries beyond the declared MJCF, and whether any lies
-    outside the dictionary (tendon springs/dampers, gravity compensation)."""
+    """Effects the plant carries beyond the declared MJCF (Coulomb terms with MuJoCo's own
+    friction shape), and whether any lies outside the dictionary (tendon springs/dampers,
+    gravity compensation)."""
     declared = declared or mujoco.MjModel.from_xml_path(str(DECLARED_MJCF))
     terms = []
     pairs = (("viscous", plant.dof_damping, declared.dof_damping),
@@ -76,7 +86,9 @@ def true_effects(plant: mujoco.MjModel, declared: mujoco.MjModel | None = None,
              ("spring", plant.jnt_stiffness, declared.jnt_stiffness))
     for effect, have, base in pairs:
         for j in np.flatnonzero(np.abs(have - base) > 0):
-            terms.append(EffectTerm(effect, int(j) + 1, float(have[j] - base[j])))
+            value = float(have[j] - base[j])
+            shape = friction_shape(plant, int(j), value) if effect == "coulomb" else ()
+            terms.append(EffectTerm(effect, int(j) + 1, value, *shape))
     extra_mass = float(plant.body_mass.sum() - declared.body_mass.sum())
     if extra_mass > 0:
         terms.append(EffectTerm("payload", plant.nv, extra_mass))

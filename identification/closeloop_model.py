@@ -45,7 +45,9 @@ class ExtendedModel:
                 tau = tau + t.coefficient * self._symbolic_payload(q, qd, qdd)
                 continue
             j = t.joint - 1
-            coulomb = ca.tanh((qd[j] + t.lead * qdd[j]) / t.eps) if t.effect == "coulomb" else 0
+            coulomb = 0
+            if t.effect == "coulomb":
+                coulomb = ca.fmin(ca.fmax((qd[j] + t.lead * qdd[j]) / t.eps, -1), 1)
             signal = {"viscous": qd[j], "coulomb": coulomb,
                       "armature": qdd[j], "offset": 1.0, "spring": q[j]}[t.effect]
             unit = ca.DM.zeros(self.dof, 1)

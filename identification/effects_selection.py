@@ -17,6 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import minimize
 
 from identification.effects import (
     COULOMB_SHAPES,
@@ -26,6 +27,8 @@ from identification.effects import (
     joint_signal,
 )
 
+LEAD_RANGE = (0.0, 0.05)  # s, Coulomb lead searched over
+EPS_RANGE = (1e-4, 2.0)  # rad/s, Coulomb linear-zone half-width searched over
 MIN_SIZE = 0.25  # named effects must have an RMS torque >= 0.25 noise sigma on their joint
 
 
@@ -133,11 +136,36 @@ def refit(residual: np.ndarray, dictionary: EffectDictionary, sigma: np.ndarray,
     return tuple(EffectTerm(e.effect, e.joint, float(c)) for e, c in zip(chosen, coef, strict=True))
 
 
+def _shape_rss(residual, cols, sigma, k, joint, q, qd, qdd, lead, eps) -> float:
+    """Weighted RSS of the refit with column k replaced by a Coulomb column of shape (lead, eps)."""
+    cols[:, :, k] = 0.0
+    cols[:, joint - 1, k] = joint_signal("coulomb", q, qd, qdd, lead, eps)[:, joint - 1]
+    y, X = _weighted(residual, cols, sigma)
+    return _lstsq(X, y, list(range(cols.shape[2])))[1]
+
+
+def _best_shape(rss_of) -> tuple[float, float]:
+    """(lead, eps) minimizing rss_of(lead, eps): best of COULOMB_SHAPES, then Nelder-Mead in
+    (lead, log eps) within LEAD_RANGE x EPS_RANGE."""
+    _, lead, eps = min((rss_of(lead, eps), lead, eps) for lead, eps in COULOMB_SHAPES)
+
+    def cost(x):
+        lead, eps = float(np.clip(x[0], *LEAD_RANGE)), float(np.exp(np.clip(x[1], *np.log(EPS_RANGE))))
+        return rss_of(lead, eps)
+
+    res = minimize(cost, [lead, np.log(eps)], method="Nelder-Mead",
+                   options={"xatol": 1e-4, "fatol": 1e-9, "maxiter": 200,
+                            "initial_simplex": [[lead, np.log(eps)], [lead + 0.004, np.log(eps)],
+                                                [lead, np.log(eps) + 0.5]]})
+    return float(np.clip(res.x[0], *LEAD_RANGE)), float(np.exp(np.clip(res.x[1], *np.log(EPS_RANGE))))
+
+
 def refine_coulomb(residual: np.ndarray, dictionary: EffectDictionary, sigma: np.ndarray,
                    terms: tuple[EffectTerm, ...], q: np.ndarray, qd: np.ndarray,
                    qdd: np.ndarray) -> tuple[EffectTerm, ...]:
-    """Pick each selected Coulomb term's shape (lead, eps) from COULOMB_SHAPES by the
-    weighted residual sum of squares of the whole refit, one joint at a time."""
+    """Estimate each selected Coulomb term's shape (lead in s, eps in rad/s) by the weighted
+    residual sum of squares of the whole refit (variable projection: coefficients by least
+    squares at each shape), one joint at a time; returns the refitted terms."""
     chosen = [Effect(t.effect, t.joint) for t in terms]
     if not any(e.effect == "coulomb" for e in chosen):
         return terms
@@ -146,16 +174,10 @@ def refine_coulomb(residual: np.ndarray, dictionary: EffectDictionary, sigma: np
     for k, e in enumerate(chosen):
         if e.effect != "coulomb":
             continue
-        best = None
-        for lead, eps in COULOMB_SHAPES:
-            cols[:, :, k] = 0.0
-            cols[:, e.joint - 1, k] = joint_signal("coulomb", q, qd, qdd, lead, eps)[:, e.joint - 1]
-            y, X = _weighted(residual, cols, sigma)
-            rss = _lstsq(X, y, list(range(len(chosen))))[1]
-            if best is None or rss < best[0]:
-                best = (rss, lead, eps)
-        shapes[e.joint] = best[1:]
-        cols[:, e.joint - 1, k] = joint_signal("coulomb", q, qd, qdd, *shapes[e.joint])[:, e.joint - 1]
+        shapes[e.joint] = _best_shape(
+            lambda lead, eps, k=k, j=e.joint: _shape_rss(residual, cols, sigma, k, j, q, qd, qdd,
+                                                         lead, eps))
+        _shape_rss(residual, cols, sigma, k, e.joint, q, qd, qdd, *shapes[e.joint])
     y, X = _weighted(residual, cols, sigma)
     coef, _ = _lstsq(X, y, list(range(len(chosen))))
     return tuple(EffectTerm(e.effect, e.joint, float(c), *shapes.get(e.joint, (t.lead, t.eps)))

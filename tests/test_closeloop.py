@@ -14,13 +14,12 @@ from harness.closeloop_plants import DECLARED_MJCF, Variant, write_variant
 SINGLE = [
     Variant((("viscous", 1, 0.01),), name="viscous1"),
     Variant((("coulomb", 2, 0.05),), name="coulomb2"),
+    Variant((("coulomb", 3, 0.05),), name="coulomb3"),  # light joint: wide linear friction zone
     Variant((("armature", 3, 0.01),), name="armature3"),
     Variant((("spring", 2, 0.2),), name="spring2"),
     Variant(payload=0.1, name="payload"),
 ]
-# Known limitation: 0.05 N m of dry friction on joint 3 (the lightest link) is not a pure
-# smooth sign in MuJoCo's soft friction constraint; the loop names coulomb 0.042 + viscous
-# 0.011 and reports unexplained: true (see the report), so that case is expected to fail here.
+
 EVERY_JOINT = [Variant(((e, j, v),), name=f"{e}{j}") for e, v in
                (("viscous", 0.02), ("coulomb", 0.05), ("armature", 0.01), ("spring", 0.2))
                for j in (1, 2, 3)]
@@ -77,8 +76,6 @@ def test_cli_bad_plant_is_one_line_and_no_output(tmp_path, capsys):
 @pytest.mark.slow
 @pytest.mark.parametrize("variant", EVERY_JOINT, ids=lambda v: v.name)
 def test_every_effect_on_every_joint(tmp_path, variant):
-    if variant.name == "coulomb3":
-        pytest.xfail("dry friction 0.05 N m on joint 3: soft-constraint friction not a smooth sign")
     _assert_accepted(run_closeloop(write_variant(variant, tmp_path)))
 
 

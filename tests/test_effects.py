@@ -113,3 +113,21 @@ def test_ljung_box_and_noise_level():
     assert ljung_box(ar)[1] < 1e-6
     smooth = np.sin(np.linspace(0, 20, 3000))[:, None]
     assert noise_sigma(smooth + 0.05 * white[:, None])[0] == pytest.approx(0.05, rel=0.05)
+
+
+@pytest.mark.parametrize("joint,friction", [(1, 0.05), (2, 0.05), (3, 0.05), (3, 0.01)])
+def test_coulomb_column_is_mujoco_frictionloss(joint, friction):
+    """mj_inverse of a frictionloss plant = declared + f clip((qd + qdd/b) / (R f / b)), with
+    b = 2 / (dmax timeconst) and R = (1 - dmin) / dmin * dof_invweight0 (effects.py)."""
+    q, qd, qdd = _states(400)
+    qd = qd * 0.2  # slow enough to spend time in the linear zone
+    plant = mujoco.MjModel.from_xml_string(variant_text(Variant((("coulomb", joint, friction),))))
+    base = mujoco.MjModel.from_xml_string(variant_text(Variant()))
+    expected = inverse_torques(plant, q, qd, qdd) - inverse_torques(base, q, qd, qdd)
+    dmin, dmax = plant.dof_solimp[joint - 1, :2]
+    b = 2.0 / (dmax * plant.dof_solref[joint - 1, 0])
+    eps = (1 - dmin) / dmin * plant.dof_invweight0[joint - 1] * friction / b
+    got = effect_torque((EffectTerm("coulomb", joint, friction, 1.0 / b, eps),), q, qd, qdd)
+    linear = np.abs(qd[:, joint - 1] + qdd[:, joint - 1] / b) < eps
+    assert 0 < linear.mean() < 1  # both regimes are exercised
+    np.testing.assert_allclose(got, expected, atol=1e-10)
