@@ -125,6 +125,21 @@ def planar_atoms(dof: int = 2, first: int = 0, total: int | None = None,
     return atoms
 
 
+def absolute_chain_atoms(dof: int = 2, symmetric: bool = False) -> list[Atom]:
+    """Planar chain in absolute link angles (a double pendulum's theta_i): kinetic
+    qd_i qd_j x {1, f(q_a - q_b)} for every link pair a < b, potential cos/sin q_i."""
+    def diff(a, b):
+        return tuple(1 if k == a else -1 if k == b else 0 for k in range(dof))
+
+    pairs = [(a, b) for a in range(dof) for b in range(a + 1, dof)]
+    atoms = []
+    for i, j in combinations_with_replacement(range(dof), 2):
+        atoms.append(Atom((i, j)))
+        atoms += [Atom((i, j), f, diff(a, b)) for a, b in pairs for f in _funcs(symmetric)]
+    unit = [tuple(int(k == i) for k in range(dof)) for i in range(dof)]
+    return atoms + [Atom((), f, u) for u in unit for f in ("cos", "sin")]
+
+
 def spatial_atoms(total: int = 2, symmetric: bool = True) -> list[Atom]:
     """Vertical joint 0 carrying a planar chain of joints 1..total-1 (elevation angles)."""
     elevations = [tuple(1 if 1 <= k <= link else 0 for k in range(total))

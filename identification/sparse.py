@@ -6,7 +6,10 @@ smallest standardized coefficients, refitting by least squares, until the
 validation error rises. Alpha and pass rate are chosen on validation blocks
 held out of the fit (the paper chose them on the training fit, which always
 prefers the largest model), preferring the sparsest candidate whose validation
-error is within `tolerance` of the best. The kept terms are then refit without
+error is statistically indistinguishable from the best: the mean of the
+per-sample squared-residual differences against the best is below its
+standard error (a paired one-standard-error rule) or below the relative
+`tolerance` (rule="tolerance" uses only the latter). The kept terms are then refit without
 shrinkage on all the data. An unpenalized intercept absorbs a constant sensor
 bias; it is reported as `intercept_` and is not a library term.
 """
@@ -65,8 +68,8 @@ class SparseRegression:
     def __init__(self, n_alphas: int = 30, alpha_ratio: float = 1e-5,
                  pass_rates=(0.5, 0.7, 0.8, 0.9), tolerance: float = 0.002,
                  rise_tolerance: float = 1e-9, block: int = 50, every: int = 5,
-                 rank_by: str = "t"):
-        self.n_alphas, self.alpha_ratio = n_alphas, alpha_ratio
+                 rank_by: str = "t", rule: str = "1se"):
+        self.n_alphas, self.alpha_ratio, self.rule = n_alphas, alpha_ratio, rule
         self.pass_rates, self.tolerance, self.rise_tolerance = tuple(pass_rates), tolerance, rise_tolerance
         self.block, self.every, self.rank_by = block, every, rank_by
 
@@ -118,12 +121,33 @@ class SparseRegression:
                 if (start, r) not in memo:  # neighbouring alphas often share a support
                     memo[start, r] = self._prune(start, fit, val, r, floor)
                 cands.append(Candidate(float(a), r, *memo[start, r]))
-        best = min(c.validation_mse for c in cands)
-        good = [c for c in cands if c.validation_mse <= best * (1 + self.tolerance) + floor]
+        good = self._good(cands, fit, x_val, y_val, floor)
         chosen = min(good, key=lambda c: (len(c.support), c.validation_mse))
         self.candidates_, self.alphas_ = cands, alphas
         self.alpha_, self.pass_rate_ = chosen.alpha, chosen.pass_rate
         return chosen
+
+    def _good(self, cands, fit: _Normal, x_val, y_val, floor: float) -> list[Candidate]:
+        """Candidates as good as the best on validation: within `tolerance` (rule 'tolerance')
+        or, rule '1se', within the larger of that and one paired standard error of the
+        per-sample squared-residual differences against the best."""
+        best = min(cands, key=lambda c: c.validation_mse)
+        if self.rule != "1se":
+            return [c for c in cands if c.validation_mse <= best.validation_mse * (1 + self.tolerance) + floor]
+
+        def squared(support):
+            s = list(support)
+            return (y_val - x_val[:, s] @ fit.solve(s)) ** 2
+
+        ref, memo, good = squared(best.support), {}, []
+        for c in cands:
+            if c.support not in memo:
+                d = squared(c.support) - ref
+                slack = max(d.std() / np.sqrt(len(d)), self.tolerance * best.validation_mse)
+                memo[c.support] = d.mean() <= slack + floor
+            if memo[c.support]:
+                good.append(c)
+        return good
 
     def _refit(self, theta: np.ndarray, y: np.ndarray, support) -> None:
         """Unbiased least squares of the kept terms plus intercept on all samples."""
