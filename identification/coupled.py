@@ -66,6 +66,12 @@ class AtomBasis:
         return out
 
 
+    def expand_stderr(self, cov: np.ndarray) -> list[np.ndarray]:
+        """Per joint, the standard error of every library feature's coefficient."""
+        return [np.sqrt(np.maximum(np.einsum("fa,ab,fb->f", e, cov, e), 0.0))
+                for e in self.factors]
+
+
 def base_atoms(design: np.ndarray, rtol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
     """Independent atom columns of the stacked (n*dof, p) design by pivoted QR, and the
     folded ones (linearly dependent on the base columns on this data)."""
@@ -88,13 +94,15 @@ def _offset_design(design: np.ndarray, cols) -> np.ndarray:
 
 def weighted_lstsq(design: np.ndarray, tau: np.ndarray, cols, sigma: np.ndarray):
     """Weighted least squares of tau (n, dof) on design[:, :, cols] + per-joint offsets.
-    Returns (coefficients of cols, offsets (dof,), residual (n, dof))."""
+    Returns (coefficients of cols, offsets (dof,), residual (n, dof), covariance of the
+    coefficients of cols, scaled by the weighted residual variance)."""
     n, dof = tau.shape
-    x = _offset_design(design, list(cols))
-    w = np.tile(1.0 / sigma, n)
-    sol = np.linalg.lstsq(x * w[:, None], tau.reshape(-1) * w, rcond=None)[0]
-    resid = tau - (x @ sol).reshape(n, dof)
-    return sol[:-dof], sol[-dof:], resid
+    x = _offset_design(design, list(cols)) * np.tile(1.0 / sigma, n)[:, None]
+    sol = np.linalg.lstsq(x, tau.reshape(-1) * np.tile(1.0 / sigma, n), rcond=None)[0]
+    resid = tau - (x @ sol).reshape(n, dof) * sigma
+    scale = float(np.sum((resid / sigma) ** 2)) / max(n * dof - x.shape[1], 1)
+    cov = scale * np.linalg.pinv(x.T @ x)[:-dof, :-dof]
+    return sol[:-dof], sol[-dof:], resid, cov
 
 
 class CoupledRegression:
@@ -114,7 +122,8 @@ class CoupledRegression:
 
     def fit(self, design: np.ndarray, tau: np.ndarray) -> CoupledRegression:
         """design (n, dof, p) atom signatures, tau (n, dof); sets coef_ (p,), offsets_ (dof,),
-        sigma_, support_, base_, folded_, alpha_, pass_rate_, candidates_, path_."""
+        sigma_, support_, base_, folded_, alpha_, pass_rate_, candidates_, path_, and the
+        refit's covariance cov_ (p, p) and stderr_ (p,)."""
         design, tau = np.asarray(design, float), np.asarray(tau, float)
         n, dof, p = design.shape
         self.base_, self.folded_ = base_atoms(design)
@@ -136,9 +145,11 @@ class CoupledRegression:
         self.candidates_ = self.selector.candidates_
         self.path_ = self._path(xs, yc, val)
         support = self.base_[list(chosen.support)]
-        coef, self.offsets_, _ = weighted_lstsq(design, tau, support, self.sigma_)
-        self.coef_ = np.zeros(p)
+        coef, self.offsets_, _, cov = weighted_lstsq(design, tau, support, self.sigma_)
+        self.coef_, self.cov_ = np.zeros(p), np.zeros((p, p))
         self.coef_[support] = coef
+        self.cov_[np.ix_(support, support)] = cov
+        self.stderr_ = np.sqrt(np.maximum(np.diag(self.cov_), 0.0))
         self.support_ = np.zeros(p, bool)
         self.support_[support] = True
         return self

@@ -150,12 +150,17 @@ class SparseRegression:
         return good
 
     def _refit(self, theta: np.ndarray, y: np.ndarray, support) -> None:
-        """Unbiased least squares of the kept terms plus intercept on all samples."""
+        """Unbiased least squares of the kept terms plus intercept on all samples; stderr_
+        holds each kept coefficient's standard error (residual variance x (X^T X)^-1)."""
         s = list(support)
         design = np.column_stack([theta[:, s], np.ones(len(y))])
-        sol = np.linalg.lstsq(design, y, rcond=None)[0]
-        self.coef_ = np.zeros(theta.shape[1])
+        sol, *_ = np.linalg.lstsq(design, y, rcond=None)
+        resid = y - design @ sol
+        var = float(resid @ resid) / max(len(y) - design.shape[1], 1)
+        cov = var * np.linalg.pinv(design.T @ design)
+        self.coef_, self.stderr_ = np.zeros(theta.shape[1]), np.zeros(theta.shape[1])
         self.coef_[s] = sol[:-1]
+        self.stderr_[s] = np.sqrt(np.maximum(np.diag(cov)[:-1], 0.0))
         self.intercept_ = float(sol[-1])
         self.support_ = np.zeros(theta.shape[1], bool)
         self.support_[s] = True
