@@ -71,6 +71,13 @@ class PlanningNLP:
         g.append(state(1.0)[0] - goal)  # eq. (19)
         lbg += [0.0] * dof
         ubg += [0.0] * dof
+        # End velocity: free, but pointing inward when the goal lies on a joint limit
+        # (bounds set per solve; see Planner.bounds). Replaces a turning-point constraint
+        # at s -> 1, which would be degenerate next to the goal equality.
+        self.end_velocity_rows = slice(sum(x.numel() for x in g), sum(x.numel() for x in g) + dof)
+        g.append(state(1.0)[1])
+        lbg += [-np.inf] * dof
+        ubg += [np.inf] * dof
         if config.rest_at_goal:
             g.append(state(1.0)[1])
             lbg += [0.0] * dof

@@ -51,7 +51,7 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
         subset = screen(forecast, reference, config.geometry, config.threshold,
                         config.obstacle_slots) if forecast is not None else None
         times = set() if subset is None else set(subset.times)
-        settled = times <= chosen and limit_excess(plan, config) <= LIMIT_SETTLED
+        settled = times <= chosen and limit_excess(planner, plan, goal) <= LIMIT_SETTLED
         if settled and (round_ > 0 or warm is None):
             break  # the constraints that matter at this solution were the ones imposed
         chosen |= times
@@ -62,16 +62,17 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     return plan, total
 
 
-def limit_excess(plan: SegmentPlan, config) -> float:
-    """Worst excursion (rad) beyond the joint limits at the plan's turning points."""
-    trajectory = plan.trajectory
+def limit_excess(planner: Planner, plan: SegmentPlan, goal) -> float:
+    """Worst excursion (rad) beyond the joint limits at the plan's turning points (those
+    the planner constrains for this goal)."""
+    trajectory, config = plan.trajectory, planner.config
+    turning = planner.usable_turning_points(goal, trajectory.turning_points())
     worst = 0.0
-    for j, times in enumerate(trajectory.turning_points()):
+    for j, times in enumerate(turning):
         times = times[np.isfinite(times)]
-        if not times.size:
-            continue
-        q = trajectory.state(trajectory.t_begin + times * trajectory.duration)[0][:, j]
-        worst = max(worst, np.max(config.lower[j] - q), np.max(q - config.upper[j]))
+        if times.size:
+            q = trajectory.state(trajectory.t_begin + times * trajectory.duration)[0][:, j]
+            worst = max(worst, np.max(config.lower[j] - q), np.max(q - config.upper[j]))
     return float(worst)
 
 

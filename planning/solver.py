@@ -23,6 +23,9 @@ _WARM = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-7,
          "ipopt.warm_start_bound_push": 1e-7, "ipopt.warm_start_mult_bound_push": 1e-7}
 
 
+END_MARGIN = 0.02  # normalized time, see Planner._usable_turning_points
+
+
 @dataclass(frozen=True)
 class ObstacleForecast:
     """Predicted obstacle centres (k, 3) in m at times (k,) in s, as the planner sees them."""
@@ -79,6 +82,31 @@ class Planner:
                                np.where(real, turning, 0.5).ravel(order="F"),
                                real.astype(float).ravel(order="F")])
 
+    def _on_limit(self, goal) -> tuple[np.ndarray, np.ndarray]:
+        """Joints whose goal lies on the lower / upper limit."""
+        goal = np.asarray(goal, float)
+        return (np.abs(goal - np.asarray(self.config.lower)) < 1e-9,
+                np.abs(goal - np.asarray(self.config.upper)) < 1e-9)
+
+    def bounds(self, goal) -> tuple[np.ndarray, np.ndarray]:
+        """lbg, ubg for this goal: arrive moving inward at a goal on a joint limit."""
+        lbg, ubg = self.nlp.lbg.copy(), self.nlp.ubg.copy()
+        at_lower, at_upper = self._on_limit(goal)
+        rows = self.nlp.end_velocity_rows
+        ubg[rows][at_lower] = 0.0
+        lbg[rows][at_upper] = 0.0
+        return lbg, ubg
+
+    def usable_turning_points(self, goal, turning):
+        """Drop turning points within END_MARGIN of the end for joints whose goal is on a
+        limit: the inward end velocity covers them (and the pair would be degenerate)."""
+        if turning is None:
+            return None
+        turning = np.array(turning, float)
+        at_limit = np.logical_or(*self._on_limit(goal))
+        turning[at_limit[:, None] & (turning > 1 - END_MARGIN)] = np.nan
+        return turning
+
     def initial_guess(self, q0, qd0, duration: float, goal) -> np.ndarray:
         """A cubic that reaches the goal at rest, and zero power slacks."""
         v = np.asarray(qd0, float) * duration
@@ -99,8 +127,10 @@ class Planner:
         turning: normalized times (dof, 3) where the joint limits are enforced in
         addition to the fixed samples (see PlanningNLP).
         """
+        turning = self.usable_turning_points(goal, turning)
         p = self.parameters(q0, qd0, duration, goal, forecast, t_begin, turning)
-        args = {"p": p, "lbg": self.nlp.lbg, "ubg": self.nlp.ubg}
+        lbg, ubg = self.bounds(goal)
+        args = {"p": p, "lbg": lbg, "ubg": ubg}
         if warm is None:
             solver, args["x0"] = self._cold, self.initial_guess(q0, qd0, duration, goal)
         else:
