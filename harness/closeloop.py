@@ -8,6 +8,13 @@ Errors are held-out relative RMS errors against the clean measured torque
 `tau_clean` (the actuator force without sensor noise) on the last `holdout`
 fraction of the samples.
 
+Declared models: `pinocchio` (the closed-form baseline, fixed), `identified`
+(the sparse prior-knowledge-library model fitted on the same training part; its
+kept terms are refitted jointly with the effects, identification.closeloop_identified)
+or a MODEL.json (fixed). closeloop.json carries the contract's keys for the
+chosen one and, under `declared_models`, the effects and errors for both
+built-in declared models.
+
 Reference errors, for scoring only (they read the plant's MJCF, which the
 estimation never does):
 - `noise_floor`: the oracle - declared model plus the plant's *true* effect set,
@@ -23,7 +30,7 @@ estimation never does):
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -31,14 +38,25 @@ import numpy as np
 from harness.closeloop_payload import PayloadTorque
 from harness.closeloop_plants import true_effects
 from harness.datagen import Dataset, generate
+from harness.errors import UserError
+from harness.plant import Plant, load_plant
 from harness.robots import DEFAULT_ROBOT, load_pinocchio
 from harness.torque_models import load_torque_model
 from identification import TorqueModel
-from identification.closeloop import CloseLoopResult, close_loop, is_unexplained, rel_error
+from identification.closeloop import (
+    CloseLoopResult,
+    close_loop,
+    is_unexplained,
+    projected_dictionary,
+    rel_error,
+)
+from identification.closeloop_identified import KeptSpan, close_loop_identified, refit_kept
 from identification.closeloop_model import ExtendedModel
-from identification.effects import Effect, EffectTerm, build_dictionary
+from identification.effects import Effect, EffectDictionary, EffectTerm
 from identification.effects_selection import refine_coulomb, refit
 from identification.residual import noise_sigma
+
+DECLARED_MODELS = ("pinocchio", "identified")  # both reported in closeloop.json
 
 
 @dataclass(frozen=True)
@@ -53,21 +71,26 @@ class CloseLoopRun:
     outside_dictionary: bool  # the plant carries an effect the dictionary cannot name
     noise_floor: np.ndarray | None  # (dof,) oracle refit error; None if outside dictionary
     truth_error: np.ndarray | None  # (dof,) true-coefficient error
+    others: tuple[CloseLoopRun, ...] = ()  # the same data with the other declared models
+
+    def summary(self) -> dict:
+        """Effects, errors and references of this declared model."""
+        r = self.result
+        ref = {k: None if v is None else v.tolist() for k, v in
+               (("noise_floor", self.noise_floor), ("truth_error", self.truth_error))}
+        return {"effects": [t.to_json() for t in r.terms], "error_before": r.error_before.tolist(),
+                "error_after": r.error_after.tolist(), "unexplained": bool(r.unexplained), **ref}
 
     def to_json(self) -> dict:
         r = self.result
         return {
-            "effects": [t.to_json() for t in r.terms],
-            "error_before": r.error_before.tolist(),
-            "error_after": r.error_after.tolist(),
-            "unexplained": bool(r.unexplained),
+            **self.summary(),
             "unexplained_joints": [d.joint for d in r.diagnostics_after if is_unexplained([d])],
             "declared": self.declared,
+            "declared_models": {run.declared: run.summary() for run in (self, *self.others)},
             "plant": self.plant,
             "error_definition": "held-out relative RMS ||tau_hat - tau_clean|| / ||tau_clean|| "
                                 "per joint on the last 25 % of samples (time order)",
-            "noise_floor": None if self.noise_floor is None else self.noise_floor.tolist(),
-            "truth_error": None if self.truth_error is None else self.truth_error.tolist(),
             "plant_effects": [t.to_json() for t in self.truth],
             "plant_outside_dictionary": self.outside_dictionary,
             "selection": {"bic_path": [list(p) for p in r.selection.bic_path],
@@ -90,40 +113,73 @@ def declared_model(spec: str, data: Dataset, split: int) -> TorqueModel:
     return result.model
 
 
-def oracle(declared: TorqueModel, data: Dataset, truth: tuple[EffectTerm, ...], split: int,
-           payload: PayloadTorque) -> tuple[np.ndarray, np.ndarray]:
-    """Held-out errors of the true effect set refitted (noise floor) and at true values."""
-    tr = slice(0, split)
-    residual = data.tau[tr] - declared.torque(data.q[tr], data.qd[tr], data.qdd[tr])
-    dictionary = build_dictionary(data.q[tr], data.qd[tr], data.qdd[tr], payload)
+def _oracle_fit(data: Dataset, dictionary: EffectDictionary, residual, truth, tr, project):
+    """The true effect set's coefficients (and Coulomb shapes) fitted on the training part."""
     sigma = noise_sigma(residual)
     chosen = [Effect(t.effect, t.joint) for t in truth]
-    fitted = refine_coulomb(residual, dictionary, sigma, refit(residual, dictionary, sigma, chosen),
-                            data.q[tr], data.qd[tr], data.qdd[tr])
-    exact = truth
-    held = slice(split, None)
+    return refine_coulomb(residual, dictionary, sigma, refit(residual, dictionary, sigma, chosen),
+                          data.q[tr], data.qd[tr], data.qdd[tr], project)
+
+
+def oracle(declared: TorqueModel, data: Dataset, truth: tuple[EffectTerm, ...], split: int,
+           payload: PayloadTorque, joint_refit: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Held-out errors of the true effect set refitted (noise floor) and at true values.
+
+    joint_refit: the declared model is identified; its kept terms are refitted with the
+    effects (as close_loop_identified does)."""
+    tr, held = slice(0, split), slice(split, None)
+    states = (data.q[tr], data.qd[tr], data.qdd[tr])
+    project = KeptSpan.of(declared, *states).project if joint_refit else None
+    residual = (project(data.tau[tr]) if project is not None
+                else data.tau[tr] - declared.torque(*states))
+    dictionary = projected_dictionary(*states, payload, project=project)
+    fitted = _oracle_fit(data, dictionary, residual, truth, tr, project)
     errors = []
-    for terms in (fitted, exact):
-        model = ExtendedModel(declared, terms, payload)
+    for terms in (fitted, truth):
+        base = refit_kept(declared, terms, *states, data.tau[tr], payload) if joint_refit else declared
+        model = ExtendedModel(base, terms, payload)
         errors.append(rel_error(model.torque(data.q[held], data.qd[held], data.qdd[held]),
                                 data.tau_clean[held]))
     return errors[0], errors[1]
 
 
-def run_closeloop(plant: str | Path, samples: int = 4000, noise: float = 0.05, seed: int = 0,
-                  bias: float = 0.0, holdout: float = 0.25, declared: str = "pinocchio",
-                  ) -> CloseLoopRun:
-    """Generate measured data on plant, close the loop on the declared model, score it."""
-    data = generate(str(plant), samples, noise, seed, "measured", bias)
-    split = int(round(samples * (1.0 - holdout)))
-    model = declared_model(declared, data, split)
-    payload = PayloadTorque(load_pinocchio(DEFAULT_ROBOT))
-    result = close_loop(model, data.q, data.qd, data.qdd, data.tau, data.tau_clean, holdout,
-                        payload, payload.symbolic)
-    from harness.plant import load_plant
+def check_plant(plant: str | Path, dof: int) -> Plant:
+    """The plant, or a UserError if it cannot be this robot (its number of joints)."""
+    p = load_plant(plant)
+    if p.dof != dof:
+        raise UserError(f"plant {plant} has {p.dof} joints; the declared {DEFAULT_ROBOT} model has "
+                        f"{dof}: not a variant of this robot")
+    return p
 
-    truth, outside = true_effects(load_plant(plant).model)
+
+def _loop(spec: str, data: Dataset, split: int, payload: PayloadTorque, truth, outside: bool,
+          holdout: float) -> CloseLoopRun:
+    model = declared_model(spec, data, split)
+    if model.dof != data.q.shape[1]:
+        raise UserError(f"declared model {spec} has {model.dof} joints, the plant "
+                        f"{data.q.shape[1]}")
+    args = (data.q, data.qd, data.qdd, data.tau, data.tau_clean, holdout, payload, payload.symbolic)
+    identified = spec == "identified"
+    result = close_loop_identified(model, *args) if identified else close_loop(model, *args)
     floor = exact = None
     if not outside:
-        floor, exact = oracle(model, data, truth, result.split, payload)
-    return CloseLoopRun(str(plant), declared, data, result, truth, outside, floor, exact)
+        floor, exact = oracle(model, data, truth, result.split, payload, identified)
+    return CloseLoopRun(str(data.meta["plant"]), spec, data, result, truth, outside, floor, exact)
+
+
+def run_closeloop(plant: str | Path, samples: int = 4000, noise: float = 0.05, seed: int = 0,
+                  bias: float = 0.0, holdout: float = 0.25, declared: str = "pinocchio",
+                  compare: bool = False) -> CloseLoopRun:
+    """Generate measured data on plant, close the loop on the declared model, score it;
+    compare: also close it with the other built-in declared models (CloseLoopRun.others)."""
+    p = check_plant(plant, load_pinocchio(DEFAULT_ROBOT).nv)
+    data = generate(str(plant), samples, noise, seed, "measured", bias)
+    split = int(round(samples * (1.0 - holdout)))
+    payload = PayloadTorque(load_pinocchio(DEFAULT_ROBOT))
+    truth, outside = true_effects(p.model)
+    run = _loop(declared, data, split, payload, truth, outside, holdout)
+    if not compare:
+        return run
+    others = tuple(_loop(spec, data, split, payload, truth, outside, holdout)
+                   for spec in DECLARED_MODELS if spec != declared)
+    return replace(run, others=others)

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from identification.closeloop_model import ExtendedModel
-from identification.effects import EffectTerm, PayloadTorque, build_dictionary
+from identification.effects import EffectDictionary, EffectTerm, PayloadTorque, build_dictionary
 from identification.effects_selection import Selection, refine_coulomb, select_effects
 from identification.errors import IdentificationError
 from identification.residual import JointDiagnostics, diagnose, noise_sigma
@@ -31,6 +31,7 @@ from identification.torque_model import TorqueModel, as_states
 UNEXPLAINED_P = 1e-3
 UNEXPLAINED_SIZE = 0.25  # structure left, in noise sigmas (0.25 sigma = 3 % extra residual power)
 MIN_TRAIN = 200
+SPANNED = 1e-6  # a column keeping less than this fraction of its norm after projection
 
 
 @dataclass(frozen=True)
@@ -59,7 +60,8 @@ def is_unexplained(diags) -> bool:
     return any(d.ljung_box_p < UNEXPLAINED_P and d.structure > UNEXPLAINED_SIZE for d in diags)
 
 
-def _check(q, qd, qdd, tau, tau_clean, dof: int, holdout: float):
+def check_data(q, qd, qdd, tau, tau_clean, dof: int, holdout: float):
+    """Validated arrays and the first held-out sample."""
     try:
         q, qd, qdd = as_states(q, qd, qdd, dof)
         tau, tau_clean, _ = as_states(tau, tau_clean, tau_clean, dof)
@@ -75,43 +77,72 @@ def _check(q, qd, qdd, tau, tau_clean, dof: int, holdout: float):
     return q, qd, qdd, tau, tau_clean, split
 
 
-def _trace(residual, dictionary, sigma, q, qd, qdd, payload):
+def projected_dictionary(q, qd, qdd, payload, shapes=None, project=None) -> EffectDictionary:
+    """The effect dictionary, its columns mapped by project (each (n, dof) slice) if given;
+    a column that project (nearly) annihilates is zeroed: the data cannot see that effect."""
+    dictionary = build_dictionary(q, qd, qdd, payload, shapes)
+    if project is None:
+        return dictionary
+    cols = dictionary.columns.copy()
+    for i in range(cols.shape[2]):
+        mapped = project(cols[:, :, i])
+        visible = np.linalg.norm(mapped) > SPANNED * np.linalg.norm(cols[:, :, i])
+        cols[:, :, i] = mapped if visible else 0.0
+    return EffectDictionary(dictionary.effects, cols)
+
+
+def trace(residual, sigma, q, qd, qdd, payload, project=None) -> tuple[Selection, tuple]:
     """Select, refine Coulomb shapes, and select again on the refined dictionary, so that
-    a default-shaped friction column does not drag in a compensating term."""
+    a default-shaped friction column does not drag in a compensating term.
+
+    project: a linear map (n, dof) -> (n, dof) applied to every candidate column (the
+    residual is expected to be mapped already); identity if None."""
+    dictionary = projected_dictionary(q, qd, qdd, payload, project=project)
     selection = select_effects(residual, dictionary, sigma)
-    terms = refine_coulomb(residual, dictionary, sigma, selection.terms, q, qd, qdd)
+    terms = refine_coulomb(residual, dictionary, sigma, selection.terms, q, qd, qdd, project)
     shapes = {t.joint: (t.lead, t.eps) for t in terms if t.effect == "coulomb"}
     if not shapes:
         return selection, terms
-    dictionary = build_dictionary(q, qd, qdd, payload, shapes)
+    dictionary = projected_dictionary(q, qd, qdd, payload, shapes, project)
     selection = select_effects(residual, dictionary, sigma)
-    return selection, refine_coulomb(residual, dictionary, sigma, selection.terms, q, qd, qdd)
+    return selection, refine_coulomb(residual, dictionary, sigma, selection.terms, q, qd, qdd,
+                                     project)
 
 
-def close_loop(declared: TorqueModel, q, qd, qdd, tau, tau_clean, holdout: float = 0.25,
-               payload: PayloadTorque | None = None, symbolic_payload=None) -> CloseLoopResult:
-    """Trace the declared model's residual on measured data to named effects and add them."""
-    q, qd, qdd, tau, tau_clean, split = _check(q, qd, qdd, tau, tau_clean, declared.dof, holdout)
-    train = slice(0, split)
-    held = slice(split, None)
-    tau_declared = declared.torque(q, qd, qdd)
-    residual = tau[train] - tau_declared[train]
-    dictionary = build_dictionary(q[train], qd[train], qdd[train], payload)
-    signals = {e.label: dictionary.columns[:, :, i] for i, e in enumerate(dictionary.effects)}
-    sigma = noise_sigma(residual)
-    selection, terms = _trace(residual, dictionary, sigma, q[train], qd[train], qdd[train], payload)
-    model = ExtendedModel(declared, terms, payload, symbolic_payload)
-    tau_after = model.torque(q, qd, qdd)
-    after = tau[train] - tau_after[train]
-    diags_after = tuple(diagnose(after))
+def _signals(q, qd, qdd, payload) -> dict[str, np.ndarray]:
+    dictionary = build_dictionary(q, qd, qdd, payload)
+    return {e.label: dictionary.columns[:, :, i] for i, e in enumerate(dictionary.effects)}
+
+
+def outcome(before: TorqueModel, model: ExtendedModel, selection: Selection, q, qd, qdd, tau,
+            tau_clean, split: int) -> CloseLoopResult:
+    """Errors and diagnostics of the declared model `before` and the extended `model`."""
+    train, held = slice(0, split), slice(split, None)
+    tau_before, tau_after = before.torque(q, qd, qdd), model.torque(q, qd, qdd)
+    diags_after = tuple(diagnose(tau[train] - tau_after[train]))
     return CloseLoopResult(
-        terms=terms,
+        terms=model.terms,
         selection=selection,
-        error_before=rel_error(tau_declared[held], tau_clean[held]),
+        error_before=rel_error(tau_before[held], tau_clean[held]),
         error_after=rel_error(tau_after[held], tau_clean[held]),
-        diagnostics_before=tuple(diagnose(residual, signals)),
+        diagnostics_before=tuple(diagnose(tau[train] - tau_before[train],
+                                          _signals(q[train], qd[train], qdd[train],
+                                                   model._payload))),
         diagnostics_after=diags_after,
         unexplained=is_unexplained(diags_after),
         model=model,
         split=split,
     )
+
+
+def close_loop(declared: TorqueModel, q, qd, qdd, tau, tau_clean, holdout: float = 0.25,
+               payload: PayloadTorque | None = None, symbolic_payload=None) -> CloseLoopResult:
+    """Trace the declared model's residual on measured data to named effects and add them."""
+    q, qd, qdd, tau, tau_clean, split = check_data(q, qd, qdd, tau, tau_clean, declared.dof,
+                                                   holdout)
+    train = slice(0, split)
+    residual = tau[train] - declared.torque(q[train], qd[train], qdd[train])
+    sigma = noise_sigma(residual)
+    selection, terms = trace(residual, sigma, q[train], qd[train], qdd[train], payload)
+    model = ExtendedModel(declared, terms, payload, symbolic_payload)
+    return outcome(declared, model, selection, q, qd, qdd, tau, tau_clean, split)

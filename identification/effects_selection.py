@@ -14,6 +14,7 @@ velocity/acceleration estimates.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,6 +28,7 @@ from identification.effects import (
     joint_signal,
 )
 
+Projection = Callable[[np.ndarray], np.ndarray]  # (n, dof) -> (n, dof)
 LEAD_RANGE = (0.0, 0.05)  # s, Coulomb lead searched over
 EPS_RANGE = (1e-4, 2.0)  # rad/s, Coulomb linear-zone half-width searched over
 MIN_SIZE = 0.25  # named effects must have an RMS torque >= 0.25 noise sigma on their joint
@@ -136,10 +138,12 @@ def refit(residual: np.ndarray, dictionary: EffectDictionary, sigma: np.ndarray,
     return tuple(EffectTerm(e.effect, e.joint, float(c)) for e, c in zip(chosen, coef, strict=True))
 
 
-def _shape_rss(residual, cols, sigma, k, joint, q, qd, qdd, lead, eps) -> float:
+def _shape_rss(residual, cols, sigma, k, joint, q, qd, qdd, lead, eps, project=None) -> float:
     """Weighted RSS of the refit with column k replaced by a Coulomb column of shape (lead, eps)."""
     cols[:, :, k] = 0.0
     cols[:, joint - 1, k] = joint_signal("coulomb", q, qd, qdd, lead, eps)[:, joint - 1]
+    if project is not None:
+        cols[:, :, k] = project(cols[:, :, k])
     y, X = _weighted(residual, cols, sigma)
     return _lstsq(X, y, list(range(cols.shape[2])))[1]
 
@@ -162,10 +166,13 @@ def _best_shape(rss_of) -> tuple[float, float]:
 
 def refine_coulomb(residual: np.ndarray, dictionary: EffectDictionary, sigma: np.ndarray,
                    terms: tuple[EffectTerm, ...], q: np.ndarray, qd: np.ndarray,
-                   qdd: np.ndarray) -> tuple[EffectTerm, ...]:
+                   qdd: np.ndarray, project: Projection | None = None) -> tuple[EffectTerm, ...]:
     """Estimate each selected Coulomb term's shape (lead in s, eps in rad/s) by the weighted
     residual sum of squares of the whole refit (variable projection: coefficients by least
-    squares at each shape), one joint at a time; returns the refitted terms."""
+    squares at each shape), one joint at a time; returns the refitted terms.
+
+    project: the map applied to the dictionary's columns (closeloop_identified), applied to
+    every trial Coulomb column too."""
     chosen = [Effect(t.effect, t.joint) for t in terms]
     if not any(e.effect == "coulomb" for e in chosen):
         return terms
@@ -176,8 +183,8 @@ def refine_coulomb(residual: np.ndarray, dictionary: EffectDictionary, sigma: np
             continue
         shapes[e.joint] = _best_shape(
             lambda lead, eps, k=k, j=e.joint: _shape_rss(residual, cols, sigma, k, j, q, qd, qdd,
-                                                         lead, eps))
-        _shape_rss(residual, cols, sigma, k, e.joint, q, qd, qdd, *shapes[e.joint])
+                                                         lead, eps, project))
+        _shape_rss(residual, cols, sigma, k, e.joint, q, qd, qdd, *shapes[e.joint], project)
     y, X = _weighted(residual, cols, sigma)
     coef, _ = _lstsq(X, y, list(range(len(chosen))))
     return tuple(EffectTerm(e.effect, e.joint, float(c), *shapes.get(e.joint, (t.lead, t.eps)))

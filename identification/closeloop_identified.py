@@ -1,0 +1,103 @@
+"""Closing the loop when the declared model is itself identified from the same data.
+
+A sparse model fitted on data from a plant with, say, joint friction has already
+absorbed the part of the friction its library spans (its qdd_j term is an
+armature; its coefficients are biased by the friction's projection on its
+terms). Tracing on its plain residual would therefore split an effect between
+the model and the added term. Instead the identified model's kept terms and the
+effect columns are refitted jointly by least squares on the training part.
+
+By the Frisch-Waugh-Lovell theorem, the joint fit's effect coefficients are the
+least-squares fit of the effects on the *projected* problem: each joint's
+measured torque and each candidate's torque on that joint with that joint's
+kept-term columns projected out (the per-joint noise weights are constants, so
+they commute with the projection). Selection runs on that projected problem, so
+BIC compares candidates by what the identified model cannot already explain; an
+effect the kept terms span exactly (an armature on a joint with a qdd_j term,
+or a payload under a full rigid-body library) is invisible and is not named -
+the identified model carries it already. The kept terms are then refitted to
+the torque minus the named effects.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from identification.closeloop import CloseLoopResult, check_data, outcome, trace
+from identification.closeloop_model import ExtendedModel
+from identification.effects import EffectTerm, PayloadTorque, effect_torque
+from identification.model import IdentifiedModel, model_from_dict
+from identification.residual import noise_sigma
+
+
+def term_columns(model: IdentifiedModel, q, qd, qdd) -> list[np.ndarray]:
+    """Per joint, the (n, k_j) torques of its kept terms at unit coefficient (N m)."""
+    spec = model.to_dict()
+    dof = int(spec["dof"])
+    out = []
+    for j, joint in enumerate(spec["joints"]):
+        cols = []
+        for term in joint["terms"]:
+            unit = {"dof": dof, "joints": [{"terms": [term] if i == j else [],
+                                            "coefficients": [1.0] if i == j else []}
+                                           for i in range(dof)]}
+            cols.append(model_from_dict(unit).torque(q, qd, qdd)[:, j])
+        out.append(np.stack(cols, axis=1) if cols else np.zeros((len(q), 0)))
+    return out
+
+
+@dataclass(frozen=True)
+class KeptSpan:
+    """Orthonormal bases (n, r_j) of each joint's kept-term columns on a set of samples."""
+
+    bases: tuple[np.ndarray, ...]
+
+    @classmethod
+    def of(cls, model: IdentifiedModel, q, qd, qdd) -> KeptSpan:
+        bases = []
+        for X in term_columns(model, q, qd, qdd):
+            if X.shape[1] == 0:
+                bases.append(X)
+                continue
+            u, s, _ = np.linalg.svd(X, full_matrices=False)
+            bases.append(u[:, s > 1e-10 * s[0]])
+        return cls(tuple(bases))
+
+    def project(self, x: np.ndarray) -> np.ndarray:
+        """x (n, dof) with each joint's kept-term span removed from its column."""
+        out = np.array(x, dtype=float, copy=True)
+        for j, Q in enumerate(self.bases):
+            out[:, j] -= Q @ (Q.T @ out[:, j])
+        return out
+
+
+def refit_kept(model: IdentifiedModel, terms: tuple[EffectTerm, ...], q, qd, qdd, tau,
+               payload: PayloadTorque | None = None) -> IdentifiedModel:
+    """The model with its kept terms' coefficients refitted (least squares per joint) to
+    tau minus the effects' torque; same terms, same MODEL.json form."""
+    target = tau - effect_torque(terms, q, qd, qdd, payload)
+    spec = model.to_dict()
+    for j, (X, joint) in enumerate(zip(term_columns(model, q, qd, qdd), spec["joints"],
+                                       strict=True)):
+        if X.shape[1]:
+            joint["coefficients"] = np.linalg.lstsq(X, target[:, j], rcond=None)[0].tolist()
+    return model_from_dict(spec)
+
+
+def close_loop_identified(identified: IdentifiedModel, q, qd, qdd, tau, tau_clean,
+                          holdout: float = 0.25, payload: PayloadTorque | None = None,
+                          symbolic_payload=None) -> CloseLoopResult:
+    """Trace effects jointly with the identified model's kept terms; error before is the
+    identified model's, error after that of its refit plus the named effects."""
+    q, qd, qdd, tau, tau_clean, split = check_data(q, qd, qdd, tau, tau_clean,
+                                                   identified.dof, holdout)
+    tr = slice(0, split)
+    span = KeptSpan.of(identified, q[tr], qd[tr], qdd[tr])
+    residual = span.project(tau[tr])  # the residual of the kept terms refitted alone
+    sigma = noise_sigma(residual)
+    selection, terms = trace(residual, sigma, q[tr], qd[tr], qdd[tr], payload, span.project)
+    refitted = refit_kept(identified, terms, q[tr], qd[tr], qdd[tr], tau[tr], payload)
+    model = ExtendedModel(refitted, terms, payload, symbolic_payload)
+    return outcome(identified, model, selection, q, qd, qdd, tau, tau_clean, split)
