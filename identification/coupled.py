@@ -161,12 +161,12 @@ class CoupledRegression:
         for c in self.candidates_:
             if c.alpha not in best or c.validation_mse < best[c.alpha].validation_mse:
                 best[c.alpha] = c
-        x_fit, y_fit = xs[~val], yc[~val]
+        x_fit = xs[~val].reshape(-1, xs.shape[-1])
+        gram, rhs = x_fit.T @ x_fit, x_fit.T @ yc[~val].reshape(-1)
         out = []
         for alpha in sorted(best):
             s = list(best[alpha].support)
-            coef = np.linalg.lstsq(x_fit[:, :, s].reshape(-1, len(s)), y_fit.reshape(-1),
-                                   rcond=None)[0]
+            coef = np.linalg.lstsq(gram[np.ix_(s, s)], rhs[s], rcond=None)[0]
             out.append((alpha, np.mean((yc[val] - xs[val][:, :, s] @ coef) ** 2, axis=0)))
         return out
 

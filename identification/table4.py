@@ -89,7 +89,8 @@ class SystemFit:
     coefficients: tuple[Coefficient, ...]
     extra_terms: tuple[tuple[str, ...], ...]  # per joint, kept terms not in the truth
     heldout_rel_rmse: tuple[float, ...]
-    lagrangian_residual: tuple[float, ...]  # noise-free fit by the system's atoms (0: consistent)
+    lagrangian_residual: tuple[float, ...]  # noise-free fit by the system's atoms (0: consistent;
+    # empty without atoms)
 
     @property
     def max_error(self) -> float:
@@ -98,9 +99,9 @@ class SystemFit:
 
 def lagrangian_residual(system: System, m: Motion) -> tuple[float, ...]:
     """Relative residual per joint of the noise-free torque fitted by one Lagrangian made of
-    the system's atoms (nan without atoms): ~1e-15 iff some Lagrangian produces the equations."""
+    the system's atoms (empty without atoms): ~1e-15 iff some Lagrangian produces the equations."""
     if not system.atoms:
-        return (float("nan"),) * system.dof
+        return ()
     from identification.coupled import AtomBasis
 
     design = AtomBasis.from_atoms(system.atoms, system.dof).evaluate(m.q, m.qd, m.qdd)
