@@ -1,0 +1,81 @@
+"""`torquebench identify`: MODEL.json contract, methods, and one-line errors with no file."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from harness.cli import main
+from harness.pinocchio_baseline import PinocchioModel
+from harness.robots import load_pinocchio
+from identification import load_model
+from identification.signals import lynxmotion_motion
+
+
+@pytest.fixture(scope="module")
+def arrays():
+    m = lynxmotion_motion(1600, seed=4)
+    tau = PinocchioModel(load_pinocchio("lynxmotion")).torque(m.q, m.qd, m.qdd)
+    rng = np.random.default_rng(2)
+    noisy = tau + 0.01 * tau.std(axis=0) * (rng.normal(size=tau.shape) + 0.2)
+    return {"t": m.t, "q": m.q, "qd": m.qd, "qdd": m.qdd, "tau": noisy, "tau_clean": tau}
+
+
+def _write(tmp_path, arrays, name="data.npz", **changes):
+    path = tmp_path / name
+    payload = {**arrays, **changes}
+    np.savez(path, **{k: v for k, v in payload.items() if v is not None})
+    return path
+
+
+@pytest.mark.parametrize("method", ["auto", "per-joint"])
+def test_identify_writes_the_contract(tmp_path, arrays, method, capsys):
+    data, out = _write(tmp_path, arrays), tmp_path / "MODEL.json"
+    assert main(["identify", "--data", str(data), "--out", str(out), "--method", method]) == 0
+    payload = json.loads(out.read_text())
+    assert payload["dof"] == 3 and len(payload["joints"]) == 3
+    assert payload["method"] == ("coupled" if method == "auto" else "per-joint")
+    for joint in payload["joints"]:
+        assert len(joint["terms"]) == len(joint["coefficients"]) > 0
+    metrics = payload["metrics"]
+    for key in ("heldout_rel_rmse", "heldout_mse", "library_size", "library_condition"):
+        assert key in metrics
+    assert len(metrics["heldout_rel_rmse"]) == 3 and max(metrics["heldout_rel_rmse"]) < 0.01
+    assert ("lagrangian" in payload) == (method == "auto")
+    # the held-out error is the model's, recomputed independently on the last 25 %
+    model = load_model(out)
+    rows = slice(1200, None)
+    pred = model.torque(arrays["q"][rows], arrays["qd"][rows], arrays["qdd"][rows])
+    truth = arrays["tau_clean"][rows]
+    np.testing.assert_allclose(metrics["heldout_rel_rmse"],
+                               np.linalg.norm(pred - truth, axis=0) / np.linalg.norm(truth, axis=0))
+    assert "wrote" in capsys.readouterr().out
+
+
+def _bad_cases(arrays):
+    nan = arrays["tau"].copy()
+    nan[3, 1] = np.nan
+    return {
+        "nan": ({"tau": nan}, [], "NaN"),
+        "missing": ({"qdd": None}, [], "missing keys qdd"),
+        "shape": ({"q": arrays["q"][:-1]}, [], "shape mismatch"),
+        "few": ({k: arrays[k][:20] for k in ("q", "qd", "qdd", "tau", "tau_clean")}, [], "more samples"),
+        "holdout": ({}, ["--holdout", "1.5"], "holdout"),
+        "method": ({}, ["--library", "paper", "--method", "coupled"], "no Lagrangian atoms"),
+    }
+
+
+@pytest.mark.parametrize("case", ["nan", "missing", "shape", "few", "holdout", "method", "nofile"])
+def test_bad_input_exits_2_with_one_line_and_no_file(tmp_path, arrays, case, capsys):
+    out = tmp_path / "MODEL.json"
+    if case == "nofile":
+        data, extra, match = tmp_path / "absent.npz", [], "not found"
+    else:
+        changes, extra, match = _bad_cases(arrays)[case]
+        data = _write(tmp_path, arrays, **changes)
+    assert main(["identify", "--data", str(data), "--out", str(out), *extra]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("torquebench identify: error:") and match in err[0]
+    assert not out.exists() and not list(tmp_path.glob(".MODEL.json*"))
