@@ -33,10 +33,11 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+import mujoco
 import numpy as np
 
 from harness.closeloop_payload import PayloadTorque
-from harness.closeloop_plants import true_effects
+from harness.closeloop_plants import DECLARED_MJCF, true_effects
 from harness.datagen import Dataset, generate
 from harness.errors import UserError
 from harness.plant import Plant, load_plant
@@ -71,7 +72,13 @@ class CloseLoopRun:
     outside_dictionary: bool  # the plant carries an effect the dictionary cannot name
     noise_floor: np.ndarray | None  # (dof,) oracle refit error; None if outside dictionary
     truth_error: np.ndarray | None  # (dof,) true-coefficient error
+    absorbed: tuple[str, ...] = ()  # labels of true effects the declared model's terms span
     others: tuple[CloseLoopRun, ...] = ()  # the same data with the other declared models
+
+    @property
+    def expected(self) -> tuple[EffectTerm, ...]:
+        """The true effects the loop can name: those the declared model does not carry."""
+        return tuple(t for t in self.truth if Effect(t.effect, t.joint).label not in self.absorbed)
 
     def summary(self) -> dict:
         """Effects, errors and references of this declared model."""
@@ -79,7 +86,8 @@ class CloseLoopRun:
         ref = {k: None if v is None else v.tolist() for k, v in
                (("noise_floor", self.noise_floor), ("truth_error", self.truth_error))}
         return {"effects": [t.to_json() for t in r.terms], "error_before": r.error_before.tolist(),
-                "error_after": r.error_after.tolist(), "unexplained": bool(r.unexplained), **ref}
+                "error_after": r.error_after.tolist(), "unexplained": bool(r.unexplained), **ref,
+                "plant_effects_absorbed": list(self.absorbed)}
 
     def to_json(self) -> dict:
         r = self.result
@@ -122,33 +130,51 @@ def _oracle_fit(data: Dataset, dictionary: EffectDictionary, residual, truth, tr
 
 
 def oracle(declared: TorqueModel, data: Dataset, truth: tuple[EffectTerm, ...], split: int,
-           payload: PayloadTorque, joint_refit: bool = False) -> tuple[np.ndarray, np.ndarray]:
-    """Held-out errors of the true effect set refitted (noise floor) and at true values.
+           payload: PayloadTorque, joint_refit: bool = False,
+           ) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Held-out errors of the true effect set refitted (noise floor) and at true values,
+    and the labels of true effects the declared model's terms span (absorbed).
 
     joint_refit: the declared model is identified; its kept terms are refitted with the
-    effects (as close_loop_identified does)."""
+    effects (as close_loop_identified does); an effect they span exactly is absorbed."""
     tr, held = slice(0, split), slice(split, None)
     states = (data.q[tr], data.qd[tr], data.qdd[tr])
     project = KeptSpan.of(declared, *states).project if joint_refit else None
     residual = (project(data.tau[tr]) if project is not None
                 else data.tau[tr] - declared.torque(*states))
     dictionary = projected_dictionary(*states, payload, project=project)
-    fitted = _oracle_fit(data, dictionary, residual, truth, tr, project)
+    absorbed = tuple(e.label for i, e in enumerate(dictionary.effects)
+                     if not np.any(dictionary.columns[:, :, i])
+                     and any(Effect(t.effect, t.joint) == e for t in truth))
+    visible = tuple(t for t in truth if Effect(t.effect, t.joint).label not in absorbed)
+    fitted = _oracle_fit(data, dictionary, residual, visible, tr, project)
     errors = []
     for terms in (fitted, truth):
         base = refit_kept(declared, terms, *states, data.tau[tr], payload) if joint_refit else declared
         model = ExtendedModel(base, terms, payload)
         errors.append(rel_error(model.torque(data.q[held], data.qd[held], data.qdd[held]),
                                 data.tau_clean[held]))
-    return errors[0], errors[1]
+    return errors[0], errors[1], absorbed
 
 
 def check_plant(plant: str | Path, dof: int) -> Plant:
-    """The plant, or a UserError if it cannot be this robot (its number of joints)."""
+    """The plant, or a UserError if it cannot be a variant of this robot: another number of
+    joints, or joints of another type, axis or place (the declared MJCF's kinematics)."""
     p = load_plant(plant)
     if p.dof != dof:
         raise UserError(f"plant {plant} has {p.dof} joints; the declared {DEFAULT_ROBOT} model has "
                         f"{dof}: not a variant of this robot")
+    ref = mujoco.MjModel.from_xml_path(str(DECLARED_MJCF))
+    m = p.model
+    for j in range(dof):
+        same = (m.jnt_type[j] == ref.jnt_type[j]
+                and np.allclose(m.jnt_axis[j], ref.jnt_axis[j], atol=1e-9)
+                and np.allclose(m.jnt_pos[j], ref.jnt_pos[j], atol=1e-9)
+                and np.allclose(m.body_pos[m.jnt_bodyid[j]], ref.body_pos[ref.jnt_bodyid[j]],
+                                atol=1e-9))
+        if not same:
+            raise UserError(f"plant {plant}: joint {j + 1} differs from {DEFAULT_ROBOT}'s in type, "
+                            "axis or position: not a variant of this robot")
     return p
 
 
@@ -162,9 +188,11 @@ def _loop(spec: str, data: Dataset, split: int, payload: PayloadTorque, truth, o
     identified = spec == "identified"
     result = close_loop_identified(model, *args) if identified else close_loop(model, *args)
     floor = exact = None
+    absorbed: tuple[str, ...] = ()
     if not outside:
-        floor, exact = oracle(model, data, truth, result.split, payload, identified)
-    return CloseLoopRun(str(data.meta["plant"]), spec, data, result, truth, outside, floor, exact)
+        floor, exact, absorbed = oracle(model, data, truth, result.split, payload, identified)
+    return CloseLoopRun(str(data.meta["plant"]), spec, data, result, truth, outside, floor, exact,
+                        absorbed)
 
 
 def run_closeloop(plant: str | Path, samples: int = 4000, noise: float = 0.05, seed: int = 0,

@@ -16,7 +16,7 @@ BIC compares candidates by what the identified model cannot already explain; an
 effect the kept terms span exactly (an armature on a joint with a qdd_j term,
 or a payload under a full rigid-body library) is invisible and is not named -
 the identified model carries it already. The kept terms are then refitted to
-the torque minus the named effects.
+the torque minus the named effects (`refit_kept`).
 """
 
 from __future__ import annotations
@@ -75,8 +75,15 @@ class KeptSpan:
 
 def refit_kept(model: IdentifiedModel, terms: tuple[EffectTerm, ...], q, qd, qdd, tau,
                payload: PayloadTorque | None = None) -> IdentifiedModel:
-    """The model with its kept terms' coefficients refitted (least squares per joint) to
-    tau minus the effects' torque; same terms, same MODEL.json form."""
+    """The model with its kept terms' coefficients refitted by least squares, per joint, to
+    tau minus the effects' torque (the joint refit); unchanged if there are no effects.
+
+    The refit is plain least squares even if the identification shared coefficients
+    across joints (coupled fit) or denoised first: correcting its coefficients by only the
+    effects' projection is not the joint refit then (measured: 0.2 vs 0.004 held-out error
+    on joint 1 of the friction plant)."""
+    if not terms:
+        return model
     target = tau - effect_torque(terms, q, qd, qdd, payload)
     spec = model.to_dict()
     for j, (X, joint) in enumerate(zip(term_columns(model, q, qd, qdd), spec["joints"],

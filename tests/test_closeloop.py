@@ -65,18 +65,63 @@ def test_cli_writes_contract(tmp_path):
     assert len(report["error_before"]) == len(report["error_after"]) == 3
 
 
-def test_cli_bad_plant_is_one_line_and_no_output(tmp_path, capsys):
-    rc = main(["closeloop", "--plant", str(tmp_path / "missing.xml"), "--out", str(tmp_path / "o")])
+TWO_JOINTS = ('<mujoco><worldbody><body><joint type="hinge"/><geom size="0.1"/><body>'
+              '<joint type="hinge"/><geom size="0.1"/></body></body></worldbody></mujoco>')
+FREE_BODY = '<mujoco><worldbody><body><freejoint/><geom size="0.1"/></body></worldbody></mujoco>'
+OTHER_ARM = DECLARED_MJCF.read_text().replace('axis="0 -1 0" range="-3.14', 'axis="0 0 1" range="-3.14')
+
+
+@pytest.mark.parametrize("text,message", [
+    (None, "plant file not found"),
+    ("<mujoco><worldbody><body>", "invalid MJCF"),
+    ("", "invalid MJCF"),
+    (TWO_JOINTS, "has 2 joints; the declared lynxmotion model has 3"),
+    (FREE_BODY, "needs 1-DOF joints only"),
+    (OTHER_ARM, "joint 3 differs from lynxmotion's"),
+], ids=["missing", "malformed", "empty", "wrong-dof", "free-joint", "other-arm"])
+def test_cli_bad_plant_is_one_line_and_no_output(tmp_path, capsys, text, message):
+    plant = tmp_path / "plant.xml"
+    if text is not None:
+        plant.write_text(text)
+    out = tmp_path / "o"
+    rc = main(["closeloop", "--plant", str(plant), "--out", str(out)])
     assert rc == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "plant file not found" in err[0]
-    assert not (tmp_path / "o" / "closeloop.json").exists()
+    captured = capsys.readouterr()
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1 and message in err[0], captured.err
+    assert "Traceback" not in captured.err
+    assert not (out / "closeloop.json").exists()
+
+
+def test_identified_declared_model_refits_jointly():
+    """Declared = the sparse model identified on the same training data: the friction plant's
+    effects are named at the plant's values (not split with the model's own terms), and the
+    Pinocchio numbers are reported beside them."""
+    loop = run_closeloop(DECLARED_MJCF.parent / "lynxmotion_friction.xml", samples=3000,
+                         declared="identified", compare=True)
+    _assert_accepted(loop)
+    report = loop.to_json()
+    assert set(report["declared_models"]) == {"pinocchio", "identified"}
+    assert report["declared_models"]["identified"]["error_after"] == report["error_after"]
+    pin = loop.others[0]
+    assert pin.declared == "pinocchio"
+    _assert_accepted(pin)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("variant", EVERY_JOINT, ids=lambda v: v.name)
 def test_every_effect_on_every_joint(tmp_path, variant):
     _assert_accepted(run_closeloop(write_variant(variant, tmp_path)))
+
+
+@pytest.mark.slow
+def test_identified_model_carries_what_its_terms_span():
+    """Payload and armature lie in the identified model's span: absorbed, not named; the
+    spring it cannot span is named on joint 3."""
+    loop = run_closeloop(DECLARED_MJCF.parent / "lynxmotion_payload.xml", declared="identified")
+    assert set(loop.absorbed) == {"payload", "armature@3"}
+    assert [(t.effect, t.joint) for t in loop.result.terms] == [("spring", 3)]
+    _assert_accepted(loop)
 
 
 @pytest.mark.slow
