@@ -83,7 +83,8 @@ def check_data(q, qd, qdd, tau, n_features: int) -> tuple[np.ndarray, ...]:
         raise IdentificationError(f"shape mismatch: {shapes}")
     n, dof = arrays[0].shape
     if n <= n_features:
-        raise IdentificationError(f"{n} training samples for {n_features} library features: need more samples than features")
+        raise IdentificationError(f"{n} training samples for {n_features} library features: "
+                                  "need more samples than features")
     for j in range(dof):
         if np.ptp(arrays[3][:, j]) == 0:
             raise IdentificationError(f"torque of joint {j + 1} is constant: nothing to identify")

@@ -16,9 +16,8 @@ bias; it is reported as `intercept_` and is not a library term.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 from sklearn.exceptions import ConvergenceWarning
@@ -133,7 +132,8 @@ class SparseRegression:
         per-sample squared-residual differences against the best."""
         best = min(cands, key=lambda c: c.validation_mse)
         if self.rule != "1se":
-            return [c for c in cands if c.validation_mse <= best.validation_mse * (1 + self.tolerance) + floor]
+            limit = best.validation_mse * (1 + self.tolerance) + floor
+            return [c for c in cands if c.validation_mse <= limit]
 
         def squared(support):
             s = list(support)

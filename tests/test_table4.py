@@ -8,8 +8,7 @@ import pytest
 
 from identification import identify
 from identification.features import parse_feature
-from identification.table4 import (CONSISTENT_DOUBLE_PENDULUM, SYSTEMS, fit_system,
-                                   lagrangian_residual)
+from identification.table4 import CONSISTENT_DOUBLE_PENDULUM, SYSTEMS, fit_system, lagrangian_residual
 
 BY_NAME = {s.name: s for s in (*SYSTEMS, CONSISTENT_DOUBLE_PENDULUM)}
 

@@ -29,7 +29,7 @@ from identification.table4 import CONSISTENT_DOUBLE_PENDULUM, SYSTEMS, fit_syste
 
 LEVELS = (0.0, 0.01, 0.05, 0.10)
 QUICK_LEVELS = (0.0, 0.05)
-N_TRAIN = 3000
+HOLDOUT = 0.25
 METHODS = ("per-joint", "coupled")
 
 
@@ -60,17 +60,22 @@ def _rel(pred, truth):
     return np.linalg.norm(pred - truth, axis=0) / np.linalg.norm(truth, axis=0)
 
 
+def n_train(n: int) -> int:
+    """Training samples: the first 1 - HOLDOUT, as identify splits."""
+    return int(round(n * (1 - HOLDOUT)))
+
+
 def _pysindy(theta, tau, truth_tau) -> dict:
     import pysindy as ps
 
-    out = {}
+    out, k = {}, n_train(len(tau))
     for name, opt in (("STLSQ", ps.STLSQ(threshold=1e-3, alpha=0.0, normalize_columns=True)),
                       ("SSR", ps.SSR(alpha=0.0, normalize_columns=True))):
         start = time.perf_counter()
-        coef = np.column_stack([opt.fit(theta[:N_TRAIN], tau[:N_TRAIN, j]).coef_.ravel()
+        coef = np.column_stack([opt.fit(theta[:k], tau[:k, j]).coef_.ravel()
                                 for j in range(tau.shape[1])])
         out[name] = {"seconds": time.perf_counter() - start,
-                     "rel": _rel(theta[N_TRAIN:] @ coef, truth_tau[N_TRAIN:]).tolist(),
+                     "rel": _rel(theta[k:] @ coef, truth_tau[k:]).tolist(),
                      "terms": [int(np.sum(coef[:, j] != 0)) for j in range(tau.shape[1])]}
     return out
 
@@ -86,12 +91,13 @@ def _scores(r, truth: list[set[str]], fresh) -> list[dict]:
     return rows
 
 
-def compare(level: float, ctx: dict, with_pysindy: bool = True) -> dict:
-    """Per-joint, coupled, oracle (and pysindy) at one noise level on the default data."""
-    d = noisy(ctx["clean"], level)
+def compare(level: float, ctx: dict, with_pysindy: bool = True, seed: int = 1) -> dict:
+    """Per-joint, coupled, oracle (and pysindy) at one noise level; seed 1 draws the noise of
+    the default data."""
+    d = noisy(ctx["clean"], level, seed)
     out: dict = {"fits": {}}
     for method in METHODS:
-        r = identify(d.q, d.qd, d.qdd, d.tau, ctx["library"], 0.25, d.tau_clean, method=method)
+        r = identify(d.q, d.qd, d.qdd, d.tau, ctx["library"], HOLDOUT, d.tau_clean, method=method)
         out["fits"][method] = r
         out[method] = {"joints": _scores(r, ctx["truth"], ctx["fresh"]), "seconds": r.seconds,
                        "equations": r.model.equations(), "alpha": [f.alpha_ for f in r.regressions],
@@ -101,8 +107,9 @@ def compare(level: float, ctx: dict, with_pysindy: bool = True) -> dict:
     out["coupled"]["lagrangian"] = coupled.lagrangian()
     out["coupled"]["atom_recall"] = len(kept & ctx["atoms"]) / len(ctx["atoms"])
     out["coupled"]["atom_precision"] = len(kept & ctx["atoms"]) / max(len(kept), 1)
-    ofit = fit_base_parameters(ctx["regressor"][:N_TRAIN], d.tau[:N_TRAIN])
-    out["oracle"] = _rel(ofit.predict(ctx["regressor"][N_TRAIN:]), d.tau_clean[N_TRAIN:]).tolist()
+    k = n_train(len(d.q))
+    ofit = fit_base_parameters(ctx["regressor"][:k], d.tau[:k])
+    out["oracle"] = _rel(ofit.predict(ctx["regressor"][k:]), d.tau_clean[k:]).tolist()
     out["oracle_parameters"] = len(ofit.columns)
     if with_pysindy:
         out["pysindy"] = _pysindy(ctx["theta"], d.tau, d.tau_clean)
@@ -175,10 +182,11 @@ def _figures(fig_dir: Path, ctx: dict, c5: dict) -> list[Path]:
     fig.savefig(figs[0], dpi=110, bbox_inches="tight")
     _alpha_figure(plt, figs[1], c5)
     fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True)
+    k = n_train(len(clean.q))
     pred = c5["fits"]["coupled"].model.torque(clean.q, clean.qd, clean.qdd)
     for j, ax in enumerate(axes):
-        ax.plot(clean.t[N_TRAIN:], clean.tau_clean[N_TRAIN:, j], "k", lw=1, label="Pinocchio (clean)")
-        ax.plot(clean.t[N_TRAIN:], pred[N_TRAIN:, j], "r--", lw=1, label="identified (coupled)")
+        ax.plot(clean.t[k:], clean.tau_clean[k:, j], "k", lw=1, label="Pinocchio (clean)")
+        ax.plot(clean.t[k:], pred[k:, j], "r--", lw=1, label="identified (coupled)")
         ax.set(ylabel=f"tau{j + 1} (N m)")
     axes[0].legend()
     axes[-1].set(xlabel="t (s), held-out part (cf. Figs. 6-8)")
@@ -278,7 +286,8 @@ def run(out_dir: Path, quick: bool = False) -> dict:
            f"{c5['coupled']['seconds']:.2f} s, per-joint {c5['per-joint']['seconds']:.2f} s; pysindy "
            + ", ".join(f"{k} {v['seconds']:.3f} s ({v['terms']} terms)" for k, v in c5["pysindy"].items()),
            "", "Identified at 5 % (coupled):", "", "```", *c5["fits"]["coupled"].model.equations(),
-           "L = " + " + ".join(f"{c:.6g}*{a}" for a, c in zip(lagr["atoms"], lagr["coefficients"], strict=True)),
+           "L = " + " + ".join(f"{c:.6g}*{a}" for a, c in
+                               zip(lagr["atoms"], lagr["coefficients"], strict=True)),
            "```"]
     d5 = c5["data"]
     if not quick:
