@@ -64,20 +64,28 @@ def residual_figure(run: CloseLoopRun, path: Path) -> Path | None:
 
 
 def error_figure(runs: dict[str, CloseLoopRun], path: Path) -> Path:
-    """Held-out relative RMS error per joint before/after (and the noise floor), per plant."""
-    fig, axes = plt.subplots(1, len(runs), figsize=(3.4 * len(runs), 3.2), squeeze=False)
+    """Held-out relative RMS error per joint before/after, for each declared model of each
+    plant (the noise floor marked on the after bars)."""
+    fig, axes = plt.subplots(1, len(runs), figsize=(3.8 * len(runs), 3.4), squeeze=False)
     for ax, (name, run) in zip(axes[0], runs.items(), strict=True):
+        group = (run, *run.others)
+        width = 0.8 / (2 * len(group))
         joints = np.arange(1, len(run.result.error_before) + 1)
-        ax.bar(joints - 0.2, run.result.error_before, 0.4, label="declared")
-        ax.bar(joints + 0.2, run.result.error_after, 0.4, label="+ named effects")
-        if run.noise_floor is not None:
-            ax.plot(joints + 0.2, run.noise_floor, "k_", ms=14, mew=2, label="noise floor")
+        for g, r in enumerate(group):
+            x0 = joints - 0.4 + width * (2 * g + 0.5)
+            ax.bar(x0, r.result.error_before, width, label=f"{r.declared}", alpha=0.45,
+                   color=f"C{g}")
+            ax.bar(x0 + width, r.result.error_after, width, label=f"{r.declared} + effects",
+                   color=f"C{g}")
+            if r.noise_floor is not None:
+                ax.plot(x0 + width, r.noise_floor, "k_", ms=8, mew=2,
+                        label="noise floor" if g == 0 else None)
         ax.set_yscale("log")
         ax.set_xticks(joints)
         ax.set_xlabel("joint")
         ax.set_ylabel("held-out rel. RMS torque error [-]")
         ax.set_title(name, fontsize=9)
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=6)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
