@@ -36,16 +36,16 @@ class Execution:
 
 def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goal,
                  forecast: ObstacleForecast | None, warm: SegmentPlan | None = None,
-                 rounds: int = 4) -> tuple[SegmentPlan, float]:
+                 rounds: int = 4) -> tuple[SegmentPlan, float, float]:
     """Solve with the obstacle samples screened on a reference; re-screen on the result.
 
     Without a warm start the unobstructed optimum is solved first and serves as the
-    reference. Returns the plan and the total wall time (ms) of the solves it took.
+    reference. Returns the plan and the total wall and CPU time (ms) of its solves.
     """
-    config, total, plan = planner.config, 0.0, warm
+    config, total, cpu, plan = planner.config, 0.0, 0.0, warm
     if plan is None:
         plan = planner.solve(q0, qd0, duration, goal, None, t_begin)
-        total = plan.solve_ms
+        total, cpu = plan.solve_ms, plan.solve_cpu_ms
     reference, chosen = plan.trajectory.restrict(t_begin, duration), set()
     for round_ in range(rounds):
         subset = screen(forecast, reference, config.geometry, config.threshold,
@@ -57,9 +57,9 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
         chosen |= times
         plan = planner.solve(q0, qd0, duration, goal, subset, t_begin, warm=plan,
                              turning=reference.turning_points())
-        total += plan.solve_ms
+        total, cpu = total + plan.solve_ms, cpu + plan.solve_cpu_ms
         reference = plan.trajectory
-    return plan, total
+    return plan, total, cpu
 
 
 def limit_excess(planner: Planner, plan: SegmentPlan, goal) -> float:
@@ -98,20 +98,20 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
     obstacle, goal, T = scenario.obstacle if avoid else None, scenario.goal, scenario.duration
     if avoid:
         check_start(planner, scenario)
-    forecast = None if obstacle is None else _forecast(obstacle, 0.0)
-    plan, ms = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0, T, goal,
-                            forecast)
+    forecast = None if obstacle is None else forecast_at(obstacle, 0.0)
+    plan, ms, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0, T, goal,
+                               forecast)
     segments, times, solve_ms = [plan], [0.0], [ms]
     failures = [] if plan.success else [plan.status]
     if obstacle is None or not replan:
         return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures))
     for t in obstacle.sample_times[:-1]:
-        forecast = _forecast(obstacle, t)
+        forecast = forecast_at(obstacle, t)
         if _predicted_clearance(planner, plan, forecast) >= planner.config.threshold \
                 - TRIGGER_TOLERANCE:
             continue
         q, qd, _ = plan.trajectory.state(t)
-        new, ms = plan_segment(planner, q[0], qd[0], t, T - t, goal, forecast, warm=plan)
+        new, ms, _ = plan_segment(planner, q[0], qd[0], t, T - t, goal, forecast, warm=plan)
         solve_ms.append(ms)
         if not new.success:
             failures.append(new.status)
@@ -122,7 +122,7 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
     return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures))
 
 
-def _forecast(obstacle, t: float) -> ObstacleForecast:
+def forecast_at(obstacle, t: float) -> ObstacleForecast:
     """Prediction at time t of the obstacle at the remaining samples, from what was seen."""
     seen = np.concatenate([[0.0], obstacle.sample_times])
     seen = seen[seen <= t + 1e-12][-2:]

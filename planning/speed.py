@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planning.config import Scenario
-from planning.replanning import _forecast, plan_segment
+from planning.replanning import forecast_at, plan_segment
 from planning.solver import Planner, SegmentPlan
 
 
@@ -18,6 +18,8 @@ class Timings:
     cold_ms: tuple[float, ...]
     replan_ms: tuple[float, ...]
     replan_failures: int
+    cold_cpu_ms: tuple[float, ...]
+    replan_cpu_ms: tuple[float, ...]
 
     def summary(self) -> dict:
         replan = np.asarray(self.replan_ms)
@@ -26,7 +28,10 @@ class Timings:
                 "replan_median_ms": float(np.median(replan)),
                 "replan_p95_ms": float(np.percentile(replan, 95)),
                 "replan_max_ms": float(np.max(replan)), "replans_timed": len(replan),
-                "replan_failures": self.replan_failures}
+                "replan_failures": self.replan_failures,
+                "cold_cpu_median_ms": float(np.median(self.cold_cpu_ms)),
+                "replan_cpu_median_ms": float(np.median(self.replan_cpu_ms)),
+                "replan_cpu_p95_ms": float(np.percentile(self.replan_cpu_ms, 95))}
 
 
 def measure(planner: Planner, scenario: Scenario, cold_repeats: int = 5,
@@ -34,19 +39,22 @@ def measure(planner: Planner, scenario: Scenario, cold_repeats: int = 5,
     """Cold plans of the whole motion, then a re-plan at every `stride`-th obstacle sample,
     each warm-started from the previous plan with the obstacle one sample further."""
     obstacle, goal, T = scenario.obstacle, scenario.goal, scenario.duration
-    cold, plan = [], None
+    cold, cold_cpu, plan = [], [], None
     for _ in range(cold_repeats):
-        plan, ms = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0, T, goal,
-                                _forecast(obstacle, obstacle.sample_times[0]))
+        plan, ms, cpu = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0, T,
+                                     goal, forecast_at(obstacle, obstacle.sample_times[0]))
         cold.append(ms)
-    replans, failures = [], 0
+        cold_cpu.append(cpu)
+    replans, replans_cpu, failures = [], [], 0
     for t in obstacle.sample_times[:-1:stride]:
         q, qd, _ = plan.trajectory.state(t)
-        new, ms = plan_segment(planner, q[0], qd[0], t, T - t, goal, _forecast(obstacle, t),
-                               warm=plan)
+        new, ms, cpu = plan_segment(planner, q[0], qd[0], t, T - t, goal,
+                                    forecast_at(obstacle, t), warm=plan)
         replans.append(ms)
+        replans_cpu.append(cpu)
         if new.success:
             plan = new
         else:
             failures += 1
-    return Timings(tuple(cold), tuple(replans), failures), plan
+    return Timings(tuple(cold), tuple(replans), failures, tuple(cold_cpu),
+                   tuple(replans_cpu)), plan

@@ -1,0 +1,191 @@
+"""Bench section: energy-optimal planning with moving-obstacle avoidance (paper III.G).
+
+Plans the paper's scenario with the closed-form (Pinocchio) model and, when one is
+given, the identified model; evaluates every executed trajectory's energy with
+Pinocchio on a 2 ms grid; adds a scenario whose obstacle crosses the optimal path,
+a minimum-jerk comparison, an N = 10 vs N = 40 energy-sample comparison, and the
+solver timings (cold plans, warm re-plans, scipy trust-constr on the same NLP).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from harness.pinocchio_baseline import PinocchioModel
+from harness.robots import DEFAULT_ROBOT, load_pinocchio
+from harness.sections import planning_figures as figures
+from planning.baselines import MinimumJerk, solve_trust_constr
+from planning.config import PlannerConfig
+from planning.energy import absolute_energy
+from planning.replanning import execute
+from planning.result import PlanResult, evaluate, to_json
+from planning.scenarios import crossing_scenario, paper_scenario
+from planning.screening import screen
+from planning.solver import ObstacleForecast, Planner
+from planning.speed import measure
+
+CLEARANCE_SLACK = 2e-3  # m: acceptance allows lambda - 2 mm where avoidance is needed
+
+
+def _summary(result: PlanResult, free: PlanResult, baseline, threshold: float) -> dict:
+    """Headline numbers of one executed plan; `free` is the unobstructed optimum."""
+    needed = free.sample_clearance < threshold
+    return {
+        "energy_pinocchio_J": absolute_energy(baseline, result.t, result.q, result.qd,
+                                              result.qdd),
+        "energy_own_model_J": result.energy,
+        "objective_energy_first_solve_J": result.execution.segments[0].energy,
+        "min_clearance_m": float(result.sample_clearance.min()),
+        "samples_needing_avoidance": int(needed.sum()),
+        "min_clearance_where_needed_m": float(result.sample_clearance[needed].min())
+        if needed.any() else None,
+        "end_error_rad": result.end_error,
+        "limit_violation_rad": result.limit_violation,
+        "replans": len(result.execution.segments) - 1,
+        "solve_ms": list(result.execution.solve_ms),
+        "feasible": result.feasible, "problems": list(result.problems),
+    }
+
+
+def _plan(model, scenario, config=None, avoid=True) -> PlanResult:
+    planner = Planner(model, config)
+    return evaluate(execute(planner, scenario, avoid=avoid), scenario, model, planner.config)
+
+
+def _minimum_jerk(baseline, scenario, config: PlannerConfig) -> dict:
+    """Energy (Pinocchio, 2 ms grid) of the minimum-jerk motion and of the unobstructed
+    energy optimum, rest to rest and with free end velocity, for N = 10 and N = 40."""
+    grid = np.linspace(0.0, scenario.duration, 1001)
+    jerk = MinimumJerk(np.asarray(scenario.start), np.asarray(scenario.goal), scenario.duration)
+    e_jerk = absolute_energy(baseline, grid, *jerk.state(grid))
+    out = {"energy_minimum_jerk_J": e_jerk}
+    for n in (config.energy_samples, 40):
+        for rest in (True, False):
+            variant = dataclasses.replace(config, energy_samples=n, rest_at_goal=rest)
+            result = _plan(baseline, scenario, variant, avoid=False)
+            energy = absolute_energy(baseline, result.t, result.q, result.qd, result.qdd)
+            key = f"N{n}_{'rest_to_rest' if rest else 'free_end_velocity'}"
+            out[f"energy_optimal_{key}_J"] = energy
+            out[f"saving_{key}_pct"] = 100 * (e_jerk - energy) / e_jerk
+    return out
+
+
+def _speed(baseline, scenario, quick: bool) -> dict:
+    """IPOPT cold and warm timings, and scipy trust-constr on the same cold problem."""
+    planner = Planner(baseline)
+    timings, _ = measure(planner, scenario, cold_repeats=3 if quick else 5,
+                         stride=4 if quick else 1)
+    out = timings.summary()
+    obstacle = scenario.obstacle
+    forecast = ObstacleForecast(obstacle.sample_times, obstacle.position(obstacle.sample_times))
+    free = planner.solve(scenario.start, scenario.start_velocity, scenario.duration,
+                         scenario.goal)
+    subset = screen(forecast, free.trajectory, planner.config.geometry,
+                    planner.config.threshold, planner.config.obstacle_slots)
+    turning = planner.usable_turning_points(scenario.goal, free.trajectory.turning_points())
+    args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
+    ipopt = planner.solve(*args, subset, 0.0, turning=turning)
+    p = planner.parameters(*args, subset, 0.0, turning)
+    scipy = solve_trust_constr(planner, planner.initial_guess(*args), p,
+                               max_iterations=20 if quick else 100)
+    out["same_problem"] = {
+        "ipopt_ms": ipopt.solve_ms, "ipopt_iterations": ipopt.iterations,
+        "ipopt_objective_J": ipopt.energy + ipopt.penalty, "ipopt_success": ipopt.success,
+        "scipy_trust_constr_ms": scipy.solve_ms, "scipy_iterations": scipy.iterations,
+        "scipy_objective_J": scipy.objective, "scipy_success": scipy.success,
+        "scipy_message": scipy.message,
+    }
+    return out
+
+
+def run(out_dir: Path, quick: bool = False, identified_model=None) -> dict:
+    """Plan, evaluate, time and draw; returns markdown, results, figures and plans."""
+    out_dir = Path(out_dir)
+    baseline = PinocchioModel(load_pinocchio(DEFAULT_ROBOT))
+    config, scenario = PlannerConfig(), paper_scenario()
+    models = {"pinocchio": baseline}
+    if identified_model is not None:
+        models["identified"] = identified_model
+    free = _plan(baseline, scenario, avoid=False)
+    paper, summaries, plans = {}, {}, {}
+    for name, model in models.items():
+        paper[name] = _plan(model, scenario)
+        summaries[name] = _summary(paper[name], free, baseline, config.threshold)
+        plans[f"paper_{name}"] = to_json(paper[name], scenario, config, name)
+    crossing = crossing_scenario(free.execution.segments[0].trajectory, config.geometry)
+    crossing_free = _plan(baseline, crossing, avoid=False)
+    crossing_avoid = _plan(baseline, crossing)
+    plans["crossing_obstacle"] = to_json(crossing_avoid, crossing, config, "pinocchio")
+    crossing_summary = _summary(crossing_avoid, crossing_free, baseline, config.threshold)
+    crossing_summary["energy_unobstructed_J"] = _summary(crossing_free, crossing_free, baseline,
+                                                         config.threshold)["energy_pinocchio_J"]
+    crossing_summary["detour_cost_J"] = (crossing_summary["energy_pinocchio_J"]
+                                         - crossing_summary["energy_unobstructed_J"])
+    crossing_summary["detour_cost_pct"] = (100 * crossing_summary["detour_cost_J"]
+                                           / crossing_summary["energy_unobstructed_J"])
+    crossing_summary["obstacle_from"] = list(crossing.obstacle.start)
+    crossing_summary["obstacle_to"] = list(crossing.obstacle.end)
+    jerk = _minimum_jerk(baseline, scenario, config)
+    fine = _plan(baseline, scenario, dataclasses.replace(config, energy_samples=40))
+    samples = {"energy_N10_J": summaries["pinocchio"]["energy_pinocchio_J"],
+               "energy_N40_J": _summary(fine, free, baseline, config.threshold)
+               ["energy_pinocchio_J"]}
+    samples["difference_pct"] = 100 * (samples["energy_N10_J"] - samples["energy_N40_J"]) \
+        / samples["energy_N40_J"]
+    speed = _speed(baseline, scenario, quick)
+    results = {"paper": summaries, "crossing": crossing_summary, "minimum_jerk": jerk,
+               "energy_samples": samples, "speed": speed,
+               "unobstructed_min_clearance_m": float(free.sample_clearance.min())}
+    results["acceptance"] = _acceptance(results, config.threshold)
+    results["headline"] = _headline(results)
+    figure_dir = out_dir / "figures"
+    figs = [figures.path3d(free, paper, figure_dir / "planning_path3d.png"),
+            figures.clearance(paper, crossing_avoid, config.threshold,
+                              figure_dir / "planning_clearance.png"),
+            figures.power(baseline, free, paper, figure_dir / "planning_power.png")]
+    return {"markdown": figures.markdown(results, config), "results": results,
+            "figures": [str(f) for f in figs], "plans": plans}
+
+
+def _acceptance(results: dict, threshold: float) -> dict:
+    paper, speed = results["paper"], results["speed"]
+    out = {}
+    for name, s in paper.items():
+        needed = s["min_clearance_where_needed_m"]
+        out[f"{name}_end_error_le_1e-6"] = s["end_error_rad"] <= 1e-6
+        out[f"{name}_clearance_held"] = needed is None or needed >= threshold - CLEARANCE_SLACK
+        out[f"{name}_feasible"] = s["feasible"]
+    if "identified" in paper:
+        e_id, e_pin = (paper[k]["energy_pinocchio_J"] for k in ("identified", "pinocchio"))
+        out["identified_energy_within_2pct"] = abs(e_id - e_pin) / e_pin <= 0.02
+    cross = results["crossing"]
+    out["crossing_avoidance_active"] = cross["samples_needing_avoidance"] > 0 \
+        and cross["replans"] >= 1
+    out["crossing_clearance_held"] = cross["min_clearance_where_needed_m"] >= threshold \
+        - CLEARANCE_SLACK
+    out["replan_median_le_10ms"] = speed["replan_median_ms"] <= 10
+    out["replan_p95_le_50ms"] = speed["replan_p95_ms"] <= 50
+    out["cold_plan_le_500ms"] = speed["cold_max_ms"] <= 500
+    return out
+
+
+def _headline(results: dict) -> dict:
+    paper, speed = results["paper"], results["speed"]
+    out = {f"paper.{k}.energy_J": v["energy_pinocchio_J"] for k, v in paper.items()}
+    out.update({f"paper.{k}.min_clearance_m": v["min_clearance_m"] for k, v in paper.items()})
+    if "identified" in paper:
+        e_id, e_pin = (paper[k]["energy_pinocchio_J"] for k in ("identified", "pinocchio"))
+        out["identified_vs_pinocchio_energy_pct"] = 100 * (e_id - e_pin) / e_pin
+    out["crossing.detour_cost_pct"] = results["crossing"]["detour_cost_pct"]
+    out["crossing.min_clearance_m"] = results["crossing"]["min_clearance_m"]
+    out["minimum_jerk_saving_N10_rest_pct"] = results["minimum_jerk"]["saving_N10_rest_to_rest_pct"]
+    out["minimum_jerk_saving_N40_rest_pct"] = results["minimum_jerk"]["saving_N40_rest_to_rest_pct"]
+    out["replan_median_ms"] = speed["replan_median_ms"]
+    out["replan_p95_ms"] = speed["replan_p95_ms"]
+    out["replan_cpu_median_ms"] = speed["replan_cpu_median_ms"]
+    out["cold_plan_median_ms"] = speed["cold_median_ms"]
+    out["scipy_trust_constr_ms"] = speed["same_problem"]["scipy_trust_constr_ms"]
+    return out
