@@ -117,7 +117,8 @@ def _format(value) -> str:
     if isinstance(value, bool) or value is None:
         return {True: "yes", False: "**no**", None: "–"}[value]
     if isinstance(value, int | float | np.generic):
-        return f"{float(value):.4g}"
+        close_to_one = 0.99 < abs(float(value)) < 1.01  # ratios: show the small difference
+        return f"{float(value):.6g}" if close_to_one else f"{float(value):.4g}"
     if isinstance(value, list | tuple):
         return ", ".join(_format(v) for v in value)
     return str(value)

@@ -55,6 +55,22 @@ def replace_section(text: str, title: str, body: str) -> str:
     return (text.rstrip() + "\n\n" if text.strip() else "") + section
 
 
+KEY_NUMBERS = (  # the README's compact table; the full one is DIR/headline.md
+    r"noise 5 %: (sparse|oracle) rel err",
+    r"energy_(planned|replayed)_J$", r"energy_ratio_identified", r"min_clearance_m$",
+    r"tracking_rms_rad$", r"\.acceptance$",
+    r"^replan_(median|p95)_ms$", r"^cold_plan_median_ms$",
+    r"^(friction|payload)\.[^.]*\.?error_(before|after)$",
+)
+
+
+def key_numbers(numbers: dict[str, dict]) -> dict[str, dict]:
+    """The headline rows matching KEY_NUMBERS."""
+    return {section: {k: v for k, v in values.items()
+                      if any(re.search(p, k) for p in KEY_NUMBERS)}
+            for section, values in numbers.items()}
+
+
 def latest_benchmark(report: dict, source: str) -> str:
     """The '## Latest benchmark' body: provenance line and the headline table."""
     state = "all sections ok" if report.get("ok") else "**some sections failed**"
@@ -62,8 +78,9 @@ def latest_benchmark(report: dict, source: str) -> str:
     note = f"; not available yet: {', '.join(missing)}" if missing else ""
     quick = " --quick" if report.get("quick") else ""
     return (f"From `torquebench bench{quick}` ({source}/report.json, "
-            f"{report.get('elapsed_s', 0):.0f} s, {state}{note}).\n\n"
-            + headline_markdown(report.get("headline", {})))
+            f"{report.get('elapsed_s', 0):.0f} s, {state}{note}); every headline number is in "
+            f"`{source}/headline.md` and `report.json`.\n\n"
+            + headline_markdown(key_numbers(report.get("headline", {}))))
 
 
 def update_readme(bench_dir: Path, readme: Path) -> None:

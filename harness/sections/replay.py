@@ -126,11 +126,21 @@ def run(out_dir: Path, quick: bool = False, plans: dict | None = None,
             "figures": figures}
 
 
+def _video_subjects(traces: dict[str, ReplayTrace]) -> dict[str, ReplayTrace]:
+    """The closed-form and identified replays (rendering is slow), else the first one."""
+    chosen = {}
+    for wanted in ("closed-form", "identified"):
+        name = next((n for n in traces if role(n) == wanted), None)
+        if name is not None:
+            chosen[name] = traces[name]
+    return chosen or dict([next(iter(traces.items()))])
+
+
 def _videos(model, traces: dict[str, ReplayTrace], out_dir: Path) -> list[str]:
     from harness.replay_video import render_video
 
     written = []
-    for name, trace in traces.items():
+    for name, trace in _video_subjects(traces).items():
         stem = re.sub(r"[^\w.-]", "_", name)
         path = out_dir / f"replay_{stem}.mp4"
         if render_video(model, trace, path):
