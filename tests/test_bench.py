@@ -111,12 +111,14 @@ def test_readme_sections_are_replaced_in_place_and_idempotent(tmp_path):
     from harness.report_readme import update_readme
 
     outcome = SectionOutcome("replay", "ok")
-    write_report(tmp_path, [outcome], {"replay": {"energy_J": 0.5}}, {"robot": "r"})
+    write_report(tmp_path, [outcome], {"replay": {"a.energy_replayed_J": 0.5, "other": 1.5}},
+                 {"robot": "r"})
     readme = tmp_path / "README.md"
     readme.write_text("# T\n\n## Latest benchmark\n\nold table\n\n## Commands\n\nkeep me\n")
     update_readme(tmp_path, readme)
     first = readme.read_text()
-    assert "old table" not in first and "| replay | energy_J | 0.5 |" in first
+    assert "old table" not in first and "| replay | a.energy_replayed_J | 0.5 |" in first
+    assert "other" not in first  # only the key numbers go into the README
     assert first.index("## Latest benchmark") < first.index("## Commands") < first.index(
         "## Reading the report")
     assert "keep me" in first
