@@ -13,14 +13,20 @@ tuned here (every choice is made on the training part of each dataset).
 from __future__ import annotations
 
 import argparse
+import sys
+from pathlib import Path
 
-import numpy as np
+# run as a script, this file's folder leads sys.path and its name would shadow the
+# `identification` package
+sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
 
-from harness.datagen import generate
-from harness.io import write_json
-from harness.pinocchio_baseline import PinocchioModel
-from harness.robots import load_pinocchio
-from harness.sections import identification as section
+import numpy as np  # noqa: E402
+
+from harness.datagen import generate  # noqa: E402
+from harness.io import write_json  # noqa: E402
+from harness.pinocchio_baseline import PinocchioModel  # noqa: E402
+from harness.robots import load_pinocchio  # noqa: E402
+from harness.sections import identification as section  # noqa: E402
 
 
 def _context(samples: int) -> dict:

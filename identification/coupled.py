@@ -85,6 +85,27 @@ def base_atoms(design: np.ndarray, rtol: float = 1e-9) -> tuple[np.ndarray, np.n
     return base, np.setdiff1d(np.arange(design.shape[-1]), base)
 
 
+def restriction_pvalue(restricted: np.ndarray, full: np.ndarray, y: np.ndarray) -> float:
+    """F-test p-value of 'y lies in span(restricted)' against 'y lies in span(full)', both with
+    an intercept; restricted's span must lie inside full's (atom signatures inside the library).
+    Small p: the data reject the restriction (e.g. no Lagrangian of these atoms fits)."""
+    from scipy.stats import f as fisher
+
+    def rss_rank(x):
+        x = np.column_stack([x, np.ones(len(y))])
+        sol, _, rank, _ = np.linalg.lstsq(x, y, rcond=None)
+        return float(np.sum((y - x @ sol) ** 2)), rank
+
+    (rss_r, k_r), (rss_u, k_u) = rss_rank(restricted), rss_rank(full)
+    if k_u <= k_r:
+        return 1.0
+    dof = len(y) - k_u
+    if rss_u <= 1e-28 * float(y @ y):  # exact data: any misfit rejects
+        return 1.0 if rss_r <= 1e-20 * float(y @ y) else 0.0
+    stat = max(rss_r - rss_u, 0.0) / (k_u - k_r) / (rss_u / dof)
+    return float(fisher.sf(stat, k_u - k_r, dof))
+
+
 def _offset_design(design: np.ndarray, cols) -> np.ndarray:
     """Stack design columns `cols` with one offset indicator per joint: (n*dof, k+dof)."""
     n, dof, _ = design.shape

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from identification.coupled import AtomBasis, CoupledRegression
+from identification.coupled import AtomBasis, CoupledRegression, restriction_pvalue
 from identification.errors import IdentificationError
 from identification.library import Conditioning, Library, conditioning, warn_if_rank_deficient
 from identification.model import IdentifiedModel, JointModel
@@ -51,13 +51,13 @@ class Identification:
                "alpha": [r.alpha_ for r in self.regressions],
                "pass_rate": [r.pass_rate_ for r in self.regressions],
                "seconds": self.seconds}
-        if self.basis is not None:
+        if self.method == "coupled":
             out["noise_sigma"] = self.regressions[0].sigma_.tolist()
         return out
 
     def lagrangian(self) -> dict:
         """Coupled method: the identified Lagrangian {atoms, coefficients, base/folded atoms}."""
-        if self.basis is None:
+        if self.method != "coupled":
             return {}
         reg, names = self.regressions[0], self.basis.names
         kept = np.flatnonzero(reg.support_)
@@ -103,14 +103,18 @@ def identify(q, qd, qdd, tau, library: Library, holdout: float = 0.25, tau_clean
              method: str | None = None) -> Identification:
     """Fit every joint's torque on the first 1 - holdout of the samples, score on the rest.
 
-    method: "coupled", "per-joint", or None (coupled if the library has atoms).
+    method: "coupled", "per-joint", "jointwise", or None (coupled if the library has atoms).
+    "jointwise" tests each joint's torque for a Lagrangian form on its own (F-test of the
+    atoms' signatures on that joint against the full library, p >= 0.01) and fits the
+    atoms there, the library features elsewhere: for equations that are not all from one
+    Lagrangian (Table IV's printed double pendulum).
     """
     if not 0.0 <= holdout < 1.0:
         raise IdentificationError(f"holdout must be in [0, 1), got {holdout}")
     method = method or ("coupled" if library.atoms else "per-joint")
-    if method not in ("coupled", "per-joint"):
-        raise IdentificationError(f"method must be 'coupled' or 'per-joint', got {method!r}")
-    if method == "coupled" and not library.atoms:
+    if method not in ("coupled", "per-joint", "jointwise"):
+        raise IdentificationError(f"method must be 'coupled', 'per-joint' or 'jointwise', got {method!r}")
+    if method in ("coupled", "jointwise") and not library.atoms:
         raise IdentificationError(f"library {library.name} has no Lagrangian atoms: "
                                   "use method 'per-joint'")
     q, qd, qdd, tau = check_data(q, qd, qdd, tau, 0)
@@ -128,15 +132,23 @@ def identify(q, qd, qdd, tau, library: Library, holdout: float = 0.25, tau_clean
         fits = (CoupledRegression(**settings).fit(
             basis.evaluate(q[:n_train], qd[:n_train], qdd[:n_train]), tau[:n_train]),)
         joints = _coupled_joints(library, basis, fits[0])
+    elif method == "jointwise":
+        basis = AtomBasis.from_atoms(library.atoms, library.dof, library.name)
+        design = basis.evaluate(q[:n_train], qd[:n_train], qdd[:n_train])
+        fits, joints = [], []
+        for j in range(library.dof):
+            if restriction_pvalue(design[:, j], theta, tau[:n_train, j]) >= 0.01:
+                reg = CoupledRegression(**settings).fit(design[:, [j]], tau[:n_train, [j]])
+                joints.append(_coupled_joints(library, basis, reg, j))
+            else:
+                reg = SparseRegression(**settings).fit(theta, tau[:n_train, j])
+                joints.append(_feature_joint(library, reg))
+            fits.append(reg)
     else:
         basis, fits, joints = None, [], []
         for j in range(library.dof):
-            reg = SparseRegression(**settings)
-            reg.fit(theta, tau[:n_train, j])
-            kept = np.flatnonzero(reg.support_)
-            joints.append(JointModel(tuple(library.names[k] for k in kept),
-                                     tuple(float(reg.coef_[k]) for k in kept), reg.intercept_))
-            fits.append(reg)
+            fits.append(SparseRegression(**settings).fit(theta, tau[:n_train, j]))
+            joints.append(_feature_joint(library, fits[-1]))
     seconds = time.perf_counter() - start
     model = IdentifiedModel(library.dof, tuple(joints), library.name, method)
     truth = tau if tau_clean is None else check_data(q, qd, qdd, tau_clean, 0)[3]
@@ -145,13 +157,20 @@ def identify(q, qd, qdd, tau, library: Library, holdout: float = 0.25, tau_clean
     return Identification(model, rel, mse, cond, seconds, tuple(fits), method, basis)
 
 
-def _coupled_joints(library: Library, basis: AtomBasis, reg: CoupledRegression) -> list[JointModel]:
+def _feature_joint(library: Library, reg: SparseRegression) -> JointModel:
+    kept = np.flatnonzero(reg.support_)
+    return JointModel(tuple(library.names[k] for k in kept), tuple(float(reg.coef_[k]) for k in kept),
+                      reg.intercept_)
+
+
+def _coupled_joints(library: Library, basis: AtomBasis, reg: CoupledRegression,
+                    only: int | None = None):
     """Each joint's equation: the kept atoms' Euler-Lagrange torques collected per feature,
-    in library order."""
+    in library order (`only`: that joint's alone, from a one-joint fit)."""
     order = {n: k for k, n in enumerate(library.names)}
     joints = []
     for j, terms in enumerate(basis.expand(reg.coef_)):
         names = sorted(terms, key=lambda n: order.get(n, len(order)))
-        joints.append(JointModel(tuple(names), tuple(terms[n] for n in names),
-                                 float(reg.offsets_[j])))
-    return joints
+        offset = reg.offsets_[0 if only is not None else j]
+        joints.append(JointModel(tuple(names), tuple(terms[n] for n in names), float(offset)))
+    return joints if only is None else joints[only]
