@@ -10,11 +10,17 @@ from pathlib import Path
 import numpy as np
 
 from harness.io import write_json
-from identification import (IdentificationError, LibraryRankWarning, generic_library, identify,
-                            paper_library, prior_knowledge_library)
+from identification import (
+    IdentificationError,
+    LibraryRankWarning,
+    generic_library,
+    identify,
+    paper_library,
+    prior_knowledge_library,
+)
 
 LIBRARIES = ("prior", "paper", "generic")
-METHODS = ("auto", "coupled", "per-joint")
+METHODS = ("auto", "coupled", "per-joint", "jointwise")
 
 
 def register(sub) -> None:
@@ -28,8 +34,9 @@ def register(sub) -> None:
                    "75 features; generic: polynomial x trig (any dof)")
     p.add_argument("--method", choices=METHODS, default="auto",
                    help="coupled: one Lagrangian, atoms shared by all joints (needs the prior "
-                   "library); per-joint: the paper's regression of each joint alone; auto: "
-                   "coupled when the library allows it")
+                   "library); per-joint: the paper's regression of each joint alone; jointwise: "
+                   "atoms on the joints whose torque passes a Lagrangian F-test, features "
+                   "elsewhere; auto: coupled when the library allows it")
     p.set_defaults(func=run)
 
 
