@@ -109,16 +109,21 @@ class CloseLoopRun:
         }
 
 
+def _reidentify(data: Dataset, split: int):
+    """The same identification as declared_model('identified'), on another training torque."""
+    from identification import identify, prior_knowledge_library
+
+    tr = slice(0, split)
+    return lambda tau: identify(data.q[tr], data.qd[tr], data.qdd[tr], tau,
+                                prior_knowledge_library(3), holdout=0.0).model
+
+
 def declared_model(spec: str, data: Dataset, split: int) -> TorqueModel:
     """'pinocchio', 'identified' (sparse model fitted on the training part of data) or a
     MODEL.json path."""
     if spec != "identified":
         return load_torque_model(spec, DEFAULT_ROBOT)
-    from identification import identify, prior_knowledge_library
-
-    result = identify(data.q[:split], data.qd[:split], data.qdd[:split], data.tau[:split],
-                      prior_knowledge_library(3), holdout=0.0)
-    return result.model
+    return _reidentify(data, split)(data.tau[:split])
 
 
 def _oracle_fit(data: Dataset, dictionary: EffectDictionary, residual, truth, tr, project):
@@ -186,7 +191,11 @@ def _loop(spec: str, data: Dataset, split: int, payload: PayloadTorque, truth, o
                         f"{data.q.shape[1]}")
     args = (data.q, data.qd, data.qdd, data.tau, data.tau_clean, holdout, payload, payload.symbolic)
     identified = spec == "identified"
-    result = close_loop_identified(model, *args) if identified else close_loop(model, *args)
+    if identified:
+        result = close_loop_identified(model, *args, reidentify=_reidentify(data, split))
+        model = result.model.declared  # the terms of the last re-identification
+    else:
+        result = close_loop(model, *args)
     floor = exact = None
     absorbed: tuple[str, ...] = ()
     if not outside:

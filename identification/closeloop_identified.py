@@ -21,6 +21,7 @@ the torque minus the named effects (`refit_kept`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,6 +31,8 @@ from identification.closeloop_model import ExtendedModel
 from identification.effects import EffectTerm, PayloadTorque, effect_torque
 from identification.model import IdentifiedModel, model_from_dict
 from identification.residual import noise_sigma
+
+Reidentify = Callable[[np.ndarray], IdentifiedModel]  # training torque (n, dof) -> model
 
 
 def term_columns(model: IdentifiedModel, q, qd, qdd) -> list[np.ndarray]:
@@ -93,18 +96,37 @@ def refit_kept(model: IdentifiedModel, terms: tuple[EffectTerm, ...], q, qd, qdd
     return model_from_dict(spec)
 
 
+def _joint_effects(terms: tuple[EffectTerm, ...]) -> tuple[EffectTerm, ...]:
+    return tuple(t for t in terms if t.effect != "payload")
+
+
 def close_loop_identified(identified: IdentifiedModel, q, qd, qdd, tau, tau_clean,
                           holdout: float = 0.25, payload: PayloadTorque | None = None,
-                          symbolic_payload=None) -> CloseLoopResult:
+                          symbolic_payload=None, reidentify: Reidentify | None = None,
+                          rounds: int = 3) -> CloseLoopResult:
     """Trace effects jointly with the identified model's kept terms; error before is the
-    identified model's, error after that of its refit plus the named effects."""
+    identified model's, error after that of its refit plus the named effects.
+
+    reidentify(tau_train) -> model: the identification that produced `identified`, rerun on
+    the training torque minus the named joint effects. A sparse fit on data carrying
+    friction may drop rigid-body terms it needs; the dictionary's payload column then
+    stands in for them. Re-identifying without the joint effects (a payload is rigid-body
+    dynamics the identified model should carry itself) and tracing again, until the named
+    set stops changing (at most `rounds` times), removes that artefact."""
     q, qd, qdd, tau, tau_clean, split = check_data(q, qd, qdd, tau, tau_clean,
                                                    identified.dof, holdout)
     tr = slice(0, split)
-    span = KeptSpan.of(identified, q[tr], qd[tr], qdd[tr])
-    residual = span.project(tau[tr])  # the residual of the kept terms refitted alone
-    sigma = noise_sigma(residual)
-    selection, terms = trace(residual, sigma, q[tr], qd[tr], qdd[tr], payload, span.project)
-    refitted = refit_kept(identified, terms, q[tr], qd[tr], qdd[tr], tau[tr], payload)
-    model = ExtendedModel(refitted, terms, payload, symbolic_payload)
-    return outcome(identified, model, selection, q, qd, qdd, tau, tau_clean, split)
+    states = (q[tr], qd[tr], qdd[tr])
+    model, named = identified, None
+    for _ in range(rounds):
+        span = KeptSpan.of(model, *states)
+        residual = span.project(tau[tr])  # the residual of the kept terms refitted alone
+        selection, terms = trace(residual, noise_sigma(residual), *states, payload, span.project)
+        labels = {(t.effect, t.joint) for t in terms}
+        if reidentify is None or labels == named:
+            break
+        named = labels
+        model = reidentify(tau[tr] - effect_torque(_joint_effects(terms), *states))
+    refitted = refit_kept(model, terms, *states, tau[tr], payload)
+    extended = ExtendedModel(refitted, terms, payload, symbolic_payload)
+    return outcome(identified, extended, selection, q, qd, qdd, tau, tau_clean, split)

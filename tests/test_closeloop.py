@@ -129,3 +129,18 @@ def test_combination_of_five_effects(tmp_path):
     v = Variant((("viscous", 1, 0.01), ("coulomb", 2, 0.05), ("armature", 3, 0.005),
                  ("spring", 3, 0.1)), payload=0.05, name="combo")
     _assert_accepted(run_closeloop(write_variant(v, tmp_path)))
+
+
+COMBOS = [
+    Variant((("coulomb", 3, 0.05), ("viscous", 3, 0.02)), name="coulomb3_viscous3"),
+    Variant((("coulomb", 1, 0.05), ("coulomb", 2, 0.05), ("coulomb", 3, 0.05)), name="coulomb123"),
+]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("declared", ["pinocchio", "identified"])
+@pytest.mark.parametrize("variant", COMBOS, ids=lambda v: v.name)
+def test_friction_combinations_both_declared_models(tmp_path, variant, declared):
+    """Dry friction's linear zone looks viscous on joint 3; a sparse model fitted on friction
+    data may drop rigid-body terms (re-identified without the named effects)."""
+    _assert_accepted(run_closeloop(write_variant(variant, tmp_path), declared=declared))
