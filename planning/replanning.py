@@ -2,9 +2,11 @@
 
 The obstacle is observed at K samples t_k = k T / K. At each sample its future
 path is predicted (constant velocity from the last two observations); when the
-current plan would bring a link within the threshold of that prediction, the
-arm re-plans from its current state (position, velocity, remaining time). The
-executed trajectory is the concatenation of the segments actually followed.
+current plan would bring a link within the threshold of that prediction, and the
+prediction differs from the one the current plan was made with (otherwise the
+solve would return the same plan), the arm re-plans from its current state
+(position, velocity, remaining time). The executed trajectory is the
+concatenation of the segments actually followed.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from planning.screening import screen
 from planning.solver import ObstacleForecast, Planner, SegmentPlan
 
 TRIGGER_TOLERANCE = 1e-3  # m: predicted dips smaller than this do not trigger a re-plan
+PREDICTION_TOLERANCE = 1e-3  # m: a forecast this close to the last one brings nothing new
 LIMIT_SETTLED = 1e-8  # rad: a plan within this of the limits at its turning points is kept
 
 
@@ -105,11 +108,13 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
     failures = [] if plan.success else [plan.status]
     if obstacle is None or not replan:
         return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures))
+    planned_with = forecast
     for t in obstacle.sample_times[:-1]:
         forecast = forecast_at(obstacle, t)
         if _predicted_clearance(planner, plan, forecast) >= planner.config.threshold \
-                - TRIGGER_TOLERANCE:
-            continue
+                - TRIGGER_TOLERANCE or _same_prediction(planned_with, forecast):
+            continue  # safe, or nothing new to plan with: the last plan already saw this
+        planned_with = forecast
         q, qd, _ = plan.trajectory.state(t)
         new, ms, _ = plan_segment(planner, q[0], qd[0], t, T - t, goal, forecast, warm=plan)
         solve_ms.append(ms)
@@ -128,6 +133,15 @@ def forecast_at(obstacle, t: float) -> ObstacleForecast:
     seen = seen[seen <= t + 1e-12][-2:]
     future = obstacle.sample_times[obstacle.sample_times > t + 1e-12]
     return ObstacleForecast(future, predict_linear(seen, obstacle.position(seen), future))
+
+
+def _same_prediction(old: ObstacleForecast, new: ObstacleForecast) -> bool:
+    """True if `new` predicts every remaining sample within PREDICTION_TOLERANCE of `old`."""
+    index = np.searchsorted(old.times, new.times)
+    if np.any(index >= len(old.times)) or not np.allclose(old.times[index], new.times):
+        return False
+    return bool(np.max(np.abs(old.centres[index] - new.centres), initial=0.0)
+                <= PREDICTION_TOLERANCE)
 
 
 def _predicted_clearance(planner: Planner, plan: SegmentPlan, forecast: ObstacleForecast):

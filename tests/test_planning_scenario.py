@@ -58,9 +58,10 @@ def test_paper_scenario_reaches_goal_and_keeps_clearance(paper):
 def test_executed_trajectory_is_continuous_at_replans(paper):
     _, _, _, avoided = paper
     segments = avoided.execution.segments
-    for previous, segment in zip(segments, segments[1:]):
+    for previous, segment in zip(segments, segments[1:], strict=False):
         t = segment.trajectory.t_begin
-        for old, new in zip(previous.trajectory.state(t)[:2], segment.trajectory.state(t)[:2]):
+        for old, new in zip(previous.trajectory.state(t)[:2], segment.trajectory.state(t)[:2],
+                            strict=True):
             assert np.allclose(old, new, atol=1e-12)  # same position and velocity
     assert np.max(np.abs(np.diff(avoided.q, axis=0))) < 0.05  # no jumps on the 2 ms grid
 
@@ -121,3 +122,29 @@ def test_plan_command_bad_input_exits_2_without_file(tmp_path, capsys):
     assert main(["plan", "--model", "pinocchio", "--goal", "0,4,-1", "--out", str(out)]) == 2
     assert not out.exists()
     assert "outside the joint limits" in capsys.readouterr().err
+
+
+def test_obstacle_parked_on_the_goal_is_flagged(paper, baseline):
+    planner, scenario, _, _ = paper
+    _, _, tip = planner.config.geometry.points(np.asarray([scenario.goal]))
+    parked = dataclasses.replace(scenario.obstacle, start=tuple(tip[0]), end=tuple(tip[0]))
+    blocked = dataclasses.replace(scenario, obstacle=parked)
+    result = evaluate(execute(planner, blocked), blocked, baseline, planner.config)
+    assert not result.feasible
+    assert any("clearance" in p for p in result.problems)
+
+
+def test_warm_replan_finds_the_cold_optimum(paper, baseline):
+    """Warm starting changes the solve time, not the answer."""
+    planner, scenario, _, avoided = paper
+    from planning.replanning import forecast_at, plan_segment
+
+    plan, t = avoided.execution.segments[-1], 0.5
+    q, qd, _ = plan.trajectory.state(t)
+    args = (planner, q[0], qd[0], t, scenario.duration - t, scenario.goal,
+            forecast_at(scenario.obstacle, t))
+    warm, _, _ = plan_segment(*args, warm=plan)
+    cold, _, _ = plan_segment(*args)
+    assert warm.success and cold.success
+    assert np.isclose(warm.energy + warm.penalty, cold.energy + cold.penalty, rtol=1e-6)
+    assert np.allclose(warm.trajectory.coefficients, cold.trajectory.coefficients, atol=1e-4)

@@ -8,7 +8,6 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
 
 from planning.energy import power as mechanical_power  # noqa: E402
 from planning.kinematics import ArmGeometry  # noqa: E402
