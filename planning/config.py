@@ -29,7 +29,7 @@ class PlannerConfig:
     rest_at_goal: bool = False
     lower: tuple[float, ...] = (-pi / 2, 0.0, -pi)
     upper: tuple[float, ...] = (pi / 2, pi, 0.0)
-    limit_samples: int = 20
+    limit_samples: int = 8
     geometry: ArmGeometry = field(default_factory=ArmGeometry)
     hessian: str = "exact"  # or "limited-memory"
     jit: bool = False  # compile the NLP's functions to C (needs a C compiler)
