@@ -2,9 +2,11 @@
 
 Public names: the TorqueModel interface, the identified model and its
 MODEL.json reader/writer, libraries, denoising, sparse regression and the
-identification pipeline.
+identification pipeline (per-joint as in the paper, or coupled: one Lagrangian shared
+by all joints).
 """
 
+from identification.coupled import AtomBasis, CoupledRegression
 from identification.denoise import Denoised, denoise
 from identification.errors import IdentificationError, LibraryRankWarning
 from identification.identify import Identification, identify
@@ -16,7 +18,8 @@ from identification.sparse import SparseRegression
 from identification.torque_model import TorqueModel, as_states
 
 __all__ = [
-    "Denoised", "IdentificationError", "Identification", "IdentifiedModel", "JointModel",
+    "AtomBasis", "CoupledRegression", "Denoised", "IdentificationError", "Identification",
+    "IdentifiedModel", "JointModel",
     "Library", "LibraryRankWarning", "SparseRegression", "TorqueModel", "as_states", "denoise",
     "generic_library", "identify", "load_model", "model_from_dict", "paper_library",
     "prior_knowledge_library",
