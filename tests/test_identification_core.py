@@ -11,8 +11,14 @@ import pytest
 
 from harness.pinocchio_baseline import PinocchioModel
 from harness.robots import load_pinocchio
-from identification import (IdentificationError, LibraryRankWarning, identify, load_model,
-                            paper_library, prior_knowledge_library)
+from identification import (
+    IdentificationError,
+    LibraryRankWarning,
+    identify,
+    load_model,
+    paper_library,
+    prior_knowledge_library,
+)
 from identification.features import parse_feature
 from identification.libraries import generic_library
 from identification.oracle import fit_base_parameters
