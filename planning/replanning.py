@@ -34,7 +34,8 @@ class Execution:
     segments: tuple[SegmentPlan, ...]
     replan_times: tuple[float, ...]
     solve_ms: tuple[float, ...]  # wall time of every solve (incl. re-screening rounds)
-    failures: tuple[str, ...]  # IPOPT statuses of failed solves
+    failures: tuple[str, ...]  # IPOPT status of a failed first plan (the result is unusable)
+    replan_failures: tuple[str, ...] = ()  # failed re-plans: the arm kept its last plan
 
 
 def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goal,
@@ -58,10 +59,14 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
         if settled and (round_ > 0 or warm is None):
             break  # the constraints that matter at this solution were the ones imposed
         chosen |= times
-        plan = planner.solve(q0, qd0, duration, goal, subset, t_begin, warm=plan,
-                             turning=reference.turning_points())
-        total, cpu = total + plan.solve_ms, cpu + plan.solve_cpu_ms
-        reference = plan.trajectory
+        turning = reference.turning_points()
+        attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin, warm=plan,
+                                turning=turning)
+        total, cpu = total + attempt.solve_ms, cpu + attempt.solve_cpu_ms
+        if not attempt.success:  # a warm start far from the new optimum can stall
+            attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin, turning=turning)
+            total, cpu = total + attempt.solve_ms, cpu + attempt.solve_cpu_ms
+        plan, reference = attempt, attempt.trajectory
     return plan, total, cpu
 
 
@@ -105,7 +110,7 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
     plan, ms, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0, T, goal,
                                forecast)
     segments, times, solve_ms = [plan], [0.0], [ms]
-    failures = [] if plan.success else [plan.status]
+    failures, replan_failures = ([] if plan.success else [plan.status]), []
     if obstacle is None or not replan:
         return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures))
     planned_with = forecast
@@ -119,12 +124,13 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
         new, ms, _ = plan_segment(planner, q[0], qd[0], t, T - t, goal, forecast, warm=plan)
         solve_ms.append(ms)
         if not new.success:
-            failures.append(new.status)
-            continue  # keep following the last good plan; the result is flagged
+            replan_failures.append(new.status)
+            continue  # keep following the last good plan; evaluate() checks what it does
         plan = new
         segments.append(plan)
         times.append(float(t))
-    return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures))
+    return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures),
+                     tuple(replan_failures))
 
 
 def forecast_at(obstacle, t: float) -> ObstacleForecast:

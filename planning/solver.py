@@ -63,7 +63,8 @@ class Planner:
         if self.config.jit:
             options.update(jit=True, compiler="shell", jit_options={"flags": ["-O1"]})
         self._cold = ca.nlpsol("plan_cold", "ipopt", problem, options)
-        self._warm = ca.nlpsol("plan_warm", "ipopt", problem, dict(options, **_WARM))
+        warm = dict(options, **_WARM, **{"ipopt.max_iter": self.config.warm_max_iterations})
+        self._warm = ca.nlpsol("plan_warm", "ipopt", problem, warm)
 
     def parameters(self, q0, qd0, duration: float, goal, forecast: ObstacleForecast | None,
                    t_begin: float = 0.0, turning: np.ndarray | None = None) -> np.ndarray:
