@@ -47,7 +47,8 @@ def _check(y: np.ndarray) -> np.ndarray:
     y = np.asarray(y, dtype=float)
     y2 = y.reshape(len(y), -1) if y.ndim else y
     if y.ndim not in (1, 2) or len(y2) < 8:
-        raise IdentificationError(f"denoise needs at least 8 samples in a 1-D or 2-D array, got shape {y.shape}")
+        raise IdentificationError(
+            f"denoise needs at least 8 samples in a 1-D or 2-D array, got shape {y.shape}")
     if not np.all(np.isfinite(y2)):
         raise IdentificationError("denoise: signal contains NaN or inf")
     return y2
