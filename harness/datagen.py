@@ -20,6 +20,7 @@ from harness.excitation import FourierExcitation, design_excitation, normalized_
 from harness.measurement import SensorConfig, rel_rmse, torque_noise
 from harness.pinocchio_baseline import PinocchioModel
 from harness.plant import Plant, load_plant
+from identification.oracle import base_columns
 
 MIN_SAMPLES = 10
 SAMPLE_RATE = 200.0  # Hz, rate of the data handed to identification
@@ -67,16 +68,6 @@ def _condition_fn(plant: Plant, rate: float, samples: int):
         return max(conds)
 
     return condition
-
-
-def base_columns(Y: np.ndarray, tol: float = 1e-8) -> np.ndarray:
-    """Indices of columns of Y spanning its range (QR with pivoting): base parameters."""
-    from scipy.linalg import qr
-
-    Yn = Y / np.maximum(np.linalg.norm(Y, axis=0), 1e-300)
-    _, r, piv = qr(Yn, mode="economic", pivoting=True)
-    rank = int(np.sum(np.abs(np.diag(r)) > tol * abs(r[0, 0])))
-    return np.sort(piv[:rank])
 
 
 def _validate(samples: int, noise: float, bias: float) -> None:
