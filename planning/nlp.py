@@ -6,8 +6,8 @@ sigma/N sum e_i + alpha sum_k w_k (max(0, lambda - D1_k)^2 + max(0, lambda - D2_
 is smooth enough for exact derivatives. Parameters p = [q0, qd0, sigma, q_end,
 obstacle centres (3 K), their normalized times s_k (K), weights w_k (K), the
 normalized times of each joint's turning points (dof x 3) and 0/1 flags (dof x 3)
-saying which of them are real], so a
-re-plan changes only numbers: the solver is built once and warm-started.
+saying which of them are real], so a re-plan changes only numbers: the solver is
+built once and warm-started.
 
 Joint limits hold at fixed interior samples and, exactly, at the turning points
 of a reference motion (where a polynomial peaks); the solver re-solves until the
@@ -22,6 +22,7 @@ import numpy as np
 from identification import TorqueModel
 from planning.clearance import symbolic_link_clearances
 from planning.config import PlannerConfig
+from planning.limits import quotient
 from planning.trajectory import DEGREE, power_basis
 
 EXTREMA = DEGREE - 1  # a quartic turns at most 3 times
@@ -31,72 +32,103 @@ class PlanningNLP:
     """Symbolic objective f(x, p) and constraints lbg <= g(x, p) <= ubg."""
 
     def __init__(self, model: TorqueModel, config: PlannerConfig):
-        self.config = config
+        self.config, self.dof = config, model.dof
         dof, n, k = model.dof, config.energy_samples, config.obstacle_slots
-        self.dof = dof
         free = ca.SX.sym("free", dof, 3)
-        slack = ca.SX.sym("e", 0 if config.power_smoothing > 0 else n)
-        self.x = ca.vertcat(ca.vec(free.T), slack)
-        q0, qd0, sigma, goal = (ca.SX.sym(s, d) for s, d in
-                                (("q0", dof), ("qd0", dof), ("sigma", 1), ("goal", dof)))
+        self.slack = ca.SX.sym("e", 0 if config.power_smoothing > 0 else n)
+        self.x = ca.vertcat(ca.vec(free.T), self.slack)
+        q0, qd0, self.sigma, goal = (ca.SX.sym(s, d) for s, d in
+                                     (("q0", dof), ("qd0", dof), ("sigma", 1), ("goal", dof)))
         obstacle, s_obs, weight = ca.SX.sym("obs", 3, k), ca.SX.sym("s_obs", k), ca.SX.sym("w", k)
         extremum, newton = ca.SX.sym("s_lim", dof, EXTREMA), ca.SX.sym("newton", dof, EXTREMA)
-        self.p = ca.vertcat(q0, qd0, sigma, goal, ca.vec(obstacle), s_obs, weight,
-                            ca.vec(extremum), ca.vec(newton))
-        coefficients = ca.horzcat(q0, qd0 * sigma, free)  # (dof, 5), column p -> s**p
+        self.order = 2 if config.rest_at_goal else 1  # zeros of q - goal at s = 1
+        self.quotient_slots = EXTREMA - self.order
+        sign = ca.SX.sym("limit_sign", dof)
+        v_turn = ca.SX.sym("v_turn", dof, self.quotient_slots)
+        v_newton = ca.SX.sym("v_newton", dof, self.quotient_slots)
+        self.p = ca.vertcat(q0, qd0, self.sigma, goal, ca.vec(obstacle), s_obs, weight,
+                            ca.vec(extremum), ca.vec(newton), sign, ca.vec(v_turn),
+                            ca.vec(v_newton))
+        self.coefficients = ca.horzcat(q0, qd0 * self.sigma, free)  # column p -> s**p
+        power = self._power(model)
+        self.penalty = config.penalty_weight * self._penalty(obstacle, s_obs, weight)
+        self._g, self._lbg, self._ubg = [], [], []
+        self.energy = self._energy(power)
+        self.f = self.energy + self.penalty
+        self._add(self.state(1.0)[0] - goal, 0.0, 0.0)  # eq. (19)
+        if config.rest_at_goal:
+            self._add(self.state(1.0)[1], 0.0, 0.0)
+        self._joint_limits(extremum, newton)
+        self.quotient_rows = [self._goal_limit(j, goal[j], sign[j], v_turn[j, :],
+                                               v_newton[j, :]) for j in range(dof)]
+        self.g = ca.vertcat(*self._g)
+        self.lbg, self.ubg = np.array(self._lbg), np.array(self._ubg)
 
-        def state(s):
-            return (_poly(coefficients, s, 0), _poly(coefficients, s, 1) / sigma,
-                    _poly(coefficients, s, 2) / sigma**2)
+    def state(self, s):
+        """q, qd (1/s), qdd (1/s^2) of the segment at normalized time s."""
+        c, sigma = self.coefficients, self.sigma
+        return _poly(c, s, 0), _poly(c, s, 1) / sigma, _poly(c, s, 2) / sigma**2
 
+    def _add(self, rows, lower, upper) -> slice:
+        """Append constraint rows with bounds (scalars or per-row lists); their slice in g."""
+        start = sum(r.numel() for r in self._g)
+        self._g.append(rows)
+        count = rows.numel()
+        self._lbg += list(np.broadcast_to(lower, count))
+        self._ubg += list(np.broadcast_to(upper, count))
+        return slice(start, start + count)
+
+    def _power(self, model: TorqueModel):
+        """P(i/N) = sum_j tau_j qd_j at the N energy samples (eq. 15)."""
+        n = self.config.energy_samples
         power = []
         for i in range(1, n + 1):
-            q, qd, qdd = state(i / n)
+            q, qd, qdd = self.state(i / n)
             power.append(ca.dot(model.symbolic_torque(q, qd, qdd), qd))
-        power = ca.vertcat(*power)
-        penalty = 0
-        for j in range(k):
-            d2, d3 = symbolic_link_clearances(config.geometry, state(s_obs[j])[0], obstacle[:, j])
+        return ca.vertcat(*power)
+
+    def _energy(self, power):
+        """sigma/N sum |P| (eq. 18): epigraph slacks, or a smoothed |P| if configured."""
+        n, eps = self.config.energy_samples, self.config.power_smoothing
+        if eps > 0:
+            return self.sigma / n * ca.sum1(ca.sqrt(power**2 + eps**2) - eps)
+        self._add(power - self.slack, -np.inf, 0.0)
+        self._add(-power - self.slack, -np.inf, 0.0)
+        return self.sigma / n * ca.sum1(self.slack)
+
+    def _penalty(self, obstacle, s_obs, weight):
+        """sum_k w_k (max(0, lambda - D1)^2 + max(0, lambda - D2)^2) (eq. 17), per sample."""
+        config, total = self.config, 0
+        for j in range(config.obstacle_slots):
+            d2, d3 = symbolic_link_clearances(config.geometry, self.state(s_obs[j])[0],
+                                              obstacle[:, j])
             gap = ca.fmax(0, config.threshold - d2) ** 2 + ca.fmax(0, config.threshold - d3) ** 2
-            penalty += weight[j] * gap
-        if config.power_smoothing > 0:  # smooth |P| instead of the epigraph
-            eps = config.power_smoothing
-            self.energy = sigma / n * ca.sum1(ca.sqrt(power**2 + eps**2) - eps)
-            g, lbg, ubg = [], [], []
-        else:
-            self.energy = sigma / n * ca.sum1(slack)
-            g, lbg, ubg = [power - slack, -power - slack], [-np.inf] * 2 * n, [0.0] * 2 * n
-        self.penalty = config.penalty_weight * penalty
-        self.f = self.energy + self.penalty
-        g.append(state(1.0)[0] - goal)  # eq. (19)
-        lbg += [0.0] * dof
-        ubg += [0.0] * dof
-        # End velocity: free, but pointing inward when the goal lies on a joint limit
-        # (bounds set per solve; see Planner.bounds). Replaces a turning-point constraint
-        # at s -> 1, which would be degenerate next to the goal equality.
-        self.end_velocity_rows = slice(sum(x.numel() for x in g), sum(x.numel() for x in g) + dof)
-        g.append(state(1.0)[1])
-        lbg += [-np.inf] * dof
-        ubg += [np.inf] * dof
-        if config.rest_at_goal:
-            g.append(state(1.0)[1])
-            lbg += [0.0] * dof
-            ubg += [0.0] * dof
+            total += weight[j] * gap
+        return total
+
+    def _joint_limits(self, extremum, newton) -> None:
+        """Limits at fixed interior samples and at the (Newton-corrected) turning points."""
+        config, c = self.config, self.coefficients
         for s in np.arange(1, config.limit_samples + 1) / (config.limit_samples + 1):
-            g.append(_poly(coefficients, float(s), 0))
-            lbg += list(config.lower)
-            ubg += list(config.upper)
-        for j in range(dof):  # limits at the motion's own turning points (parameters)
+            self._add(_poly(c, float(s), 0), config.lower, config.upper)
+        for j in range(self.dof):
             for m in range(EXTREMA):
-                g.append(_poly(coefficients[j, :], _newton(coefficients[j, :], extremum[j, m],
-                                                            newton[j, m]), 0))
-                lbg.append(config.lower[j])
-                ubg.append(config.upper[j])
-        self.g = ca.vertcat(*g)
-        self.lbg, self.ubg = np.array(lbg), np.array(ubg)
+                at = _newton(c[j, :], extremum[j, m], newton[j, m])
+                self._add(_poly(c[j, :], at, 0), config.lower[j], config.upper[j])
+
+    def _goal_limit(self, j: int, goal, sign, turning, use) -> slice:
+        """Rows v >= 0 of planning.limits' quotient for joint j (at the fixed samples, at
+        s = 1 and at its Newton-corrected turning points); bounds are set per solve
+        (Planner.bounds): [0, inf] when the goal is on a limit, free otherwise."""
+        v = ca.horzcat(*quotient([self.coefficients[j, p] for p in range(DEGREE + 1)],
+                                 goal, sign, self.order))
+        samples = np.arange(1, self.config.limit_samples + 2) / (self.config.limit_samples + 1)
+        rows = [_poly(v, float(s), 0) for s in samples]
+        rows += [_poly(v, _newton(v, turning[m], use[m]), 0) for m in range(self.quotient_slots)]
+        return self._add(ca.vertcat(*rows), -np.inf, np.inf)
 
     def functions(self) -> tuple[ca.Function, ca.Function, ca.Function]:
-        """Numeric f(x, p), grad f(x, p), g(x, p), jacobian g(x, p) for checks and baselines."""
+        """Numeric (f, grad f)(x, p), (g, jacobian g)(x, p) and (energy, penalty)(x, p)."""
         f = ca.Function("objective", [self.x, self.p], [self.f, ca.gradient(self.f, self.x)])
         g = ca.Function("constraints", [self.x, self.p], [self.g, ca.jacobian(self.g, self.x)])
         parts = ca.Function("objective_parts", [self.x, self.p], [self.energy, self.penalty])
@@ -115,11 +147,13 @@ def _newton(coefficients, s, use):
 
 
 def _poly(coefficients, s, derivative: int):
-    """d^k q / ds^k at one normalized time s (number or CasADi scalar)."""
+    """d^k q / ds^k at one normalized time s (number or CasADi scalar) of ascending
+    coefficients (rows x degree+1)."""
+    degree = coefficients.shape[1] - 1
     if isinstance(s, float):
-        return coefficients @ ca.DM(power_basis(np.array([s]), derivative).T)
-    terms = [ca.DM.ones(1), s, s**2, s**3, s**4]
-    factors = {0: [1, 1, 1, 1, 1], 1: [0, 1, 2, 3, 4], 2: [0, 0, 2, 6, 12]}[derivative]
-    column = ca.vertcat(*[f * terms[max(p - derivative, 0)] if f else 0 for p, f in
-                          enumerate(factors)])
-    return coefficients @ column
+        return coefficients @ ca.DM(power_basis(np.array([s]), derivative).T[: degree + 1])
+    column = []
+    for p in range(degree + 1):
+        factor = float(np.prod(np.arange(p - derivative + 1, p + 1))) if derivative else 1.0
+        column.append(factor * s ** (p - derivative) if p >= derivative else 0)
+    return coefficients @ ca.vertcat(*column)

@@ -18,6 +18,7 @@ import numpy as np
 from planning.clearance import link_clearances
 from planning.config import Scenario
 from planning.errors import PlanningError
+from planning.limits import limit_excess
 from planning.obstacle import predict_linear
 from planning.screening import screen
 from planning.solver import ObstacleForecast, Planner, SegmentPlan
@@ -55,33 +56,20 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
         subset = screen(forecast, reference, config.geometry, config.threshold,
                         config.obstacle_slots) if forecast is not None else None
         times = set() if subset is None else set(subset.times)
-        settled = times <= chosen and limit_excess(planner, plan, goal) <= LIMIT_SETTLED
+        settled = times <= chosen and limit_excess(plan.trajectory, config.lower,
+                                                   config.upper) <= LIMIT_SETTLED
         if settled and (round_ > 0 or warm is None):
             break  # the constraints that matter at this solution were the ones imposed
         chosen |= times
-        turning = reference.turning_points()
         attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin, warm=plan,
-                                turning=turning)
+                                reference=reference)
         total, cpu = total + attempt.solve_ms, cpu + attempt.solve_cpu_ms
         if not attempt.success:  # a warm start far from the new optimum can stall
-            attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin, turning=turning)
+            attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin,
+                                    reference=reference)
             total, cpu = total + attempt.solve_ms, cpu + attempt.solve_cpu_ms
         plan, reference = attempt, attempt.trajectory
     return plan, total, cpu
-
-
-def limit_excess(planner: Planner, plan: SegmentPlan, goal) -> float:
-    """Worst excursion (rad) beyond the joint limits at the plan's turning points (those
-    the planner constrains for this goal)."""
-    trajectory, config = plan.trajectory, planner.config
-    turning = planner.usable_turning_points(goal, trajectory.turning_points())
-    worst = 0.0
-    for j, times in enumerate(turning):
-        times = times[np.isfinite(times)]
-        if times.size:
-            q = trajectory.state(trajectory.t_begin + times * trajectory.duration)[0][:, j]
-            worst = max(worst, np.max(config.lower[j] - q), np.max(q - config.upper[j]))
-    return float(worst)
 
 
 def check_start(planner: Planner, scenario: Scenario) -> None:

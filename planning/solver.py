@@ -10,7 +10,8 @@ import numpy as np
 
 from identification import TorqueModel
 from planning.config import PlannerConfig
-from planning.nlp import PlanningNLP
+from planning.limits import END_MARGIN, goal_limit_signs, quotient_turning_points
+from planning.nlp import EXTREMA, PlanningNLP
 from planning.trajectory import QuarticTrajectory
 
 _COMMON = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
@@ -21,9 +22,6 @@ _COMMON = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
 # took a median of 11 and up to 81 (with mu_strategy adaptive) or 300 (monotone).
 _WARM = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-7,
          "ipopt.warm_start_bound_push": 1e-7, "ipopt.warm_start_mult_bound_push": 1e-7}
-
-
-END_MARGIN = 0.02  # normalized time, see Planner._usable_turning_points
 
 
 @dataclass(frozen=True)
@@ -67,8 +65,11 @@ class Planner:
         self._warm = ca.nlpsol("plan_warm", "ipopt", problem, warm)
 
     def parameters(self, q0, qd0, duration: float, goal, forecast: ObstacleForecast | None,
-                   t_begin: float = 0.0, turning: np.ndarray | None = None) -> np.ndarray:
-        """Pack the parameter vector p; obstacle samples outside (t_begin, t_end] weigh 0."""
+                   t_begin: float = 0.0,
+                   reference: QuarticTrajectory | None = None) -> np.ndarray:
+        """Pack the parameter vector p; obstacle samples outside (t_begin, t_end] weigh 0;
+        the joint limits are constrained at the turning points of `reference` (a motion
+        on the same horizon, e.g. the previous solution)."""
         k = self.config.obstacle_slots
         centres, s_obs, weight = np.zeros((k, 3)), np.zeros(k), np.zeros(k)
         if forecast is not None:
@@ -76,38 +77,32 @@ class Planner:
             keep = np.flatnonzero((s > 1e-12) & (s <= 1 + 1e-12))[-k:]
             m = len(keep)
             centres[:m], s_obs[:m], weight[:m] = forecast.centres[keep], s[keep], 1.0
-        if turning is None:
-            turning = np.full((self.model.dof, 3), np.nan)
-        turning = np.asarray(turning, float)
-        real = np.isfinite(turning)
+        turning, v_turning, signs = self.turning_points(goal, reference)
         return np.concatenate([q0, qd0, [duration], goal, centres.ravel(), s_obs, weight,
-                               np.where(real, turning, 0.5).ravel(order="F"),
-                               real.astype(float).ravel(order="F")])
+                               *_slots(turning), signs + (signs == 0), *_slots(v_turning)])
 
-    def _on_limit(self, goal) -> tuple[np.ndarray, np.ndarray]:
-        """Joints whose goal lies on the lower / upper limit."""
-        goal = np.asarray(goal, float)
-        return (np.abs(goal - np.asarray(self.config.lower)) < 1e-9,
-                np.abs(goal - np.asarray(self.config.upper)) < 1e-9)
+    def turning_points(self, goal, reference: QuarticTrajectory | None):
+        """Where the limits are enforced beyond the fixed samples: q's turning points (dof, 3)
+        and those of the goal-limit quotient (planning.limits), NaN for none; and the
+        per-joint goal-limit signs."""
+        dof = self.model.dof
+        signs = goal_limit_signs(goal, self.config.lower, self.config.upper)
+        if reference is None:
+            return (np.full((dof, EXTREMA), np.nan),
+                    np.full((dof, self.nlp.quotient_slots), np.nan), signs)
+        turning = reference.turning_points()
+        turning[(signs != 0)[:, None] & (turning > 1 - END_MARGIN)] = np.nan
+        v_turning = quotient_turning_points(reference, np.asarray(goal, float), signs,
+                                            self.nlp.order, self.nlp.quotient_slots)
+        return turning, v_turning, signs
 
     def bounds(self, goal) -> tuple[np.ndarray, np.ndarray]:
-        """lbg, ubg for this goal: arrive moving inward at a goal on a joint limit."""
+        """lbg, ubg for this goal: the quotient rows hold (>= 0) where it is on a limit."""
         lbg, ubg = self.nlp.lbg.copy(), self.nlp.ubg.copy()
-        at_lower, at_upper = self._on_limit(goal)
-        rows = self.nlp.end_velocity_rows
-        ubg[rows][at_lower] = 0.0
-        lbg[rows][at_upper] = 0.0
+        signs = goal_limit_signs(goal, self.config.lower, self.config.upper)
+        for j in np.flatnonzero(signs):
+            lbg[self.nlp.quotient_rows[j]] = 0.0
         return lbg, ubg
-
-    def usable_turning_points(self, goal, turning):
-        """Drop turning points within END_MARGIN of the end for joints whose goal is on a
-        limit: the inward end velocity covers them (and the pair would be degenerate)."""
-        if turning is None:
-            return None
-        turning = np.array(turning, float)
-        at_limit = np.logical_or(*self._on_limit(goal))
-        turning[at_limit[:, None] & (turning > 1 - END_MARGIN)] = np.nan
-        return turning
 
     def initial_guess(self, q0, qd0, duration: float, goal) -> np.ndarray:
         """A cubic that reaches the goal at rest, and zero power slacks."""
@@ -123,14 +118,13 @@ class Planner:
 
     def solve(self, q0, qd0, duration: float, goal, forecast: ObstacleForecast | None = None,
               t_begin: float = 0.0, warm: SegmentPlan | None = None,
-              turning: np.ndarray | None = None) -> SegmentPlan:
+              reference: QuarticTrajectory | None = None) -> SegmentPlan:
         """Plan from (q0, qd0) at t_begin to goal at t_begin + duration.
 
-        turning: normalized times (dof, 3) where the joint limits are enforced in
-        addition to the fixed samples (see PlanningNLP).
+        reference: a motion on the same horizon whose turning points get limit constraints
+        in addition to the fixed samples (see PlanningNLP, planning.limits).
         """
-        turning = self.usable_turning_points(goal, turning)
-        p = self.parameters(q0, qd0, duration, goal, forecast, t_begin, turning)
+        p = self.parameters(q0, qd0, duration, goal, forecast, t_begin, reference)
         lbg, ubg = self.bounds(goal)
         args = {"p": p, "lbg": lbg, "ubg": ubg}
         if warm is None:
@@ -173,3 +167,10 @@ class Planner:
         if not hasattr(self, "_parts_fn"):
             self._parts_fn = self.nlp.functions()[2]
         return self._parts_fn
+
+
+def _slots(times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Turning-point parameters: times (NaN -> 0.5) and 0/1 flags, column-major like ca.vec."""
+    real = np.isfinite(times)
+    return (np.where(real, times, 0.5).ravel(order="F"),
+            real.astype(float).ravel(order="F"))

@@ -87,8 +87,9 @@ def nlp_functions():
     # obstacle centres 5 cm from the end effector: the penalty is active
     _, _, tip = config.geometry.points(arm.state(times)[0])
     forecast = ObstacleForecast(times, tip + np.array([0.0, 0.05, 0.0]))
-    turning = np.array([[0.3, 0.6, 0.9]] * 3)
-    p = planner.parameters(q0, np.array([0.1, -0.2, 0.3]), 2.0, goal, forecast, 0.0, turning)
+    # goal q1 on its lower limit: the goal-limit quotient rows are part of the check
+    goal[0] = config.lower[0]
+    p = planner.parameters(q0, np.array([0.1, -0.2, 0.3]), 2.0, goal, forecast, 0.0, arm)
     x = np.concatenate([arm.coefficients[:, 2:].ravel(), RNG.uniform(0.1, 1, 10)])
     return PlanningNLP(model, config).functions(), x, p
 
@@ -115,3 +116,17 @@ def test_constraint_jacobian_matches_finite_differences(nlp_functions):
     jacobian = np.asarray(constraints(x, p)[1])
     numeric = _central_difference(lambda y: constraints(y, p)[0], x)
     assert np.allclose(jacobian, numeric, rtol=1e-6, atol=1e-6)
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_goal_limit_quotient_is_polynomial_division(order):
+    from planning.limits import quotient
+
+    c = RNG.normal(size=5)
+    if order == 2:  # arrive at rest: q'(1) = 0
+        c[1] -= c[1] + 2 * c[2] + 3 * c[3] + 4 * c[4]
+    goal = c.sum()  # q(1) = goal
+    v = np.asarray(quotient(list(c), goal, -1.0, order))
+    s = np.linspace(0, 0.95, 7)
+    expected = -(np.polynomial.Polynomial(c)(s) - goal) / (1 - s) ** order
+    assert np.allclose(np.polynomial.Polynomial(v)(s), expected, atol=1e-10)

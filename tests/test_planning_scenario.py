@@ -148,3 +148,13 @@ def test_warm_replan_finds_the_cold_optimum(paper, baseline):
     assert warm.success and cold.success
     assert np.isclose(warm.energy + warm.penalty, cold.energy + cold.penalty, rtol=1e-6)
     assert np.allclose(warm.trajectory.coefficients, cold.trajectory.coefficients, atol=1e-4)
+
+
+def test_rest_at_goal_on_a_joint_limit(baseline):
+    """The paper's goal has q1 on its lower limit; arriving at rest there stays inside."""
+    config = PlannerConfig(rest_at_goal=True)
+    scenario = Scenario()
+    result = evaluate(execute(Planner(baseline, config), scenario), scenario, baseline, config)
+    assert result.feasible, result.problems
+    assert np.allclose(result.qd[-1], 0.0, atol=1e-8)
+    assert result.limit_violation <= 1e-9

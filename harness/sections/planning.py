@@ -85,10 +85,9 @@ def _speed(baseline, scenario, quick: bool) -> dict:
                          scenario.goal)
     subset = screen(forecast, free.trajectory, planner.config.geometry,
                     planner.config.threshold, planner.config.obstacle_slots)
-    turning = planner.usable_turning_points(scenario.goal, free.trajectory.turning_points())
     args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
-    ipopt = planner.solve(*args, subset, 0.0, turning=turning)
-    p = planner.parameters(*args, subset, 0.0, turning)
+    ipopt = planner.solve(*args, subset, 0.0, reference=free.trajectory)
+    p = planner.parameters(*args, subset, 0.0, free.trajectory)
     scipy = solve_trust_constr(planner, planner.initial_guess(*args), p,
                                max_iterations=20 if quick else 100)
     out["same_problem"] = {
