@@ -1,5 +1,25 @@
-"""Energy-optimal, obstacle-avoiding trajectory planning (paper III.B, III.G, Algorithm 2)."""
+"""Energy-optimal, obstacle-avoiding trajectory planning (paper III.B, III.G, Algorithm 2).
 
+Modules, in the order the math flows:
+
+- trajectory: quartic joint polynomials in normalized time (eqs. 11, 12)
+- kinematics, clearance: elbow / end effector (eqs. 9, 10) and obstacle-to-segment distance
+- obstacle: the moving obstacle, its K samples and its constant-velocity prediction
+- nlp, limits: energy sigma/N sum |P| + alpha max(0, lambda - d)^2 with joint limits
+- solver: IPOPT through CasADi (exact derivatives), built once, warm-started
+- screening: which obstacle samples a solve must see
+- replanning: Algorithm 2, re-planning from the current state when the obstacle threatens
+- result: the executed trajectory, checked, and its PLAN.json payload
+- baselines, speed, scenarios: minimum jerk, scipy trust-constr, timings, named scenarios
+
+The planner takes any `identification.TorqueModel` (identified or closed form).
+"""
+
+from planning.config import PlannerConfig, Scenario
 from planning.errors import PlanningError
+from planning.replanning import execute
+from planning.result import evaluate, to_json
+from planning.solver import Planner
 
-__all__ = ["PlanningError"]
+__all__ = ["PlanningError", "Planner", "PlannerConfig", "Scenario", "evaluate", "execute",
+           "to_json"]

@@ -8,6 +8,7 @@
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -60,8 +61,11 @@ def solve_trust_constr(planner: Planner, x0: np.ndarray, p: np.ndarray,
 
     limits = NonlinearConstraint(g, planner.nlp.lbg, planner.nlp.ubg, jac="2-point", hess=BFGS())
     start = time.perf_counter()
-    result = minimize(f, x0, method="trust-constr", jac="2-point", hess=BFGS(), constraints=[limits],
-                      options={"maxiter": max_iterations, "gtol": 1e-8, "xtol": 1e-10})
+    with warnings.catch_warnings():  # BFGS updates on linear constraints warn; harmless
+        warnings.simplefilter("ignore", UserWarning)
+        result = minimize(f, x0, method="trust-constr", jac="2-point", hess=BFGS(),
+                          constraints=[limits],
+                          options={"maxiter": max_iterations, "gtol": 1e-8, "xtol": 1e-10})
     elapsed = 1e3 * (time.perf_counter() - start)
     return ScipyResult(float(result.fun), elapsed, int(result.nit), bool(result.success),
                        str(result.message), np.asarray(result.x))

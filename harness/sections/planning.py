@@ -89,7 +89,7 @@ def _speed(baseline, scenario, quick: bool) -> dict:
     ipopt = planner.solve(*args, subset, 0.0, reference=free.trajectory)
     p = planner.parameters(*args, subset, 0.0, free.trajectory)
     scipy = solve_trust_constr(planner, planner.initial_guess(*args), p,
-                               max_iterations=20 if quick else 100)
+                               max_iterations=20 if quick else 300)
     out["same_problem"] = {
         "ipopt_ms": ipopt.solve_ms, "ipopt_iterations": ipopt.iterations,
         "ipopt_objective_J": ipopt.energy + ipopt.penalty, "ipopt_success": ipopt.success,
