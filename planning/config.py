@@ -32,7 +32,6 @@ class PlannerConfig:
     limit_samples: int = 8
     geometry: ArmGeometry = field(default_factory=ArmGeometry)
     hessian: str = "exact"  # or "limited-memory"
-    jit: bool = False  # compile the NLP's functions to C (needs a C compiler)
     max_iterations: int = 300
     warm_max_iterations: int = 60  # a warm solve that needs more restarts cold
     power_smoothing: float = 0.0  # W; 0: exact epigraph of |P|, > 0: sqrt(P^2 + eps^2) - eps

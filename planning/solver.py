@@ -58,11 +58,11 @@ class Planner:
         problem = {"x": self.nlp.x, "p": self.nlp.p, "f": self.nlp.f, "g": self.nlp.g}
         options = dict(_COMMON, **{"ipopt.max_iter": self.config.max_iterations,
                                    "ipopt.hessian_approximation": self.config.hessian})
-        if self.config.jit:
-            options.update(jit=True, compiler="shell", jit_options={"flags": ["-O1"]})
         self._cold = ca.nlpsol("plan_cold", "ipopt", problem, options)
         warm = dict(options, **_WARM, **{"ipopt.max_iter": self.config.warm_max_iterations})
         self._warm = ca.nlpsol("plan_warm", "ipopt", problem, warm)
+        self._parts = ca.Function("objective_parts", [self.nlp.x, self.nlp.p],
+                                  [self.nlp.energy, self.nlp.penalty])
 
     def parameters(self, q0, qd0, duration: float, goal, forecast: ObstacleForecast | None,
                    t_begin: float = 0.0,
@@ -161,12 +161,6 @@ class Planner:
             solve_cpu_ms=elapsed[1], x=x,
             multipliers=(np.asarray(result["lam_g"]).ravel(), np.asarray(result["lam_x"]).ravel()),
         )
-
-    @property
-    def _parts(self) -> ca.Function:
-        if not hasattr(self, "_parts_fn"):
-            self._parts_fn = self.nlp.functions()[2]
-        return self._parts_fn
 
 
 def _slots(times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
