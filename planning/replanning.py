@@ -25,7 +25,7 @@ from planning.solver import ObstacleForecast, Planner, SegmentPlan
 
 TRIGGER_TOLERANCE = 1e-3  # m: predicted dips smaller than this do not trigger a re-plan
 PREDICTION_TOLERANCE = 1e-3  # m: a forecast this close to the last one brings nothing new
-LIMIT_SETTLED = 1e-8  # rad: a plan within this of the limits at its turning points is kept
+LIMIT_SETTLED = 1e-8  # rad: a plan this close to its limits (dense grid) needs no re-solve
 
 
 @dataclass(frozen=True)

@@ -66,8 +66,10 @@ def register(sub) -> None:
 def _setup(args) -> tuple[PlannerConfig, Scenario]:
     if not args.duration > 0 or not math.isfinite(args.duration):
         raise PlanningError(f"--duration must be > 0 s, got {args.duration}")
-    if not args.threshold > 0 or args.samples < 2 or args.energy_samples < 1:
-        raise UserError("--threshold must be > 0, --samples >= 2, --energy-samples >= 1")
+    if not (args.threshold > 0 and args.penalty >= 0) or args.samples < 2 \
+            or args.energy_samples < 1:
+        raise UserError("--threshold must be > 0, --penalty >= 0, --samples >= 2, "
+                        "--energy-samples >= 1")
     config = dataclasses.replace(PlannerConfig(), threshold=args.threshold,
                                  penalty_weight=args.penalty, rest_at_goal=args.rest_at_goal,
                                  energy_samples=args.energy_samples)
