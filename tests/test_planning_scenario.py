@@ -158,3 +158,19 @@ def test_rest_at_goal_on_a_joint_limit(baseline):
     assert result.feasible, result.problems
     assert np.allclose(result.qd[-1], 0.0, atol=1e-8)
     assert result.limit_violation <= 1e-9
+
+
+def test_crossing_obstacle_is_avoided_at_every_sample(paper, baseline):
+    """An obstacle through the forearm of the unobstructed optimum at t = 1 s: the plan
+    detours and holds the threshold at every one of the K samples (not one instant)."""
+    from planning.scenarios import crossing_scenario
+
+    planner, _, free, _ = paper
+    crossing = crossing_scenario(free.execution.segments[0].trajectory, planner.config.geometry)
+    blind = evaluate(execute(planner, crossing, avoid=False), crossing, baseline, planner.config)
+    result = evaluate(execute(planner, crossing), crossing, baseline, planner.config)
+    needed = blind.sample_clearance < planner.config.threshold
+    assert needed.sum() > 20 and blind.sample_clearance.min() < 1e-6  # it really crosses
+    assert result.feasible, result.problems
+    assert np.all(result.sample_clearance >= planner.config.threshold - 2e-3)
+    assert result.energy > blind.energy  # the detour costs energy
