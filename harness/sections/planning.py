@@ -135,6 +135,9 @@ def run(out_dir: Path, quick: bool = False, identified_model=None) -> dict:
     samples["difference_pct"] = 100 * (samples["energy_N10_J"] - samples["energy_N40_J"]) \
         / samples["energy_N40_J"]
     speed = _speed(baseline, scenario, quick)
+    crossing_timings, _ = measure(Planner(baseline), crossing, cold_repeats=3,
+                                  stride=4 if quick else 1)
+    speed["crossing"] = crossing_timings.summary()
     results = {"paper": summaries, "crossing": crossing_summary, "minimum_jerk": jerk,
                "energy_samples": samples, "speed": speed,
                "unobstructed_min_clearance_m": float(free.sample_clearance.min())}
