@@ -24,6 +24,12 @@ class PlannerConfig:
 
     threshold: float = 0.08
     penalty_weight: float = 200.0
+    # Exterior penalty method (paper III.G: alpha increases until the penalty converges):
+    # while a solution dips more than penalty_tolerance (m) below the threshold, alpha is
+    # multiplied by penalty_growth, up to max_penalty_weight.
+    penalty_tolerance: float = 1e-3
+    penalty_growth: float = 10.0
+    max_penalty_weight: float = 2e5
     energy_samples: int = 10
     obstacle_slots: int = 24
     rest_at_goal: bool = False

@@ -6,7 +6,8 @@ sigma/N sum e_i + alpha sum_k w_k (max(0, lambda - D1_k)^2 + max(0, lambda - D2_
 is smooth enough for exact derivatives. Parameters p = [q0, qd0, sigma, q_end,
 obstacle centres (3 K), their normalized times s_k (K), weights w_k (K), the
 normalized times of each joint's turning points (dof x 3) and 0/1 flags (dof x 3)
-saying which of them are real], so a re-plan changes only numbers: the solver is
+saying which of them are real, the goal-limit signs and quotient turning points
+(planning.limits), and alpha], so a re-plan changes only numbers: the solver is
 built once and warm-started.
 
 Joint limits hold at fixed interior samples and, exactly, at the turning points
@@ -46,12 +47,13 @@ class PlanningNLP:
         sign = ca.SX.sym("limit_sign", dof)
         v_turn = ca.SX.sym("v_turn", dof, self.quotient_slots)
         v_newton = ca.SX.sym("v_newton", dof, self.quotient_slots)
+        alpha = ca.SX.sym("alpha")  # penalty weight: a parameter, raised by the solver loop
         self.p = ca.vertcat(q0, qd0, self.sigma, goal, ca.vec(obstacle), s_obs, weight,
                             ca.vec(extremum), ca.vec(newton), sign, ca.vec(v_turn),
-                            ca.vec(v_newton))
+                            ca.vec(v_newton), alpha)
         self.coefficients = ca.horzcat(q0, qd0 * self.sigma, free)  # column p -> s**p
         power = self._power(model)
-        self.penalty = config.penalty_weight * self._penalty(obstacle, s_obs, weight)
+        self.penalty = alpha * self._penalty(obstacle, s_obs, weight)
         self._g, self._lbg, self._ubg = [], [], []
         self.energy = self._energy(power)
         self.f = self.energy + self.penalty

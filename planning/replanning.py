@@ -42,15 +42,39 @@ class Execution:
 def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goal,
                  forecast: ObstacleForecast | None, warm: SegmentPlan | None = None,
                  rounds: int = 4) -> tuple[SegmentPlan, float, float]:
-    """Solve with the obstacle samples screened on a reference; re-screen on the result.
+    """Plan one segment: screened solves (see _screened), with the penalty weight raised
+    while the solution still dips below the threshold (exterior penalty method).
 
     Without a warm start the unobstructed optimum is solved first and serves as the
     reference. Returns the plan and the total wall and CPU time (ms) of its solves.
     """
-    config, total, cpu, plan = planner.config, 0.0, 0.0, warm
-    if plan is None:
-        plan = planner.solve(q0, qd0, duration, goal, None, t_begin)
-        total, cpu = plan.solve_ms, plan.solve_cpu_ms
+    config, total, cpu = planner.config, 0.0, 0.0
+    alpha = config.penalty_weight if warm is None else warm.penalty_weight
+    if warm is None:
+        warm = planner.solve(q0, qd0, duration, goal, None, t_begin, alpha=alpha)
+        total, cpu = warm.solve_ms, warm.solve_cpu_ms
+        first = True
+    else:
+        first = False
+    while True:
+        plan, ms, cpu_ms = _screened(planner, q0, qd0, t_begin, duration, goal, forecast,
+                                     warm, first, alpha, rounds)
+        total, cpu = total + ms, cpu + cpu_ms
+        if forecast is None or alpha >= config.max_penalty_weight or not plan.success or \
+                _predicted_clearance(planner, plan, forecast) >= config.threshold \
+                - config.penalty_tolerance:
+            return plan, total, cpu
+        alpha = min(alpha * config.penalty_growth, config.max_penalty_weight)
+        warm, first = plan, False
+
+
+def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan, cold: bool,
+              alpha: float, rounds: int) -> tuple[SegmentPlan, float, float]:
+    """Solve with the obstacle samples screened on a reference (`plan`, re-expressed on
+    this horizon) and the limits at its turning points; re-screen on the result until
+    the constraints that matter are the ones imposed. cold: `plan` already solves this
+    very problem without obstacle, so an empty screen needs no further solve."""
+    config, total, cpu = planner.config, 0.0, 0.0
     reference, chosen = plan.trajectory.restrict(t_begin, duration), set()
     for round_ in range(rounds):
         subset = screen(forecast, reference, config.geometry, config.threshold,
@@ -58,15 +82,15 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
         times = set() if subset is None else set(subset.times)
         settled = times <= chosen and limit_excess(plan.trajectory, config.lower,
                                                    config.upper) <= LIMIT_SETTLED
-        if settled and (round_ > 0 or warm is None):
-            break  # the constraints that matter at this solution were the ones imposed
+        if settled and (round_ > 0 or cold):
+            break
         chosen |= times
         attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin, warm=plan,
-                                reference=reference)
+                                reference=reference, alpha=alpha)
         total, cpu = total + attempt.solve_ms, cpu + attempt.solve_cpu_ms
         if not attempt.success:  # a warm start far from the new optimum can stall
             attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin,
-                                    reference=reference)
+                                    reference=reference, alpha=alpha)
             total, cpu = total + attempt.solve_ms, cpu + attempt.solve_cpu_ms
         plan, reference = attempt, attempt.trajectory
     return plan, total, cpu

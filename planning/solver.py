@@ -44,6 +44,7 @@ class SegmentPlan:
     iterations: int
     solve_ms: float  # wall time
     solve_cpu_ms: float  # CPU time of this thread (insensitive to other load on the machine)
+    penalty_weight: float  # alpha this solve used, J/m^2 per obstacle sample
     x: np.ndarray  # primal solution, for warm starts
     multipliers: tuple[np.ndarray, np.ndarray]  # (lam_g, lam_x)
 
@@ -65,8 +66,8 @@ class Planner:
                                   [self.nlp.energy, self.nlp.penalty])
 
     def parameters(self, q0, qd0, duration: float, goal, forecast: ObstacleForecast | None,
-                   t_begin: float = 0.0,
-                   reference: QuarticTrajectory | None = None) -> np.ndarray:
+                   t_begin: float = 0.0, reference: QuarticTrajectory | None = None,
+                   alpha: float | None = None) -> np.ndarray:
         """Pack the parameter vector p; obstacle samples outside (t_begin, t_end] weigh 0;
         the joint limits are constrained at the turning points of `reference` (a motion
         on the same horizon, e.g. the previous solution)."""
@@ -78,8 +79,10 @@ class Planner:
             m = len(keep)
             centres[:m], s_obs[:m], weight[:m] = forecast.centres[keep], s[keep], 1.0
         turning, v_turning, signs = self.turning_points(goal, reference)
+        alpha = self.config.penalty_weight if alpha is None else alpha
         return np.concatenate([q0, qd0, [duration], goal, centres.ravel(), s_obs, weight,
-                               *_slots(turning), signs + (signs == 0), *_slots(v_turning)])
+                               *_slots(turning), signs + (signs == 0), *_slots(v_turning),
+                               [alpha]])
 
     def turning_points(self, goal, reference: QuarticTrajectory | None):
         """Where the limits are enforced beyond the fixed samples: q's turning points (dof, 3)
@@ -118,13 +121,16 @@ class Planner:
 
     def solve(self, q0, qd0, duration: float, goal, forecast: ObstacleForecast | None = None,
               t_begin: float = 0.0, warm: SegmentPlan | None = None,
-              reference: QuarticTrajectory | None = None) -> SegmentPlan:
+              reference: QuarticTrajectory | None = None,
+              alpha: float | None = None) -> SegmentPlan:
         """Plan from (q0, qd0) at t_begin to goal at t_begin + duration.
 
         reference: a motion on the same horizon whose turning points get limit constraints
         in addition to the fixed samples (see PlanningNLP, planning.limits).
+        alpha: penalty weight (J/m^2 per sample), default config.penalty_weight.
         """
-        p = self.parameters(q0, qd0, duration, goal, forecast, t_begin, reference)
+        alpha = self.config.penalty_weight if alpha is None else float(alpha)
+        p = self.parameters(q0, qd0, duration, goal, forecast, t_begin, reference, alpha)
         lbg, ubg = self.bounds(goal)
         args = {"p": p, "lbg": lbg, "ubg": ubg}
         if warm is None:
@@ -136,7 +142,7 @@ class Planner:
         result = solver(**args)
         elapsed = (1e3 * (time.perf_counter() - start), 1e3 * (time.thread_time() - cpu))
         stats = solver.stats()
-        return self._segment(result, stats, elapsed, q0, qd0, duration, t_begin, p)
+        return self._segment(result, stats, elapsed, q0, qd0, duration, t_begin, p, alpha)
 
     def _warm_start(self, warm: SegmentPlan, t_begin: float, duration: float) -> dict:
         """Primal-dual start: the previous plan's remaining motion re-expressed on the new
@@ -149,7 +155,8 @@ class Planner:
             x = np.concatenate([x, np.abs(np.sum(self.model.torque(q, qd, qdd) * qd, axis=1))])
         return {"x0": x, "lam_g0": warm.multipliers[0], "lam_x0": warm.multipliers[1]}
 
-    def _segment(self, result, stats, elapsed, q0, qd0, duration, t_begin, p) -> SegmentPlan:
+    def _segment(self, result, stats, elapsed, q0, qd0, duration, t_begin, p,
+                 alpha) -> SegmentPlan:
         x = np.asarray(result["x"]).ravel()
         free = x[: 3 * self.model.dof].reshape(self.model.dof, 3)
         trajectory = QuarticTrajectory.from_free(t_begin, duration, q0, qd0, free)
@@ -158,7 +165,7 @@ class Planner:
             trajectory=trajectory, energy=energy, penalty=penalty,
             success=bool(stats["success"]), status=str(stats["return_status"]),
             iterations=int(stats.get("iter_count", -1)), solve_ms=elapsed[0],
-            solve_cpu_ms=elapsed[1], x=x,
+            solve_cpu_ms=elapsed[1], penalty_weight=alpha, x=x,
             multipliers=(np.asarray(result["lam_g"]).ravel(), np.asarray(result["lam_x"]).ravel()),
         )
 
