@@ -174,3 +174,20 @@ def test_crossing_obstacle_is_avoided_at_every_sample(paper, baseline):
     assert result.feasible, result.problems
     assert np.all(result.sample_clearance >= planner.config.threshold - 2e-3)
     assert result.energy > blind.energy  # the detour costs energy
+
+
+def test_penalty_weight_rises_until_the_threshold_holds(paper, baseline):
+    """Exterior penalty method: a weak alpha is raised; without raising it the plan fails."""
+    from planning.scenarios import crossing_scenario
+
+    planner, _, free, _ = paper
+    crossing = crossing_scenario(free.execution.segments[0].trajectory, planner.config.geometry)
+    results = {}
+    for ceiling in (2.0, 2e5):
+        config = PlannerConfig(penalty_weight=2.0, max_penalty_weight=ceiling)
+        results[ceiling] = evaluate(execute(Planner(baseline, config), crossing), crossing,
+                                    baseline, config)
+    assert not results[2.0].feasible
+    held = results[2e5]
+    assert held.feasible, held.problems
+    assert max(s.penalty_weight for s in held.execution.segments) > 2.0
