@@ -45,6 +45,7 @@ def _summary(result: PlanResult, free: PlanResult, baseline, threshold: float) -
         "end_error_rad": result.end_error,
         "limit_violation_rad": result.limit_violation,
         "replans": len(result.execution.segments) - 1,
+        "max_penalty_weight_used": max(s.penalty_weight for s in result.execution.segments),
         "solve_ms": list(result.execution.solve_ms),
         "feasible": result.feasible, "problems": list(result.problems),
     }

@@ -95,8 +95,11 @@ def markdown(results: dict, config) -> str:
         f"Quartic joint polynomials, energy sum |P| sigma/N (N = {config.energy_samples}) plus "
         f"alpha max(0, lambda - d)^2 (alpha = {config.penalty_weight}, lambda = "
         f"{config.threshold} m) to the link *segments* at every predicted obstacle sample, "
-        "IPOPT with exact CasADi derivatives; re-planning per Algorithm 2. Energies are "
-        "integral |P| dt with Pinocchio torques on a 2 ms grid.", "",
+        "IPOPT with exact CasADi derivatives; re-planning per Algorithm 2. alpha is raised "
+        "x10 while a solution dips more than 1 mm below lambda (exterior penalty method); "
+        "largest alpha used: " + ", ".join(f"{k} {v['max_penalty_weight_used']:g}" for k, v in
+                                           {**paper, "crossing": cross}.items())
+        + ". Energies are integral |P| dt with Pinocchio torques on a 2 ms grid.", "",
         "| plan (paper scenario) | energy, Pinocchio (J) | energy, own model (J) | min clearance"
         " (m) | min clearance where needed (m) | end error (rad) | re-plans | feasible |",
         "|---|---|---|---|---|---|---|---|",
