@@ -19,7 +19,8 @@ _COMMON = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
 # Measured on the re-plan sweep of the paper scenario (199 re-plans): a primal-dual warm
 # start (previous plan re-expressed on the new horizon, previous multipliers) with a tiny
 # barrier and bound pushes took a median of 6 and at most 25 iterations; a primal-only start
-# took a median of 11 and up to 81 (with mu_strategy adaptive) or 300 (monotone).
+# took a median of 11 and up to 81 (with mu_strategy adaptive) or 300 (monotone). Warm solves
+# stop at config.warm_max_iterations; planning.replanning then retries cold.
 _WARM = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-7,
          "ipopt.warm_start_bound_push": 1e-7, "ipopt.warm_start_mult_bound_push": 1e-7}
 
@@ -75,8 +76,10 @@ class Planner:
         centres, s_obs, weight = np.zeros((k, 3)), np.zeros(k), np.zeros(k)
         if forecast is not None:
             s = (np.asarray(forecast.times) - t_begin) / duration
-            keep = np.flatnonzero((s > 1e-12) & (s <= 1 + 1e-12))[-k:]
+            keep = np.flatnonzero((s > 1e-12) & (s <= 1 + 1e-12))
             m = len(keep)
+            if m > k:  # pass a screened forecast (planning.screening) instead
+                raise ValueError(f"{m} obstacle samples on the horizon, the NLP has {k} slots")
             centres[:m], s_obs[:m], weight[:m] = forecast.centres[keep], s[keep], 1.0
         turning, v_turning, signs = self.turning_points(goal, reference)
         alpha = self.config.penalty_weight if alpha is None else alpha
