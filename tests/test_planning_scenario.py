@@ -191,3 +191,12 @@ def test_penalty_weight_rises_until_the_threshold_holds(paper, baseline):
     held = results[2e5]
     assert held.feasible, held.problems
     assert max(s.penalty_weight for s in held.execution.segments) > 2.0
+
+
+def test_plan_command_takes_vectors_starting_with_a_minus(tmp_path):
+    out = tmp_path / "plan.json"
+    assert main(["plan", "--model", "pinocchio", "--goal", "-1.0,1.0,-1.2",
+                 "--obstacle-from", "-0.1,0.3,0.2", "--out", str(out)]) == 0
+    plan = json.loads(out.read_text())
+    assert np.allclose(plan["q"][-1], [-1.0, 1.0, -1.2], atol=1e-6)
+    assert np.allclose(plan["obstacle"][0], [-0.1, 0.3, 0.2])

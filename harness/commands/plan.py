@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 
 from harness.errors import UserError
 from harness.io import write_json
@@ -60,6 +61,9 @@ def register(sub) -> None:
     p.add_argument("--rest-at-goal", action="store_true", help="also require zero end velocity")
     p.add_argument("--no-replan", action="store_true", help="follow the first plan throughout")
     p.add_argument("--out", required=True, help="output PLAN.json")
+    # Let "--goal -1.57,0.8,-1.0" through: argparse only takes "-1.5"-like strings as
+    # values, and would read a comma-separated vector starting with a minus as an option.
+    p._negative_number_matcher = re.compile(r"^-\.?\d")
     p.set_defaults(func=run)
 
 
