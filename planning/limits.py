@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planning.trajectory import QuarticTrajectory
+from planning.trajectory import QuarticTrajectory, stationary_points
 
 END_MARGIN = 0.02  # normalized time: q's turning points this close to a limit goal are
 # left to the quotient constraints
@@ -43,22 +43,13 @@ def goal_limit_signs(goal, lower, upper) -> np.ndarray:
         - (np.abs(goal - np.asarray(upper)) < 1e-9).astype(float)
 
 
-def real_roots_inside(coefficients) -> np.ndarray:
-    """Real roots in (0, 1) of the derivative of an ascending-coefficient polynomial."""
-    if len(coefficients) < 3:
-        return np.array([])
-    roots = np.polynomial.Polynomial(coefficients).deriv().roots()
-    real = roots[np.abs(roots.imag) < 1e-9].real
-    return np.sort(real[(real > 1e-6) & (real < 1 - 1e-6)])
-
-
 def quotient_turning_points(trajectory: QuarticTrajectory, goal, signs, order: int,
                             slots: int) -> np.ndarray:
     """Turning points (dof, slots) in (0, 1) of each joint's quotient v; NaN if none."""
     out = np.full((len(trajectory.coefficients), slots), np.nan)
     for j, (c, sign) in enumerate(zip(trajectory.coefficients, signs, strict=True)):
         if sign:
-            roots = real_roots_inside(np.asarray(quotient(list(c), goal[j], sign, order)))
+            roots = stationary_points(quotient(list(c), goal[j], sign, order))
             out[j, : min(len(roots), slots)] = roots[:slots]
     return out
 
@@ -68,5 +59,5 @@ def limit_excess(trajectory: QuarticTrajectory, lower, upper, samples: int = 400
     times = np.linspace(0.0, 1.0, samples + 1)
     turning = trajectory.turning_points()
     times = np.concatenate([times, turning[np.isfinite(turning)]])
-    q = trajectory.state(trajectory.t_begin + times * trajectory.duration)[0]
+    q = trajectory.position(trajectory.t_begin + times * trajectory.duration)
     return float(max(0.0, np.max(np.asarray(lower) - q), np.max(q - np.asarray(upper))))

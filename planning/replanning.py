@@ -163,5 +163,5 @@ def _same_prediction(old: ObstacleForecast, new: ObstacleForecast) -> bool:
 
 
 def _predicted_clearance(planner: Planner, plan: SegmentPlan, forecast: ObstacleForecast):
-    q = plan.trajectory.state(forecast.times)[0]
+    q = plan.trajectory.position(forecast.times)
     return link_clearances(planner.config.geometry, q, forecast.centres).min()

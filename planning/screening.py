@@ -23,7 +23,7 @@ def screen(forecast: ObstacleForecast, reference: QuarticTrajectory, geometry: A
     times = np.asarray(forecast.times)
     inside = np.flatnonzero((times > reference.t_begin + 1e-12)
                             & (times <= reference.t_end + 1e-12))
-    q = reference.state(times[inside])[0]
+    q = reference.position(times[inside])
     clearance = link_clearances(geometry, q, forecast.centres[inside]).min(axis=1)
     near = inside[clearance < threshold + margin]
     if len(near) > slots:

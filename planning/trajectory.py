@@ -8,6 +8,7 @@ c[:, 1] = qd0 * sigma; the planner chooses c[:, 2:] (9 numbers for 3 joints).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from math import comb
 
 import numpy as np
 
@@ -56,24 +57,58 @@ class QuarticTrajectory:
             power_basis(s, 2) @ c / self.duration**2,
         )
 
+    def position(self, t) -> np.ndarray:
+        """q (n, dof) in rad at absolute times t (s); cheaper than `state`."""
+        return power_basis(self.normalized(np.atleast_1d(t))) @ self.coefficients.T
+
     def turning_points(self) -> np.ndarray:
         """Normalized times (dof, 3) in (0, 1) where each joint's velocity vanishes;
         unused entries are NaN."""
-        out = np.full((len(self.coefficients), DEGREE - 1), np.nan)
-        for j, c in enumerate(self.coefficients):
-            roots = np.polynomial.Polynomial(c).deriv().roots()
-            real = roots[np.abs(roots.imag) < 1e-9].real
-            real = np.sort(real[(real > 1e-6) & (real < 1 - 1e-6)])
-            out[j, : len(real)] = real
-        return out
+        return stationary_points_rows(self.coefficients)
 
     def restrict(self, t_begin: float, duration: float) -> QuarticTrajectory:
         """The same motion re-expressed on [t_begin, t_begin + duration] (exact: a
         quartic in s is a quartic in any affinely shifted normalized time)."""
-        inner = np.polynomial.Polynomial([(t_begin - self.t_begin) / self.duration,
-                                          duration / self.duration])
-        rows = [np.polynomial.Polynomial(c)(inner).coef for c in self.coefficients]
-        coefficients = np.zeros_like(self.coefficients)
-        for i, row in enumerate(rows):
-            coefficients[i, : len(row)] = row[: DEGREE + 1]
-        return QuarticTrajectory(t_begin, duration, coefficients)
+        shift, scale = (t_begin - self.t_begin) / self.duration, duration / self.duration
+        p, k = np.meshgrid(np.arange(DEGREE + 1), np.arange(DEGREE + 1), indexing="ij")
+        # s = shift + scale u:  s^p = sum_k C(p, k) shift^(p-k) scale^k u^k
+        change = np.where(k <= p, _BINOMIAL * shift ** np.maximum(p - k, 0) * scale**k, 0.0)
+        return QuarticTrajectory(t_begin, duration, self.coefficients @ change)
+
+
+_BINOMIAL = np.array([[comb(p, k) for k in range(DEGREE + 1)] for p in range(DEGREE + 1)],
+                     dtype=float)
+
+
+def stationary_points_rows(coefficients: np.ndarray) -> np.ndarray:
+    """stationary_points of each row of quartic coefficients (n, 5) -> (n, 3), NaN-padded;
+    one batched eigenvalue call for the companion matrices of the cubic derivatives."""
+    c = np.asarray(coefficients, dtype=float)
+    slope = c[:, 1:] * np.arange(1, DEGREE + 1)  # ascending cubic coefficients
+    lead = slope[:, -1]
+    out = np.full((len(c), DEGREE - 1), np.nan)
+    regular = np.abs(lead) > 1e-12 * (np.abs(slope).max(axis=1) + 1e-300)
+    if regular.any():
+        monic = slope[regular, :-1] / lead[regular, None]
+        companion = np.zeros((int(regular.sum()), 3, 3))
+        companion[:, 0, :] = -monic[:, ::-1]
+        companion[:, 1, 0] = companion[:, 2, 1] = 1.0
+        roots = np.linalg.eigvals(companion)
+        ok = (np.abs(roots.imag) < 1e-9) & (roots.real > 1e-6) & (roots.real < 1 - 1e-6)
+        values = np.sort(np.where(ok, roots.real, np.nan), axis=1)
+        out[regular] = values
+    for j in np.flatnonzero(~regular):
+        roots = stationary_points(c[j])
+        out[j, : len(roots)] = roots
+    return out
+
+
+def stationary_points(coefficients) -> np.ndarray:
+    """Sorted real roots in (0, 1) of the derivative of ascending `coefficients`."""
+    slope = np.arange(1, len(coefficients)) * np.asarray(coefficients[1:], dtype=float)
+    slope = np.trim_zeros(slope, "b")
+    if len(slope) < 2:
+        return np.empty(0)
+    roots = np.roots(slope[::-1])
+    real = roots[np.abs(roots.imag) < 1e-9].real
+    return np.sort(real[(real > 1e-6) & (real < 1 - 1e-6)])
