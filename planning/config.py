@@ -17,7 +17,8 @@ class PlannerConfig:
     """How trajectories are scored and constrained.
 
     threshold: lambda (m); penalty_weight: alpha (J/m^2 per obstacle sample);
-    energy_samples: N; obstacle_slots: how many obstacle samples one solve sees (the
+    energy_samples: N, weighted by energy_quadrature; degree: of the joint polynomials;
+    obstacle_slots: how many obstacle samples one solve sees (the
     ones that can come within the threshold, see planning.screening);
     limits in rad, enforced at limit_samples interior points of every segment.
     """
@@ -31,6 +32,8 @@ class PlannerConfig:
     penalty_growth: float = 10.0
     max_penalty_weight: float = 2e5
     energy_samples: int = 10
+    energy_quadrature: str = "paper"  # planning.quadrature: "paper" (eq. 18), "gauss", "simpson"
+    degree: int = 4  # of the joint polynomials (paper: 4); degree - 1 free coefficients per joint
     obstacle_slots: int = 24
     rest_at_goal: bool = False
     lower: tuple[float, ...] = (-pi / 2, 0.0, -pi)

@@ -1,4 +1,4 @@
-"""Joint limits along a quartic segment, including a goal that lies on a limit.
+"""Joint limits along a polynomial segment, including a goal that lies on a limit.
 
 Away from the segment's end, a limit holds if it holds at the motion's turning
 points. When the goal sits on a limit (the paper's q1 = -pi/2 does), the motion
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planning.trajectory import QuarticTrajectory, stationary_points
+from planning.trajectory import PolynomialTrajectory, stationary_points
 
 END_MARGIN = 0.02  # normalized time: q's turning points this close to a limit goal are
 # left to the quotient constraints
@@ -43,7 +43,7 @@ def goal_limit_signs(goal, lower, upper) -> np.ndarray:
         - (np.abs(goal - np.asarray(upper)) < 1e-9).astype(float)
 
 
-def quotient_turning_points(trajectory: QuarticTrajectory, goal, signs, order: int,
+def quotient_turning_points(trajectory: PolynomialTrajectory, goal, signs, order: int,
                             slots: int) -> np.ndarray:
     """Turning points (dof, slots) in (0, 1) of each joint's quotient v; NaN if none."""
     out = np.full((len(trajectory.coefficients), slots), np.nan)
@@ -54,7 +54,7 @@ def quotient_turning_points(trajectory: QuarticTrajectory, goal, signs, order: i
     return out
 
 
-def limit_excess(trajectory: QuarticTrajectory, lower, upper, samples: int = 400) -> float:
+def limit_excess(trajectory: PolynomialTrajectory, lower, upper, samples: int = 400) -> float:
     """Worst excursion (rad) beyond the limits on a dense grid plus the turning points."""
     times = np.linspace(0.0, 1.0, samples + 1)
     turning = trajectory.turning_points()

@@ -1,11 +1,12 @@
 """The energy + clearance-penalty NLP (paper eqs. 15-19), built once, solved by IPOPT.
 
-Decision variables x = [free quartic coefficients (dof x 3, row-major), e (N)]:
-e_i >= |P(i/N)| is the epigraph of the absolute power, so the objective
-sigma/N sum e_i + alpha sum_k w_k (max(0, lambda - D1_k)^2 + max(0, lambda - D2_k)^2)
+Decision variables x = [free polynomial coefficients (dof x (degree - 1), row-major),
+e (N)]: e_i >= |P(s_i)| is the epigraph of the absolute power, so the objective
+sigma sum_i w_i e_i (planning.quadrature; the paper's w_i = 1/N, s_i = i/N)
++ alpha sum_k w_k (max(0, lambda - D1_k)^2 + max(0, lambda - D2_k)^2)
 is smooth enough for exact derivatives. Parameters p = [q0, qd0, sigma, q_end,
 obstacle centres (3 K), their normalized times s_k (K), weights w_k (K), the
-normalized times of each joint's turning points (dof x 3) and 0/1 flags (dof x 3)
+normalized times of each joint's turning points (dof x (degree - 1)) and 0/1 flags
 saying which of them are real, the goal-limit signs and quotient turning points
 (planning.limits), and alpha], so a re-plan changes only numbers: the solver is
 built once and warm-started.
@@ -24,9 +25,13 @@ from identification import TorqueModel
 from planning.clearance import symbolic_link_clearances
 from planning.config import PlannerConfig
 from planning.limits import quotient
-from planning.trajectory import DEGREE, power_basis
+from planning.quadrature import energy_nodes
+from planning.trajectory import power_basis
 
-EXTREMA = DEGREE - 1  # a quartic turns at most 3 times
+
+def extrema(degree: int) -> int:
+    """How often a polynomial of this degree can turn."""
+    return degree - 1
 
 
 class PlanningNLP:
@@ -35,15 +40,20 @@ class PlanningNLP:
     def __init__(self, model: TorqueModel, config: PlannerConfig):
         self.config, self.dof = config, model.dof
         dof, n, k = model.dof, config.energy_samples, config.obstacle_slots
-        free = ca.SX.sym("free", dof, 3)
+        if config.degree < 3:
+            raise ValueError(f"polynomial degree must be >= 3, got {config.degree}")
+        self.extrema = extrema(config.degree)
+        self.nodes, self.weights = energy_nodes(config.energy_quadrature, n)
+        free = ca.SX.sym("free", dof, config.degree - 1)
         self.slack = ca.SX.sym("e", 0 if config.power_smoothing > 0 else n)
         self.x = ca.vertcat(ca.vec(free.T), self.slack)
         q0, qd0, self.sigma, goal = (ca.SX.sym(s, d) for s, d in
                                      (("q0", dof), ("qd0", dof), ("sigma", 1), ("goal", dof)))
         obstacle, s_obs, weight = ca.SX.sym("obs", 3, k), ca.SX.sym("s_obs", k), ca.SX.sym("w", k)
-        extremum, newton = ca.SX.sym("s_lim", dof, EXTREMA), ca.SX.sym("newton", dof, EXTREMA)
+        extremum = ca.SX.sym("s_lim", dof, self.extrema)
+        newton = ca.SX.sym("newton", dof, self.extrema)
         self.order = 2 if config.rest_at_goal else 1  # zeros of q - goal at s = 1
-        self.quotient_slots = EXTREMA - self.order
+        self.quotient_slots = self.extrema - self.order
         sign = ca.SX.sym("limit_sign", dof)
         v_turn = ca.SX.sym("v_turn", dof, self.quotient_slots)
         v_newton = ca.SX.sym("v_newton", dof, self.quotient_slots)
@@ -81,22 +91,22 @@ class PlanningNLP:
         return slice(start, start + count)
 
     def _power(self, model: TorqueModel):
-        """P(i/N) = sum_j tau_j qd_j at the N energy samples (eq. 15)."""
-        n = self.config.energy_samples
+        """P(s_i) = sum_j tau_j qd_j at the N energy samples (eq. 15)."""
         power = []
-        for i in range(1, n + 1):
-            q, qd, qdd = self.state(i / n)
+        for s in self.nodes:
+            q, qd, qdd = self.state(float(s))
             power.append(ca.dot(model.symbolic_torque(q, qd, qdd), qd))
         return ca.vertcat(*power)
 
     def _energy(self, power):
-        """sigma/N sum |P| (eq. 18): epigraph slacks, or a smoothed |P| if configured."""
-        n, eps = self.config.energy_samples, self.config.power_smoothing
+        """sigma sum w_i |P(s_i)| (eq. 18 with the paper's rule): epigraph slacks, or a
+        smoothed |P| if configured."""
+        eps, w = self.config.power_smoothing, ca.DM(self.weights)
         if eps > 0:
-            return self.sigma / n * ca.sum1(ca.sqrt(power**2 + eps**2) - eps)
+            return self.sigma * ca.dot(w, ca.sqrt(power**2 + eps**2) - eps)
         self._add(power - self.slack, -np.inf, 0.0)
         self._add(-power - self.slack, -np.inf, 0.0)
-        return self.sigma / n * ca.sum1(self.slack)
+        return self.sigma * ca.dot(w, self.slack)
 
     def _penalty(self, obstacle, s_obs, weight):
         """sum_k w_k (max(0, lambda - D1)^2 + max(0, lambda - D2)^2) (eq. 17), per sample."""
@@ -114,7 +124,7 @@ class PlanningNLP:
         for s in np.arange(1, config.limit_samples + 1) / (config.limit_samples + 1):
             self._add(_poly(c, float(s), 0), config.lower, config.upper)
         for j in range(self.dof):
-            for m in range(EXTREMA):
+            for m in range(self.extrema):
                 at = _newton(c[j, :], extremum[j, m], newton[j, m])
                 self._add(_poly(c[j, :], at, 0), config.lower[j], config.upper[j])
 
@@ -122,7 +132,7 @@ class PlanningNLP:
         """Rows v >= 0 of planning.limits' quotient for joint j (at the fixed samples, at
         s = 1 and at its Newton-corrected turning points); bounds are set per solve
         (Planner.bounds): [0, inf] when the goal is on a limit, free otherwise."""
-        v = ca.horzcat(*quotient([self.coefficients[j, p] for p in range(DEGREE + 1)],
+        v = ca.horzcat(*quotient([self.coefficients[j, p] for p in range(self.config.degree + 1)],
                                  goal, sign, self.order))
         samples = np.arange(1, self.config.limit_samples + 2) / (self.config.limit_samples + 1)
         rows = [_poly(v, float(s), 0) for s in samples]
@@ -153,7 +163,7 @@ def _poly(coefficients, s, derivative: int):
     coefficients (rows x degree+1)."""
     degree = coefficients.shape[1] - 1
     if isinstance(s, float):
-        return coefficients @ ca.DM(power_basis(np.array([s]), derivative).T[: degree + 1])
+        return coefficients @ ca.DM(power_basis(np.array([s]), derivative, degree).T)
     column = []
     for p in range(degree + 1):
         factor = float(np.prod(np.arange(p - derivative + 1, p + 1))) if derivative else 1.0

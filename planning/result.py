@@ -81,7 +81,7 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
     segments = result.execution.segments
     return {
         "coefficients": [s.trajectory.coefficients for s in segments],
-        "coefficient_order": "per segment (dof, 5): column p multiplies s**p, "
+        "coefficient_order": f"per segment (dof, {config.degree + 1}): column p multiplies s**p, "
                              "s = (t - t_begin) / duration",
         "segments": [{"t_begin": s.trajectory.t_begin, "duration": s.trajectory.duration,
                       "objective_energy": s.energy, "penalty": s.penalty,
@@ -94,6 +94,7 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
         "sample_clearance": result.sample_clearance if scenario.obstacle else None,
         "threshold": config.threshold, "penalty_weight": config.penalty_weight,
         "energy_samples": config.energy_samples,
+        "energy_quadrature": config.energy_quadrature, "degree": config.degree,
         "energy": result.energy,
         "min_clearance": float(result.sample_clearance.min()) if scenario.obstacle else None,
         "replans": len(segments) - 1,

@@ -6,7 +6,7 @@ import numpy as np
 
 from planning.config import Scenario
 from planning.obstacle import LinearObstacle
-from planning.trajectory import QuarticTrajectory
+from planning.trajectory import PolynomialTrajectory
 
 
 def paper_scenario() -> Scenario:
@@ -14,7 +14,7 @@ def paper_scenario() -> Scenario:
     return Scenario()
 
 
-def crossing_scenario(free: QuarticTrajectory, geometry, t_cross: float = 1.0,
+def crossing_scenario(free: PolynomialTrajectory, geometry, t_cross: float = 1.0,
                       sweep: tuple[float, float, float] = (0.0, 0.0, 0.5)) -> Scenario:
     """The paper's motion with an obstacle that passes exactly through the middle of the
     forearm (elbow-end effector) of the unobstructed optimum `free` at t_cross (s),

@@ -14,10 +14,10 @@ import numpy as np
 from planning.clearance import link_clearances
 from planning.kinematics import ArmGeometry
 from planning.solver import ObstacleForecast
-from planning.trajectory import QuarticTrajectory
+from planning.trajectory import PolynomialTrajectory
 
 
-def screen(forecast: ObstacleForecast, reference: QuarticTrajectory, geometry: ArmGeometry,
+def screen(forecast: ObstacleForecast, reference: PolynomialTrajectory, geometry: ArmGeometry,
            threshold: float, slots: int, margin: float = 0.03) -> ObstacleForecast:
     """The samples in (t_begin, t_end] whose reference clearance is below threshold + margin."""
     times = np.asarray(forecast.times)

@@ -11,8 +11,8 @@ import numpy as np
 from identification import TorqueModel
 from planning.config import PlannerConfig
 from planning.limits import END_MARGIN, goal_limit_signs, quotient_turning_points
-from planning.nlp import EXTREMA, PlanningNLP
-from planning.trajectory import QuarticTrajectory
+from planning.nlp import PlanningNLP
+from planning.trajectory import PolynomialTrajectory
 
 _COMMON = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
            "ipopt.tol": 1e-8, "ipopt.constr_viol_tol": 1e-9}
@@ -40,7 +40,7 @@ class ObstacleForecast:
 class SegmentPlan:
     """One IPOPT solve: the segment, its objective parts (J) and how the solve went."""
 
-    trajectory: QuarticTrajectory
+    trajectory: PolynomialTrajectory
     energy: float  # sigma/N sum |P|, J
     penalty: float  # alpha sum of squared threshold violations, J
     success: bool
@@ -54,7 +54,7 @@ class SegmentPlan:
 
 
 class Planner:
-    """Energy-optimal, obstacle-penalized quartic segments for one torque model."""
+    """Energy-optimal, obstacle-penalized polynomial segments (quartic by default) for one torque model."""
 
     def __init__(self, model: TorqueModel, config: PlannerConfig | None = None):
         self.config = config or PlannerConfig()
@@ -70,7 +70,7 @@ class Planner:
                                   [self.nlp.energy, self.nlp.penalty])
 
     def parameters(self, q0, qd0, duration: float, goal, forecast: ObstacleForecast | None,
-                   t_begin: float = 0.0, reference: QuarticTrajectory | None = None,
+                   t_begin: float = 0.0, reference: PolynomialTrajectory | None = None,
                    alpha: float | None = None) -> np.ndarray:
         """Pack the parameter vector p; obstacle samples outside (t_begin, t_end] weigh 0;
         the joint limits are constrained at the turning points of `reference` (a motion
@@ -90,14 +90,14 @@ class Planner:
                                *_slots(turning), signs + (signs == 0), *_slots(v_turning),
                                [alpha]])
 
-    def turning_points(self, goal, reference: QuarticTrajectory | None):
-        """Where the limits are enforced beyond the fixed samples: q's turning points (dof, 3)
+    def turning_points(self, goal, reference: PolynomialTrajectory | None):
+        """Where the limits are enforced beyond the fixed samples: q's turning points (dof, degree - 1)
         and those of the goal-limit quotient (planning.limits), NaN for none; and the
         per-joint goal-limit signs."""
         dof = self.model.dof
         signs = goal_limit_signs(goal, self.config.lower, self.config.upper)
         if reference is None:
-            return (np.full((dof, EXTREMA), np.nan),
+            return (np.full((dof, self.nlp.extrema), np.nan),
                     np.full((dof, self.nlp.quotient_slots), np.nan), signs)
         turning = reference.turning_points()
         turning[(signs != 0)[:, None] & (turning > 1 - END_MARGIN)] = np.nan
@@ -117,7 +117,8 @@ class Planner:
         """A cubic that reaches the goal at rest, and zero power slacks."""
         v = np.asarray(qd0, float) * duration
         d = np.asarray(goal, float) - np.asarray(q0, float) - v
-        free = np.stack([3 * d + v, -v - 2 * d, np.zeros_like(d)], axis=1)
+        free = np.zeros((len(d), self.config.degree - 1))
+        free[:, 0], free[:, 1] = 3 * d + v, -v - 2 * d
         return np.concatenate([free.ravel(), np.zeros(self._slacks)])
 
     @property
@@ -127,7 +128,7 @@ class Planner:
 
     def solve(self, q0, qd0, duration: float, goal, forecast: ObstacleForecast | None = None,
               t_begin: float = 0.0, warm: SegmentPlan | None = None,
-              reference: QuarticTrajectory | None = None,
+              reference: PolynomialTrajectory | None = None,
               alpha: float | None = None) -> SegmentPlan:
         """Plan from (q0, qd0) at t_begin to goal at t_begin + duration.
 
@@ -153,19 +154,19 @@ class Planner:
     def _warm_start(self, warm: SegmentPlan, t_begin: float, duration: float) -> dict:
         """Primal-dual start: the previous plan's remaining motion re-expressed on the new
         horizon, the power slacks it implies, and the previous multipliers."""
-        n = self.config.energy_samples
         rest = warm.trajectory.restrict(t_begin, duration)
         x = rest.coefficients[:, 2:].ravel()
         if self._slacks:
-            q, qd, qdd = rest.state(t_begin + duration * np.arange(1, n + 1) / n)
+            q, qd, qdd = rest.state(t_begin + duration * self.nlp.nodes)
             x = np.concatenate([x, np.abs(np.sum(self.model.torque(q, qd, qdd) * qd, axis=1))])
         return {"x0": x, "lam_g0": warm.multipliers[0], "lam_x0": warm.multipliers[1]}
 
     def _segment(self, result, stats, elapsed, q0, qd0, duration, t_begin, p,
                  alpha) -> SegmentPlan:
         x = np.asarray(result["x"]).ravel()
-        free = x[: 3 * self.model.dof].reshape(self.model.dof, 3)
-        trajectory = QuarticTrajectory.from_free(t_begin, duration, q0, qd0, free)
+        width = self.config.degree - 1
+        free = x[: width * self.model.dof].reshape(self.model.dof, width)
+        trajectory = PolynomialTrajectory.from_free(t_begin, duration, q0, qd0, free)
         energy, penalty = (float(v) for v in self._parts(x, p))
         return SegmentPlan(
             trajectory=trajectory, energy=energy, penalty=penalty,

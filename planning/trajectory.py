@@ -1,8 +1,9 @@
-"""Quartic joint polynomials in normalized time (paper eqs. 11, 12).
+"""Joint polynomials in normalized time (paper eqs. 11, 12), quartic by default.
 
 q_i(s) = sum_p c[i, p] s**p, s = (t - t_begin) / sigma in [0, 1], sigma the
 duration (s). Start position and velocity fix c[:, 0] = q0 and
-c[:, 1] = qd0 * sigma; the planner chooses c[:, 2:] (9 numbers for 3 joints).
+c[:, 1] = qd0 * sigma; the planner chooses c[:, 2:] (degree - 1 numbers per
+joint: 9 for the paper's three quartics).
 """
 
 from __future__ import annotations
@@ -12,22 +13,22 @@ from math import comb
 
 import numpy as np
 
-DEGREE = 4
+DEGREE = 4  # the paper's quartic
 
 
-def power_basis(s: np.ndarray, derivative: int = 0) -> np.ndarray:
-    """Rows d^k/ds^k [1, s, s^2, s^3, s^4] at normalized times s (n,) -> (n, 5)."""
+def power_basis(s: np.ndarray, derivative: int = 0, degree: int = DEGREE) -> np.ndarray:
+    """Rows d^k/ds^k [1, s, ..., s^degree] at normalized times s (n,) -> (n, degree + 1)."""
     s = np.atleast_1d(np.asarray(s, dtype=float))
-    basis = np.zeros((len(s), DEGREE + 1))
-    for p in range(derivative, DEGREE + 1):
+    basis = np.zeros((len(s), degree + 1))
+    for p in range(derivative, degree + 1):
         factor = np.prod(np.arange(p - derivative + 1, p + 1)) if derivative else 1.0
         basis[:, p] = factor * s ** (p - derivative)
     return basis
 
 
 @dataclass(frozen=True)
-class QuarticTrajectory:
-    """One planned segment: coefficients (dof, 5), column p multiplies s**p."""
+class PolynomialTrajectory:
+    """One planned segment: coefficients (dof, degree + 1), column p multiplies s**p."""
 
     t_begin: float  # s
     duration: float  # sigma, s
@@ -35,9 +36,14 @@ class QuarticTrajectory:
 
     @classmethod
     def from_free(cls, t_begin: float, duration: float, q0, qd0, free: np.ndarray):
-        """Segment from its start state and the free coefficients (dof, 3) of s^2..s^4."""
+        """Segment from its start state and the free coefficients (dof, degree - 1) of
+        s^2..s^degree."""
         fixed = np.stack([np.asarray(q0, float), np.asarray(qd0, float) * duration], axis=1)
         return cls(t_begin, duration, np.hstack([fixed, np.asarray(free, float)]))
+
+    @property
+    def degree(self) -> int:
+        return self.coefficients.shape[1] - 1
 
     @property
     def t_end(self) -> float:
@@ -49,50 +55,54 @@ class QuarticTrajectory:
 
     def state(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """q (rad), qd (rad/s), qdd (rad/s^2), each (n, dof), at absolute times t (s)."""
-        s = self.normalized(np.atleast_1d(t))
-        c = self.coefficients.T
+        s, c, d = self.normalized(np.atleast_1d(t)), self.coefficients.T, self.degree
         return (
-            power_basis(s) @ c,
-            power_basis(s, 1) @ c / self.duration,
-            power_basis(s, 2) @ c / self.duration**2,
+            power_basis(s, 0, d) @ c,
+            power_basis(s, 1, d) @ c / self.duration,
+            power_basis(s, 2, d) @ c / self.duration**2,
         )
 
     def position(self, t) -> np.ndarray:
         """q (n, dof) in rad at absolute times t (s); cheaper than `state`."""
-        return power_basis(self.normalized(np.atleast_1d(t))) @ self.coefficients.T
+        return power_basis(self.normalized(np.atleast_1d(t)), 0, self.degree) @ self.coefficients.T
 
     def turning_points(self) -> np.ndarray:
-        """Normalized times (dof, 3) in (0, 1) where each joint's velocity vanishes;
+        """Normalized times (dof, degree - 1) in (0, 1) where each joint's velocity vanishes;
         unused entries are NaN."""
         return stationary_points_rows(self.coefficients)
 
-    def restrict(self, t_begin: float, duration: float) -> QuarticTrajectory:
+    def restrict(self, t_begin: float, duration: float) -> PolynomialTrajectory:
         """The same motion re-expressed on [t_begin, t_begin + duration] (exact: a
-        quartic in s is a quartic in any affinely shifted normalized time)."""
+        polynomial in s is one of the same degree in any affinely shifted normalized time)."""
         shift, scale = (t_begin - self.t_begin) / self.duration, duration / self.duration
-        p, k = np.meshgrid(np.arange(DEGREE + 1), np.arange(DEGREE + 1), indexing="ij")
+        n = self.degree + 1
+        p, k = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
         # s = shift + scale u:  s^p = sum_k C(p, k) shift^(p-k) scale^k u^k
-        change = np.where(k <= p, _BINOMIAL * shift ** np.maximum(p - k, 0) * scale**k, 0.0)
-        return QuarticTrajectory(t_begin, duration, self.coefficients @ change)
+        change = np.where(k <= p, _binomial(n) * shift ** np.maximum(p - k, 0) * scale**k, 0.0)
+        return PolynomialTrajectory(t_begin, duration, self.coefficients @ change)
 
 
-_BINOMIAL = np.array([[comb(p, k) for k in range(DEGREE + 1)] for p in range(DEGREE + 1)],
-                     dtype=float)
+QuarticTrajectory = PolynomialTrajectory  # the paper's degree; the name older code uses
+
+
+def _binomial(n: int) -> np.ndarray:
+    return np.array([[comb(p, k) for k in range(n)] for p in range(n)], dtype=float)
 
 
 def stationary_points_rows(coefficients: np.ndarray) -> np.ndarray:
-    """stationary_points of each row of quartic coefficients (n, 5) -> (n, 3), NaN-padded;
-    one batched eigenvalue call for the companion matrices of the cubic derivatives."""
+    """stationary_points of each row of coefficients (n, degree + 1) -> (n, degree - 1),
+    NaN-padded; one batched eigenvalue call for the companion matrices of the derivatives."""
     c = np.asarray(coefficients, dtype=float)
-    slope = c[:, 1:] * np.arange(1, DEGREE + 1)  # ascending cubic coefficients
+    m = c.shape[1] - 2  # degree of the derivative
+    slope = c[:, 1:] * np.arange(1, m + 2)  # ascending coefficients of dq/ds
     lead = slope[:, -1]
-    out = np.full((len(c), DEGREE - 1), np.nan)
+    out = np.full((len(c), m), np.nan)
     regular = np.abs(lead) > 1e-12 * (np.abs(slope).max(axis=1) + 1e-300)
-    if regular.any():
+    if regular.any() and m > 0:
         monic = slope[regular, :-1] / lead[regular, None]
-        companion = np.zeros((int(regular.sum()), 3, 3))
+        companion = np.zeros((int(regular.sum()), m, m))
         companion[:, 0, :] = -monic[:, ::-1]
-        companion[:, 1, 0] = companion[:, 2, 1] = 1.0
+        companion[:, np.arange(1, m), np.arange(m - 1)] = 1.0
         roots = np.linalg.eigvals(companion)
         ok = (np.abs(roots.imag) < 1e-9) & (roots.real > 1e-6) & (roots.real < 1 - 1e-6)
         values = np.sort(np.where(ok, roots.real, np.nan), axis=1)
@@ -112,3 +122,13 @@ def stationary_points(coefficients) -> np.ndarray:
     roots = np.roots(slope[::-1])
     real = roots[np.abs(roots.imag) < 1e-9].real
     return np.sort(real[(real > 1e-6) & (real < 1 - 1e-6)])
+
+
+def hermite(start: np.ndarray, end: np.ndarray, degree: int) -> np.ndarray:
+    """Coefficients (dof, degree + 1) of the polynomial in s in [0, 1] with the given
+    derivatives d^k q/ds^k at s = 0 (start, (dof, a)) and s = 1 (end, (dof, b)),
+    a + b = degree + 1 (e.g. the rest-to-rest quintic: a = b = 3, the minimum-jerk motion)."""
+    start, end = np.atleast_2d(start), np.atleast_2d(end)
+    rows = [power_basis([0.0], k, degree)[0] for k in range(start.shape[1])]
+    rows += [power_basis([1.0], k, degree)[0] for k in range(end.shape[1])]
+    return np.linalg.solve(np.array(rows), np.hstack([start, end]).T).T
