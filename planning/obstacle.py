@@ -28,6 +28,21 @@ class LinearObstacle:
         return self.duration * np.arange(1, self.samples + 1) / self.samples
 
 
+@dataclass(frozen=True)
+class SwayingObstacle(LinearObstacle):
+    """The linear path plus a sinusoidal sway: centre(t) = linear(t) + sway sin(2 pi periods
+    t / duration); m, s. Constant-velocity prediction is never exact for it, so the arm
+    re-plans at every sample where the prediction threatens (Algorithm 2 exercised)."""
+
+    sway: tuple[float, float, float] = (0.0, 0.0, 0.0)  # amplitude vector, m
+    periods: float = 1.0  # sway periods over the motion
+
+    def position(self, t) -> np.ndarray:
+        t = np.atleast_1d(np.asarray(t, float))
+        phase = 2 * np.pi * self.periods * np.clip(t, 0.0, self.duration) / self.duration
+        return super().position(t) + np.sin(phase)[:, None] * np.asarray(self.sway)
+
+
 def predict_linear(times: np.ndarray, observed: np.ndarray, future: np.ndarray) -> np.ndarray:
     """Constant-velocity prediction (n, 3) at `future` times from the last two observations.
 

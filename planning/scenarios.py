@@ -1,11 +1,12 @@
-"""Named scenarios: the paper's, and one whose obstacle crosses the optimal path."""
+"""Named scenarios: the paper's, one whose obstacle crosses the optimal path, and one whose
+obstacle also sways (constant-velocity prediction is never exact: repeated re-planning)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from planning.config import Scenario
-from planning.obstacle import LinearObstacle
+from planning.obstacle import LinearObstacle, SwayingObstacle
 from planning.trajectory import PolynomialTrajectory
 
 
@@ -26,4 +27,19 @@ def crossing_scenario(free: PolynomialTrajectory, geometry, t_cross: float = 1.0
     start = crossing - frac * np.asarray(sweep)
     stop = crossing + (1 - frac) * np.asarray(sweep)
     obstacle = LinearObstacle(tuple(start), tuple(stop), base.duration)
+    return Scenario(base.start, base.goal, base.duration, obstacle)
+
+
+def swaying_scenario(free: PolynomialTrajectory, geometry, amplitude: float = 0.04,
+                     periods: float = 1.0) -> Scenario:
+    """The crossing scenario's obstacle swaying sideways (horizontal, perpendicular to the
+    forearm of `free` at the crossing) by `amplitude` (m), `periods` times over the motion;
+    with whole periods it still passes through the forearm's middle at t = 1 s."""
+    base = crossing_scenario(free, geometry)
+    _, elbow, end = geometry.points(free.state(1.0)[0])
+    forearm = (end - elbow)[0]
+    side = np.array([-forearm[1], forearm[0], 0.0])
+    sway = amplitude * side / np.linalg.norm(side)
+    obstacle = SwayingObstacle(base.obstacle.start, base.obstacle.end, base.duration,
+                               sway=tuple(sway), periods=periods)
     return Scenario(base.start, base.goal, base.duration, obstacle)

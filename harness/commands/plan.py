@@ -17,7 +17,8 @@ from harness.robots import DEFAULT_ROBOT
 from harness.torque_models import load_torque_model
 from planning import PlanningError
 from planning.config import PlannerConfig, Scenario
-from planning.obstacle import LinearObstacle
+from planning.obstacle import LinearObstacle, SwayingObstacle
+from planning.quadrature import RULES
 from planning.replanning import execute
 from planning.result import evaluate, to_json
 from planning.solver import Planner
@@ -58,6 +59,17 @@ def register(sub) -> None:
                    help="penalty weight alpha (J/m^2 per obstacle sample)")
     p.add_argument("--energy-samples", type=int, default=PlannerConfig.energy_samples,
                    help="power samples N of the energy objective")
+    p.add_argument("--energy-quadrature", choices=RULES, default=PlannerConfig.energy_quadrature,
+                   help="where the power is sampled: paper (eq. 18, s_i = i/N), gauss "
+                        "(Gauss-Legendre, plans with the true energy at N ~ 20), simpson")
+    p.add_argument("--degree", type=int, default=PlannerConfig.degree,
+                   help="degree of the joint polynomials (paper: 4; 4..9)")
+    p.add_argument("--power-smoothing", type=float, default=PlannerConfig.power_smoothing,
+                   help="W; 0: exact |P| (epigraph), > 0: sqrt(P^2 + eps^2) - eps")
+    p.add_argument("--obstacle-sway", default="0,0,0",
+                   help="sway amplitude vector (m) added to the linear obstacle path as "
+                        "sway sin(2 pi periods t / duration)")
+    p.add_argument("--sway-periods", type=float, default=1.0, help="sway periods over the motion")
     p.add_argument("--rest-at-goal", action="store_true", help="also require zero end velocity")
     p.add_argument("--no-replan", action="store_true", help="follow the first plan throughout")
     p.add_argument("--out", required=True, help="output PLAN.json")
@@ -74,12 +86,24 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
             or args.energy_samples < 1:
         raise UserError("--threshold must be > 0, --penalty >= 0, --samples >= 2, "
                         "--energy-samples >= 1")
+    if not 4 <= args.degree <= 9:
+        raise UserError(f"--degree must be in 4..9, got {args.degree}")
+    if args.energy_quadrature == "simpson" and (args.energy_samples < 3
+                                                 or args.energy_samples % 2 == 0):
+        raise UserError("--energy-quadrature simpson needs an odd --energy-samples >= 3")
+    if not (math.isfinite(args.power_smoothing) and args.power_smoothing >= 0
+            and math.isfinite(args.sway_periods)):
+        raise UserError("--power-smoothing must be >= 0 and --sway-periods finite")
     config = dataclasses.replace(PlannerConfig(), threshold=args.threshold,
                                  penalty_weight=args.penalty, rest_at_goal=args.rest_at_goal,
-                                 energy_samples=args.energy_samples)
-    obstacle = LinearObstacle(_vector(args.obstacle_from, "obstacle-from"),
-                              _vector(args.obstacle_to, "obstacle-to"), args.duration,
-                              args.samples)
+                                 energy_samples=args.energy_samples,
+                                 energy_quadrature=args.energy_quadrature, degree=args.degree,
+                                 power_smoothing=args.power_smoothing)
+    path = (_vector(args.obstacle_from, "obstacle-from"),
+            _vector(args.obstacle_to, "obstacle-to"), args.duration, args.samples)
+    sway = _vector(args.obstacle_sway, "obstacle-sway")
+    obstacle = (SwayingObstacle(*path, sway=sway, periods=args.sway_periods) if any(sway)
+                else LinearObstacle(*path))
     scenario = Scenario(_vector(args.start, "start"), _vector(args.goal, "goal"),
                         args.duration, obstacle)
     scenario.validate(config)
