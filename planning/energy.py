@@ -16,3 +16,11 @@ def absolute_energy(model: TorqueModel, t: np.ndarray, q, qd, qdd) -> float:
     """Integral of |P| dt (J) by the trapezoid rule on the time grid t (s)."""
     p = np.abs(power(model, q, qd, qdd))
     return float(np.sum(0.5 * (p[1:] + p[:-1]) * np.diff(t)))
+
+
+def net_work(model: TorqueModel, t: np.ndarray, q, qd, qdd) -> float:
+    """Integral of P dt (J), trapezoid rule on t (s). For a conservative (rigid-body) model
+    it is the change of kinetic plus potential energy, whatever the path: a lower bound
+    |net work| <= integral of |P| dt that no parametrization can beat."""
+    p = power(model, q, qd, qdd)
+    return float(np.sum(0.5 * (p[1:] + p[:-1]) * np.diff(t)))
