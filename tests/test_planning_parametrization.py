@@ -1,0 +1,164 @@
+"""Higher-degree polynomials, dense energy quadrature, the net-work bound, swaying obstacle."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from scipy.integrate import quad
+
+from harness.pinocchio_baseline import PinocchioModel
+from harness.robots import load_pinocchio
+from planning.baselines import MinimumJerk
+from planning.config import PlannerConfig
+from planning.energy import absolute_energy, net_work, power
+from planning.obstacle import SwayingObstacle, predict_linear
+from planning.quadrature import energy_nodes
+from planning.solver import ObstacleForecast, Planner
+from planning.trajectory import PolynomialTrajectory, hermite, stationary_points
+
+RNG = np.random.default_rng(7)
+Q0, GOAL = np.array([1.2, 0.6, -0.8]), np.array([-1.0, 1.2, -1.0])
+
+
+@pytest.fixture(scope="module")
+def pin_model():
+    return load_pinocchio("lynxmotion")
+
+
+@pytest.fixture(scope="module")
+def baseline(pin_model):
+    return PinocchioModel(pin_model)
+
+
+def _central_difference(fun, x, h=1e-6):
+    columns = []
+    for i in range(len(x)):
+        e = np.zeros_like(x)
+        e[i] = h
+        columns.append((np.asarray(fun(x + e)) - np.asarray(fun(x - e))).ravel() / (2 * h))
+    return np.stack(columns, axis=-1)
+
+
+@pytest.mark.parametrize("smoothing", [0.0, 1e-3])
+def test_degree_seven_gradients_match_finite_differences(baseline, smoothing):
+    config = PlannerConfig(degree=7, energy_quadrature="gauss", energy_samples=12,
+                           obstacle_slots=6, power_smoothing=smoothing)
+    planner = Planner(baseline, config)
+    arm = PolynomialTrajectory.from_free(0.0, 2.0, Q0, np.zeros(3),
+                                         RNG.normal(scale=0.3, size=(3, 6)))
+    times = np.linspace(0.3, 2.0, 6)
+    _, _, tip = config.geometry.points(arm.state(times)[0])
+    forecast = ObstacleForecast(times, tip + np.array([0.0, 0.05, 0.0]))
+    p = planner.parameters(Q0, np.array([0.1, -0.2, 0.3]), 2.0, GOAL, forecast, 0.0, arm)
+    slacks = RNG.uniform(0.1, 1, 0 if smoothing else 12)
+    x = np.concatenate([arm.coefficients[:, 2:].ravel(), slacks])
+    objective, constraints, parts = planner.nlp.functions()
+    assert float(parts(x, p)[1]) > 1e-3  # the obstacle penalty is part of the check
+    assert np.allclose(np.asarray(objective(x, p)[1]).ravel(),
+                       _central_difference(lambda y: objective(y, p)[0], x).ravel(),
+                       rtol=1e-6, atol=1e-6)
+    assert np.allclose(np.asarray(constraints(x, p)[1]),
+                       _central_difference(lambda y: constraints(y, p)[0], x),
+                       rtol=1e-6, atol=1e-6)
+
+
+@pytest.mark.parametrize("degree", range(4, 10))
+def test_boundary_conditions_hold_for_every_degree(baseline, degree):
+    config = PlannerConfig(degree=degree, energy_quadrature="gauss", energy_samples=8,
+                           rest_at_goal=True)
+    qd0 = np.array([0.2, -0.1, 0.3])
+    plan = Planner(baseline, config).solve(Q0, qd0, 1.5, GOAL, t_begin=0.5)
+    assert plan.success
+    trajectory = plan.trajectory
+    assert trajectory.coefficients.shape == (3, degree + 1)
+    q, qd, _ = trajectory.state([0.5, 2.0])
+    assert np.allclose(q[0], Q0, atol=1e-12) and np.allclose(qd[0], qd0, atol=1e-12)
+    assert np.allclose(q[1], GOAL, atol=1e-9) and np.allclose(qd[1], 0.0, atol=1e-9)
+
+
+def test_degree_seven_restriction_and_turning_points():
+    trajectory = PolynomialTrajectory(0.3, 1.7, RNG.normal(size=(3, 8)))
+    t = np.linspace(1.1, 2.0, 7)
+    part = trajectory.restrict(1.1, 0.9)
+    assert all(np.allclose(a, b, atol=1e-11) for a, b in zip(trajectory.state(t), part.state(t),
+                                                             strict=True))
+    turning = trajectory.turning_points()
+    assert turning.shape == (3, 6)
+    for row, c in zip(turning, trajectory.coefficients, strict=True):
+        assert np.allclose(row[np.isfinite(row)], stationary_points(c), atol=1e-9)
+
+
+def test_degree_five_rest_to_rest_is_minimum_jerk():
+    c = hermite(np.stack([Q0, np.zeros(3), np.zeros(3)], axis=1),
+                np.stack([GOAL, np.zeros(3), np.zeros(3)], axis=1), 5)
+    quintic = PolynomialTrajectory(0.0, 2.0, c)
+    jerk = MinimumJerk(Q0, GOAL, 2.0)
+    t = np.linspace(0.0, 2.0, 21)
+    assert all(np.allclose(a, b, atol=1e-12) for a, b in zip(quintic.state(t), jerk.state(t),
+                                                             strict=True))
+    # the planner's degree-5 NLP with rest at the goal: minimum jerk satisfies its equalities
+    config = PlannerConfig(degree=5, energy_quadrature="gauss", energy_samples=6,
+                           rest_at_goal=True, power_smoothing=1e-3)
+    planner = Planner(PinocchioModel(load_pinocchio("lynxmotion")), config)
+    _, constraints, _ = planner.nlp.functions()
+    g = np.asarray(constraints(c[:, 2:].ravel(), planner.parameters(
+        Q0, np.zeros(3), 2.0, GOAL, None))[0]).ravel()
+    assert np.allclose(g[:6], 0.0, atol=1e-12)  # goal position and goal velocity rows
+
+
+@pytest.mark.parametrize("rule, n, degree", [("gauss", 5, 9), ("simpson", 7, 3),
+                                             ("paper", 4, 0)])
+def test_quadrature_rules_integrate_polynomials(rule, n, degree):
+    s, w = energy_nodes(rule, n)
+    assert np.isclose(w.sum(), 1.0)
+    assert np.isclose(w @ s**degree, 1.0 / (degree + 1))
+
+
+def _fixed_trajectory() -> PolynomialTrajectory:
+    c = hermite(np.stack([Q0, np.zeros(3), np.zeros(3)], axis=1),
+                np.stack([GOAL, np.zeros(3), np.zeros(3)], axis=1), 5)
+    c = np.hstack([c, np.zeros((3, 2))])
+    c[:, 3:] += 0.2 * RNG.normal(size=(3, 5)) * np.array([1, -3, 3, -1, 0])  # keep c(1)
+    return PolynomialTrajectory(0.0, 2.0, c)
+
+
+def test_dense_energy_matches_scipy_quad_of_pinocchio_power(baseline):
+    trajectory = _fixed_trajectory()
+
+    def absolute_power(t: float) -> float:
+        return float(abs(power(baseline, *trajectory.state(t))[0]))
+
+    exact, _ = quad(absolute_power, 0.0, 2.0, limit=400, epsabs=1e-12, epsrel=1e-10)
+    grid = np.linspace(0.0, 2.0, 4001)
+    assert np.isclose(absolute_energy(baseline, grid, *trajectory.state(grid)), exact, rtol=1e-5)
+    config = PlannerConfig(degree=7, energy_quadrature="gauss", energy_samples=60,
+                           power_smoothing=1e-6)
+    planner = Planner(baseline, config)
+    x = trajectory.coefficients[:, 2:].ravel()
+    planned = float(planner.nlp.functions()[2](x, planner.parameters(
+        Q0, np.zeros(3), 2.0, trajectory.position(2.0)[0], None))[0])
+    assert np.isclose(planned, exact, rtol=2e-3)
+
+
+def test_net_work_is_the_potential_energy_change(baseline, pin_model):
+    jerk = MinimumJerk(Q0, GOAL, 2.0)
+    grid = np.linspace(0.0, 2.0, 4001)
+    data = pin_model.createData()
+    rise = (pin.computePotentialEnergy(pin_model, data, GOAL)
+            - pin.computePotentialEnergy(pin_model, data, Q0))
+    assert np.isclose(net_work(baseline, grid, *jerk.state(grid)), rise, rtol=1e-6)
+    # and bounds the absolute energy of any motion from Q0 at rest to GOAL (rise > 0:
+    # integral |P| >= integral P = rise + final kinetic energy)
+    trajectory = _fixed_trajectory()
+    assert absolute_energy(baseline, grid, *trajectory.state(grid)) >= abs(rise) - 1e-9
+
+
+def test_swaying_obstacle_defeats_constant_velocity_prediction():
+    obstacle = SwayingObstacle((0.1, 0.4, 0.2), (0.2, -0.3, 0.3), 2.0, sway=(0.0, 0.0, 0.04))
+    assert np.allclose(obstacle.position([0.0, 1.0, 2.0]),
+                       [obstacle.start, 0.5 * (np.add(obstacle.start, obstacle.end)),
+                        obstacle.end], atol=1e-12)
+    seen, future = obstacle.sample_times[3:5], obstacle.sample_times[5:]
+    error = predict_linear(seen, obstacle.position(seen), future) - obstacle.position(future)
+    assert np.max(np.linalg.norm(error, axis=1)) > 0.01
