@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -162,3 +164,20 @@ def test_swaying_obstacle_defeats_constant_velocity_prediction():
     seen, future = obstacle.sample_times[3:5], obstacle.sample_times[5:]
     error = predict_linear(seen, obstacle.position(seen), future) - obstacle.position(future)
     assert np.max(np.linalg.norm(error, axis=1)) > 0.01
+
+
+def test_plan_command_with_degree_quadrature_and_sway(tmp_path):
+    from harness.cli import main
+
+    out = tmp_path / "plan.json"
+    assert main(["plan", "--model", "pinocchio", "--degree", "5", "--energy-quadrature",
+                 "gauss", "--energy-samples", "20", "--obstacle-sway", "0,0.04,0",
+                 "--out", str(out)]) == 0
+    plan = json.loads(out.read_text())
+    for key in ("coefficients", "t", "q", "qd", "qdd", "obstacle", "threshold", "energy",
+                "min_clearance", "replans", "solve_ms"):
+        assert key in plan
+    assert np.asarray(plan["coefficients"]).shape[1:] == (3, 6)
+    assert plan["replans"] >= 2  # the forecast is wrong at every sample near the arm
+    assert plan["min_clearance"] >= plan["threshold"] - 2e-3
+    assert main(["plan", "--model", "pinocchio", "--degree", "3", "--out", str(out)]) == 2
