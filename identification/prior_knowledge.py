@@ -53,7 +53,31 @@ class Atom:
         return Feature(tuple(("qd", k) for k in self.velocities), self.trig()).name
 
 
-def atom_torque(atom: Atom, joint: int) -> dict[Feature, float]:
+@dataclass(frozen=True)
+class Combination:
+    """A fixed linear combination of atoms with one shared coefficient: sum_k w_k atom_k."""
+
+    parts: tuple[tuple[Atom, float], ...]
+
+    @property
+    def name(self) -> str:
+        """The combination as printed, e.g. '(0.5*qd1^2*cos(q3) + qd2^2*cos(q3) + ...)'."""
+        body = " + ".join(a.name if w == 1 else f"{w:g}*{a.name}" for a, w in self.parts)
+        return f"({body})"
+
+
+def atom_torque(atom: Atom | Combination, joint: int) -> dict[Feature, float]:
+    """Euler-Lagrange torque of an atom or a combination on `joint`, as {feature: factor}."""
+    if isinstance(atom, Combination):
+        out: dict[Feature, float] = {}
+        for part, weight in atom.parts:
+            for f, v in _atom_torque(part, joint).items():
+                out[f] = out.get(f, 0.0) + weight * v
+        return {f: v for f, v in out.items() if v != 0.0}
+    return _atom_torque(atom, joint)
+
+
+def _atom_torque(atom: Atom, joint: int) -> dict[Feature, float]:
     """d/dt dL/dqd_joint - dL/dq_joint for L = atom, as {feature: factor}.
 
     L = qd_i qd_j f(c.q):  dL/dqd_joint = (1 + [i == j]) qd_other f, whose time
@@ -83,7 +107,7 @@ def atom_torque(atom: Atom, joint: int) -> dict[Feature, float]:
     return {f: v for f, v in out.items() if v != 0.0}
 
 
-def _euler_lagrange(atom: Atom, joint: int) -> set[Feature]:
+def _euler_lagrange(atom: Atom | Combination, joint: int) -> set[Feature]:
     """Features of the atom's torque on `joint` (factors dropped)."""
     return set(atom_torque(atom, joint))
 
@@ -157,18 +181,54 @@ def spatial_atoms(total: int = 2, symmetric: bool = True) -> list[Atom]:
     return atoms
 
 
-def arm_atoms(dof: int = 3, symmetric_links: bool = True) -> list[Atom]:
+def _elevations(total: int) -> list[tuple[int, ...]]:
+    """Absolute elevation th_a of each chain link a = 1..total-1 as angle coefficients."""
+    return [tuple(1 if 1 <= k <= link else 0 for k in range(total)) for link in range(1, total)]
+
+
+def link_pair_atoms(total: int, a: int, b: int, func: str) -> Combination:
+    """Rigid link pair a < b (chain links, 0-based) of a vertical-base arm: the base's reach
+    product qd1^2 cos th_a * {cos, sin} th_b plus the chain's w_a w_b f(th_b - th_a)."""
+    ea, eb = _elevations(total)[a], _elevations(total)[b]
+    plus = tuple(x + y for x, y in zip(ea, eb, strict=True))
+    minus = tuple(y - x for x, y in zip(ea, eb, strict=True))
+    weights: dict[Atom, float] = {Atom((0, 0), func, plus): 0.5}
+    weights[Atom((0, 0), func, minus)] = 0.5
+    for i in range(1, a + 2):  # w_a w_b = sum over joints i <= a, j <= b of qd_i qd_j
+        for j in range(1, b + 2):
+            key = Atom((min(i, j), max(i, j)), func, minus)
+            weights[key] = weights.get(key, 0.0) + 1.0
+    return Combination(tuple(weights.items()))
+
+
+def _tied(atoms: list[Atom], dof: int, symmetric_links: bool) -> list:
+    """Replace the chain's relative-angle atoms and the base's cross-link reach atoms by one
+    Combination per link pair and function."""
+    pairs = [(a, b) for a in range(dof - 1) for b in range(a + 1, dof - 1)]
+    combos = [link_pair_atoms(dof, a, b, f) for a, b in pairs for f in _funcs(symmetric_links)]
+    covered = {part for c in combos for part, _ in c.parts}
+    # a chain's relative-angle term only comes from a link pair (never e.g. qd3^2 cos q3)
+    return [a for a in atoms if a not in covered
+            and not (a.func and a.velocities and min(a.velocities) >= 1)] + combos
+
+
+def arm_atoms(dof: int = 3, symmetric_links: bool = True, rigid_links: bool = False) -> list:
     """Atoms of a vertical-base arm with a planar chain: spatial atoms on the base plus
-    planar atoms on joints 2..dof (a pendulum for dof = 1), duplicates removed."""
+    planar atoms on joints 2..dof (a pendulum for dof = 1), duplicates removed; with
+    rigid_links, the relative-angle atoms tied per link pair (see `link_pair_atoms`)."""
     if dof < 2:
         return pendulum_atoms()
     atoms = spatial_atoms(dof, symmetric_links)
     atoms += planar_atoms(dof - 1, first=1, total=dof, symmetric=symmetric_links)
-    return list(dict.fromkeys(atoms))
+    atoms = list(dict.fromkeys(atoms))
+    return _tied(atoms, dof, symmetric_links) if rigid_links else atoms
 
 
-def prior_knowledge_library(dof: int = 3, symmetric_links: bool = True) -> Library:
+def prior_knowledge_library(dof: int = 3, symmetric_links: bool = True,
+                            rigid_links: bool = True) -> Library:
     """The library of a vertical-base arm with a planar chain, composed from the simple
-    structures: spatial atoms on the base plus planar atoms on joints 2..dof."""
+    structures: spatial atoms on the base plus planar atoms on joints 2..dof; its atoms
+    tied per rigid link pair unless rigid_links is False."""
     suffix = "" if symmetric_links or dof < 2 else "-general"
-    return derive(arm_atoms(dof, symmetric_links), dof, f"prior-{dof}dof{suffix}")[0]
+    suffix += "" if rigid_links or dof < 3 else "-untied"
+    return derive(arm_atoms(dof, symmetric_links, rigid_links), dof, f"prior-{dof}dof{suffix}")[0]
