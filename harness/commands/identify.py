@@ -19,7 +19,7 @@ from identification import (
     prior_knowledge_library,
 )
 
-LIBRARIES = ("prior", "paper", "generic")
+LIBRARIES = ("prior", "prior-general", "paper", "generic")
 METHODS = ("auto", "coupled", "per-joint", "jointwise")
 
 
@@ -30,7 +30,8 @@ def register(sub) -> None:
     p.add_argument("--holdout", type=float, default=0.25,
                    help="last fraction of samples (time order) held out for scoring")
     p.add_argument("--library", choices=LIBRARIES, default="prior",
-                   help="prior: derived from simple structures (3-DOF arm); paper: the published "
+                   help="prior: derived from simple structures (3-DOF arm, symmetric links); "
+                   "prior-general: the same without the symmetric-link assumption; paper: the published "
                    "75 features; generic: polynomial x trig (any dof)")
     p.add_argument("--method", choices=METHODS, default="auto",
                    help="coupled: one Lagrangian, atoms shared by all joints (needs the prior "
@@ -59,7 +60,9 @@ def load_arrays(path: str | Path) -> dict[str, np.ndarray]:
 def choose_library(name: str, dof: int):
     if name == "generic" or dof != 3:
         return generic_library(dof)
-    return paper_library() if name == "paper" else prior_knowledge_library(3)
+    if name == "paper":
+        return paper_library()
+    return prior_knowledge_library(3, symmetric_links=name != "prior-general")
 
 
 def run(args) -> int:
