@@ -142,6 +142,12 @@ def compare(level: float, ctx: dict, with_pysindy: bool = True, seed: int | None
 
 
 def context() -> dict:
+    """Default data (clean), fresh trajectory, both libraries, their truths and the regressor."""
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _context()
+
+
+def _context() -> dict:
     clean = generate("lynxmotion", 4000, 0.0, seed=0)
     fresh = generate("lynxmotion", 4000, 0.0, seed=5)
     libs = {"symmetric": prior_knowledge_library(3), "general": prior_knowledge_library(3, False)}
