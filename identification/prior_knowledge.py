@@ -201,15 +201,28 @@ def link_pair_atoms(total: int, a: int, b: int, func: str) -> Combination:
     return Combination(tuple(weights.items()))
 
 
+def link_rate_atom(a: int) -> Atom | Combination:
+    """w_a^2 of chain link a (0-based), w_a = qd_2 + ... + qd_(a+2): the link's own
+    rotational energy in the chain's plane."""
+    if a == 0:
+        return Atom((1, 1))
+    joints = range(1, a + 2)
+    return Combination(tuple((Atom((i, j)), 1.0 if i == j else 2.0)
+                             for i in joints for j in joints if i <= j))
+
+
 def _tied(atoms: list[Atom], dof: int, symmetric_links: bool) -> list:
-    """Replace the chain's relative-angle atoms and the base's cross-link reach atoms by one
-    Combination per link pair and function."""
+    """The chain's kinetic atoms of rigid links plus rotors: w_a^2 per link, qd_j^2 per
+    rotor of the distal joints (the first chain joint's rotor is w_1^2 itself), and one
+    Combination per link pair and function for the relative-angle and base reach terms."""
     pairs = [(a, b) for a in range(dof - 1) for b in range(a + 1, dof - 1)]
     combos = [link_pair_atoms(dof, a, b, f) for a, b in pairs for f in _funcs(symmetric_links)]
     covered = {part for c in combos for part, _ in c.parts}
-    # a chain's relative-angle term only comes from a link pair (never e.g. qd3^2 cos q3)
-    return [a for a in atoms if a not in covered
-            and not (a.func and a.velocities and min(a.velocities) >= 1)] + combos
+    # a chain's kinetic term comes from a link, a rotor or a link pair (never qd3^2 cos q3)
+    kept = [a for a in atoms if a not in covered and not (a.velocities and min(a.velocities) >= 1)]
+    rates = [link_rate_atom(a) for a in range(dof - 1)]
+    rotors = [Atom((j, j)) for j in range(2, dof)]
+    return kept + rates + rotors + combos
 
 
 def arm_atoms(dof: int = 3, symmetric_links: bool = True, rigid_links: bool = False) -> list:

@@ -45,7 +45,7 @@ def _casadi_torque(atom, q, qd, qdd) -> np.ndarray:
 def test_tied_atom_torques_match_casadi_euler_lagrange(symmetric):
     atoms = arm_atoms(3, symmetric_links=symmetric, rigid_links=True)
     combos = [a for a in atoms if isinstance(a, Combination)]
-    assert len(combos) == (1 if symmetric else 2)
+    assert len(combos) == (2 if symmetric else 3)  # link 3's w^2 and the link pair(s)
     rng = np.random.default_rng(1)
     q, qd, qdd = (rng.uniform(-2, 2, (4, 3)) for _ in range(3))
     design = AtomBasis.from_atoms(atoms, 3).evaluate(q, qd, qdd)
@@ -96,4 +96,11 @@ def test_tied_library_fits_the_arm_exactly_with_fewer_coefficients(motion):
     assert tied.names == untied.names and len(tied.atoms) < len(untied.atoms)
     r = identify(m.q, m.qd, m.qdd, tau, tied, holdout=0.25)
     assert np.all(r.heldout_rel_rmse <= 1e-8)
-    assert len(r.lagrangian()["atoms"]) == 9  # the arm's Lagrangian in 9 tied atoms (12 untied)
+    kept = r.lagrangian()["atoms"]
+    assert len(kept) == 8 and "qd3^2" not in kept  # 8 tied atoms (12 untied), no rotor
+    # a rotor on joint 3 (MuJoCo armature: torque I_r qdd3) is the rotor atom 1/2 I_r qd3^2
+    armature = 0.005
+    rotor = identify(m.q, m.qd, m.qdd, tau + armature * np.eye(3)[2] * m.qdd[:, [2]], tied, 0.25)
+    lag = rotor.lagrangian()
+    assert set(lag["atoms"]) == set(kept) | {"qd3^2"}
+    assert lag["coefficients"][lag["atoms"].index("qd3^2")] == pytest.approx(armature / 2, rel=1e-8)

@@ -347,7 +347,7 @@ def _intro(ctx: dict, c5: dict) -> list[str]:
             f"structures: `{lib.name}` ({len(lib)} features, {nb} atoms, symmetric links: centre "
             f"of mass on the link axis, Iyy = Izz) and `{gen.name}` ({len(gen)} features, {ng} "
             "atoms, general inertia tensors: spans every rigid-body torque of this arm, "
-            "tests/test_identification_atoms.py). Both tie each rigid link pair's "
+            "tests/test_identification_atoms.py). Both write the chain as rigid links plus rotors (w_a^2, qd_j^2) and tie each rigid link pair's "
             "relative-angle terms into one coefficient (prior_knowledge.link_pair_atoms). "
             "Data: `generate('lynxmotion', 4000, noise, seed=0)`, 200 Hz, last 25 % held out, "
             "noise std = level x each joint's torque std with mean 0.2 std, one independent "
