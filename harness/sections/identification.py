@@ -208,8 +208,9 @@ def robustness(ctx: dict, seeds=ROBUST_SEEDS, level: float = 0.05) -> dict:
 
 def robustness_markdown(rob: dict) -> list[str]:
     n, lv = len(rob["seeds"]), 100 * rob["level"]
+    first = "; the first is the default data" if rob["level"] == 0.05 and rob["seeds"][0] == 1 else ""
     md = ["", f"Robustness: {n} independent noise draws at {lv:g} % (seeds "
-          f"{', '.join(map(str, rob['seeds']))}; the first is the default data). Per joint: "
+          f"{', '.join(map(str, rob['seeds']))}{first}). Per joint: "
           "median and worst ratio of the held-out error to the oracle's on the same draw "
           "(seed of the worst), ratio of the RMS errors over the draws, smallest recall / "
           f"precision of the true terms; draws with every joint within {RATIO_LIMIT} x the "
@@ -347,7 +348,8 @@ def _intro(ctx: dict, c5: dict) -> list[str]:
             f"structures: `{lib.name}` ({len(lib)} features, {nb} atoms, symmetric links: centre "
             f"of mass on the link axis, Iyy = Izz) and `{gen.name}` ({len(gen)} features, {ng} "
             "atoms, general inertia tensors: spans every rigid-body torque of this arm, "
-            "tests/test_identification_atoms.py). Both write the chain as rigid links plus rotors (w_a^2, qd_j^2) and tie each rigid link pair's "
+            "tests/test_identification_atoms.py). Both write the chain as rigid links plus "
+            "rotors (w_a^2, qd_j^2) and tie each rigid link pair's "
             "relative-angle terms into one coefficient (prior_knowledge.link_pair_atoms). "
             "Data: `generate('lynxmotion', 4000, noise, seed=0)`, 200 Hz, last 25 % held out, "
             "noise std = level x each joint's torque std with mean 0.2 std, one independent "
@@ -361,6 +363,48 @@ def _intro(ctx: dict, c5: dict) -> list[str]:
             "that there is no rotor inertia, the atoms know neither); pysindy on the symmetric "
             "library. Fresh trajectory: another excitation (seed 5), ratio to the held-out "
             "error in brackets.", "", *TABLE_HEAD]
+
+
+def expected_error(design: np.ndarray, cols, sigma: np.ndarray, k: int,
+                   tau_clean: np.ndarray) -> np.ndarray:
+    """Per joint, the expected held-out relative RMS error of weighted least squares on
+    design[:, :, cols] + per-joint offsets, fitted on the first k samples, when the model
+    is exact and the noise white with std sigma (N m): sqrt(trace(H cov H^T)) / ||tau||."""
+    n, dof = tau_clean.shape
+    x = np.concatenate([design[:k][:, :, cols], np.broadcast_to(np.eye(dof), (k, dof, dof))], axis=2)
+    xw = (x / sigma[None, :, None]).reshape(k * dof, -1)
+    cov = np.linalg.inv(xw.T @ xw)[: len(cols), : len(cols)]
+    return np.array([np.sqrt(np.einsum("ia,ab,ib->", h, cov, h)) / np.linalg.norm(tau_clean[k:, j])
+                     for j, h in enumerate(design[k:][:, :, cols].transpose(1, 0, 2))])
+
+
+def expected_errors(ctx: dict, level: float = 0.05) -> dict:
+    """expected_error of the true terms of each atom set and of the oracle, true noise std."""
+    clean = ctx["clean"]
+    k, sigma = n_train(len(clean.q)), level * clean.tau_clean.std(axis=0)
+    untied = AtomBasis.from_atoms(prior_knowledge_library(3, rigid_links=False).atoms, 3)
+    out = {}
+    for label, basis in (("15 untied atoms", untied), ("tied atoms", ctx["bases"]["symmetric"])):
+        truth = true_atoms(basis, clean)
+        cols = [basis.names.index(a) for a in sorted(truth)]
+        design = basis.evaluate(clean.q, clean.qd, clean.qdd)
+        out[f"{label} ({len(cols)} true)"] = expected_error(design, cols, sigma, k, clean.tau_clean)
+    cols = fit_base_parameters(ctx["regressor"][:k], clean.tau_clean[:k]).columns
+    out[f"oracle ({len(cols)})"] = expected_error(ctx["regressor"], cols, sigma, k, clean.tau_clean)
+    return {key: v.tolist() for key, v in out.items()}
+
+
+def _why_joint3(expected: dict) -> list[str]:
+    rows = "; ".join(f"{k}: {', '.join(f'{x:.2e}' for x in v)}" for k, v in expected.items())
+    return ["", "Why joint 3 trailed the oracle (issue #3): not selection (every draw keeps "
+            "exactly the true atoms), not the weights (the true noise std gives the same "
+            "errors), not the offsets. The earlier 15-atom set wrote the chain in joint rates, "
+            "so joint 3 carried coefficients no rigid arm has: qd3^2 free of qd2*qd3 (a rotor), "
+            "qd2^2 cos q3 free of qd2*qd3 cos q3, and the base's reach product free of the "
+            "chain's. Expected held-out error at 5 % of weighted least squares on the true "
+            f"terms, true noise std, per joint: {rows}. Rigid links plus a rotor atom that "
+            "the selection drops when there is no armature put every joint below the oracle "
+            "in expectation; the RMS ratios over the draws above agree."]
 
 
 def _default_choice(rob: dict) -> list[str]:
@@ -416,7 +460,9 @@ def _run(out_dir: Path, quick: bool) -> dict:
     md += ["", "At 5 % (default data): coupled / oracle = " + ", ".join(
         f"{x:.2f}" for x in acc["ratio_to_oracle"]) + "; checks: " + ", ".join(
         f"{k} {'yes' if v else 'NO'}" for k, v in acc.items() if isinstance(v, bool))]
-    md += robustness_markdown(rob) + _robust_note(rob) + _default_choice(rob)
+    res["expected_5pct"] = expected_errors(ctx)
+    md += robustness_markdown(rob) + _robust_note(rob) + _why_joint3(res["expected_5pct"])
+    md += _default_choice(rob)
     md += _atoms_markdown(ctx, c5)
     md += ["", "Speed at 5 % (all three joints): " + ", ".join(
         f"{label} {c5[label]['seconds']:.2f} s" for label, _, _ in METHODS) + "; pysindy "
