@@ -8,7 +8,11 @@ stacked over joints (rows = samples x joints, columns = atoms, ~15 unknowns),
 each joint's rows weighted by 1 / its noise std, with a per-joint unpenalized
 offset for the sensor bias. Selection is the paper's: Lasso over a swept alpha,
 the proportional filter until the validation error rises, then an unbiased
-weighted least-squares refit. Atoms whose stacked torque signatures are
+weighted least-squares refit; kept atoms whose refit t-statistic is below the
+Bonferroni bound of a `familywise` error over all candidate atoms are then
+dropped one at a time (the weakest first, refitting each time): validation
+error alone cannot tell a null atom from noise, and a general atom set has
+many null atoms. Atoms whose stacked torque signatures are
 linearly dependent on this data are folded into base atoms (pivoted QR), as
 base parameters are formed from standard inertial parameters.
 """
@@ -129,7 +133,8 @@ def weighted_lstsq(design: np.ndarray, tau: np.ndarray, cols, sigma: np.ndarray)
 class CoupledRegression:
     """Stacked, noise-weighted Lasso + proportional filter + WLS refit over shared atoms."""
 
-    def __init__(self, **selector):
+    def __init__(self, familywise: float = 0.01, **selector):
+        self.familywise = familywise
         self.selector = SparseRegression(**selector)
 
     def noise_sigma(self, design: np.ndarray, tau: np.ndarray, cols) -> np.ndarray:
@@ -166,7 +171,7 @@ class CoupledRegression:
         self.candidates_ = self.selector.candidates_
         self.path_ = self._path(xs, yc, val)
         support = self.base_[list(chosen.support)]
-        coef, self.offsets_, _, cov = weighted_lstsq(design, tau, support, self.sigma_)
+        support, (coef, self.offsets_, _, cov) = self._significant(design, tau, support)
         self.coef_, self.cov_ = np.zeros(p), np.zeros((p, p))
         self.coef_[support] = coef
         self.cov_[np.ix_(support, support)] = cov
@@ -174,6 +179,20 @@ class CoupledRegression:
         self.support_ = np.zeros(p, bool)
         self.support_[support] = True
         return self
+
+    def _significant(self, design: np.ndarray, tau: np.ndarray, support: np.ndarray):
+        """Backward elimination of atoms with |t| below the two-sided Bonferroni bound of
+        `familywise` over every candidate atom; returns the support and its refit."""
+        from scipy.stats import norm
+
+        bound = float(norm.isf(self.familywise / (2 * design.shape[-1])))
+        while True:
+            fit = weighted_lstsq(design, tau, support, self.sigma_)
+            stderr = np.sqrt(np.maximum(np.diag(fit[3]), 0.0))
+            t = np.abs(fit[0]) / np.where(stderr > 0, stderr, np.inf)
+            if len(support) == 1 or t.min() >= bound:
+                return support, fit
+            support = np.delete(support, int(np.argmin(t)))
 
     def _path(self, xs, yc, val) -> list[tuple[float, np.ndarray]]:
         """(alpha, per-joint validation MSE in units of each joint's noise variance) of the
