@@ -4,7 +4,8 @@ Every joint's torque comes from the same Lagrangian L = sum_a xi_a * atom_a, so
 an atom's coefficient xi_a is shared: its Euler-Lagrange derivative fixes the
 relative factors of its features on every joint. The paper regresses each
 joint alone (~30 free coefficients for this arm); here the regression is
-stacked over joints (rows = samples x joints, columns = atoms, ~15 unknowns),
+stacked over joints (rows = samples x joints, columns = atoms: 11 candidates,
+8 true for this arm; 22 candidates without the symmetric-link assumption),
 each joint's rows weighted by 1 / its noise std, with a per-joint unpenalized
 offset for the sensor bias. Selection is the paper's: Lasso over a swept alpha,
 the proportional filter until the validation error rises, then an unbiased

@@ -79,3 +79,21 @@ def test_bad_input_exits_2_with_one_line_and_no_file(tmp_path, arrays, case, cap
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("torquebench identify: error:") and match in err[0]
     assert not out.exists() and not list(tmp_path.glob(".MODEL.json*"))
+
+
+def test_identify_general_library_drops_the_symmetry_assumption(tmp_path, arrays):
+    """--library prior-general: the atoms of general links; on this symmetric arm it keeps
+    the symmetric fit's atoms and predicts the same torque (up to the noise weights, which
+    are estimated on each set's own candidate atoms)."""
+    data, models = _write(tmp_path, arrays), {}
+    for library in ("prior", "prior-general"):
+        out = tmp_path / f"{library}.json"
+        assert main(["identify", "--data", str(data), "--out", str(out), "--library", library]) == 0
+        models[library] = json.loads(out.read_text())
+    assert models["prior"]["library"] == "prior-3dof"
+    assert models["prior-general"]["library"] == "prior-3dof-general"
+    assert set(models["prior-general"]["lagrangian"]["atoms"]) == set(models["prior"]["lagrangian"]["atoms"])
+    m = lynxmotion_motion(200, seed=9)
+    general, symmetric = (load_model(tmp_path / f"{k}.json") for k in ("prior-general", "prior"))
+    np.testing.assert_allclose(general.torque(m.q, m.qd, m.qdd), symmetric.torque(m.q, m.qd, m.qdd),
+                               rtol=1e-4, atol=1e-6)
