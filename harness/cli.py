@@ -48,9 +48,22 @@ def _user_errors() -> tuple[type[BaseException], ...]:
     return tuple(errors)
 
 
+DIR_OUTPUTS = ("bench", "closeloop")  # commands whose --out is a folder
+
+
+def _check_output(args) -> None:
+    """Fail before the work, not after it, when --out cannot be the file asked for."""
+    out = getattr(args, "out", None)
+    if out and args.command not in DIR_OUTPUTS and os.path.isdir(out):
+        raise UserError(f"output path {out} is a directory, expected a file name")
+    if out and args.command in DIR_OUTPUTS and os.path.isfile(out):
+        raise UserError(f"output folder {out} is an existing file")
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
+        _check_output(args)
         return int(args.func(args) or 0)
     except _user_errors() as exc:
         print(f"torquebench {args.command}: error: {exc}", file=sys.stderr)

@@ -57,7 +57,7 @@ def _condition_fn(plant: Plant, rate: float, samples: int):
 
     def condition(exc: FourierExcitation) -> float:
         states = exc.evaluate(t)
-        conds = [library_report(*states).get("library_condition", 0.0)]
+        conds = [library_report(*states)["library_condition"]] if plant.dof == 3 else []
         if baseline is not None:
             Y = baseline.regressor(*states).reshape(-1, 10 * (pmodel.njoints - 1))
             if not base:
@@ -124,14 +124,25 @@ def generate(
     return Dataset(t, q, qd, qdd, tau, tau_clean, meta, truth)
 
 
+def report_library(dof: int):
+    """The feature library whose conditioning is reported for a dof-joint dataset.
+
+    3 joints: the paper's published 75 features. Otherwise the generic
+    polynomial x trig library (trig of the first two non-base joints' angle sums
+    beyond 2 joints, to keep it a few hundred features).
+    """
+    from identification.libraries import generic_library, paper_library
+
+    if dof == 3:
+        return paper_library()
+    return generic_library(dof) if dof <= 2 else generic_library(dof, trig_joints=(1, 2))
+
+
 def library_report(q, qd, qdd) -> dict:
-    """Rank and normalized condition of the paper's 75-feature library on this data (3-DOF)."""
-    if q.shape[1] != 3:
-        return {}
-    from identification.libraries import paper_library
+    """Rank and normalized condition of the report library on this data."""
     from identification.library import conditioning
 
-    library = paper_library()
+    library = report_library(q.shape[1])
     cond = conditioning(library.evaluate(q, qd, qdd), library.names)
     return {"library": library.name, "library_rank": cond.rank, "library_size": cond.size,
             "library_condition": cond.condition}

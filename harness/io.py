@@ -10,12 +10,19 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.errors import UserError
+
 
 def atomic_write(path: str | Path, write: Callable[[str], None], suffix: str = "") -> None:
     """Call write(tmp_path) and move the finished file to path; nothing is left on failure."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
+    if path.is_dir():
+        raise UserError(f"output path {path} is a directory, expected a file name")
+    output_dir(path.parent)
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
+    except OSError as exc:
+        raise UserError(f"cannot write to {path.parent}: {exc.strerror}") from None
     os.close(fd)
     try:
         write(tmp)
@@ -25,6 +32,18 @@ def atomic_write(path: str | Path, write: Callable[[str], None], suffix: str = "
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+def output_dir(path: str | Path) -> Path:
+    """Create the folder path (and parents); UserError if a file stands in the way."""
+    path = Path(path)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except (FileExistsError, NotADirectoryError):
+        raise UserError(f"cannot create output folder {path}: a file of that name exists") from None
+    except OSError as exc:
+        raise UserError(f"cannot create output folder {path}: {exc.strerror}") from None
+    return path
 
 
 def _umask() -> int:

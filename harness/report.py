@@ -64,12 +64,13 @@ def report_json(outcomes: list[SectionOutcome], numbers: dict, meta: dict) -> di
 
 
 def _figure_links(outcome: SectionOutcome, out_dir: Path) -> list[str]:
-    links = []
+    """Image links relative to report.md, for figures the section's text does not show yet."""
+    links, base = [], out_dir.resolve()
     for fig in outcome.figures:
-        path = Path(fig)
-        rel = path.relative_to(out_dir) if path.is_absolute() and path.is_relative_to(
-            out_dir) else path
-        links.append(f"![{path.stem}]({rel.as_posix()})")
+        path = Path(fig).resolve()  # a relative figure path is relative to the working directory
+        rel = path.relative_to(base) if path.is_relative_to(base) else path
+        if f"]({rel.as_posix()})" not in outcome.markdown:
+            links.append(f"![{path.stem}]({rel.as_posix()})")
     return links
 
 

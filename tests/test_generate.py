@@ -108,3 +108,36 @@ def test_predict_rejects_nan_states(tmp_path):
     np.savez(data, q=q, qd=np.zeros((20, 3)), qdd=np.zeros((20, 3)))
     res = run_cli("predict", "--model", "pinocchio", "--data", str(data), "--out", str(pred))
     assert res.returncode == 2 and "NaN" in res.stderr and not pred.exists()
+
+
+def test_output_path_errors_are_one_line(tmp_path):
+    a_file = tmp_path / "afile"
+    a_file.write_text("")
+    (tmp_path / "adir").mkdir()
+    for args, message in [
+        (["generate", "--samples", "20", "--out", str(tmp_path / "adir")], "is a directory"),
+        (["generate", "--samples", "20", "--out", str(a_file / "x.npz")], "a file of that name"),
+        (["closeloop", "--plant", "lynxmotion", "--out", str(a_file)], "existing file"),
+    ]:
+        res = run_cli(*args)
+        assert res.returncode == 2, res.stderr
+        assert message in res.stderr and len(res.stderr.strip().splitlines()) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["adir", "afile"]
+    assert list((tmp_path / "adir").iterdir()) == []
+
+
+def test_library_condition_is_reported_for_other_robots():
+    ds = generate("double_pendulum", samples=600, noise=0.0, seed=0)
+    assert ds.meta["library"].startswith("generic-2dof") and np.isfinite(ds.meta["library_condition"])
+    assert ds.meta["library_rank"] == ds.meta["library_size"]
+
+
+def test_malformed_data_names_the_bad_array(tmp_path):
+    data = tmp_path / "d.npz"
+    np.savez(data, q=np.zeros((5, 2)), qd=np.zeros((5, 3)), qdd=np.zeros((5, 3)))
+    res = run_cli("predict", "--model", "pinocchio", "--data", str(data), "--out", str(tmp_path / "p.npz"))
+    assert res.returncode == 2 and "q (5, 2), qd (5, 3)" in res.stderr
+    text = tmp_path / "t.npz"
+    text.write_text("hello")
+    res = run_cli("predict", "--model", "pinocchio", "--data", str(text), "--out", str(tmp_path / "p.npz"))
+    assert res.returncode == 2 and "not an .npz archive" in res.stderr

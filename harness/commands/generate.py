@@ -36,8 +36,6 @@ def run(args) -> int:
 
 
 def _library(meta: dict) -> str:
-    if "library_condition" not in meta:
-        return "no library for this dof"
     return (f"{meta['library']} library rank {meta['library_rank']}/{meta['library_size']}, "
             f"normalized condition {meta['library_condition']:.3g}")
 
