@@ -20,7 +20,11 @@ class PlannerConfig:
     energy_samples: N, weighted by energy_quadrature; degree: of the joint polynomials;
     obstacle_slots: how many obstacle samples one solve sees (the
     ones that can come within the threshold, see planning.screening);
-    limits in rad, enforced at limit_samples interior points of every segment.
+    limits in rad, enforced at limit_samples interior points of every segment;
+    torque_limit: |tau_i| <= torque_limit[i] (N m, planning model's torque) at s = 0, the
+    energy samples and the obstacle samples of every segment (None: unconstrained). The
+    default is the Lynxmotion MJCF motors' ctrlrange (gear 1); callers that know the
+    plant pass its own (planning does not read models).
     """
 
     threshold: float = 0.08
@@ -39,6 +43,7 @@ class PlannerConfig:
     lower: tuple[float, ...] = (-pi / 2, 0.0, -pi)
     upper: tuple[float, ...] = (pi / 2, pi, 0.0)
     limit_samples: int = 8
+    torque_limit: tuple[float, ...] | None = (10.0, 10.0, 10.0)
     geometry: ArmGeometry = field(default_factory=ArmGeometry)
     hessian: str = "exact"  # or "limited-memory"
     max_iterations: int = 300

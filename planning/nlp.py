@@ -73,6 +73,7 @@ class PlanningNLP:
         self._joint_limits(extremum, newton)
         self.quotient_rows = [self._goal_limit(j, goal[j], sign[j], v_turn[j, :],
                                                v_newton[j, :]) for j in range(dof)]
+        self.torque_rows = self._torque_limits(model, s_obs)
         self.g = ca.vertcat(*self._g)
         self.lbg, self.ubg = np.array(self._lbg), np.array(self._ubg)
 
@@ -91,12 +92,29 @@ class PlanningNLP:
         return slice(start, start + count)
 
     def _power(self, model: TorqueModel):
-        """P(s_i) = sum_j tau_j qd_j at the N energy samples (eq. 15)."""
-        power = []
+        """P(s_i) = sum_j tau_j qd_j at the N energy samples (eq. 15); keeps the torques
+        for the torque limits."""
+        power, self._node_torques = [], []
         for s in self.nodes:
             q, qd, qdd = self.state(float(s))
-            power.append(ca.dot(model.symbolic_torque(q, qd, qdd), qd))
+            tau = model.symbolic_torque(q, qd, qdd)
+            self._node_torques.append(tau)
+            power.append(ca.dot(tau, qd))
         return ca.vertcat(*power)
+
+    def _torque_limits(self, model: TorqueModel, s_obs) -> slice | None:
+        """-tau_max <= tau(s) <= tau_max at s = 0, the energy samples and the obstacle
+        samples (unused obstacle slots sit at s = 0: a duplicate, harmless row)."""
+        limit = self.config.torque_limit
+        if limit is None:
+            return None
+        if len(limit) != self.dof:
+            raise ValueError(f"torque_limit needs {self.dof} values, got {len(limit)}")
+        torques = [model.symbolic_torque(*self.state(0.0)), *self._node_torques]
+        torques += [model.symbolic_torque(*self.state(s_obs[j]))
+                    for j in range(self.config.obstacle_slots)]
+        bound = np.tile(np.asarray(limit, float), len(torques))
+        return self._add(ca.vertcat(*torques), -bound, bound)
 
     def _energy(self, power):
         """sigma sum w_i |P(s_i)| (eq. 18 with the paper's rule): epigraph slacks, or a

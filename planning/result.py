@@ -15,6 +15,9 @@ from planning.replanning import Execution
 CLEARANCE_TOLERANCE = 2e-3  # m below the threshold still counted as avoided (penalty is soft)
 END_TOLERANCE = 1e-6  # rad
 LIMIT_TOLERANCE = 1e-6  # rad
+# relative: the NLP holds the torque limit at its samples only; between them a plan may
+# exceed it by this much (the dense grid has 5 points per obstacle sample interval)
+TORQUE_TOLERANCE = 0.01
 
 
 @dataclass(frozen=True)
@@ -31,6 +34,7 @@ class PlanResult:
     energy: float  # J, integral of |P| on t under the planning model
     end_error: float  # rad, max |q(T) - goal|
     limit_violation: float  # rad, worst excursion beyond the joint limits
+    peak_torque: np.ndarray  # (dof,) N m, max |tau_i| on t under the planning model
     execution: Execution
     feasible: bool
     problems: tuple[str, ...]
@@ -67,12 +71,22 @@ def evaluate(execution: Execution, scenario: Scenario, model: TorqueModel,
         problems.append(f"end-position error {end_error:.2e} rad > {END_TOLERANCE:.0e}")
     if limit > LIMIT_TOLERANCE:
         problems.append(f"joint limits exceeded by {limit:.2e} rad")
+    peak_torque = np.abs(model.torque(q, qd, qdd)).max(axis=0)
+    problems += _torque_problems(peak_torque, config.torque_limit)
     if sample_clearance.min() < config.threshold - CLEARANCE_TOLERANCE:
         problems.append(f"clearance {sample_clearance.min():.4f} m < threshold "
                         f"{config.threshold} m - {CLEARANCE_TOLERANCE} m")
     return PlanResult(t, q, qd, qdd, obstacle, clearance, sample_clearance,
-                      absolute_energy(model, t, q, qd, qdd), end_error, limit, execution,
-                      not problems, tuple(problems))
+                      absolute_energy(model, t, q, qd, qdd), end_error, limit, peak_torque,
+                      execution, not problems, tuple(problems))
+
+
+def _torque_problems(peak: np.ndarray, limit) -> list[str]:
+    """One line per joint whose peak torque (N m) exceeds its limit beyond the tolerance."""
+    if limit is None:
+        return []
+    return [f"joint {j + 1} torque {peak[j]:.3g} N m exceeds the limit {limit[j]:g} N m"
+            for j in range(len(peak)) if peak[j] > limit[j] * (1 + TORQUE_TOLERANCE)]
 
 
 def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
@@ -102,6 +116,7 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
         "solve_ms": result.execution.solve_ms,
         "replan_failures": result.execution.replan_failures,
         "end_error": result.end_error, "limit_violation": result.limit_violation,
+        "peak_torque": result.peak_torque, "torque_limit": config.torque_limit,
         "feasible": result.feasible, "problems": result.problems,
         "duration": scenario.duration, "start": scenario.start, "goal": scenario.goal,
         "start_velocity": scenario.start_velocity, "rest_at_goal": config.rest_at_goal,

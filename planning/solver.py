@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 
@@ -53,21 +54,60 @@ class SegmentPlan:
     multipliers: tuple[np.ndarray, np.ndarray]  # (lam_g, lam_x)
 
 
+TORQUE_GRID = 65  # points of normalized time where a segment's torque is checked
+
+
+@dataclass(frozen=True)
+class _Solvers:
+    """One NLP and its cold and warm IPOPT instances."""
+
+    nlp: PlanningNLP
+    cold: ca.Function
+    warm: ca.Function
+    parts: ca.Function
+
+
+def _build(nlp: PlanningNLP, config: PlannerConfig, name: str) -> _Solvers:
+    problem = {"x": nlp.x, "p": nlp.p, "f": nlp.f, "g": nlp.g}
+    options = dict(_COMMON, **{"ipopt.max_iter": config.max_iterations,
+                               "ipopt.hessian_approximation": config.hessian})
+    warm = dict(options, **_WARM, **{"ipopt.max_iter": config.warm_max_iterations})
+    parts = ca.Function("objective_parts", [nlp.x, nlp.p], [nlp.energy, nlp.penalty])
+    return _Solvers(nlp, ca.nlpsol(f"{name}_cold", "ipopt", problem, options),
+                    ca.nlpsol(f"{name}_warm", "ipopt", problem, warm), parts)
+
+
 class Planner:
-    """Energy-optimal, obstacle-penalized polynomial segments (quartic by default) for one torque model."""
+    """Energy-optimal, obstacle-penalized polynomial segments (quartic by default) for one torque model.
+
+    Torque limits (config.torque_limit) are an active-set pair of NLPs: every solve first
+    runs the NLP without torque rows; only when that optimum's torque exceeds the limit
+    on a dense grid is the NLP with torque rows (built on first need) solved. A relaxed
+    optimum that respects the limits is the constrained optimum, so the common case pays
+    nothing (measured: the torque rows double a re-plan's time).
+    """
 
     def __init__(self, model: TorqueModel, config: PlannerConfig | None = None):
         self.config = config or PlannerConfig()
         self.model = model
-        self.nlp = PlanningNLP(model, self.config)
-        problem = {"x": self.nlp.x, "p": self.nlp.p, "f": self.nlp.f, "g": self.nlp.g}
-        options = dict(_COMMON, **{"ipopt.max_iter": self.config.max_iterations,
-                                   "ipopt.hessian_approximation": self.config.hessian})
-        self._cold = ca.nlpsol("plan_cold", "ipopt", problem, options)
-        warm = dict(options, **_WARM, **{"ipopt.max_iter": self.config.warm_max_iterations})
-        self._warm = ca.nlpsol("plan_warm", "ipopt", problem, warm)
-        self._parts = ca.Function("objective_parts", [self.nlp.x, self.nlp.p],
-                                  [self.nlp.energy, self.nlp.penalty])
+        self.nlp = PlanningNLP(model, dataclasses.replace(self.config, torque_limit=None))
+        self._relaxed = _build(self.nlp, self.config, "plan")
+        self._limited: _Solvers | None = None
+
+    def _torque_limited(self) -> _Solvers:
+        if self._limited is None:
+            self._limited = _build(PlanningNLP(self.model, self.config), self.config,
+                                   "plan_torque")
+        return self._limited
+
+    def torque_excess(self, trajectory: PolynomialTrajectory) -> float:
+        """Largest |tau_i| - torque_limit_i (N m) on a dense grid of the segment (< 0: inside;
+        -inf without limits)."""
+        if self.config.torque_limit is None:
+            return -np.inf
+        t = trajectory.t_begin + trajectory.duration * np.linspace(0.0, 1.0, TORQUE_GRID)
+        tau = self.model.torque(*trajectory.state(t))
+        return float(np.max(np.abs(tau) - np.asarray(self.config.torque_limit)))
 
     def parameters(self, q0, qd0, duration: float, goal, forecast: ObstacleForecast | None,
                    t_begin: float = 0.0, reference: PolynomialTrajectory | None = None,
@@ -105,12 +145,13 @@ class Planner:
                                             self.nlp.order, self.nlp.quotient_slots)
         return turning, v_turning, signs
 
-    def bounds(self, goal) -> tuple[np.ndarray, np.ndarray]:
+    def bounds(self, goal, nlp: PlanningNLP | None = None) -> tuple[np.ndarray, np.ndarray]:
         """lbg, ubg for this goal: the quotient rows hold (>= 0) where it is on a limit."""
-        lbg, ubg = self.nlp.lbg.copy(), self.nlp.ubg.copy()
+        nlp = nlp or self.nlp
+        lbg, ubg = nlp.lbg.copy(), nlp.ubg.copy()
         signs = goal_limit_signs(goal, self.config.lower, self.config.upper)
         for j in np.flatnonzero(signs):
-            lbg[self.nlp.quotient_rows[j]] = 0.0
+            lbg[nlp.quotient_rows[j]] = 0.0
         return lbg, ubg
 
     def initial_guess(self, q0, qd0, duration: float, goal) -> np.ndarray:
@@ -138,36 +179,53 @@ class Planner:
         """
         alpha = self.config.penalty_weight if alpha is None else float(alpha)
         p = self.parameters(q0, qd0, duration, goal, forecast, t_begin, reference, alpha)
-        lbg, ubg = self.bounds(goal)
+        segment = (q0, qd0, duration, t_begin, p, alpha)
+        plan = self._solve(self._relaxed, goal, warm, segment)
+        if not plan.success or self.torque_excess(plan.trajectory) <= 0:
+            return plan
+        # the relaxed optimum overdrives a motor: solve again with the torque rows
+        limited = self._solve(self._torque_limited(), goal, warm, segment)
+        return dataclasses.replace(limited, solve_ms=plan.solve_ms + limited.solve_ms,
+                                   solve_cpu_ms=plan.solve_cpu_ms + limited.solve_cpu_ms)
+
+    def _solve(self, solvers: _Solvers, goal, warm: SegmentPlan | None,
+               segment: tuple) -> SegmentPlan:
+        q0, qd0, duration, t_begin, p, alpha = segment
+        lbg, ubg = self.bounds(goal, solvers.nlp)
         args = {"p": p, "lbg": lbg, "ubg": ubg}
         if warm is None:
-            solver, args["x0"] = self._cold, self.initial_guess(q0, qd0, duration, goal)
+            solver, args["x0"] = solvers.cold, self.initial_guess(q0, qd0, duration, goal)
         else:
-            solver = self._warm
-            args.update(self._warm_start(warm, t_begin, duration))
+            solver = solvers.warm
+            args.update(self._warm_start(warm, t_begin, duration, len(lbg)))
         start, cpu = time.perf_counter(), time.thread_time()
         result = solver(**args)
         elapsed = (1e3 * (time.perf_counter() - start), 1e3 * (time.thread_time() - cpu))
-        stats = solver.stats()
-        return self._segment(result, stats, elapsed, q0, qd0, duration, t_begin, p, alpha)
+        return self._segment(solvers, result, solver.stats(), elapsed, segment)
 
-    def _warm_start(self, warm: SegmentPlan, t_begin: float, duration: float) -> dict:
+    def _warm_start(self, warm: SegmentPlan, t_begin: float, duration: float,
+                    rows: int) -> dict:
         """Primal-dual start: the previous plan's remaining motion re-expressed on the new
-        horizon, the power slacks it implies, and the previous multipliers."""
+        horizon, the power slacks it implies, and the previous multipliers (torque rows,
+        the last ones, zero-padded or dropped when the previous solve had none / this has
+        none)."""
         rest = warm.trajectory.restrict(t_begin, duration)
         x = rest.coefficients[:, 2:].ravel()
         if self._slacks:
             q, qd, qdd = rest.state(t_begin + duration * self.nlp.nodes)
             x = np.concatenate([x, np.abs(np.sum(self.model.torque(q, qd, qdd) * qd, axis=1))])
-        return {"x0": x, "lam_g0": warm.multipliers[0], "lam_x0": warm.multipliers[1]}
+        lam_g = np.zeros(rows)
+        kept = min(rows, len(warm.multipliers[0]))
+        lam_g[:kept] = warm.multipliers[0][:kept]
+        return {"x0": x, "lam_g0": lam_g, "lam_x0": warm.multipliers[1]}
 
-    def _segment(self, result, stats, elapsed, q0, qd0, duration, t_begin, p,
-                 alpha) -> SegmentPlan:
+    def _segment(self, solvers: _Solvers, result, stats, elapsed, segment) -> SegmentPlan:
+        q0, qd0, duration, t_begin, p, alpha = segment
         x = np.asarray(result["x"]).ravel()
         width = self.config.degree - 1
         free = x[: width * self.model.dof].reshape(self.model.dof, width)
         trajectory = PolynomialTrajectory.from_free(t_begin, duration, q0, qd0, free)
-        energy, penalty = (float(v) for v in self._parts(x, p))
+        energy, penalty = (float(v) for v in solvers.parts(x, p))
         return SegmentPlan(
             trajectory=trajectory, energy=energy, penalty=penalty,
             success=bool(stats["success"]), status=str(stats["return_status"]),

@@ -11,9 +11,11 @@ import dataclasses
 import math
 import re
 
+import numpy as np
+
 from harness.errors import UserError
 from harness.io import write_json
-from harness.robots import DEFAULT_ROBOT
+from harness.robots import DEFAULT_ROBOT, load_mujoco
 from harness.torque_models import load_torque_model
 from planning import PlanningError
 from planning.config import PlannerConfig, Scenario
@@ -70,6 +72,9 @@ def register(sub) -> None:
                    help="sway amplitude vector (m) added to the linear obstacle path as "
                         "sway sin(2 pi periods t / duration)")
     p.add_argument("--sway-periods", type=float, default=1.0, help="sway periods over the motion")
+    p.add_argument("--torque-limit", default=None,
+                   help="per-joint torque limits t1,t2,t3 (N m), or 'none'; default: the "
+                        "robot MJCF's motor ctrlrange times gear")
     p.add_argument("--rest-at-goal", action="store_true", help="also require zero end velocity")
     p.add_argument("--no-replan", action="store_true", help="follow the first plan throughout")
     p.add_argument("--out", required=True, help="output PLAN.json")
@@ -77,6 +82,31 @@ def register(sub) -> None:
     # values, and would read a comma-separated vector starting with a minus as an option.
     p._negative_number_matcher = re.compile(r"^-\.?\d")
     p.set_defaults(func=run)
+
+
+def plant_torque_limit(robot: str) -> tuple[float, ...] | None:
+    """|tau_i| bound (N m) of each joint from the robot's MJCF motors (ctrlrange x gear), in
+    joint order; None if a motor is unlimited or the motors do not map 1:1 to joints."""
+    model = load_mujoco(robot)
+    joints = model.actuator_trnid[:, 0]
+    if model.nu != model.njnt or sorted(joints) != list(range(model.njnt)) \
+            or not all(model.actuator_ctrllimited):
+        return None
+    reach = np.abs(model.actuator_ctrlrange).min(axis=1) * np.abs(model.actuator_gear[:, 0])
+    limit = np.empty(model.njnt)
+    limit[joints] = reach
+    return tuple(float(v) for v in limit)
+
+
+def _torque_limit(args) -> tuple[float, ...] | None:
+    if args.torque_limit is None:
+        return plant_torque_limit(args.robot)
+    if args.torque_limit.strip().lower() == "none":
+        return None
+    limit = _vector(args.torque_limit, "torque-limit")
+    if not all(v > 0 for v in limit):
+        raise UserError(f"--torque-limit must be positive, got '{args.torque_limit}'")
+    return limit
 
 
 def _setup(args) -> tuple[PlannerConfig, Scenario]:
@@ -98,7 +128,8 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  penalty_weight=args.penalty, rest_at_goal=args.rest_at_goal,
                                  energy_samples=args.energy_samples,
                                  energy_quadrature=args.energy_quadrature, degree=args.degree,
-                                 power_smoothing=args.power_smoothing)
+                                 power_smoothing=args.power_smoothing,
+                                 torque_limit=_torque_limit(args))
     path = (_vector(args.obstacle_from, "obstacle-from"),
             _vector(args.obstacle_to, "obstacle-to"), args.duration, args.samples)
     sway = _vector(args.obstacle_sway, "obstacle-sway")
