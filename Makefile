@@ -5,6 +5,11 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 OUT ?= bench-out
 
+# Small matrices: single-threaded BLAS is faster than contended threads (see harness/cli.py).
+export OPENBLAS_NUM_THREADS ?= 1
+export OMP_NUM_THREADS ?= 1
+export MKL_NUM_THREADS ?= 1
+
 .PHONY: install test bench lint clean
 
 install: $(STAMP)
