@@ -35,8 +35,8 @@ class Identification:
     """A fitted model and how well it does on the held-out part."""
 
     model: IdentifiedModel
-    heldout_rel_rmse: np.ndarray  # (dof,)
-    heldout_mse: np.ndarray  # (dof,) N^2 m^2
+    heldout_rel_rmse: np.ndarray  # (dof,); NaN when holdout is 0 (no held-out part)
+    heldout_mse: np.ndarray  # (dof,) N^2 m^2; NaN when holdout is 0
     conditioning: Conditioning
     seconds: float
     regressions: tuple = field(default=(), repr=False)  # SparseRegression per joint, or
@@ -45,9 +45,10 @@ class Identification:
     basis: AtomBasis | None = field(default=None, repr=False)  # coupled: the atoms
 
     def metrics(self) -> dict:
+        """JSON metrics; the held-out errors are null when nothing was held out (holdout 0)."""
         out = {"method": self.method,
-               "heldout_rel_rmse": self.heldout_rel_rmse.tolist(),
-               "heldout_mse": self.heldout_mse.tolist(),
+               "heldout_rel_rmse": _nullable(self.heldout_rel_rmse),
+               "heldout_mse": _nullable(self.heldout_mse),
                "library_size": self.conditioning.size,
                "library_rank": self.conditioning.rank,
                "library_condition": self.conditioning.condition,
@@ -67,6 +68,10 @@ class Identification:
         return {"atoms": [names[k] for k in kept], "coefficients": reg.coef_[kept].tolist(),
                 "candidate_atoms": len(names), "base_atoms": len(reg.base_),
                 "folded_atoms": [names[k] for k in reg.folded_]}
+
+
+def _nullable(x: np.ndarray) -> list:
+    return [None if np.isnan(v) else float(v) for v in x]
 
 
 def check_data(q, qd, qdd, tau, n_features: int) -> tuple[np.ndarray, ...]:
@@ -106,6 +111,9 @@ def identify(q, qd, qdd, tau, library: Library, holdout: float = 0.25, tau_clean
              method: str | None = None) -> Identification:
     """Fit every joint's torque on the first 1 - holdout of the samples, score on the rest.
 
+    holdout 0 fits on all samples (closed-loop re-identification) and scores nothing: the
+    held-out errors are NaN, never a training-data error under a held-out name.
+
     method: "coupled", "per-joint", "jointwise", or None (coupled if the library has atoms).
     "jointwise" tests each joint's torque for a Lagrangian form on its own (F-test of the
     atoms' signatures on that joint against the full library, p >= 0.01) and fits the
@@ -132,6 +140,8 @@ def _identify(q, qd, qdd, tau, library: Library, holdout: float, tau_clean,
     if q.shape[1] != library.dof:
         raise IdentificationError(f"data has {q.shape[1]} joints, library {library.name} has {library.dof}")
     n_train = int(round(len(q) * (1 - holdout)))
+    if holdout > 0 and n_train >= len(q):
+        raise IdentificationError(f"holdout {holdout} of {len(q)} samples leaves no held-out sample")
     check_data(q[:n_train], qd[:n_train], qdd[:n_train], tau[:n_train], len(library))
     start = time.perf_counter()
     theta = library.evaluate(q[:n_train], qd[:n_train], qdd[:n_train])
@@ -163,8 +173,10 @@ def _identify(q, qd, qdd, tau, library: Library, holdout: float, tau_clean,
     seconds = time.perf_counter() - start
     model = IdentifiedModel(library.dof, tuple(joints), library.name, method)
     truth = tau if tau_clean is None else check_data(q, qd, qdd, tau_clean, 0)[3]
-    rows = slice(n_train, None) if n_train < len(q) else slice(None)
-    rel, mse = _score(model, q[rows], qd[rows], qdd[rows], truth[rows])
+    if n_train < len(q):
+        rel, mse = _score(model, q[n_train:], qd[n_train:], qdd[n_train:], truth[n_train:])
+    else:  # holdout 0 (a final fit on all data): nothing is held out, so no held-out error
+        rel = mse = np.full(library.dof, np.nan)
     return Identification(model, rel, mse, cond, seconds, tuple(fits), method, basis)
 
 

@@ -63,11 +63,15 @@ def _bad_cases(arrays):
         "shape": ({"q": arrays["q"][:-1]}, [], "shape mismatch"),
         "few": ({k: arrays[k][:20] for k in ("q", "qd", "qdd", "tau", "tau_clean")}, [], "more samples"),
         "holdout": ({}, ["--holdout", "1.5"], "holdout"),
+        "holdout0": ({}, ["--holdout", "0"], "--holdout must be in (0, 1), got 0.0"),
+        "holdout1": ({}, ["--holdout", "1"], "--holdout must be in (0, 1)"),
+        "holdoutneg": ({}, ["--holdout", "-0.1"], "--holdout must be in (0, 1)"),
         "method": ({}, ["--library", "paper", "--method", "coupled"], "no Lagrangian atoms"),
     }
 
 
-@pytest.mark.parametrize("case", ["nan", "missing", "shape", "few", "holdout", "method", "nofile"])
+@pytest.mark.parametrize("case", ["nan", "missing", "shape", "few", "holdout", "holdout0",
+                                  "holdout1", "holdoutneg", "method", "nofile"])
 def test_bad_input_exits_2_with_one_line_and_no_file(tmp_path, arrays, case, capsys):
     out = tmp_path / "MODEL.json"
     if case == "nofile":
@@ -97,3 +101,20 @@ def test_identify_general_library_drops_the_symmetry_assumption(tmp_path, arrays
     general, symmetric = (load_model(tmp_path / f"{k}.json") for k in ("prior-general", "prior"))
     np.testing.assert_allclose(general.torque(m.q, m.qd, m.qdd), symmetric.torque(m.q, m.qd, m.qdd),
                                rtol=1e-4, atol=1e-6)
+
+
+def test_library_holdout_zero_reports_no_heldout_error(arrays):
+    """identify(..., holdout=0) (the closed loop's final fit) fits on everything and scores
+    nothing: no training error under the held-out name; a holdout that rounds to no sample
+    is an error."""
+    from identification import IdentificationError, identify, prior_knowledge_library
+
+    lib = prior_knowledge_library(3)
+    args = (arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"], lib)
+    r = identify(*args, 0.0, arrays["tau_clean"])
+    assert np.all(np.isnan(r.heldout_rel_rmse)) and np.all(np.isnan(r.heldout_mse))
+    metrics = r.metrics()
+    assert metrics["heldout_rel_rmse"] == [None] * 3 and metrics["heldout_mse"] == [None] * 3
+    json.dumps(metrics, allow_nan=False)
+    with pytest.raises(IdentificationError, match="no held-out sample"):
+        identify(*args, 1e-5, arrays["tau_clean"])

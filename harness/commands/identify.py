@@ -28,7 +28,7 @@ def register(sub) -> None:
     p.add_argument("--data", required=True, help="dataset .npz with q, qd, qdd, tau [, tau_clean]")
     p.add_argument("--out", required=True, help="output MODEL.json")
     p.add_argument("--holdout", type=float, default=0.25,
-                   help="last fraction of samples (time order) held out for scoring")
+                   help="last fraction of samples (time order) held out for scoring, in (0, 1)")
     p.add_argument("--library", choices=LIBRARIES, default="prior",
                    help="prior: derived from simple structures (3-DOF arm, symmetric links); "
                    "prior-general: the same without the symmetric-link assumption; paper: the published "
@@ -66,6 +66,8 @@ def choose_library(name: str, dof: int):
 
 
 def run(args) -> int:
+    if not 0.0 < args.holdout < 1.0:  # 0 would score the training data as "held out"
+        raise IdentificationError(f"--holdout must be in (0, 1), got {args.holdout}")
     data = load_arrays(args.data)
     dof = data["q"].shape[1] if data["q"].ndim == 2 else 1
     library = choose_library(args.library, dof)
