@@ -71,6 +71,53 @@ def key_numbers(numbers: dict[str, dict]) -> dict[str, dict]:
             for section, values in numbers.items()}
 
 
+def _pct(values) -> str:
+    return ", ".join(f"{100 * v:.3f} %" for v in values)
+
+
+def _get(headline: dict, section: str, key: str):
+    return headline.get(section, {}).get(key)
+
+
+def glance(headline: dict) -> str:
+    """The README's answer to the one question, in plain rows; missing numbers are skipped."""
+    rows = []
+    sparse = _get(headline, "identification", "noise 5 %: sparse rel err")
+    oracle = _get(headline, "identification", "noise 5 %: oracle rel err")
+    if sparse and oracle:
+        rows.append(("Identified torque, 5 % noise: held-out rel. RMS error per joint "
+                     "(coupled sparse; oracle = WLS on Pinocchio's base regressor)",
+                     f"{_pct(sparse)}; oracle {_pct(oracle)}"))
+    pct = _get(headline, "planning", "identified_vs_pinocchio_energy_pct")
+    if pct is not None:
+        rows.append(("Paper scenario: energy of the identified-model plan vs the closed-form plan "
+                     "(both evaluated with Pinocchio)", f"{pct:+.3f} %"))
+    ratio = _get(headline, "replay", "energy_ratio_identified_over_closed_form_replayed")
+    if ratio is not None:
+        rows.append(("Same two plans replayed in MuJoCo: energy ratio identified / closed-form",
+                     f"{ratio:.5f}"))
+    clear = [v for k, v in headline.get("replay", {}).items() if k.endswith(".min_clearance_m")]
+    if clear:
+        rows.append(("Smallest link-obstacle clearance kept in any MuJoCo replay (threshold 80 mm)",
+                     f"{1000 * min(clear):.1f} mm"))
+    med, p95 = (_get(headline, "planning", k) for k in ("replan_median_ms", "replan_p95_ms"))
+    if med is not None and p95 is not None:
+        rows.append(("Warm re-plan (obstacle one sample further), median / p95", f"{med:.1f} / {p95:.1f} ms"))
+    bound = _get(headline, "planning", "net_work_bound_J")
+    paper = _get(headline, "planning", "parametrization.quartic, N=10 (paper).free_true_energy_J")
+    if bound is not None and paper is not None:
+        rows.append(("No-obstacle optimum: true energy of the paper's quartic/N=10 plan vs the "
+                     "net-work lower bound (= minimum jerk)", f"{paper:.4f} J vs {bound:.4f} J"))
+    before = _get(headline, "closeloop", "friction.pinocchio.error_before")
+    after = _get(headline, "closeloop", "friction.pinocchio.error_after")
+    if before and after:
+        rows.append(("Closing the loop, friction plant: Pinocchio model's held-out error before -> "
+                     "after adding the named effects", f"{_pct(before)} -> {_pct(after)}"))
+    if not rows:
+        return ""
+    return "\n".join(["| question | measured |", "|---|---|", *(f"| {a} | {b} |" for a, b in rows)])
+
+
 def latest_benchmark(report: dict, source: str) -> str:
     """The '## Latest benchmark' body: provenance line and the headline table."""
     state = "all sections ok" if report.get("ok") else "**some sections failed**"
@@ -80,6 +127,7 @@ def latest_benchmark(report: dict, source: str) -> str:
     return (f"From `torquebench bench{quick}` ({source}/report.json, "
             f"{report.get('elapsed_s', 0):.0f} s, {state}{note}); every headline number is in "
             f"`{source}/headline.md` and `report.json`.\n\n"
+            + glance(report.get("headline", {})) + "\n\nKey numbers by section:\n\n"
             + headline_markdown(key_numbers(report.get("headline", {}))))
 
 
