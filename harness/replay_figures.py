@@ -24,17 +24,44 @@ def _save(fig, path: Path) -> Path:
 
 
 def power_figure(traces: dict[str, ReplayTrace], path: Path) -> Path:
-    """|sum tau qd| over time, replayed (solid) and planned feedforward (dashed), per plan."""
-    fig, ax = plt.subplots(figsize=(7, 4))
+    """|sum tau qd| over time, replayed (solid) and planned feedforward (dashed): one panel
+    per plan with its own y-axis, so one plan's power does not flatten the others."""
+    fig, axes = plt.subplots(len(traces), 1, figsize=(7, 2.2 * len(traces) + 0.6),
+                             sharex=True, squeeze=False)
+    for i, (ax, (name, tr)) in enumerate(zip(axes[:, 0], traces.items(), strict=True)):
+        ax.plot(tr.t, abs(tr.power), color=f"C{i}", label="replayed")
+        ax.plot(tr.t, abs(tr.power_reference), color="k", ls="--", lw=1,
+                label="planned (feedforward)")
+        ax.set_ylabel("|P| [W]")
+        ax.set_title(name, fontsize=9)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+    axes[-1, 0].set_xlabel("time t [s]")
+    fig.suptitle("Power |Σ τ_i q̇_i| over time, replayed in MuJoCo", fontsize=10)
+    return _save(fig, path)
+
+
+def model_power_figure(traces: dict[str, ReplayTrace], path: Path) -> Path:
+    """Paper Fig. 11: replayed power of the paper scenario planned with each model (closed
+    form and identified) on one axis, and their difference below."""
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 5), sharex=True,
+                                      gridspec_kw={"height_ratios": [2, 1]})
     for i, (name, tr) in enumerate(traces.items()):
-        color = f"C{i}"
-        ax.plot(tr.t, abs(tr.power), color=color, label=f"{name}: replayed")
-        ax.plot(tr.t, abs(tr.power_reference), color=color, ls="--", lw=1,
-                label=f"{name}: planned (feedforward)")
-    ax.set(xlabel="time t [s]", ylabel="power |Σ τ_i q̇_i| [W]",
-           title="Power over time, replayed in MuJoCo (cf. paper Fig. 11)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+        top.plot(tr.t, tr.power, color=f"C{i}", ls="-" if i == 0 else "--", label=name)
+    top.axhline(0, color="k", lw=0.5)
+    top.set(ylabel="power Σ τ_i q̇_i [W]",
+            title="Paper scenario, replayed: closed-form vs identified model (cf. Fig. 11)")
+    top.grid(alpha=0.3)
+    top.legend(fontsize=8)
+    names = list(traces)
+    if len(names) >= 2:
+        a, b = traces[names[0]], traces[names[1]]
+        n = min(len(a.t), len(b.t))
+        bottom.plot(a.t[:n], b.power[:n] - a.power[:n], color="C3")
+        bottom.set_ylabel(f"{names[1]} − {names[0]} [W]", fontsize=8)
+    bottom.axhline(0, color="k", lw=0.5)
+    bottom.set_xlabel("time t [s]")
+    bottom.grid(alpha=0.3)
     return _save(fig, path)
 
 

@@ -94,9 +94,43 @@ def replay_numbers(results: dict) -> dict:
     return out
 
 
+def _checks(results: dict) -> dict[str, bool]:
+    """A section's acceptance checks: results['acceptance'] and, per plan,
+    results['plans'][name]['acceptance'] (dicts of booleans)."""
+    found = {}
+    own = results.get("acceptance")
+    if isinstance(own, dict):
+        found.update({k: v for k, v in own.items() if isinstance(v, bool)})
+    plans = results.get("plans")
+    for name, entry in (plans.items() if isinstance(plans, dict) else ()):
+        checks = entry.get("acceptance") if isinstance(entry, dict) else None
+        if isinstance(checks, dict):
+            found.update({f"{name}.{k}": v for k, v in checks.items() if isinstance(v, bool)})
+    return found
+
+
+def acceptance_summary(section_results: dict[str, dict]) -> dict | None:
+    """{'checks failed': 'N of M' or 'none of M', 'failed': 'section: check, ...'} over every
+    section's acceptance checks; None when no section declared any."""
+    total, failed = 0, []
+    for section, results in section_results.items():
+        checks = _checks(results) if isinstance(results, dict) else {}
+        total += len(checks)
+        failed += [f"{section}: {k}" for k, ok in checks.items() if not ok]
+    if not total:
+        return None
+    if not failed:
+        return {"checks failed": f"none of {total}"}
+    return {"checks failed": f"**{len(failed)} of {total} acceptance checks failed**",
+            "failed": ", ".join(failed)}
+
+
 def headline(section_results: dict[str, dict], plans: dict) -> dict[str, dict]:
-    """{section: {quantity: value}} of the headline numbers."""
+    """{section: {quantity: value}} of the headline numbers; 'acceptance' first."""
     out: dict[str, dict] = {}
+    summary = acceptance_summary(section_results)
+    if summary:
+        out["acceptance"] = summary
     for name, results in section_results.items():
         own = results.get("headline") if isinstance(results, dict) else None
         numbers = dict(own) if isinstance(own, dict) else {}

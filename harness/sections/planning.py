@@ -148,6 +148,19 @@ def _swaying(baseline, free_trajectory, quick: bool) -> tuple[dict, PlanResult, 
     }, result, scenario
 
 
+def _scenario_replans(solve_ms) -> dict:
+    """Timings (ms, wall) of a scenario's actual solves: the first plan, the first re-plan
+    (the forecast switches from 'standing still' to 'moving' there, so it is the largest
+    change) and all re-plans, each incl. re-screening and penalty escalation."""
+    ms = np.asarray(solve_ms, float)
+    replans = ms[1:]
+    return {"first_plan_ms": float(ms[0]), "replans_timed": len(replans),
+            "first_replan_ms": float(replans[0]) if len(replans) else None,
+            "replan_median_ms": float(np.median(replans)) if len(replans) else None,
+            "replan_p95_ms": float(np.percentile(replans, 95)) if len(replans) else None,
+            "replan_max_ms": float(np.max(replans)) if len(replans) else None}
+
+
 def _speed(baseline, scenario, quick: bool) -> dict:
     """IPOPT cold and warm timings, and scipy trust-constr on the same cold problem."""
     planner = Planner(baseline)
@@ -170,7 +183,7 @@ def _speed(baseline, scenario, quick: bool) -> dict:
         "ipopt_objective_J": ipopt.energy + ipopt.penalty, "ipopt_success": ipopt.success,
         "scipy_trust_constr_ms": scipy.solve_ms, "scipy_iterations": scipy.iterations,
         "scipy_objective_J": scipy.objective, "scipy_success": scipy.success,
-        "scipy_message": scipy.message,
+        "scipy_message": scipy.message, "scipy_max_iterations": 20 if quick else 300,
     }
     return out
 
@@ -215,6 +228,10 @@ def run(out_dir: Path, quick: bool = False, identified_model=None) -> dict:
     free_trajectory = free.execution.segments[0].trajectory
     sway, sway_result, sway_scenario = _swaying(baseline, free_trajectory, quick)
     plans["swaying_obstacle"] = to_json(sway_result, sway_scenario, config, "pinocchio")
+    speed["scenarios"] = {**{f"paper ({k})": _scenario_replans(v.execution.solve_ms)
+                                for k, v in paper.items()},
+                          "crossing": _scenario_replans(crossing_avoid.execution.solve_ms),
+                          "swaying": _scenario_replans(sway_result.execution.solve_ms)}
     results = {"paper": summaries, "crossing": crossing_summary, "minimum_jerk": jerk,
                "parametrizations": _parametrizations(baseline, scenario, quick),
                "swaying": sway,
@@ -250,8 +267,10 @@ def _acceptance(results: dict, threshold: float) -> dict:
     out["swaying_replans_repeatedly"] = results["swaying"]["replans"] >= 5
     out["swaying_clearance_held"] = results["swaying"]["min_clearance_m"] >= threshold \
         - CLEARANCE_SLACK
-    out["replan_median_le_10ms"] = speed["replan_median_ms"] <= 10
-    out["replan_p95_le_50ms"] = speed["replan_p95_ms"] <= 50
+    # issue's definition: warm re-plan with the obstacle one sample further (synthetic sweep);
+    # the scenarios' actual re-plans are reported beside it (speed.scenarios), not checked
+    out["synthetic_replan_median_le_10ms"] = speed["replan_median_ms"] <= 10
+    out["synthetic_replan_p95_le_50ms"] = speed["replan_p95_ms"] <= 50
     out["cold_plan_le_500ms"] = speed["cold_max_ms"] <= 500
     return out
 
@@ -276,9 +295,21 @@ def _headline(results: dict) -> dict:
     out["swaying.replans"] = results["swaying"]["replans"]
     out["swaying.replan_median_ms"] = results["swaying"]["replan_median_ms"]
     out["swaying.min_clearance_m"] = results["swaying"]["min_clearance_m"]
-    out["replan_median_ms"] = speed["replan_median_ms"]
-    out["replan_p95_ms"] = speed["replan_p95_ms"]
-    out["replan_cpu_median_ms"] = speed["replan_cpu_median_ms"]
+    out["synthetic_replan_median_ms (warm, obstacle one sample further)"] = \
+        speed["replan_median_ms"]
+    out["synthetic_replan_p95_ms"] = speed["replan_p95_ms"]
+    out["synthetic_replan_cpu_median_ms"] = speed["replan_cpu_median_ms"]
+    for name, v in speed["scenarios"].items():
+        if v["replans_timed"]:
+            out[f"{name}: actual re-plan median / max ms"] = [v["replan_median_ms"],
+                                                              v["replan_max_ms"]]
     out["cold_plan_median_ms"] = speed["cold_median_ms"]
-    out["scipy_trust_constr_ms"] = speed["same_problem"]["scipy_trust_constr_ms"]
+    same = speed["same_problem"]
+    if same["scipy_success"]:
+        out["scipy_trust_constr_ms"] = same["scipy_trust_constr_ms"]
+    else:
+        out["scipy_trust_constr"] = (
+            f"did not converge within {same['scipy_iterations']} iterations "
+            f"({same['scipy_trust_constr_ms'] / 1e3:.1f} s), objective "
+            f"{same['scipy_objective_J']:.4f} vs IPOPT {same['ipopt_objective_J']:.4f}")
     return out

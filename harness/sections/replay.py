@@ -13,7 +13,13 @@ from pathlib import Path
 
 from harness.pinocchio_baseline import PinocchioModel
 from harness.replay import ReplayResult, ReplayTrace, replay
-from harness.replay_figures import clearance_figure, path_figure, power_figure, tracking_figure
+from harness.replay_figures import (
+    clearance_figure,
+    model_power_figure,
+    path_figure,
+    power_figure,
+    tracking_figure,
+)
 from harness.replay_reference import plan_reference
 from harness.robots import DEFAULT_ROBOT, load_mujoco, load_pinocchio
 
@@ -75,8 +81,18 @@ def _row(name: str, r: ReplayResult, ok: dict[str, bool]) -> str:
             f"| {r.tracking_rms * 1e3:.3f} | {r.max_tracking_error * 1e3:.3f} | {verdict} |")
 
 
+def verdict_line(verdicts: dict[str, dict[str, bool]]) -> str:
+    """One bold line: how many acceptance checks failed, and which."""
+    total = sum(len(v) for v in verdicts.values())
+    failed = [f"{name}: {k}" for name, v in verdicts.items() for k, ok in v.items() if not ok]
+    if not failed:
+        return f"All {total} acceptance checks passed."
+    return f"**{len(failed)} of {total} acceptance checks failed** ({', '.join(failed)})."
+
+
 def markdown(results: dict[str, ReplayResult], verdicts: dict, side: dict | None) -> str:
     lines = [
+        verdict_line(verdicts), "",
         "Each plan is executed by MuJoCo forward simulation (0.5 ms steps) through the motor "
         "actuators, tracked by Pinocchio feedforward + PD; the obstacle moves as a mocap body. "
         "'energy planned' is the planner's own figure; 'energy of plan, dense' integrates "
@@ -118,12 +134,30 @@ def run(out_dir: Path, quick: bool = False, plans: dict | None = None,
                clearance_figure(traces, threshold, figures_dir / "replay_clearance.png"),
                path_figure(traces, figures_dir / "replay_path3d.png"),
                tracking_figure(traces, figures_dir / "replay_tracking.png")]
+    paper = _paper_pair(traces)
+    if paper:
+        figures.append(model_power_figure(paper, figures_dir / "replay_power_models.png"))
     videos = _videos(model, traces, out_dir) if video and not quick else []
     payload = {name: {**asdict(r), "energy_error": r.energy_error, "role": role(name),
                       "acceptance": verdicts[name]} for name, r in results.items()}
+    failed = sum(not ok for v in verdicts.values() for ok in v.values())
     return {"markdown": markdown(results, verdicts, side),
-            "results": {"plans": payload, "comparison": side, "videos": videos},
+            "results": {"plans": payload, "comparison": side, "videos": videos,
+                        "acceptance_failed": failed},
             "figures": figures}
+
+
+def _paper_pair(traces: dict[str, ReplayTrace]) -> dict[str, ReplayTrace] | None:
+    """The paper scenario's closed-form and identified replays (paper Fig. 11), if both ran.
+    Plans named 'paper_*' are preferred over other plans of the same role."""
+    chosen = {}
+    for wanted in ("closed-form", "identified"):
+        names = [n for n in traces if role(n) == wanted]
+        names.sort(key=lambda n: not n.lower().startswith("paper"))
+        if not names:
+            return None
+        chosen[names[0]] = traces[names[0]]
+    return chosen
 
 
 def _video_subjects(traces: dict[str, ReplayTrace]) -> dict[str, ReplayTrace]:
