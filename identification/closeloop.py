@@ -3,11 +3,17 @@
 1. Residual of the declared model on the training part (first 1 - holdout of the
    samples in time order) and its diagnostics (identification.residual).
 2. Tracing: forward selection with BIC over the effect dictionary
-   (identification.effects_selection), all joints at once.
-3. Adding: the declared model extended with the selected effects, whose
+   (identification.effects_selection), all joints at once; then screening
+   (identification.effects_robustness): only effects whose coefficients agree on
+   the two halves of the training part and that lower its block cross-validated
+   error are named, the others are returned as `candidates` with the reason, and a
+   joint the effects make worse on validation falls back to the declared model.
+3. Adding: the declared model extended with the named effects, whose
    coefficients are the weighted least-squares fit on the training residual.
 4. Errors: held-out relative RMS error ||tau_hat - tau_clean|| / ||tau_clean||
-   per joint on the last `holdout` fraction, before and after.
+   per joint on the last `holdout` fraction, before and after; and the same
+   against the measured (noisy) torque, `*_measured`, the scale on which the
+   noise sets the bar.
 
 `unexplained` is set when, after the refit, some joint's residual still carries
 structure (a non-white residual, Ljung-Box p < UNEXPLAINED_P, whose part above
@@ -23,6 +29,7 @@ import numpy as np
 
 from identification.closeloop_model import ExtendedModel
 from identification.effects import EffectDictionary, EffectTerm, PayloadTorque, build_dictionary
+from identification.effects_robustness import Candidate, Screening, screen
 from identification.effects_selection import Selection, refine_coulomb, select_effects
 from identification.errors import IdentificationError
 from identification.residual import JointDiagnostics, diagnose, noise_sigma
@@ -47,6 +54,19 @@ class CloseLoopResult:
     unexplained: bool
     model: ExtendedModel
     split: int  # first held-out sample
+    error_before_measured: np.ndarray  # (dof,) ||tau_hat - tau|| / ||tau|| held out, measured tau
+    error_after_measured: np.ndarray
+    screening: Screening
+
+    @property
+    def candidates(self) -> tuple[Candidate, ...]:
+        """Selected effects not named (unstable or no validation gain), with the reason."""
+        return self.screening.candidates
+
+    @property
+    def fallback(self) -> tuple[int, ...]:
+        """Joints (1..dof) kept at the declared model: the effects were worse on validation."""
+        return self.screening.fallback
 
 
 def rel_error(estimate: np.ndarray, truth: np.ndarray) -> np.ndarray:
@@ -114,8 +134,8 @@ def _signals(q, qd, qdd, payload) -> dict[str, np.ndarray]:
     return {e.label: dictionary.columns[:, :, i] for i, e in enumerate(dictionary.effects)}
 
 
-def outcome(before: TorqueModel, model: ExtendedModel, selection: Selection, q, qd, qdd, tau,
-            tau_clean, split: int) -> CloseLoopResult:
+def outcome(before: TorqueModel, model: ExtendedModel, selection: Selection, screening: Screening,
+            q, qd, qdd, tau, tau_clean, split: int) -> CloseLoopResult:
     """Errors and diagnostics of the declared model `before` and the extended `model`."""
     train, held = slice(0, split), slice(split, None)
     tau_before, tau_after = before.torque(q, qd, qdd), model.torque(q, qd, qdd)
@@ -132,6 +152,9 @@ def outcome(before: TorqueModel, model: ExtendedModel, selection: Selection, q, 
         unexplained=is_unexplained(diags_after),
         model=model,
         split=split,
+        error_before_measured=rel_error(tau_before[held], tau[held]),
+        error_after_measured=rel_error(tau_after[held], tau[held]),
+        screening=screening,
     )
 
 
@@ -143,6 +166,8 @@ def close_loop(declared: TorqueModel, q, qd, qdd, tau, tau_clean, holdout: float
     train = slice(0, split)
     residual = tau[train] - declared.torque(q[train], qd[train], qdd[train])
     sigma = noise_sigma(residual)
-    selection, terms = trace(residual, sigma, q[train], qd[train], qdd[train], payload)
-    model = ExtendedModel(declared, terms, payload, symbolic_payload)
-    return outcome(declared, model, selection, q, qd, qdd, tau, tau_clean, split)
+    states = (q[train], qd[train], qdd[train])
+    selection, terms = trace(residual, sigma, *states, payload)
+    screening = screen(residual, [], terms, sigma, *states, payload)
+    model = ExtendedModel(declared, screening.named, payload, symbolic_payload, screening.fallback)
+    return outcome(declared, model, selection, screening, q, qd, qdd, tau, tau_clean, split)

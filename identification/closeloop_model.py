@@ -16,22 +16,32 @@ class ExtendedModel:
     payload / symbolic_payload: the unit-mass end-effector payload torque,
     numeric on (n, dof) arrays and symbolic on CasADi columns; needed only if a
     payload term is present.
+    fallback: joints (1..dof) on which the model is `original` (the declared model as
+    given; default `declared`) without any effect: the effects made them worse on
+    validation (identification.effects_robustness).
     """
 
     def __init__(self, declared: TorqueModel, terms: tuple[EffectTerm, ...],
                  payload: PayloadTorque | None = None,
-                 symbolic_payload: Callable | None = None):
+                 symbolic_payload: Callable | None = None,
+                 fallback: tuple[int, ...] = (), original: TorqueModel | None = None):
         self.declared = declared
         self.terms = tuple(terms)
         self.dof = declared.dof
+        self.fallback = tuple(fallback)
+        self.original = original if original is not None else declared
         self._payload = payload
         self._symbolic_payload = symbolic_payload
 
     def torque(self, q, qd, qdd) -> np.ndarray:
         """Declared torque plus the effects, (n, dof) in N m."""
         q, qd, qdd = as_states(q, qd, qdd, self.dof)
-        return self.declared.torque(q, qd, qdd) + effect_torque(
+        tau = self.declared.torque(q, qd, qdd) + effect_torque(
             self.terms, q, qd, qdd, self._payload)
+        if self.fallback:
+            cols = [j - 1 for j in self.fallback]
+            tau[:, cols] = self.original.torque(q, qd, qdd)[:, cols]
+        return tau
 
     def symbolic_torque(self, q, qd, qdd):
         """CasADi form: the declared model's expression plus each effect's."""
@@ -53,4 +63,8 @@ class ExtendedModel:
             unit = ca.DM.zeros(self.dof, 1)
             unit[j] = 1.0
             tau = tau + t.coefficient * signal * unit
+        if self.fallback:
+            plain = self.original.symbolic_torque(q, qd, qdd)
+            tau = ca.vertcat(*[plain[j] if j + 1 in self.fallback else tau[j]
+                               for j in range(self.dof)])
         return tau
