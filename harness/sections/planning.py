@@ -177,13 +177,13 @@ def _speed(baseline, scenario, quick: bool) -> dict:
     ipopt = planner.solve(*args, subset, 0.0, reference=free.trajectory)
     p = planner.parameters(*args, subset, 0.0, free.trajectory)
     scipy = solve_trust_constr(planner, planner.initial_guess(*args), p,
-                               max_iterations=20 if quick else 300)
+                               max_iterations=20 if quick else 150)
     out["same_problem"] = {
         "ipopt_ms": ipopt.solve_ms, "ipopt_iterations": ipopt.iterations,
         "ipopt_objective_J": ipopt.energy + ipopt.penalty, "ipopt_success": ipopt.success,
         "scipy_trust_constr_ms": scipy.solve_ms, "scipy_iterations": scipy.iterations,
         "scipy_objective_J": scipy.objective, "scipy_success": scipy.success,
-        "scipy_message": scipy.message, "scipy_max_iterations": 20 if quick else 300,
+        "scipy_message": scipy.message, "scipy_max_iterations": 20 if quick else 150,
     }
     return out
 
