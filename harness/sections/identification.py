@@ -373,10 +373,11 @@ def _table4_markdown(fits) -> list[str]:
 
 
 def _level_result(c: dict) -> dict:
-    return {"joints": [{**cp, "oracle": c["oracle"][j], "per_joint_rel": c["per-joint"]["joints"][j]["rel"],
+    return {"joints": [{**cp, "oracle": c["oracle"][j], "true_support": c["true_support"][j],
+                        "per_joint_rel": c["per-joint"]["joints"][j]["rel"],
                         "general_rel": c["coupled general"]["joints"][j]["rel"]}
                        for j, cp in enumerate(c["coupled"]["joints"])],
-            **{k: c[k] for k in ("oracle", "pysindy") if k in c},
+            **{k: c[k] for k in ("oracle", "true_support", "pysindy") if k in c},
             **{label: c[label] for label, _, _ in METHODS}}
 
 
