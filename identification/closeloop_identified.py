@@ -28,8 +28,8 @@ import numpy as np
 
 from identification.closeloop import CloseLoopResult, check_data, outcome, trace
 from identification.closeloop_model import ExtendedModel
-from identification.effects_robustness import screen
 from identification.effects import EffectTerm, PayloadTorque, effect_torque
+from identification.effects_robustness import screen
 from identification.model import IdentifiedModel, model_from_dict
 from identification.residual import noise_sigma
 

@@ -33,6 +33,13 @@ def _print(run) -> None:
     print(f"  declared {run.declared}: named [{named}]")
     print(f"    error before [{fmt(f'{e:.3e}' for e in r.error_before)}] "
           f"after [{fmt(f'{e:.3e}' for e in r.error_after)}] unexplained {str(r.unexplained).lower()}")
+    print(f"    vs measured torque: before [{fmt(f'{e:.3e}' for e in r.error_before_measured)}] "
+          f"after [{fmt(f'{e:.3e}' for e in r.error_after_measured)}]")
+    if r.candidates:
+        print("    not named: " + "; ".join(f"joint {c.term.joint} {c.term.effect} ({c.reason})"
+                                         for c in r.candidates))
+    if r.fallback:
+        print(f"    joints {list(r.fallback)} fall back to the declared model")
 
 
 def run(args) -> int:
