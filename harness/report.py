@@ -57,6 +57,7 @@ def report_json(outcomes: list[SectionOutcome], numbers: dict, meta: dict) -> di
     return _clean({
         **meta,
         "ok": all(o.status != "failed" for o in outcomes),
+        "acceptance_failed": numbers.get("acceptance", {}).get("failed", ""),
         "headline": numbers,
         "sections": {o.name: {k: v for k, v in asdict(o).items() if k not in ("name", "markdown")}
                      for o in outcomes},
@@ -98,6 +99,10 @@ def report_markdown(outcomes: list[SectionOutcome], numbers: dict, meta: dict,
     status = "all sections ran" if not failed and not missing else "; ".join(
         filter(None, [f"failed: {', '.join(failed)}" if failed else "",
                       f"not available: {', '.join(missing)}" if missing else ""]))
+    verdict = numbers.get("acceptance", {})
+    status += f"; acceptance: {verdict['checks failed']}" if verdict else ""
+    if verdict.get("failed"):
+        status += f" ({verdict['failed']})"
     lines = [
         "# torquebench report", "",
         f"Robot `{meta.get('robot')}`, {meta.get('elapsed_s', 0):.0f} s in total"
