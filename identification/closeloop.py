@@ -23,12 +23,18 @@ explains: the method then says so instead of forcing a name.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from identification.closeloop_model import ExtendedModel
-from identification.effects import EffectDictionary, EffectTerm, PayloadTorque, build_dictionary
+from identification.effects import (
+    Effect,
+    EffectDictionary,
+    EffectTerm,
+    PayloadTorque,
+    build_dictionary,
+)
 from identification.effects_robustness import Candidate, Screening, screen
 from identification.effects_selection import Selection, refine_coulomb, select_effects
 from identification.errors import IdentificationError
@@ -111,22 +117,59 @@ def projected_dictionary(q, qd, qdd, payload, shapes=None, project=None) -> Effe
     return EffectDictionary(dictionary.effects, cols)
 
 
-def trace(residual, sigma, q, qd, qdd, payload, project=None) -> tuple[Selection, tuple]:
+def _without(dictionary: EffectDictionary, excluded: frozenset[str]) -> EffectDictionary:
+    """The dictionary with the columns of the excluded labels zeroed (never selected)."""
+    if not excluded:
+        return dictionary
+    cols = dictionary.columns.copy()
+    for i, e in enumerate(dictionary.effects):
+        if e.label in excluded:
+            cols[:, :, i] = 0.0
+    return EffectDictionary(dictionary.effects, cols)
+
+
+def trace(residual, sigma, q, qd, qdd, payload, project=None,
+          excluded: frozenset[str] = frozenset()) -> tuple[Selection, tuple]:
     """Select, refine Coulomb shapes, and select again on the refined dictionary, so that
     a default-shaped friction column does not drag in a compensating term.
 
     project: a linear map (n, dof) -> (n, dof) applied to every candidate column (the
-    residual is expected to be mapped already); identity if None."""
-    dictionary = projected_dictionary(q, qd, qdd, payload, project=project)
+    residual is expected to be mapped already); identity if None.
+    excluded: labels of effects not to select (rejected by screening)."""
+    dictionary = _without(projected_dictionary(q, qd, qdd, payload, project=project), excluded)
     selection = select_effects(residual, dictionary, sigma)
     terms = refine_coulomb(residual, dictionary, sigma, selection.terms, q, qd, qdd, project)
     shapes = {t.joint: (t.lead, t.eps) for t in terms if t.effect == "coulomb"}
     if not shapes:
         return selection, terms
-    dictionary = projected_dictionary(q, qd, qdd, payload, shapes, project)
+    dictionary = _without(projected_dictionary(q, qd, qdd, payload, shapes, project), excluded)
     selection = select_effects(residual, dictionary, sigma)
     return selection, refine_coulomb(residual, dictionary, sigma, selection.terms, q, qd, qdd,
                                      project)
+
+
+def screened_trace(target, base, residual, sigma, states, payload, project=None,
+                   rounds: int = 3) -> tuple[Selection, Screening]:
+    """Trace, screen, and trace again without the rejected effects (a rejected stand-in may
+    have hidden a robust effect, e.g. a Coulomb column taking a viscous one's place next to
+    a tendon), until screening rejects nothing new; every rejection is kept as a candidate.
+
+    target, base: the screening's regression (identification.effects_robustness.screen);
+    residual: the selection's (the target with the base's span projected out by project)."""
+    excluded: frozenset[str] = frozenset()
+    rejected: dict[str, Candidate] = {}
+    for _ in range(rounds):
+        selection, terms = trace(residual, sigma, *states, payload, project, excluded)
+        screening = screen(target, base, terms, sigma, *states, payload)
+        new = {Effect(c.term.effect, c.term.joint).label: c for c in screening.candidates}
+        for label, c in new.items():
+            rejected.setdefault(label, c)
+        if set(new) <= excluded:
+            break
+        excluded = excluded | frozenset(new)
+    named = {Effect(t.effect, t.joint).label for t in screening.named}
+    return selection, replace(screening, candidates=tuple(
+        c for label, c in rejected.items() if label not in named))
 
 
 def _signals(q, qd, qdd, payload) -> dict[str, np.ndarray]:
@@ -167,7 +210,6 @@ def close_loop(declared: TorqueModel, q, qd, qdd, tau, tau_clean, holdout: float
     residual = tau[train] - declared.torque(q[train], qd[train], qdd[train])
     sigma = noise_sigma(residual)
     states = (q[train], qd[train], qdd[train])
-    selection, terms = trace(residual, sigma, *states, payload)
-    screening = screen(residual, [], terms, sigma, *states, payload)
+    selection, screening = screened_trace(residual, [], residual, sigma, states, payload)
     model = ExtendedModel(declared, screening.named, payload, symbolic_payload, screening.fallback)
     return outcome(declared, model, selection, screening, q, qd, qdd, tau, tau_clean, split)

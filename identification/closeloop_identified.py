@@ -22,14 +22,19 @@ the torque minus the named effects (`refit_kept`).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from identification.closeloop import CloseLoopResult, check_data, outcome, trace
+from identification.closeloop import (
+    CloseLoopResult,
+    check_data,
+    outcome,
+    screened_trace,
+    trace,
+)
 from identification.closeloop_model import ExtendedModel
 from identification.effects import EffectTerm, PayloadTorque, effect_torque
-from identification.effects_robustness import screen
 from identification.model import IdentifiedModel, model_from_dict
 from identification.residual import noise_sigma
 
@@ -101,6 +106,16 @@ def refit_kept(model: IdentifiedModel, terms: tuple[EffectTerm, ...], q, qd, qdd
     return model_from_dict(spec)
 
 
+def _worse_in_training(extended: ExtendedModel, identified: IdentifiedModel, states,
+                       tau: np.ndarray) -> set[int]:
+    """Joints (1..dof) on which the extended model's training residual exceeds the identified
+    model's. On a joint an effect acts on, the joint refit minimizes that residual and this
+    never fires (the block cross-validation of the screening decides there); on the others
+    the model differs only by re-identification, a fit on the same training part."""
+    sse = [np.sum((tau - m.torque(*states)) ** 2, axis=0) for m in (extended, identified)]
+    return {int(j) + 1 for j in np.flatnonzero(sse[0] > sse[1] * (1 + 1e-9))}
+
+
 def _labels(terms) -> set[tuple[str, int]]:
     return {(t.effect, t.joint) for t in terms}
 
@@ -136,16 +151,30 @@ def close_loop_identified(identified: IdentifiedModel, q, qd, qdd, tau, tau_clea
             break
         named = labels
         model = reidentify(tau[tr] - effect_torque(_joint_effects(terms), *states))
-    screening = screen(tau[tr], term_columns(model, *states), terms, noise_sigma(residual),
-                       *states, payload)
+    span = KeptSpan.of(model, *states)
+    selection, screening = screened_trace(tau[tr], term_columns(model, *states),
+                                          span.project(tau[tr]), noise_sigma(residual), states,
+                                          payload, span.project)
     if reidentify is not None and _labels(screening.named) != labels:
         # the model was re-identified without effects that screening then rejected
         joint = _joint_effects(screening.named)
         model = reidentify(tau[tr] - effect_torque(joint, *states)) if joint else identified
-        screening = screen(tau[tr], term_columns(model, *states), screening.named,
-                           noise_sigma(KeptSpan.of(model, *states).project(tau[tr])), *states,
-                           payload)
+        span = KeptSpan.of(model, *states)
+        rejected = screening.candidates
+        residual = span.project(tau[tr])
+        selection, screening = screened_trace(tau[tr], term_columns(model, *states), residual,
+                                              noise_sigma(residual), states, payload,
+                                              span.project)
+        seen = {(c.term.effect, c.term.joint) for c in screening.candidates} | _labels(
+            screening.named)
+        screening = replace(screening, candidates=screening.candidates + tuple(
+            c for c in rejected if (c.term.effect, c.term.joint) not in seen))
     refitted = refit_kept(model, screening.named, *states, tau[tr], payload)
     extended = ExtendedModel(refitted, screening.named, payload, symbolic_payload,
                              screening.fallback, identified)
+    worse = _worse_in_training(extended, identified, states, tau[tr])
+    if worse:  # joints the re-identification made worse: the identified model as given
+        screening = replace(screening, fallback=tuple(sorted(set(screening.fallback) | worse)))
+        extended = ExtendedModel(refitted, screening.named, payload, symbolic_payload,
+                                 screening.fallback, identified)
     return outcome(identified, extended, selection, screening, q, qd, qdd, tau, tau_clean, split)
