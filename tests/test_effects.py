@@ -15,6 +15,7 @@ from harness.pinocchio_baseline import PinocchioModel
 from harness.robots import load_pinocchio
 from identification.closeloop_model import ExtendedModel
 from identification.effects import EffectTerm, build_dictionary, effect_torque
+from identification.effects_robustness import screen
 from identification.effects_selection import select_effects
 from identification.residual import ljung_box, noise_sigma
 
@@ -65,13 +66,18 @@ def test_joint_effects_match_mujoco_passive_forces():
     np.testing.assert_allclose(effect_torque(terms, q, qd, qdd), expected, atol=1e-10)
 
 
-def test_extended_model_symbolic_equals_numeric(pmodel):
+@pytest.mark.parametrize("fallback", [(), (2,)])
+def test_extended_model_symbolic_equals_numeric(pmodel, fallback):
     payload = PayloadTorque(pmodel)
     terms = (EffectTerm("viscous", 1, 0.02), EffectTerm("coulomb", 2, 0.05, 0.01, 0.02),
              EffectTerm("armature", 3, 0.003), EffectTerm("offset", 1, -0.1),
              EffectTerm("spring", 2, 0.3), EffectTerm("payload", 3, 0.08))
-    model = ExtendedModel(PinocchioModel(pmodel), terms, payload, payload.symbolic)
+    declared = PinocchioModel(pmodel)
+    model = ExtendedModel(declared, terms, payload, payload.symbolic, fallback)
     q, qd, qdd = _states(5)
+    if fallback:  # the fallback joint is the declared model's, the others carry the effects
+        np.testing.assert_allclose(model.torque(q, qd, qdd)[:, 1], declared.torque(q, qd, qdd)[:, 1])
+        assert not np.allclose(model.torque(q, qd, qdd)[:, 0], declared.torque(q, qd, qdd)[:, 0])
     x = [ca.SX.sym(n, 3) for n in ("q", "qd", "qdd")]
     f = ca.Function("tau", x, [model.symbolic_torque(*x)])
     for k in range(5):
@@ -131,3 +137,26 @@ def test_coulomb_column_is_mujoco_frictionloss(joint, friction):
     linear = np.abs(qd[:, joint - 1] + qdd[:, joint - 1] / b) < eps
     assert 0 < linear.mean() < 1  # both regimes are exercised
     np.testing.assert_allclose(got, expected, atol=1e-10)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_screening_names_the_robust_effect_and_rejects_stand_ins(seed):
+    """A viscous effect on joint 1 beside structure no candidate spans on joint 2 (a
+    q3 sin q1 torque): the viscous term is named at its value; the spring and offset that
+    stand in for the structure, and a spurious armature, are rejected with a reason."""
+    q, qd, qdd = _states(2000, seed)
+    rng = np.random.default_rng(seed)
+    sigma = np.full(3, 0.002)
+    residual = rng.normal(0.0, 1.0, q.shape) * sigma
+    residual[:, 0] += 0.02 * qd[:, 0]
+    residual[:, 1] += 0.3 * q[:, 2] * np.sin(q[:, 0])
+    terms = (EffectTerm("viscous", 1, 0.02), EffectTerm("spring", 2, 0.1),
+             EffectTerm("offset", 2, 0.1), EffectTerm("armature", 3, 0.01))
+    result = screen(residual, [], terms, sigma, q, qd, qdd)
+    assert [(t.effect, t.joint) for t in result.named] == [("viscous", 1)]
+    assert result.named[0].coefficient == pytest.approx(0.02, rel=0.05)
+    assert {(c.term.effect, c.term.joint) for c in result.candidates} == {
+        ("spring", 2), ("offset", 2), ("armature", 3)}
+    assert all(c.reason for c in result.candidates)
+    assert result.fallback == ()
+    assert np.all(result.validation_after <= result.validation_before)
