@@ -44,7 +44,7 @@ def _verdict(run: CloseLoopRun) -> str:
         parts.append(f"joints {', '.join(str(j + 1) for j in absorbed)}: effects absorbed by the "
                      "declared model, checked after <= before (not 1/5)")
     if run.result.fallback:
-        parts.append(f"joints {', '.join(map(str, run.result.fallback))} fall back to declared")
+        parts.append(f"declared model kept on joint(s) {', '.join(map(str, run.result.fallback))}")
     return "; ".join(parts)
 
 
