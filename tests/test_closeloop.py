@@ -131,6 +131,9 @@ def test_cli_writes_contract(tmp_path):
     assert named[("coulomb", 2)] == pytest.approx(0.05, rel=0.1)
     assert report["unexplained"] is False
     assert len(report["error_before"]) == len(report["error_after"]) == 3
+    for key in ("error_before_measured", "error_after_measured", "truth_error_measured"):
+        assert len(report[key]) == 3
+    assert report["candidates"] == [] and report["fallback_joints"] == []
 
 
 TWO_JOINTS = ('<mujoco><worldbody><body><joint type="hinge"/><geom size="0.1"/><body>'
