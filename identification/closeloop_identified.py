@@ -106,14 +106,19 @@ def refit_kept(model: IdentifiedModel, terms: tuple[EffectTerm, ...], q, qd, qdd
     return model_from_dict(spec)
 
 
-def _worse_in_training(extended: ExtendedModel, identified: IdentifiedModel, states,
-                       tau: np.ndarray) -> set[int]:
-    """Joints (1..dof) on which the extended model's training residual exceeds the identified
-    model's. On a joint an effect acts on, the joint refit minimizes that residual and this
-    never fires (the block cross-validation of the screening decides there); on the others
-    the model differs only by re-identification, a fit on the same training part."""
+def _not_better_in_training(extended: ExtendedModel, identified: IdentifiedModel, states,
+                            tau: np.ndarray) -> set[int]:
+    """Joints (1..dof) that no named effect acts on and on which the re-identified model's
+    training residual sum of squares is not clearly below the identified model's: by less
+    than sqrt(2 / n) of it, one standard deviation of a noise-only sum of squares of n
+    samples. There the two differ only by the re-identification (shared coefficients move
+    when another joint's target changes), a fit on the same training part, whose small
+    in-sample gains do not carry over (payload plant, joint 1: 0.0038 -> 0.0066 held out
+    for a 1 % lower training sum); where they are large they do (joint 2: 0.029 -> 0.0021)."""
+    touched = np.any(effect_torque(extended.terms, *states, extended._payload) != 0, axis=0)
     sse = [np.sum((tau - m.torque(*states)) ** 2, axis=0) for m in (extended, identified)]
-    return {int(j) + 1 for j in np.flatnonzero(sse[0] > sse[1] * (1 + 1e-9))}
+    margin = 1.0 - np.sqrt(2.0 / len(tau))
+    return {int(j) + 1 for j in np.flatnonzero(~touched & (sse[0] > sse[1] * margin))}
 
 
 def _labels(terms) -> set[tuple[str, int]]:
@@ -172,8 +177,8 @@ def close_loop_identified(identified: IdentifiedModel, q, qd, qdd, tau, tau_clea
     refitted = refit_kept(model, screening.named, *states, tau[tr], payload)
     extended = ExtendedModel(refitted, screening.named, payload, symbolic_payload,
                              screening.fallback, identified)
-    worse = _worse_in_training(extended, identified, states, tau[tr])
-    if worse:  # joints the re-identification made worse: the identified model as given
+    worse = _not_better_in_training(extended, identified, states, tau[tr])
+    if worse:  # joints the re-identification does not clearly improve: the model as identified
         screening = replace(screening, fallback=tuple(sorted(set(screening.fallback) | worse)))
         extended = ExtendedModel(refitted, screening.named, payload, symbolic_payload,
                                  screening.fallback, identified)
