@@ -174,6 +174,10 @@ def close_loop_identified(identified: IdentifiedModel, q, qd, qdd, tau, tau_clea
             screening.named)
         screening = replace(screening, candidates=screening.candidates + tuple(
             c for c in rejected if (c.term.effect, c.term.joint) not in seen))
+    if not screening.named:  # nothing named: the declared model as it is
+        extended = ExtendedModel(identified, (), payload, symbolic_payload)
+        return outcome(identified, extended, selection, screening, q, qd, qdd, tau, tau_clean,
+                       split)
     refitted = refit_kept(model, screening.named, *states, tau[tr], payload)
     extended = ExtendedModel(refitted, screening.named, payload, symbolic_payload,
                              screening.fallback, identified)
