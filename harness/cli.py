@@ -20,7 +20,7 @@ if sys.platform.startswith("linux"):
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-from harness.errors import UserError
+from harness.errors import UserError  # noqa: E402 - after the environment set-up above
 
 COMMANDS = ["generate", "identify", "predict", "plan", "replay", "closeloop", "bench"]
 
