@@ -94,18 +94,17 @@ def replay_numbers(results: dict) -> dict:
     return out
 
 
-def _checks(results: dict) -> dict[str, bool]:
-    """A section's acceptance checks: results['acceptance'] and, per plan,
-    results['plans'][name]['acceptance'] (dicts of booleans)."""
-    found = {}
-    own = results.get("acceptance")
-    if isinstance(own, dict):
-        found.update({k: v for k, v in own.items() if isinstance(v, bool)})
-    plans = results.get("plans")
-    for name, entry in (plans.items() if isinstance(plans, dict) else ()):
-        checks = entry.get("acceptance") if isinstance(entry, dict) else None
-        if isinstance(checks, dict):
-            found.update({f"{name}.{k}": v for k, v in checks.items() if isinstance(v, bool)})
+def _checks(results: dict, path: str = "") -> dict[str, bool]:
+    """A section's acceptance checks: the boolean entries of every dict named
+    'acceptance*' or 'checks' anywhere in its results (per plan, per plant, ...)."""
+    found: dict[str, bool] = {}
+    for key, value in results.items():
+        if not isinstance(value, dict):
+            continue
+        where = f"{path}.{key}" if path else str(key)
+        if str(key).startswith("acceptance") or key == "checks":
+            found.update({f"{where}.{k}": v for k, v in value.items() if isinstance(v, bool)})
+        found.update(_checks(value, where))
     return found
 
 
