@@ -15,12 +15,16 @@ from harness.replay import ReplayTrace  # noqa: E402
 MARGIN = 0.005  # m, acceptance band below the threshold
 
 
-def _save(fig, path: Path) -> Path:
+def save_figure(fig, path: Path) -> Path:
+    """Write a finished matplotlib figure as PNG (120 dpi) and release it."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+_save = save_figure
 
 
 def power_figure(traces: dict[str, ReplayTrace], path: Path) -> Path:

@@ -23,9 +23,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 
 from identification.library import Library
+from identification.oracle import base_columns
 from identification.prior_knowledge import Atom, atom_torque
 from identification.sparse import SparseRegression, validation_mask
 
@@ -80,13 +80,7 @@ class AtomBasis:
 def base_atoms(design: np.ndarray, rtol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
     """Independent atom columns of the stacked (n*dof, p) design by pivoted QR, and the
     folded ones (linearly dependent on the base columns on this data)."""
-    stacked = design.reshape(-1, design.shape[-1])
-    norms = np.linalg.norm(stacked, axis=0)
-    usable = np.flatnonzero(norms > 0)
-    _, r, perm = scipy.linalg.qr(stacked[:, usable] / norms[usable], mode="economic", pivoting=True)
-    diag = np.abs(np.diag(r))
-    rank = int(np.sum(diag > rtol * diag[0]))
-    base = np.sort(usable[perm[:rank]])
+    base = base_columns(design, rtol)
     return base, np.setdiff1d(np.arange(design.shape[-1]), base)
 
 

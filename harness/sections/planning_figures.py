@@ -10,18 +10,11 @@ import numpy as np
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from harness.replay_figures import save_figure as _save  # noqa: E402
 from planning.energy import power as mechanical_power  # noqa: E402
 from planning.kinematics import ArmGeometry  # noqa: E402
 
 COLORS = {"pinocchio": "tab:green", "identified": "tab:orange"}
-
-
-def _save(fig, path: Path) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
 
 
 def path3d(free, paper: dict, path: Path) -> Path:
