@@ -15,6 +15,7 @@ from planning.nlp import PlanningNLP
 from planning.obstacle import LinearObstacle, predict_linear
 from planning.solver import ObstacleForecast, Planner
 from planning.trajectory import QuarticTrajectory
+from tests.helpers import central_difference as _central_difference
 
 RNG = np.random.default_rng(7)
 
@@ -92,15 +93,6 @@ def nlp_functions():
     p = planner.parameters(q0, np.array([0.1, -0.2, 0.3]), 2.0, goal, forecast, 0.0, arm)
     x = np.concatenate([arm.coefficients[:, 2:].ravel(), RNG.uniform(0.1, 1, 10)])
     return PlanningNLP(model, config).functions(), x, p
-
-
-def _central_difference(fun, x, h=1e-6):
-    columns = []
-    for i in range(len(x)):
-        e = np.zeros_like(x)
-        e[i] = h
-        columns.append((np.asarray(fun(x + e)) - np.asarray(fun(x - e))).ravel() / (2 * h))
-    return np.stack(columns, axis=-1)
 
 
 def test_objective_gradient_matches_finite_differences(nlp_functions):

@@ -18,6 +18,7 @@ from planning.obstacle import SwayingObstacle, predict_linear
 from planning.quadrature import energy_nodes
 from planning.solver import ObstacleForecast, Planner
 from planning.trajectory import PolynomialTrajectory, hermite, stationary_points
+from tests.helpers import central_difference as _central_difference
 
 RNG = np.random.default_rng(7)
 Q0, GOAL = np.array([1.2, 0.6, -0.8]), np.array([-1.0, 1.2, -1.0])
@@ -31,15 +32,6 @@ def pin_model():
 @pytest.fixture(scope="module")
 def baseline(pin_model):
     return PinocchioModel(pin_model)
-
-
-def _central_difference(fun, x, h=1e-6):
-    columns = []
-    for i in range(len(x)):
-        e = np.zeros_like(x)
-        e[i] = h
-        columns.append((np.asarray(fun(x + e)) - np.asarray(fun(x - e))).ravel() / (2 * h))
-    return np.stack(columns, axis=-1)
 
 
 @pytest.mark.parametrize("smoothing", [0.0, 1e-3])

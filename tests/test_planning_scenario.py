@@ -6,7 +6,6 @@ import dataclasses
 import json
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 from harness.cli import main
@@ -18,16 +17,7 @@ from planning.energy import absolute_energy
 from planning.replanning import execute
 from planning.result import evaluate
 from planning.solver import Planner
-
-
-def _heavier(scale: float) -> PinocchioModel:
-    """A stand-in 'identified' model: the arm with every link's inertia scaled."""
-    model = load_pinocchio("lynxmotion")
-    for j in range(1, model.njoints):
-        inertia = model.inertias[j]
-        model.inertias[j] = pin.Inertia(inertia.mass * scale, inertia.lever,
-                                        inertia.inertia * scale)
-    return PinocchioModel(model)
+from tests.helpers import heavier_model as _heavier
 
 
 @pytest.fixture(scope="module")

@@ -5,21 +5,9 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import pinocchio as pin
-
-from harness.pinocchio_baseline import PinocchioModel
 from harness.replay_reference import plan_reference
-from harness.robots import load_pinocchio
 from harness.sections import planning as section
-
-
-def _heavier(scale: float) -> PinocchioModel:
-    model = load_pinocchio("lynxmotion")
-    for j in range(1, model.njoints):
-        inertia = model.inertias[j]
-        model.inertias[j] = pin.Inertia(inertia.mass * scale, inertia.lever,
-                                        inertia.inertia * scale)
-    return PinocchioModel(model)
+from tests.helpers import heavier_model as _heavier
 
 
 def test_section_quick(tmp_path):
