@@ -23,10 +23,10 @@ sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__)
 
 from threadpoolctl import threadpool_limits  # noqa: E402
 
-from harness.datagen import generate  # noqa: E402
+from harness.data.generate import generate  # noqa: E402
 from harness.io import write_json  # noqa: E402
-from harness.pinocchio_baseline import PinocchioModel  # noqa: E402
-from harness.robots import load_pinocchio  # noqa: E402
+from harness.robots.baseline import PinocchioModel  # noqa: E402
+from harness.robots.registry import load_pinocchio  # noqa: E402
 from harness.sections import identification as section  # noqa: E402
 
 

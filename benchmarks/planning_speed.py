@@ -15,7 +15,7 @@ import os
 
 import numpy as np
 
-from harness.torque_models import load_torque_model
+from harness.robots.torque_models import load_torque_model
 from planning.quadrature import RULES
 from planning.replanning import execute
 from planning.scenarios import crossing_scenario, paper_scenario, swaying_scenario

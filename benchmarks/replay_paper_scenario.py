@@ -17,10 +17,10 @@ from dataclasses import asdict
 import numpy as np
 
 from harness.io import write_json
-from harness.pinocchio_baseline import PinocchioModel
-from harness.replay import replay
-from harness.replay_reference import plan_reference
-from harness.robots import DEFAULT_ROBOT, load_mujoco, load_pinocchio
+from harness.replay.reference import plan_reference
+from harness.replay.simulate import replay
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
 from planning.clearance import link_clearances
 from planning.config import PlannerConfig, Scenario
 from planning.solver import ObstacleForecast, Planner

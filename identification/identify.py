@@ -5,7 +5,7 @@ error is ||tau_hat - tau_clean|| / ||tau_clean|| per joint on it (tau when no
 clean torque is given). The regression target is the raw measured torque, not
 a denoised one. The bench section ("Denoise then regress") fits the coupled
 model both ways on the same draws at 1, 5 and 10 % noise (training part
-denoised by GCV Tikhonov smoothing, identification.denoise). Measured there
+denoised by GCV Tikhonov smoothing, identification.regression.denoise). Measured there
 (seeds fixed): the denoised target leaves the training residual almost
 perfectly correlated (lag-1 autocorrelation 0.93-1.00 vs ~0 on the raw
 torque), so the refit's standard errors are too small (RMS of (estimate -
@@ -18,7 +18,7 @@ information the least-squares fit does not already average out; it only
 correlates the residuals. Denoising stays a reported diagnostic (Fig. 2).
 
 Two methods: "per-joint" (the paper: each joint's torque regressed alone on
-the library) and "coupled" (identification.coupled: one Lagrangian, atoms
+the library) and "coupled" (identification.regression.coupled: one Lagrangian, atoms
 shared by all joints). The default is "coupled" when the library was derived
 from Lagrangian atoms (prior_knowledge_library): it shares 11 atom coefficients
 (rigid link pairs tied, symmetric links; 22 for general links) across the
@@ -35,11 +35,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from identification.coupled import AtomBasis, CoupledRegression, restriction_pvalue
 from identification.errors import IdentificationError
-from identification.library import Conditioning, Library, conditioning, warn_if_rank_deficient
+from identification.library.base import Conditioning, Library, conditioning, warn_if_rank_deficient
+from identification.metrics import rel_error
 from identification.model import IdentifiedModel, JointModel
-from identification.sparse import SparseRegression
+from identification.regression.coupled import AtomBasis, CoupledRegression, restriction_pvalue
+from identification.regression.sparse import SparseRegression
 
 
 @dataclass(frozen=True)
@@ -114,8 +115,8 @@ def check_data(q, qd, qdd, tau, n_features: int) -> tuple[np.ndarray, ...]:
 
 
 def _score(model, q, qd, qdd, truth) -> tuple[np.ndarray, np.ndarray]:
-    err = model.torque(q, qd, qdd) - truth
-    return np.linalg.norm(err, axis=0) / np.linalg.norm(truth, axis=0), np.mean(err**2, axis=0)
+    pred = model.torque(q, qd, qdd)
+    return rel_error(pred, truth), np.mean((pred - truth) ** 2, axis=0)
 
 
 def identify(q, qd, qdd, tau, library: Library, holdout: float = 0.25, tau_clean=None,

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from identification.errors import IdentificationError
-from identification.features import Feature, parse_feature
+from identification.library.features import Feature, parse_feature
 from identification.torque_model import as_states
 
 

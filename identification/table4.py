@@ -26,12 +26,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from identification.coupled import CoupledRegression
-from identification.features import parse_feature
 from identification.identify import identify
-from identification.libraries import generic_library
-from identification.library import Library
-from identification.prior_knowledge import Atom, absolute_chain_atoms, derive
+from identification.library.base import Library
+from identification.library.features import parse_feature
+from identification.library.prior_knowledge import Atom, absolute_chain_atoms, derive
+from identification.library.published import generic_library
+from identification.metrics import rel_error
+from identification.regression.coupled import CoupledRegression
 from identification.signals import Motion, multisine
 
 
@@ -106,12 +107,12 @@ def lagrangian_residual(system: System, m: Motion) -> tuple[float, ...]:
     the system's atoms (empty without atoms): ~1e-15 iff some Lagrangian produces the equations."""
     if not system.atoms:
         return ()
-    from identification.coupled import AtomBasis
+    from identification.regression.coupled import AtomBasis
 
     design = AtomBasis.from_atoms(system.atoms, system.dof).evaluate(m.q, m.qd, m.qdd)
     tau = system.torque(m)
     coef = np.linalg.lstsq(design.reshape(-1, design.shape[-1]), tau.reshape(-1), rcond=None)[0]
-    return tuple((np.linalg.norm(design @ coef - tau, axis=0) / np.linalg.norm(tau, axis=0)).tolist())
+    return tuple(rel_error(design @ coef, tau).tolist())
 
 
 def fit_system(system: System, noise: float = 0.05, seed: int = 8) -> SystemFit:

@@ -15,12 +15,3 @@ Modules, in the order the math flows:
 
 The planner takes any `identification.TorqueModel` (identified or closed form).
 """
-
-from planning.config import PlannerConfig, Scenario
-from planning.errors import PlanningError
-from planning.replanning import execute
-from planning.result import evaluate, to_json
-from planning.solver import Planner
-
-__all__ = ["PlanningError", "Planner", "PlannerConfig", "Scenario", "evaluate", "execute",
-           "to_json"]

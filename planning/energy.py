@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from identification import TorqueModel
+from identification.torque_model import TorqueModel
 
 
 def power(model: TorqueModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:

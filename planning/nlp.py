@@ -21,7 +21,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from identification import TorqueModel
+from identification.torque_model import TorqueModel
 from planning.clearance import symbolic_link_clearances
 from planning.config import PlannerConfig
 from planning.limits import quotient

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from identification import TorqueModel
+from identification.torque_model import TorqueModel
 from planning.clearance import link_clearances
 from planning.config import PlannerConfig, Scenario
 from planning.energy import absolute_energy

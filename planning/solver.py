@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from identification import TorqueModel
+from identification.torque_model import TorqueModel
 from planning.config import PlannerConfig
 from planning.limits import END_MARGIN, goal_limit_signs, quotient_turning_points
 from planning.nlp import PlanningNLP

@@ -3,8 +3,8 @@
 import numpy as np
 import pinocchio as pin
 
-from harness.pinocchio_baseline import PinocchioModel
-from harness.robots import load_pinocchio
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
 
 
 def central_difference(fun, x, h=1e-6):

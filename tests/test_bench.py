@@ -99,7 +99,7 @@ def test_missing_section_is_reported_not_failed(tmp_path, monkeypatch, capsys):
 
 
 def test_report_json_has_no_nan(tmp_path):
-    from harness.report import SectionOutcome, write_report
+    from harness.report.writer import SectionOutcome, write_report
 
     outcome = SectionOutcome("x", "ok", results={"a": float("nan"), "b": np.arange(2)})
     payload = write_report(tmp_path, [outcome], {}, {"robot": "r"})
@@ -107,8 +107,8 @@ def test_report_json_has_no_nan(tmp_path):
 
 
 def test_readme_sections_are_replaced_in_place_and_idempotent(tmp_path):
-    from harness.report import SectionOutcome, write_report
-    from harness.report_readme import update_readme
+    from harness.report.readme import update_readme
+    from harness.report.writer import SectionOutcome, write_report
 
     outcome = SectionOutcome("replay", "ok")
     write_report(tmp_path, [outcome], {"replay": {"a.energy_replayed_J": 0.5, "other": 1.5}},
@@ -127,8 +127,8 @@ def test_readme_sections_are_replaced_in_place_and_idempotent(tmp_path):
 
 
 def test_identification_headline_and_section_titles(tmp_path):
-    from harness.report import SectionOutcome, report_markdown
-    from harness.report_headline import identification_numbers
+    from harness.report.headline import identification_numbers
+    from harness.report.writer import SectionOutcome, report_markdown
 
     levels = {"0.05": {"joints": [{"rel": 0.004, "oracle": 0.003}] * 3}}
     numbers = identification_numbers({"levels": levels})

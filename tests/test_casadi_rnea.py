@@ -7,9 +7,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from harness.casadi_rnea import symbolic_rnea
-from harness.pinocchio_baseline import PinocchioModel
-from harness.robots import load_pinocchio
+from harness.robots.baseline import PinocchioModel
+from harness.robots.casadi_rnea import symbolic_rnea
+from harness.robots.registry import load_pinocchio
 
 
 def _function(model: pin.Model) -> ca.Function:

@@ -9,14 +9,15 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.closeloop import run_closeloop
-from harness.closeloop_acceptance import absorbed_joints, checks, coefficient_errors, meets_noise_bar
-from harness.closeloop_plants import DECLARED_MJCF, Variant, write_variant
-from identification.closeloop import projected_dictionary, rel_error
-from identification.closeloop_model import ExtendedModel
-from identification.effects import Effect
-from identification.effects_selection import refit
-from identification.residual import noise_sigma
+from harness.closeloop.acceptance import absorbed_joints, checks, coefficient_errors, meets_noise_bar
+from harness.closeloop.plants import DECLARED_MJCF, Variant, write_variant
+from harness.closeloop.run import run_closeloop
+from identification.closeloop.effects import Effect
+from identification.closeloop.extended import ExtendedModel
+from identification.closeloop.loop import projected_dictionary
+from identification.closeloop.residual import noise_sigma
+from identification.closeloop.selection import refit
+from identification.metrics import rel_error
 
 COUPLED = DECLARED_MJCF.parent / "lynxmotion_coupled.xml"
 

@@ -7,7 +7,8 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from identification import IdentificationError, denoise
+from identification.errors import IdentificationError
+from identification.regression.denoise import denoise
 
 
 def _explicit(y: np.ndarray, weight: float) -> np.ndarray:

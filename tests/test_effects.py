@@ -8,16 +8,16 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from harness.closeloop_payload import PayloadTorque
-from harness.closeloop_plants import Variant, variant_text
-from harness.datagen import inverse_torques
-from harness.pinocchio_baseline import PinocchioModel
-from harness.robots import load_pinocchio
-from identification.closeloop_model import ExtendedModel
-from identification.effects import EffectTerm, build_dictionary, effect_torque
-from identification.effects_robustness import screen
-from identification.effects_selection import select_effects
-from identification.residual import ljung_box, noise_sigma
+from harness.closeloop.payload import PayloadTorque
+from harness.closeloop.plants import Variant, variant_text
+from harness.data.generate import inverse_torques
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
+from identification.closeloop.effects import EffectTerm, build_dictionary, effect_torque
+from identification.closeloop.extended import ExtendedModel
+from identification.closeloop.residual import ljung_box, noise_sigma
+from identification.closeloop.robustness import screen
+from identification.closeloop.selection import select_effects
 
 
 def _states(n=600, seed=0):

@@ -7,10 +7,10 @@ import sys
 import numpy as np
 import pytest
 
-from harness.datagen import generate
-from harness.excitation import random_excitation
-from harness.pinocchio_baseline import PinocchioModel
-from harness.robots import load_pinocchio
+from harness.data.excitation import random_excitation
+from harness.data.generate import generate
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
 
 
 def run_cli(*args, cwd=None):

@@ -8,11 +8,11 @@ import casadi
 import numpy as np
 import pytest
 
-from harness.pinocchio_baseline import PinocchioModel
-from harness.robots import load_pinocchio
-from identification import identify, prior_knowledge_library
-from identification.coupled import AtomBasis
-from identification.prior_knowledge import Atom, Combination, arm_atoms
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
+from identification.identify import identify
+from identification.library.prior_knowledge import Atom, Combination, arm_atoms, prior_knowledge_library
+from identification.regression.coupled import AtomBasis
 from identification.signals import lynxmotion_motion
 
 

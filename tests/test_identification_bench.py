@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from threadpoolctl import threadpool_limits
 
-from harness.datagen import generate
+from harness.data.generate import generate
 from harness.sections import identification as section
 
 

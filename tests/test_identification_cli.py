@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.pinocchio_baseline import PinocchioModel
-from harness.robots import load_pinocchio
-from identification import load_model
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
+from identification.model import load_model
 from identification.signals import lynxmotion_motion
 
 
@@ -107,7 +107,9 @@ def test_library_holdout_zero_reports_no_heldout_error(arrays):
     """identify(..., holdout=0) (the closed loop's final fit) fits on everything and scores
     nothing: no training error under the held-out name; a holdout that rounds to no sample
     is an error."""
-    from identification import IdentificationError, identify, prior_knowledge_library
+    from identification.errors import IdentificationError
+    from identification.identify import identify
+    from identification.library.prior_knowledge import prior_knowledge_library
 
     lib = prior_knowledge_library(3)
     args = (arrays["q"], arrays["qd"], arrays["qdd"], arrays["tau"], lib)

@@ -9,13 +9,16 @@ import casadi
 import numpy as np
 import pytest
 
-from harness.datagen import generate
-from harness.pinocchio_baseline import PinocchioModel
-from harness.robots import load_pinocchio
-from identification import IdentificationError, identify, load_model, paper_library, prior_knowledge_library
-from identification.coupled import AtomBasis, CoupledRegression, base_atoms
-from identification.oracle import fit_base_parameters
-from identification.prior_knowledge import absolute_chain_atoms, arm_atoms
+from harness.data.generate import generate
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
+from identification.errors import IdentificationError
+from identification.identify import identify
+from identification.library.prior_knowledge import absolute_chain_atoms, arm_atoms, prior_knowledge_library
+from identification.library.published import paper_library
+from identification.model import load_model
+from identification.regression.coupled import AtomBasis, CoupledRegression, base_atoms
+from identification.regression.oracle import fit_base_parameters
 from identification.signals import lynxmotion_motion
 
 

@@ -1,4 +1,4 @@
-"""Tuned pysindy peers (identification.sparse_peers): the sweep picks the true support on
+"""Tuned pysindy peers (identification.regression.peers): the sweep picks the true support on
 sparse data, the refit equals least squares on the kept columns, and the selection rule is
 the sparsest candidate within one paired standard error of the best."""
 
@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from identification.sparse import validation_mask
-from identification.sparse_peers import choose, tune
+from identification.regression.peers import choose, tune
+from identification.regression.sparse import validation_mask
 
 
 @pytest.fixture(scope="module")

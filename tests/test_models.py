@@ -7,8 +7,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from harness.pinocchio_baseline import PinocchioModel
-from harness.robots import MODELS, ROBOTS, get_robot, load_mujoco, load_pinocchio
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import MODELS, ROBOTS, get_robot, load_mujoco, load_pinocchio
 
 D1, L2, L3 = 0.086, 0.146, 0.187
 

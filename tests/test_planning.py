@@ -6,8 +6,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from harness.pinocchio_baseline import PinocchioModel
-from harness.robots import load_mujoco, load_pinocchio
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_mujoco, load_pinocchio
 from planning.clearance import link_clearances, segment_distance
 from planning.config import PlannerConfig
 from planning.kinematics import ArmGeometry

@@ -7,8 +7,8 @@ import json
 import numpy as np
 
 from harness.cli import main
-from harness.pinocchio_baseline import PinocchioModel
-from harness.robots import load_pinocchio
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
 from planning.energy import absolute_energy
 
 

@@ -9,8 +9,8 @@ import pinocchio as pin
 import pytest
 from scipy.integrate import quad
 
-from harness.pinocchio_baseline import PinocchioModel
-from harness.robots import load_pinocchio
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
 from planning.baselines import MinimumJerk
 from planning.config import PlannerConfig
 from planning.energy import absolute_energy, net_work, power

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.pinocchio_baseline import PinocchioModel
-from harness.robots import load_pinocchio
-from planning import PlanningError
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
 from planning.config import PlannerConfig, Scenario
 from planning.energy import absolute_energy
+from planning.errors import PlanningError
 from planning.replanning import execute
 from planning.result import evaluate
 from planning.solver import Planner

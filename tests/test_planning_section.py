@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from harness.replay_reference import plan_reference
+from harness.replay.reference import plan_reference
 from harness.sections import planning as section
 from tests.helpers import heavier_model as _heavier
 

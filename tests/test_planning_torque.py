@@ -10,10 +10,10 @@ import pytest
 
 from harness.cli import main
 from harness.commands.plan import plant_torque_limit
-from harness.pinocchio_baseline import PinocchioModel
-from harness.replay import replay
-from harness.replay_reference import plan_reference
-from harness.robots import load_mujoco, load_pinocchio
+from harness.replay.reference import plan_reference
+from harness.replay.simulate import replay
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_mujoco, load_pinocchio
 from harness.sections.replay import checks
 from planning.config import PlannerConfig, Scenario
 from planning.replanning import execute

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.pinocchio_baseline import PinocchioModel
-from harness.replay import TrackingGains, replay
-from harness.replay_clearance import point_to_segment
-from harness.replay_reference import plan_reference
-from harness.robots import MODELS, load_mujoco, load_pinocchio
+from harness.replay.clearance import point_to_segment
+from harness.replay.reference import plan_reference
+from harness.replay.simulate import TrackingGains, replay
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import MODELS, load_mujoco, load_pinocchio
 
 Q0 = np.array([np.pi / 2, np.pi / 5, -np.pi / 4])
 Q_END = np.array([-np.pi / 2, 2 * np.pi / 5, -np.pi / 3])

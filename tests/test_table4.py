@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from identification import identify
-from identification.features import parse_feature
+from identification.identify import identify
+from identification.library.features import parse_feature
 from identification.table4 import CONSISTENT_DOUBLE_PENDULUM, SYSTEMS, fit_system, lagrangian_residual
 
 BY_NAME = {s.name: s for s in (*SYSTEMS, CONSISTENT_DOUBLE_PENDULUM)}
@@ -93,8 +93,8 @@ def test_pysindy_agrees_on_noise_free_data(name):
 
 def test_jointwise_fits_only_the_lagrangian_equation_by_atoms():
     """Printed double pendulum: eq. 2 passes the F-test (atoms, shared coupling), eq. 1 fails."""
-    from identification.coupled import CoupledRegression
-    from identification.sparse import SparseRegression
+    from identification.regression.coupled import CoupledRegression
+    from identification.regression.sparse import SparseRegression
 
     s = BY_NAME["double pendulum"]
     m = s.motion()
@@ -108,7 +108,7 @@ def test_jointwise_fits_only_the_lagrangian_equation_by_atoms():
 
 
 def test_restriction_pvalue_separates_nested_truth_from_misfit():
-    from identification.coupled import restriction_pvalue
+    from identification.regression.coupled import restriction_pvalue
 
     rng = np.random.default_rng(0)
     full = rng.normal(size=(2000, 6))

@@ -18,9 +18,9 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from harness.errors import UserError
-from harness.report import SectionOutcome, write_report
-from harness.report_headline import headline
-from harness.robots import DEFAULT_ROBOT
+from harness.report.headline import headline
+from harness.report.writer import SectionOutcome, write_report
+from harness.robots.registry import DEFAULT_ROBOT
 
 SECTIONS = ("identification", "planning", "replay", "closeloop")
 HEARTBEAT = 30.0  # s between "still running" lines of a long section

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from harness.closeloop import run_closeloop
+from harness.closeloop.run import run_closeloop
 from harness.errors import UserError
 from harness.io import write_json
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from harness.datagen import generate
+from harness.data.generate import generate
 from harness.io import write_npz
 
 

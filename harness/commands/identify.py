@@ -10,14 +10,10 @@ from pathlib import Path
 import numpy as np
 
 from harness.io import write_json
-from identification import (
-    IdentificationError,
-    LibraryRankWarning,
-    generic_library,
-    identify,
-    paper_library,
-    prior_knowledge_library,
-)
+from identification.errors import IdentificationError, LibraryRankWarning
+from identification.identify import identify
+from identification.library.prior_knowledge import prior_knowledge_library
+from identification.library.published import generic_library, paper_library
 
 LIBRARIES = ("prior", "prior-general", "paper", "generic")
 METHODS = ("auto", "coupled", "per-joint", "jointwise")

@@ -15,10 +15,10 @@ import numpy as np
 
 from harness.errors import UserError
 from harness.io import write_json
-from harness.robots import DEFAULT_ROBOT, load_mujoco
-from harness.torque_models import load_torque_model
-from planning import PlanningError
+from harness.robots.registry import DEFAULT_ROBOT, load_mujoco
+from harness.robots.torque_models import load_torque_model
 from planning.config import PlannerConfig, Scenario
+from planning.errors import PlanningError
 from planning.obstacle import LinearObstacle, SwayingObstacle
 from planning.quadrature import RULES
 from planning.replanning import execute

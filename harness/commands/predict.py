@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from harness.dataset import load_states
+from harness.data.dataset import load_states
 from harness.errors import UserError
 from harness.io import write_npz
-from harness.robots import DEFAULT_ROBOT
-from harness.torque_models import load_torque_model
+from harness.robots.registry import DEFAULT_ROBOT
+from harness.robots.torque_models import load_torque_model
 
 
 def register(sub) -> None:

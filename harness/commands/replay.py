@@ -8,7 +8,7 @@ from pathlib import Path
 
 from harness.errors import UserError
 from harness.io import write_json
-from harness.robots import DEFAULT_ROBOT
+from harness.robots.registry import DEFAULT_ROBOT
 
 FEEDFORWARD = "pinocchio"  # closed-form model of the default robot
 
@@ -51,10 +51,10 @@ def result_json(result, plant: str) -> dict:
 
 
 def run(args) -> int:
-    from harness.pinocchio_baseline import PinocchioModel
-    from harness.replay import replay
-    from harness.replay_reference import plan_reference
-    from harness.robots import load_mujoco, load_pinocchio
+    from harness.replay.reference import plan_reference
+    from harness.replay.simulate import replay
+    from harness.robots.baseline import PinocchioModel
+    from harness.robots.registry import load_mujoco, load_pinocchio
 
     reference = plan_reference(read_plan(args.plan))
     plant = args.plant or DEFAULT_ROBOT
@@ -62,7 +62,7 @@ def run(args) -> int:
     result, trace = replay(model, reference, PinocchioModel(load_pinocchio(DEFAULT_ROBOT)))
     write_json(args.out, result_json(result, str(plant)))
     if args.video:
-        from harness.replay_video import render_video
+        from harness.replay.video import render_video
 
         render_video(model, trace, args.video)
     return 0

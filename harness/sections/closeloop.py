@@ -12,16 +12,16 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from harness.closeloop import CloseLoopRun, run_closeloop
-from harness.closeloop_acceptance import (
+from harness.closeloop.acceptance import (
     NOISE_BAR,
     absorbed_joints,
     checks,
     coefficient_errors,
     reference_ratios,
 )
-from harness.closeloop_figures import error_figure, residual_figure
-from harness.closeloop_plants import DECLARED_MJCF
+from harness.closeloop.figures import error_figure, residual_figure
+from harness.closeloop.plants import DECLARED_MJCF
+from harness.closeloop.run import CloseLoopRun, run_closeloop
 
 PLANTS = {"friction": "lynxmotion_friction.xml", "payload": "lynxmotion_payload.xml",
           "coupled (outside dictionary)": "lynxmotion_coupled.xml", "control": "lynxmotion.xml"}

@@ -3,7 +3,7 @@ and pysindy (paper Figs. 2-8, Tables III, IV).
 
 Data: the default robot, `generate('lynxmotion', 4000, noise, seed=0)`, last 25 % held
 out; a fresh excitation (seed 5) checks that the model predicts a trajectory it was not
-trained on. The noise is drawn here from the clean torque with harness.measurement's
+trained on. The noise is drawn here from the clean torque with harness.data.sensors's
 `torque_noise` (std = level x each joint's torque std, mean 0.2 std) and
 `np.random.default_rng(seed)`. Each level gets its own draw (NOISE_SEEDS): seed 1 at
 5 % is exactly the default data (generate(..., seed=0) draws its noise with seed 1),
@@ -21,7 +21,7 @@ beat it: it is not an upper bound), *true support* (two-step WLS on exactly the 
 atoms: what a perfect selector reaches on the draw; coupled / true support = 1 means the
 selection cost nothing). Peers: pysindy STLSQ (threshold) and SSR (stopping point on its
 elimination path), each swept and chosen on our validation blocks inside the training
-part (identification.sparse_peers); every reported time includes its sweep. Denoise then
+part (identification.regression.peers); every reported time includes its sweep. Denoise then
 regress: the coupled fit on the GCV-denoised training torque beside the raw one at every
 noisy level (identification.identify's docstring summarizes the outcome). "True terms" are the
 library features with a non-zero coefficient in the exact noise-free least-squares fit
@@ -37,14 +37,18 @@ from pathlib import Path
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from harness.datagen import generate
-from harness.measurement import torque_noise
-from harness.pinocchio_baseline import PinocchioModel
-from harness.robots import load_pinocchio
-from identification import denoise, identify, paper_library, prior_knowledge_library
-from identification.coupled import AtomBasis, CoupledRegression, weighted_lstsq
-from identification.oracle import fit_base_parameters
-from identification.sparse_peers import tune
+from harness.data.generate import generate
+from harness.data.sensors import torque_noise
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
+from identification.identify import identify
+from identification.library.prior_knowledge import prior_knowledge_library
+from identification.library.published import paper_library
+from identification.metrics import rel_error
+from identification.regression.coupled import AtomBasis, CoupledRegression, weighted_lstsq
+from identification.regression.denoise import denoise
+from identification.regression.oracle import fit_base_parameters
+from identification.regression.peers import tune
 from identification.table4 import CONSISTENT_DOUBLE_PENDULUM, SYSTEMS, fit_system
 
 LEVELS = (0.0, 0.01, 0.05, 0.10)
@@ -83,10 +87,6 @@ def true_atoms(basis: AtomBasis, d) -> set[str]:
     return _nonzero(design.reshape(-1, design.shape[-1]), d.tau_clean.reshape(-1), basis.names)
 
 
-def _rel(pred, truth):
-    return np.linalg.norm(pred - truth, axis=0) / np.linalg.norm(truth, axis=0)
-
-
 def n_train(n: int) -> int:
     """Training samples: the first 1 - HOLDOUT, as identify splits."""
     return int(round(n * (1 - HOLDOUT)))
@@ -94,7 +94,7 @@ def n_train(n: int) -> int:
 
 def _pysindy(ctx: dict, d) -> dict:
     """pysindy STLSQ and SSR on the symmetric library, each joint's hyper-parameter swept and
-    chosen on our validation blocks inside the training part (identification.sparse_peers);
+    chosen on our validation blocks inside the training part (identification.regression.peers);
     seconds include the sweep, like identify's."""
     theta, names, truth = ctx["theta"], ctx["library"].names, ctx["truth"]["symmetric"]
     out, k = {}, n_train(len(d.tau))
@@ -104,7 +104,7 @@ def _pysindy(ctx: dict, d) -> dict:
         kept = [{names[i] for i in np.flatnonzero(f.coef)} for f in fits]
         out[name] = {"seconds": sum(f.seconds for f in fits), "setting_name": fits[0].setting_name,
                      "setting": [f.setting for f in fits],
-                     "rel": _rel(theta[k:] @ coef, d.tau_clean[k:]).tolist(),
+                     "rel": rel_error(theta[k:] @ coef, d.tau_clean[k:]).tolist(),
                      "terms": [len(s) for s in kept],
                      "recall": [len(s & t) / len(t) for s, t in zip(kept, truth, strict=True)],
                      "precision": [len(s & t) / max(len(s), 1) for s, t in zip(kept, truth, strict=True)]}
@@ -119,12 +119,12 @@ def true_support(ctx: dict, d, key: str = "symmetric") -> np.ndarray:
     design = basis.evaluate(d.q, d.qd, d.qdd)
     sigma = CoupledRegression().noise_sigma(design[:k], d.tau[:k], cols)
     coef = weighted_lstsq(design[:k], d.tau[:k], cols, sigma)[0]
-    return _rel(design[k:][:, :, cols] @ coef, d.tau_clean[k:])
+    return rel_error(design[k:][:, :, cols] @ coef, d.tau_clean[k:])
 
 
 def _scores(r, truth: list[set[str]], fresh) -> list[dict]:
     rows = []
-    frel = None if fresh is None else _rel(r.model.torque(fresh.q, fresh.qd, fresh.qdd), fresh.tau_clean)
+    frel = None if fresh is None else rel_error(r.model.torque(fresh.q, fresh.qd, fresh.qdd), fresh.tau_clean)
     for j, jm in enumerate(r.model.joints):
         hit = len(set(jm.terms) & truth[j])
         rows.append({"rel": float(r.heldout_rel_rmse[j]), "mse": float(r.heldout_mse[j]),
@@ -150,7 +150,7 @@ def fit_methods(d, ctx: dict, fresh=None) -> dict:
                               atom_precision=len(kept & atoms) / max(len(kept), 1))
     k = n_train(len(d.q))
     ofit = fit_base_parameters(ctx["regressor"][:k], d.tau[:k])
-    out["oracle"] = _rel(ofit.predict(ctx["regressor"][k:]), d.tau_clean[k:]).tolist()
+    out["oracle"] = rel_error(ofit.predict(ctx["regressor"][k:]), d.tau_clean[k:]).tolist()
     out["oracle_parameters"] = len(ofit.columns)
     out["true_support"] = true_support(ctx, d).tolist()
     return out

@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.pinocchio_baseline import PinocchioModel
-from harness.robots import DEFAULT_ROBOT, load_pinocchio
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import DEFAULT_ROBOT, load_pinocchio
 from harness.sections import planning_figures as figures
 from planning.baselines import MinimumJerk, solve_trust_constr
 from planning.config import PlannerConfig

@@ -10,7 +10,7 @@ import numpy as np
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from harness.replay_figures import save_figure as _save  # noqa: E402
+from harness.replay.figures import save_figure as _save  # noqa: E402
 from planning.energy import power as mechanical_power  # noqa: E402
 from planning.kinematics import ArmGeometry  # noqa: E402
 

@@ -11,17 +11,17 @@ import re
 from dataclasses import asdict
 from pathlib import Path
 
-from harness.pinocchio_baseline import PinocchioModel
-from harness.replay import ReplayResult, ReplayTrace, replay
-from harness.replay_figures import (
+from harness.replay.figures import (
     clearance_figure,
     model_power_figure,
     path_figure,
     power_figure,
     tracking_figure,
 )
-from harness.replay_reference import plan_reference
-from harness.robots import DEFAULT_ROBOT, load_mujoco, load_pinocchio
+from harness.replay.reference import plan_reference
+from harness.replay.simulate import ReplayResult, ReplayTrace, replay
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
 
 TRACKING_LIMIT = 1e-3  # rad
 ENERGY_TOLERANCE = 0.02  # relative
@@ -171,7 +171,7 @@ def _video_subjects(traces: dict[str, ReplayTrace]) -> dict[str, ReplayTrace]:
 
 
 def _videos(model, traces: dict[str, ReplayTrace], out_dir: Path) -> list[str]:
-    from harness.replay_video import render_video
+    from harness.replay.video import render_video
 
     written = []
     for name, trace in _video_subjects(traces).items():

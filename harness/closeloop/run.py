@@ -1,0 +1,234 @@
+"""Closing the loop on a plant: measured data, declared model, traced effects, scores.
+
+Measured data come from `generate(mode="measured")` with zero sensor bias by
+default: a constant torque-sensor bias cannot be told apart from a constant
+offset torque without a zero-torque calibration (taring the sensor at rest is
+what one does on a real arm), so with a bias the `offset` effect is named.
+Errors are held-out relative RMS errors against the clean measured torque
+`tau_clean` (the actuator force without sensor noise) on the last `holdout`
+fraction of the samples.
+
+Declared models: `pinocchio` (the closed-form baseline, fixed), `identified`
+(the sparse prior-knowledge-library model fitted on the same training part; its
+kept terms are refitted jointly with the effects, identification.closeloop.identified)
+or a MODEL.json (fixed). closeloop.json carries the contract's keys for the
+chosen one and, under `declared_models`, the effects and errors for both
+built-in declared models.
+
+Reference errors, for scoring only (they read the plant's MJCF, which the
+estimation never does):
+- `truth_error_measured`: declared model plus the true effects at the plant's own
+  coefficients (Coulomb at MuJoCo's own friction shape, `friction_shape`), evaluated
+  on the estimated states, relative RMS against the *measured* held-out torque: what
+  the noise allows on the same data. The acceptance bar: the extended model's
+  `error_after_measured` within 1.5x of it (harness.closeloop.acceptance).
+- `truth_error`: the same model against the clean torque (what state estimation
+  alone allows), and `noise_floor`: the true effect set refitted on the training
+  part, against the clean torque. Information only: the noise floor equals the
+  error after whenever the right effects are named (same fit), and any fitted
+  coefficient costs about sqrt(k / n) noise sigmas against the clean torque, which
+  the true coefficients do not pay.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from harness.closeloop.payload import PayloadTorque
+from harness.closeloop.plants import DECLARED_MJCF, true_effects
+from harness.data.generate import Dataset, generate
+from harness.errors import UserError
+from harness.robots.plant import Plant, load_plant
+from harness.robots.registry import DEFAULT_ROBOT, load_pinocchio
+from harness.robots.torque_models import load_torque_model
+from identification.closeloop.effects import Effect, EffectDictionary, EffectTerm
+from identification.closeloop.extended import ExtendedModel
+from identification.closeloop.identified import KeptSpan, close_loop_identified, refit_kept
+from identification.closeloop.loop import (
+    CloseLoopResult,
+    close_loop,
+    is_unexplained,
+    projected_dictionary,
+)
+from identification.closeloop.residual import noise_sigma
+from identification.closeloop.selection import refine_coulomb, refit
+from identification.metrics import rel_error
+from identification.torque_model import TorqueModel
+
+DECLARED_MODELS = ("pinocchio", "identified")  # both reported in closeloop.json
+
+
+@dataclass(frozen=True)
+class CloseLoopRun:
+    """A closed loop on one plant, with the references it is scored against."""
+
+    plant: str
+    declared: str
+    data: Dataset
+    result: CloseLoopResult
+    truth: tuple[EffectTerm, ...]  # effects the plant carries beyond the declared model
+    outside_dictionary: bool  # the plant carries an effect the dictionary cannot name
+    noise_floor: np.ndarray | None  # (dof,) oracle refit error; None if outside dictionary
+    truth_error: np.ndarray | None  # (dof,) true-coefficient error vs the clean torque
+    truth_error_measured: np.ndarray | None  # (dof,) same vs the measured torque (the bar)
+    absorbed: tuple[str, ...] = ()  # labels of true effects the declared model's terms span
+    others: tuple[CloseLoopRun, ...] = ()  # the same data with the other declared models
+
+    @property
+    def expected(self) -> tuple[EffectTerm, ...]:
+        """The true effects the loop can name: those the declared model does not carry."""
+        return tuple(t for t in self.truth if Effect(t.effect, t.joint).label not in self.absorbed)
+
+    def summary(self) -> dict:
+        """Effects, errors and references of this declared model."""
+        r = self.result
+        ref = {k: None if v is None else v.tolist() for k, v in
+               (("noise_floor", self.noise_floor), ("truth_error", self.truth_error),
+                ("truth_error_measured", self.truth_error_measured))}
+        return {"effects": [t.to_json() for t in r.terms], "error_before": r.error_before.tolist(),
+                "error_after": r.error_after.tolist(), "unexplained": bool(r.unexplained),
+                "error_before_measured": r.error_before_measured.tolist(),
+                "error_after_measured": r.error_after_measured.tolist(), **ref,
+                "candidates": [c.to_json() for c in r.candidates],
+                "fallback_joints": list(r.fallback),
+                "plant_effects_absorbed": list(self.absorbed)}
+
+    def to_json(self) -> dict:
+        r = self.result
+        return {
+            **self.summary(),
+            "unexplained_joints": [d.joint for d in r.diagnostics_after if is_unexplained([d])],
+            "declared": self.declared,
+            "declared_models": {run.declared: run.summary() for run in (self, *self.others)},
+            "plant": self.plant,
+            "error_definition": "held-out relative RMS ||tau_hat - tau_clean|| / ||tau_clean|| "
+                                "per joint on the last 25 % of samples (time order); *_measured: "
+                                "the same against the measured (noisy) torque tau",
+            "plant_effects": [t.to_json() for t in self.truth],
+            "plant_outside_dictionary": self.outside_dictionary,
+            "selection": {"bic_path": [list(p) for p in r.selection.bic_path],
+                          "sizes_in_noise_sigma": r.selection.sizes},
+            "diagnostics": {"before": [d.to_json() for d in r.diagnostics_before],
+                            "after": [d.to_json() for d in r.diagnostics_after]},
+            "data": {k: self.data.meta[k] for k in ("samples", "noise", "bias", "seed", "mode")},
+        }
+
+
+def _reidentify(data: Dataset, split: int):
+    """The same identification as declared_model('identified'), on another training torque."""
+    from identification.identify import identify
+    from identification.library.prior_knowledge import prior_knowledge_library
+
+    tr = slice(0, split)
+    return lambda tau: identify(data.q[tr], data.qd[tr], data.qdd[tr], tau,
+                                prior_knowledge_library(3), holdout=0.0).model
+
+
+def declared_model(spec: str, data: Dataset, split: int) -> TorqueModel:
+    """'pinocchio', 'identified' (sparse model fitted on the training part of data) or a
+    MODEL.json path."""
+    if spec != "identified":
+        return load_torque_model(spec, DEFAULT_ROBOT)
+    return _reidentify(data, split)(data.tau[:split])
+
+
+def _oracle_fit(data: Dataset, dictionary: EffectDictionary, residual, truth, tr, project):
+    """The true effect set's coefficients (and Coulomb shapes) fitted on the training part."""
+    sigma = noise_sigma(residual)
+    chosen = [Effect(t.effect, t.joint) for t in truth]
+    return refine_coulomb(residual, dictionary, sigma, refit(residual, dictionary, sigma, chosen),
+                          data.q[tr], data.qd[tr], data.qdd[tr], project)
+
+
+def oracle(declared: TorqueModel, data: Dataset, truth: tuple[EffectTerm, ...], split: int,
+           payload: PayloadTorque, joint_refit: bool = False,
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Held-out errors of the true effect set refitted (noise floor) and at true values
+    (against the clean and the measured torque), and the labels of true effects the
+    declared model's terms span (absorbed).
+
+    joint_refit: the declared model is identified; its kept terms are refitted with the
+    effects (as close_loop_identified does); an effect they span exactly is absorbed."""
+    tr, held = slice(0, split), slice(split, None)
+    states = (data.q[tr], data.qd[tr], data.qdd[tr])
+    project = KeptSpan.of(declared, *states).project if joint_refit else None
+    residual = (project(data.tau[tr]) if project is not None
+                else data.tau[tr] - declared.torque(*states))
+    dictionary = projected_dictionary(*states, payload, project=project)
+    absorbed = tuple(e.label for i, e in enumerate(dictionary.effects)
+                     if not np.any(dictionary.columns[:, :, i])
+                     and any(Effect(t.effect, t.joint) == e for t in truth))
+    visible = tuple(t for t in truth if Effect(t.effect, t.joint).label not in absorbed)
+    fitted = _oracle_fit(data, dictionary, residual, visible, tr, project)
+    errors = []
+    for terms in (fitted, truth):
+        base = refit_kept(declared, terms, *states, data.tau[tr], payload) if joint_refit else declared
+        model = ExtendedModel(base, terms, payload)
+        errors.append(model.torque(data.q[held], data.qd[held], data.qdd[held]))
+    return (rel_error(errors[0], data.tau_clean[held]), rel_error(errors[1], data.tau_clean[held]),
+            rel_error(errors[1], data.tau[held]), absorbed)
+
+
+def check_plant(plant: str | Path, dof: int) -> Plant:
+    """The plant, or a UserError if it cannot be a variant of this robot: another number of
+    joints, or joints of another type, axis or place (the declared MJCF's kinematics)."""
+    p = load_plant(plant)
+    if p.dof != dof:
+        raise UserError(f"plant {plant} has {p.dof} joints; the declared {DEFAULT_ROBOT} model has "
+                        f"{dof}: not a variant of this robot")
+    ref = mujoco.MjModel.from_xml_path(str(DECLARED_MJCF))
+    m = p.model
+    for j in range(dof):
+        same = (m.jnt_type[j] == ref.jnt_type[j]
+                and np.allclose(m.jnt_axis[j], ref.jnt_axis[j], atol=1e-9)
+                and np.allclose(m.jnt_pos[j], ref.jnt_pos[j], atol=1e-9)
+                and np.allclose(m.body_pos[m.jnt_bodyid[j]], ref.body_pos[ref.jnt_bodyid[j]],
+                                atol=1e-9))
+        if not same:
+            raise UserError(f"plant {plant}: joint {j + 1} differs from {DEFAULT_ROBOT}'s in type, "
+                            "axis or position: not a variant of this robot")
+    return p
+
+
+def _loop(spec: str, data: Dataset, split: int, payload: PayloadTorque, truth, outside: bool,
+          holdout: float) -> CloseLoopRun:
+    model = declared_model(spec, data, split)
+    if model.dof != data.q.shape[1]:
+        raise UserError(f"declared model {spec} has {model.dof} joints, the plant "
+                        f"{data.q.shape[1]}")
+    args = (data.q, data.qd, data.qdd, data.tau, data.tau_clean, holdout, payload, payload.symbolic)
+    identified = spec == "identified"
+    if identified:
+        result = close_loop_identified(model, *args, reidentify=_reidentify(data, split))
+        model = result.model.declared  # the terms of the last re-identification
+    else:
+        result = close_loop(model, *args)
+    floor = exact = measured = None
+    absorbed: tuple[str, ...] = ()
+    if not outside:
+        floor, exact, measured, absorbed = oracle(model, data, truth, result.split, payload,
+                                                  identified)
+    return CloseLoopRun(str(data.meta["plant"]), spec, data, result, truth, outside, floor, exact,
+                        measured, absorbed)
+
+
+def run_closeloop(plant: str | Path, samples: int = 4000, noise: float = 0.05, seed: int = 0,
+                  bias: float = 0.0, holdout: float = 0.25, declared: str = "pinocchio",
+                  compare: bool = False) -> CloseLoopRun:
+    """Generate measured data on plant, close the loop on the declared model, score it;
+    compare: also close it with the other built-in declared models (CloseLoopRun.others)."""
+    p = check_plant(plant, load_pinocchio(DEFAULT_ROBOT).nv)
+    data = generate(str(plant), samples, noise, seed, "measured", bias)
+    split = int(round(samples * (1.0 - holdout)))
+    payload = PayloadTorque(load_pinocchio(DEFAULT_ROBOT))
+    truth, outside = true_effects(p.model)
+    run = _loop(declared, data, split, payload, truth, outside, holdout)
+    if not compare:
+        return run
+    others = tuple(_loop(spec, data, split, payload, truth, outside, holdout)
+                   for spec in DECLARED_MODELS if spec != declared)
+    return replace(run, others=others)

@@ -1,0 +1,160 @@
+"""Torque data for identification, from MuJoCo.
+
+`inverse`: MuJoCo inverse dynamics (mj_inverse) along an excitation trajectory,
+plus non-zero-mean Gaussian torque noise.
+`measured`: MuJoCo forward simulation through the plant's actuators under a
+tracking controller; the user sees encoder angles and noisy actuator torques
+and estimates qd, qdd from the angles (harness.data.sensors).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from harness.data.excitation import FourierExcitation, design_excitation, normalized_condition
+from harness.data.sensors import SensorConfig, torque_noise
+from harness.errors import UserError
+from harness.robots.baseline import PinocchioModel
+from harness.robots.plant import Plant, load_plant
+from identification.metrics import rel_error
+from identification.regression.oracle import base_columns
+
+MIN_SAMPLES = 10
+SAMPLE_RATE = 200.0  # Hz, rate of the data handed to identification
+
+
+@dataclass(frozen=True)
+class Dataset:
+    """Time series of one experiment; arrays (n, dof), SI units."""
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    tau: np.ndarray
+    tau_clean: np.ndarray
+    meta: dict
+    truth: dict = field(default_factory=dict)  # q/qd/qdd the simulator had (measured mode)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The npz payload of the CLI contract (plus true states where known)."""
+        out = {k: getattr(self, k) for k in ("t", "q", "qd", "qdd", "tau", "tau_clean")}
+        out.update({f"{k}_true": v for k, v in self.truth.items()})
+        out["meta"] = np.array(json.dumps(self.meta))
+        return out
+
+
+def _condition_fn(plant: Plant, rate: float, samples: int):
+    """Excitation quality: the worse of the normalized conditions of the plant's
+    base regressor (Pinocchio) and of the paper's feature library (3-DOF)."""
+    pmodel = plant.pinocchio()
+    t = np.linspace(0.0, samples / rate, min(samples, 400), endpoint=False)
+    baseline = PinocchioModel(pmodel) if pmodel is not None and pmodel.nv == plant.dof else None
+    base: list[np.ndarray] = []  # base-parameter columns: structural, found on the first candidate
+
+    def condition(exc: FourierExcitation) -> float:
+        states = exc.evaluate(t)
+        conds = [library_report(*states)["library_condition"]] if plant.dof == 3 else []
+        if baseline is not None:
+            Y = baseline.regressor(*states).reshape(-1, 10 * (pmodel.njoints - 1))
+            if not base:
+                base.append(base_columns(Y))
+            conds.append(normalized_condition(Y[:, base[0]]))
+        else:
+            conds.append(normalized_condition(np.hstack(states)))
+        return max(conds)
+
+    return condition
+
+
+def _validate(samples: int, noise: float, bias: float) -> None:
+    if samples < MIN_SAMPLES:
+        raise UserError(f"--samples must be at least {MIN_SAMPLES}, got {samples}")
+    if not np.isfinite(noise) or noise < 0:
+        raise UserError(f"--noise must be a finite fraction >= 0, got {noise}")
+    if not np.isfinite(bias):
+        raise UserError(f"--bias must be finite, got {bias}")
+
+
+def inverse_torques(model: mujoco.MjModel, q, qd, qdd) -> np.ndarray:
+    """mj_inverse generalized forces (n, nv) along a trajectory."""
+    data = mujoco.MjData(model)
+    tau = np.empty_like(q)
+    for k in range(len(q)):
+        data.qpos[:], data.qvel[:], data.qacc[:] = q[k], qd[k], qdd[k]
+        mujoco.mj_inverse(model, data)
+        tau[k] = data.qfrc_inverse
+    return tau
+
+
+def generate(
+    plant: str,
+    samples: int = 4000,
+    noise: float = 0.05,
+    seed: int = 0,
+    mode: str = "inverse",
+    bias: float = 0.2,
+    sensors: SensorConfig | None = None,
+) -> Dataset:
+    """One dataset of `samples` points at SAMPLE_RATE Hz; noise is a fraction of torque std."""
+    _validate(samples, noise, bias)
+    p = load_plant(plant)
+    lo, hi = p.limits()
+    exc, cond = design_excitation(lo, hi, seed, _condition_fn(p, SAMPLE_RATE, samples))
+    t = np.arange(samples) / SAMPLE_RATE
+    rng = np.random.default_rng(seed + 1)
+    meta = dict(plant=str(plant), mode=mode, noise=noise, bias=bias, seed=seed, dof=p.dof,
+                samples=samples, rate=SAMPLE_RATE, excitation_condition=cond)
+    if mode == "inverse":
+        q, qd, qdd = exc.evaluate(t)
+        tau_clean = inverse_torques(p.model, q, qd, qdd)
+        truth: dict = {}
+    elif mode == "measured":
+        from harness.data.tracking import simulate_measured
+
+        q, qd, qdd, tau_clean, truth, stats = simulate_measured(p, exc, t, sensors or SensorConfig(), rng)
+        meta.update(stats)
+    else:
+        raise UserError(f"--mode must be 'inverse' or 'measured', got '{mode}'")
+    meta.update(library_report(q, qd, qdd))
+    tau = tau_clean + torque_noise(tau_clean, noise, bias, rng)
+    return Dataset(t, q, qd, qdd, tau, tau_clean, meta, truth)
+
+
+def report_library(dof: int):
+    """The feature library whose conditioning is reported for a dof-joint dataset.
+
+    3 joints: the paper's published 75 features. Otherwise the generic
+    polynomial x trig library (trig of the first two non-base joints' angle sums
+    beyond 2 joints, to keep it a few hundred features).
+    """
+    from identification.library.published import generic_library, paper_library
+
+    if dof == 3:
+        return paper_library()
+    return generic_library(dof) if dof <= 2 else generic_library(dof, trig_joints=(1, 2))
+
+
+def library_report(q, qd, qdd) -> dict:
+    """Rank and normalized condition of the report library on this data."""
+    from identification.library.base import conditioning
+
+    library = report_library(q.shape[1])
+    cond = conditioning(library.evaluate(q, qd, qdd), library.names)
+    return {"library": library.name, "library_rank": cond.rank, "library_size": cond.size,
+            "library_condition": cond.condition}
+
+
+def state_errors(p: Plant, est: tuple, true: tuple) -> dict:
+    """Relative RMS errors of estimated qd, qdd and of the torque they imply."""
+    out = {"qd_rel_rmse": rel_error(est[1], true[1]).tolist(),
+           "qdd_rel_rmse": rel_error(est[2], true[2]).tolist()}
+    pmodel = p.pinocchio()
+    if pmodel is not None and pmodel.nv == p.dof:
+        baseline = PinocchioModel(pmodel)
+        out["tau_from_states_rel_rmse"] = rel_error(baseline.torque(*est), baseline.torque(*true)).tolist()
+    return out

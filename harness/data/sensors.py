@@ -1,0 +1,56 @@
+"""What a user of a real arm measures: encoder angles and noisy motor torques.
+
+Joint velocities and accelerations are estimated from the measured angles by
+Savitzky-Golay differentiation (scipy.signal.savgol_filter), a zero-phase
+local-polynomial fit that is the standard offline choice for identification.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import savgol_filter
+
+
+@dataclass(frozen=True)
+class SensorConfig:
+    """Sensor model; angles in rad, rates in Hz, window in s."""
+
+    encoder_bits: int = 16  # quantization step 2 pi / 2**bits
+    angle_noise: float = 2e-5  # rad, Gaussian jitter before quantization
+    sensing_rate: float = 2000.0  # Hz, the controller/sensor loop
+    window: float = 0.2  # s, Savitzky-Golay window for derivative estimation
+    polyorder: int = 4
+
+    @property
+    def resolution(self) -> float:
+        return 2 * np.pi / 2**self.encoder_bits
+
+
+def encoder(q: np.ndarray, cfg: SensorConfig, rng: np.random.Generator) -> np.ndarray:
+    """Quantized, jittered angle readings (rad)."""
+    noisy = q + rng.normal(scale=cfg.angle_noise, size=q.shape)
+    return np.round(noisy / cfg.resolution) * cfg.resolution
+
+
+def estimate_derivatives(q_meas: np.ndarray, cfg: SensorConfig) -> tuple[np.ndarray, ...]:
+    """Smoothed q, estimated qd, qdd from angles sampled at cfg.sensing_rate (axis 0 = time)."""
+    dt = 1.0 / cfg.sensing_rate
+    window = int(round(cfg.window * cfg.sensing_rate)) | 1  # odd
+    if window > len(q_meas):
+        window = len(q_meas) if len(q_meas) % 2 else len(q_meas) - 1
+    order = min(cfg.polyorder, window - 1)
+    kw = dict(window_length=window, polyorder=order, axis=0, mode="interp")
+    q = savgol_filter(q_meas, deriv=0, **kw)
+    qd = savgol_filter(q_meas, deriv=1, delta=dt, **kw)
+    qdd = savgol_filter(q_meas, deriv=2, delta=dt, **kw)
+    return q, qd, qdd
+
+
+def torque_noise(
+    tau_clean: np.ndarray, level: float, bias: float, rng: np.random.Generator
+) -> np.ndarray:
+    """Non-zero-mean Gaussian torque noise: std = level * std(tau_j), mean = bias * that std."""
+    sigma = level * tau_clean.std(axis=0)
+    return rng.normal(size=tau_clean.shape) * sigma + bias * sigma

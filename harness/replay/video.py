@@ -1,0 +1,79 @@
+"""Render a replay to mp4 with MuJoCo's offscreen renderer.
+
+Headless machines render through EGL (`MUJOCO_GL=egl`, read when mujoco is
+first imported). Where no GL context can be made the video is skipped with a
+warning and `render_video` returns False; the measurement never depends on it.
+Frames are encoded by the ffmpeg binary that the `imageio-ffmpeg` wheel ships.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from harness.io import atomic_write
+from harness.replay.simulate import ReplayTrace
+
+CAMERA = "overview"
+FPS = 30  # frames per second of simulated time
+
+
+def _renderer(model: mujoco.MjModel) -> mujoco.Renderer | None:
+    width = min(640, model.vis.global_.offwidth)
+    height = min(480, model.vis.global_.offheight)
+    try:
+        return mujoco.Renderer(model, height=height - height % 2, width=width - width % 2)
+    except Exception as exc:  # no display, no EGL/OSMesa: any backend failure means "skip"
+        warn(f"video skipped, no OpenGL rendering available ({type(exc).__name__}: {exc})")
+        return None
+
+
+def warn(message: str) -> None:
+    print(f"torquebench: warning: {message}", file=sys.stderr)
+
+
+def frames(model: mujoco.MjModel, trace: ReplayTrace, renderer: mujoco.Renderer):
+    """Yield RGB frames (h, w, 3) uint8 at FPS from the recorded trace."""
+    data = mujoco.MjData(model)
+    camera = CAMERA if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, CAMERA) >= 0 else -1
+    body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "obstacle")
+    mocap = int(model.body_mocapid[body]) if body >= 0 else -1
+    times = np.arange(trace.t[0], trace.t[-1] + 1e-9, 1.0 / FPS)
+    for k in np.searchsorted(trace.t, times).clip(0, len(trace.t) - 1):
+        data.qpos[:] = trace.q[k]
+        if mocap >= 0:
+            data.mocap_pos[mocap] = trace.obstacle[k]
+        mujoco.mj_forward(model, data)
+        renderer.update_scene(data, camera=camera)
+        yield renderer.render()
+
+
+def render_video(model: mujoco.MjModel, trace: ReplayTrace, path: str | Path) -> bool:
+    """Write the replay as an mp4 at path; False (with a warning) if it cannot render."""
+    try:
+        import imageio_ffmpeg
+    except ImportError:
+        warn("video skipped, imageio-ffmpeg is not installed")
+        return False
+    renderer = _renderer(model)
+    if renderer is None:
+        return False
+
+    def write(tmp: str) -> None:
+        writer = imageio_ffmpeg.write_frames(
+            tmp, (renderer.width, renderer.height), fps=FPS, quality=7,
+            output_params=["-f", "mp4"],
+        )
+        writer.send(None)  # start the ffmpeg process
+        for frame in frames(model, trace, renderer):
+            writer.send(np.ascontiguousarray(frame))
+        writer.close()
+
+    try:
+        atomic_write(path, write, suffix=".mp4")
+    finally:
+        renderer.close()
+    return True

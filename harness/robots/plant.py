@@ -1,0 +1,50 @@
+"""A plant: the MuJoCo model that produces data, with its joint limits and Pinocchio twin."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pinocchio as pin
+
+from harness.errors import UserError
+from harness.robots.registry import ROBOTS, load_mujoco, load_pinocchio
+
+
+@dataclass(frozen=True)
+class Plant:
+    """MuJoCo model of the data-producing robot; `name` is what the user passed."""
+
+    name: str
+    model: mujoco.MjModel
+
+    @property
+    def dof(self) -> int:
+        return self.model.nv
+
+    def limits(self) -> tuple[np.ndarray, np.ndarray]:
+        """Joint position limits (rad); unlimited hinges get [-pi, pi]."""
+        ids = self.model.dof_jntid
+        limited = self.model.jnt_limited[ids].astype(bool)
+        lo = np.where(limited, self.model.jnt_range[ids, 0], -np.pi)
+        hi = np.where(limited, self.model.jnt_range[ids, 1], np.pi)
+        return lo, hi
+
+    def pinocchio(self) -> pin.Model | None:
+        """The plant's rigid-body model in Pinocchio (registry URDF or parsed MJCF)."""
+        if self.name in ROBOTS:
+            return load_pinocchio(self.name)
+        try:
+            return pin.buildModelFromMJCF(self.name)
+        except Exception:  # noqa: BLE001 - pin raises bare exceptions on MJCF it cannot map
+            return None
+
+
+def load_plant(name_or_path: str | Path) -> Plant:
+    """Load a plant by registry name or MJCF path; only hinge/slide joints are supported."""
+    model = load_mujoco(name_or_path)
+    if model.nq != model.nv or model.nv == 0:
+        raise UserError(f"plant {name_or_path}: needs 1-DOF joints only (nq={model.nq}, nv={model.nv})")
+    return Plant(str(name_or_path), model)

@@ -1,0 +1,70 @@
+"""The declared torque model extended with named effects: itself a TorqueModel."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from identification.closeloop.effects import EffectTerm, PayloadTorque, effect_torque
+from identification.torque_model import TorqueModel, as_states
+
+
+class ExtendedModel:
+    """tau = declared(q, qd, qdd) + sum of effect terms (N m).
+
+    payload / symbolic_payload: the unit-mass end-effector payload torque,
+    numeric on (n, dof) arrays and symbolic on CasADi columns; needed only if a
+    payload term is present.
+    fallback: joints (1..dof) on which the model is `original` (the declared model as
+    given; default `declared`) without any effect: the effects made them worse on
+    validation (identification.closeloop.robustness).
+    """
+
+    def __init__(self, declared: TorqueModel, terms: tuple[EffectTerm, ...],
+                 payload: PayloadTorque | None = None,
+                 symbolic_payload: Callable | None = None,
+                 fallback: tuple[int, ...] = (), original: TorqueModel | None = None):
+        self.declared = declared
+        self.terms = tuple(terms)
+        self.dof = declared.dof
+        self.fallback = tuple(fallback)
+        self.original = original if original is not None else declared
+        self._payload = payload
+        self._symbolic_payload = symbolic_payload
+
+    def torque(self, q, qd, qdd) -> np.ndarray:
+        """Declared torque plus the effects, (n, dof) in N m."""
+        q, qd, qdd = as_states(q, qd, qdd, self.dof)
+        tau = self.declared.torque(q, qd, qdd) + effect_torque(
+            self.terms, q, qd, qdd, self._payload)
+        if self.fallback:
+            cols = [j - 1 for j in self.fallback]
+            tau[:, cols] = self.original.torque(q, qd, qdd)[:, cols]
+        return tau
+
+    def symbolic_torque(self, q, qd, qdd):
+        """CasADi form: the declared model's expression plus each effect's."""
+        import casadi as ca
+
+        tau = self.declared.symbolic_torque(q, qd, qdd)
+        for t in self.terms:
+            if t.effect == "payload":
+                if self._symbolic_payload is None:
+                    raise ValueError("symbolic payload torque not provided")
+                tau = tau + t.coefficient * self._symbolic_payload(q, qd, qdd)
+                continue
+            j = t.joint - 1
+            coulomb = 0
+            if t.effect == "coulomb":
+                coulomb = ca.fmin(ca.fmax((qd[j] + t.lead * qdd[j]) / t.eps, -1), 1)
+            signal = {"viscous": qd[j], "coulomb": coulomb,
+                      "armature": qdd[j], "offset": 1.0, "spring": q[j]}[t.effect]
+            unit = ca.DM.zeros(self.dof, 1)
+            unit[j] = 1.0
+            tau = tau + t.coefficient * signal * unit
+        if self.fallback:
+            plain = self.original.symbolic_torque(q, qd, qdd)
+            tau = ca.vertcat(*[plain[j] if j + 1 in self.fallback else tau[j]
+                               for j in range(self.dof)])
+        return tau
