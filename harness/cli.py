@@ -44,12 +44,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _user_errors() -> tuple[type[BaseException], ...]:
-    errors: list[type[BaseException]] = [UserError, FileNotFoundError]
-    for module, name in (("identification", "IdentificationError"), ("planning", "PlanningError")):
-        cls = getattr(importlib.import_module(module), name, None)
-        if cls is not None:
-            errors.append(cls)
-    return tuple(errors)
+    """The errors that mean bad input, not a bug: one line, exit 2."""
+    from identification.errors import IdentificationError
+    from planning.errors import PlanningError
+
+    return UserError, FileNotFoundError, IdentificationError, PlanningError
 
 
 DIR_OUTPUTS = ("bench", "closeloop")  # commands whose --out is a folder

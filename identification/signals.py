@@ -7,19 +7,9 @@ noise-free to machine precision.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-
-@dataclass(frozen=True)
-class Motion:
-    """Joint trajectory samples: t (n,) in s; q, qd, qdd (n, dof) in rad, rad/s, rad/s^2."""
-
-    t: np.ndarray
-    q: np.ndarray
-    qd: np.ndarray
-    qdd: np.ndarray
+from identification.torque_model import Motion
 
 
 def multisine(n: int, dof: int, seed: int, centre, amplitude, duration: float = 20.0,

@@ -7,9 +7,21 @@ implement it, so the planner and the replay never know which one they hold.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
+
+
+@dataclass(frozen=True)
+class Motion:
+    """Joint trajectory samples, the states a torque model is evaluated on: t (n,) in s;
+    q, qd, qdd (n, dof) in rad, rad/s, rad/s^2. Datasets and plans extend it."""
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
 
 
 @runtime_checkable

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from identification.torque_model import TorqueModel
+from identification.torque_model import Motion, TorqueModel
 from planning.clearance import link_clearances
 from planning.config import PlannerConfig, Scenario
 from planning.energy import absolute_energy
@@ -21,13 +21,10 @@ TORQUE_TOLERANCE = 0.01
 
 
 @dataclass(frozen=True)
-class PlanResult:
-    """Executed motion on a time grid that contains every obstacle sample time."""
+class PlanResult(Motion):
+    """Executed motion (t, q, qd, qdd) on a time grid that contains every obstacle sample
+    time, with what it costs and how close it comes."""
 
-    t: np.ndarray  # (n,) s
-    q: np.ndarray  # (n, dof) rad
-    qd: np.ndarray  # rad/s
-    qdd: np.ndarray  # rad/s^2
     obstacle: np.ndarray  # (n, 3) m, the obstacle centre at t
     clearance: np.ndarray  # (n, 2) m, link 2 and link 3
     sample_clearance: np.ndarray  # (K,) m, min over links at the obstacle sample times

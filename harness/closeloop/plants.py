@@ -17,8 +17,9 @@ import mujoco
 import numpy as np
 
 from identification.closeloop.effects import EffectTerm
+from models import MODELS
 
-DECLARED_MJCF = Path(__file__).resolve().parents[1] / "models" / "lynxmotion" / "lynxmotion.xml"
+DECLARED_MJCF = MODELS / "lynxmotion" / "lynxmotion.xml"
 JOINT_ATTRIBUTES = {"viscous": "damping", "coulomb": "frictionloss", "armature": "armature",
                     "spring": "stiffness"}
 

@@ -40,7 +40,8 @@ import numpy as np
 
 from harness.closeloop.payload import PayloadTorque
 from harness.closeloop.plants import DECLARED_MJCF, true_effects
-from harness.data.generate import Dataset, generate
+from harness.data.dataset import Dataset
+from harness.data.generate import generate
 from harness.errors import UserError
 from harness.robots.plant import Plant, load_plant
 from harness.robots.registry import DEFAULT_ROBOT, load_pinocchio

@@ -4,11 +4,8 @@ from __future__ import annotations
 
 import sys
 import warnings
-import zipfile
-from pathlib import Path
 
-import numpy as np
-
+from harness.data.dataset import load_arrays
 from harness.io import write_json
 from identification.errors import IdentificationError, LibraryRankWarning
 from identification.identify import identify
@@ -37,21 +34,6 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def load_arrays(path: str | Path) -> dict[str, np.ndarray]:
-    """q, qd, qdd, tau (and tau_clean if present) from an .npz; IdentificationError otherwise."""
-    path = Path(path)
-    if not path.is_file():
-        raise IdentificationError(f"data file not found: {path}")
-    try:
-        with np.load(path, allow_pickle=False) as npz:
-            missing = [k for k in ("q", "qd", "qdd", "tau") if k not in npz.files]
-            if missing:
-                raise IdentificationError(f"{path}: missing keys {', '.join(missing)}")
-            keys = [k for k in ("q", "qd", "qdd", "tau", "tau_clean") if k in npz.files]
-            return {k: np.asarray(npz[k], dtype=float) for k in keys}
-    except (zipfile.BadZipFile, ValueError, OSError) as exc:
-        raise IdentificationError(f"{path}: not a readable .npz ({exc})") from None
-
 
 def choose_library(name: str, dof: int):
     if name == "generic" or dof != 3:
@@ -64,7 +46,7 @@ def choose_library(name: str, dof: int):
 def run(args) -> int:
     if not 0.0 < args.holdout < 1.0:  # 0 would score the training data as "held out"
         raise IdentificationError(f"--holdout must be in (0, 1), got {args.holdout}")
-    data = load_arrays(args.data)
+    data, _ = load_arrays(args.data, ("q", "qd", "qdd", "tau"), optional=("tau_clean",))
     dof = data["q"].shape[1] if data["q"].ndim == 2 else 1
     library = choose_library(args.library, dof)
     with warnings.catch_warnings(record=True) as caught:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from harness.data.dataset import load_states
+from harness.data.dataset import load_arrays
 from harness.errors import UserError
 from harness.io import write_npz
 from harness.robots.registry import DEFAULT_ROBOT
@@ -19,7 +19,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    states, _ = load_states(args.data)
+    states, _ = load_arrays(args.data)
     model = load_torque_model(args.model, args.robot)
     if states["q"].shape[1] != model.dof:
         raise UserError(f"data has {states['q'].shape[1]} joints, model has {model.dof}")

@@ -9,43 +9,21 @@ and estimates qd, qdd from the angles (harness.data.sensors).
 
 from __future__ import annotations
 
-import json
-from dataclasses import dataclass, field
-
 import mujoco
 import numpy as np
 
+from harness.data.dataset import Dataset
 from harness.data.excitation import FourierExcitation, design_excitation, normalized_condition
 from harness.data.sensors import SensorConfig, torque_noise
+from harness.data.tracking import simulate_measured
 from harness.errors import UserError
 from harness.robots.baseline import PinocchioModel
 from harness.robots.plant import Plant, load_plant
-from identification.metrics import rel_error
 from identification.regression.oracle import base_columns
 
 MIN_SAMPLES = 10
 SAMPLE_RATE = 200.0  # Hz, rate of the data handed to identification
 
-
-@dataclass(frozen=True)
-class Dataset:
-    """Time series of one experiment; arrays (n, dof), SI units."""
-
-    t: np.ndarray
-    q: np.ndarray
-    qd: np.ndarray
-    qdd: np.ndarray
-    tau: np.ndarray
-    tau_clean: np.ndarray
-    meta: dict
-    truth: dict = field(default_factory=dict)  # q/qd/qdd the simulator had (measured mode)
-
-    def arrays(self) -> dict[str, np.ndarray]:
-        """The npz payload of the CLI contract (plus true states where known)."""
-        out = {k: getattr(self, k) for k in ("t", "q", "qd", "qdd", "tau", "tau_clean")}
-        out.update({f"{k}_true": v for k, v in self.truth.items()})
-        out["meta"] = np.array(json.dumps(self.meta))
-        return out
 
 
 def _condition_fn(plant: Plant, rate: float, samples: int):
@@ -114,9 +92,8 @@ def generate(
         tau_clean = inverse_torques(p.model, q, qd, qdd)
         truth: dict = {}
     elif mode == "measured":
-        from harness.data.tracking import simulate_measured
-
-        q, qd, qdd, tau_clean, truth, stats = simulate_measured(p, exc, t, sensors or SensorConfig(), rng)
+        q, qd, qdd, tau_clean, truth, stats = simulate_measured(p, exc, t, SAMPLE_RATE,
+                                                                sensors or SensorConfig(), rng)
         meta.update(stats)
     else:
         raise UserError(f"--mode must be 'inverse' or 'measured', got '{mode}'")
@@ -148,13 +125,3 @@ def library_report(q, qd, qdd) -> dict:
     return {"library": library.name, "library_rank": cond.rank, "library_size": cond.size,
             "library_condition": cond.condition}
 
-
-def state_errors(p: Plant, est: tuple, true: tuple) -> dict:
-    """Relative RMS errors of estimated qd, qdd and of the torque they imply."""
-    out = {"qd_rel_rmse": rel_error(est[1], true[1]).tolist(),
-           "qdd_rel_rmse": rel_error(est[2], true[2]).tolist()}
-    pmodel = p.pinocchio()
-    if pmodel is not None and pmodel.nv == p.dof:
-        baseline = PinocchioModel(pmodel)
-        out["tau_from_states_rel_rmse"] = rel_error(baseline.torque(*est), baseline.torque(*true)).tolist()
-    return out

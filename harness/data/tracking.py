@@ -18,8 +18,9 @@ import numpy as np
 from harness.data.excitation import FourierExcitation
 from harness.data.sensors import SensorConfig, encoder, estimate_derivatives
 from harness.errors import UserError
-
-SAMPLE_RATE = 200.0  # Hz, must match harness.data.generate.SAMPLE_RATE
+from harness.robots.baseline import PinocchioModel
+from harness.robots.plant import Plant
+from identification.metrics import rel_error
 
 OMEGA, ZETA = 30.0, 1.0  # rad/s, closed-loop bandwidth and damping of the tracking error
 
@@ -53,11 +54,12 @@ def _actuation(model: mujoco.MjModel) -> np.ndarray | None:
     return np.linalg.inv(moment.T)
 
 
-def simulate_measured(plant, exc: FourierExcitation, t_out: np.ndarray, cfg: SensorConfig,
-                      rng: np.random.Generator):
-    """Simulate, sense, estimate; returns q, qd, qdd, tau_clean at t_out, truth, stats."""
+def simulate_measured(plant, exc: FourierExcitation, t_out: np.ndarray, rate: float,
+                      cfg: SensorConfig, rng: np.random.Generator):
+    """Simulate, sense, estimate; returns q, qd, qdd, tau_clean at t_out (sampled at rate
+    Hz), truth, stats."""
     model = plant.model
-    period = 1.0 / SAMPLE_RATE
+    period = 1.0 / rate
     if abs(period / model.opt.timestep - round(period / model.opt.timestep)) > 1e-9:
         # e.g. MuJoCo's 2 ms default on URDF robots: refine so sensor samples land on the grid
         model.opt.timestep = period / np.ceil(period / model.opt.timestep)
@@ -100,8 +102,6 @@ def simulate_measured(plant, exc: FourierExcitation, t_out: np.ndarray, cfg: Sen
     q_est, qd_est, qdd_est = estimate_derivatives(encoder(q_read, cfg, rng), cfg)
     idx = np.round(t_out * cfg.sensing_rate).astype(int)
     truth = {"q": q_true[idx], "qd": qd_true[idx], "qdd": qdd_true[idx]}
-    from harness.data.generate import state_errors
-
     stats = state_errors(plant, (q_est[idx], qd_est[idx], qdd_est[idx]),
                          (truth["q"], truth["qd"], truth["qdd"]))
     stats["tracking_rms"] = float(np.sqrt(np.mean((q_true - q_ref) ** 2)))
@@ -114,3 +114,14 @@ def _mass_matrix(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
     m = np.zeros((model.nv, model.nv))
     mujoco.mj_fullM(model, data, m)
     return m
+
+
+def state_errors(p: Plant, est: tuple, true: tuple) -> dict:
+    """Relative RMS errors of estimated qd, qdd and of the torque they imply."""
+    out = {"qd_rel_rmse": rel_error(est[1], true[1]).tolist(),
+           "qdd_rel_rmse": rel_error(est[2], true[2]).tolist()}
+    pmodel = p.pinocchio()
+    if pmodel is not None and pmodel.nv == p.dof:
+        baseline = PinocchioModel(pmodel)
+        out["tau_from_states_rel_rmse"] = rel_error(baseline.torque(*est), baseline.torque(*true)).tolist()
+    return out

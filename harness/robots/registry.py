@@ -18,8 +18,7 @@ import mujoco
 import pinocchio as pin
 
 from harness.errors import UserError
-
-MODELS = Path(__file__).resolve().parents[1] / "models"
+from models import MODELS
 
 
 @dataclass(frozen=True)
