@@ -17,9 +17,10 @@ from planning.kinematics import ArmGeometry
 
 
 def segment_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Distance (n,) from points (n, 3) to segments a-b (n, 3 each)."""
+    """Distance (n,) from points (n, 3) to segments a-b (n, 3 each); a zero-length segment
+    is its point."""
     ab = b - a
-    t = np.einsum("ij,ij->i", point - a, ab) / np.einsum("ij,ij->i", ab, ab)
+    t = np.einsum("ij,ij->i", point - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
     closest = a + np.clip(t, 0.0, 1.0)[:, None] * ab
     return np.linalg.norm(point - closest, axis=1)
 

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.replay.clearance import point_to_segment
 from harness.replay.reference import plan_reference
 from harness.replay.simulate import TrackingGains, replay
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import MODELS, load_mujoco, load_pinocchio
+from planning.clearance import segment_distance
 
 Q0 = np.array([np.pi / 2, np.pi / 5, -np.pi / 4])
 Q_END = np.array([-np.pi / 2, 2 * np.pi / 5, -np.pi / 3])
@@ -55,13 +55,13 @@ def test_reference_interpolates_between_coarse_samples_exactly():
         np.testing.assert_allclose(got, want, atol=1e-10)
 
 
-def test_point_to_segment_matches_dense_sampling():
+def test_segment_distance_matches_dense_sampling():
     rng = np.random.default_rng(0)
     a, b, p = (rng.normal(size=(50, 3)) for _ in range(3))
     s = np.linspace(0.0, 1.0, 20001)
     brute = [np.min(np.linalg.norm(a[i] + s[:, None] * (b[i] - a[i]) - p[i], axis=1))
              for i in range(50)]
-    np.testing.assert_allclose(point_to_segment(p, a, b), brute, atol=1e-6)
+    np.testing.assert_allclose(segment_distance(p, a, b), brute, atol=1e-6)
 
 
 def test_replay_tracks_and_measures_the_reference_energy(scene_replay, feedforward):

@@ -1,8 +1,7 @@
 """What a user of a real arm measures: encoder angles and noisy motor torques.
 
 Joint velocities and accelerations are estimated from the measured angles by
-Savitzky-Golay differentiation (scipy.signal.savgol_filter), a zero-phase
-local-polynomial fit that is the standard offline choice for identification.
+Savitzky-Golay differentiation (harness.data.derivatives).
 """
 
 from __future__ import annotations
@@ -10,7 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import savgol_filter
+
+from harness.data.derivatives import savgol_derivatives
 
 
 @dataclass(frozen=True)
@@ -36,16 +36,7 @@ def encoder(q: np.ndarray, cfg: SensorConfig, rng: np.random.Generator) -> np.nd
 
 def estimate_derivatives(q_meas: np.ndarray, cfg: SensorConfig) -> tuple[np.ndarray, ...]:
     """Smoothed q, estimated qd, qdd from angles sampled at cfg.sensing_rate (axis 0 = time)."""
-    dt = 1.0 / cfg.sensing_rate
-    window = int(round(cfg.window * cfg.sensing_rate)) | 1  # odd
-    if window > len(q_meas):
-        window = len(q_meas) if len(q_meas) % 2 else len(q_meas) - 1
-    order = min(cfg.polyorder, window - 1)
-    kw = dict(window_length=window, polyorder=order, axis=0, mode="interp")
-    q = savgol_filter(q_meas, deriv=0, **kw)
-    qd = savgol_filter(q_meas, deriv=1, delta=dt, **kw)
-    qdd = savgol_filter(q_meas, deriv=2, delta=dt, **kw)
-    return q, qd, qdd
+    return savgol_derivatives(q_meas, cfg.sensing_rate, cfg.window, cfg.polyorder)
 
 
 def torque_noise(

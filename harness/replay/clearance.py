@@ -16,19 +16,12 @@ import mujoco
 import numpy as np
 
 from harness.errors import UserError
+from planning.clearance import segment_distance
 
 LINK_SITES = (("shoulder", "elbow"), ("elbow", "end_effector"))
 LINK_GEOMS = ("link2", "link3")
 OBSTACLE = "obstacle"
 SURFACE_CUTOFF = 1.0  # m: mj_geomDistance reports distances up to this bound
-
-
-def point_to_segment(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Distance (m) from points p (n, 3) to segments a->b (n, 3) each."""
-    ab = b - a
-    s = np.einsum("ij,ij->i", p - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
-    closest = a + np.clip(s, 0.0, 1.0)[:, None] * ab
-    return np.linalg.norm(p - closest, axis=1)
 
 
 def _id(model: mujoco.MjModel, kind: mujoco.mjtObj, name: str) -> int:
@@ -69,7 +62,7 @@ class ClearanceProbe:
         """Distance (m) from centre to each link segment at the current kinematics."""
         a = np.stack([data.site_xpos[i] for i, _ in self.segments])
         b = np.stack([data.site_xpos[j] for _, j in self.segments])
-        return point_to_segment(np.broadcast_to(centre, a.shape), a, b)
+        return segment_distance(np.broadcast_to(centre, a.shape), a, b)
 
     def surface_distances(self, model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
         """Signed surface distance (m) from each link capsule to the obstacle sphere."""
