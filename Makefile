@@ -10,7 +10,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
 export MKL_NUM_THREADS ?= 1
 
-.PHONY: install test bench lint clean
+.PHONY: install test bench lint clean install-check
 
 install: $(STAMP)
 
@@ -25,6 +25,10 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	MUJOCO_GL=egl $(VENV)/bin/torquebench bench --out $(OUT)
+
+# the wheel in a fresh venv, run from outside the checkout (also in CI)
+install-check:
+	bash .ci/install-check
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check harness identification planning tests benchmarks
