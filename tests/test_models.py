@@ -108,3 +108,15 @@ def test_registry_paths_exist():
         assert robot.urdf.is_file()
         for path in (robot.mjcf, robot.scene):
             assert path is None or path.is_file()
+
+
+def test_a_urdf_path_loads_like_the_registered_robot_and_leaves_no_mujoco_log(tmp_path, monkeypatch):
+    """A user's URDF path goes through the same normalization as a registered one: meshes
+    dropped, ROS's lower = upper = 0 'no limit' removed, so MuJoCo warns about nothing
+    (a warning would write MUJOCO_LOG.TXT into the working directory)."""
+    monkeypatch.chdir(tmp_path)
+    urdf = get_robot("double_pendulum").urdf
+    by_path, by_name = load_mujoco(urdf), load_mujoco("double_pendulum")
+    assert by_path.nv == by_name.nv == 2
+    np.testing.assert_array_equal(by_path.body_mass, by_name.body_mass)
+    assert not (tmp_path / "MUJOCO_LOG.TXT").exists()

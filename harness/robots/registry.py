@@ -84,7 +84,7 @@ def _strip_geometry(urdf_text: str) -> str:
 
 
 def load_mujoco(name_or_path: str | Path, scene: bool = False) -> mujoco.MjModel:
-    """A MuJoCo model from a registered robot name or any MJCF file path."""
+    """A MuJoCo model from a registered robot name or any MJCF or URDF file path."""
     path = Path(name_or_path)
     if str(name_or_path) not in ROBOTS:
         if path.suffix.lower() not in (".xml", ".mjcf") and not path.exists():
@@ -92,10 +92,12 @@ def load_mujoco(name_or_path: str | Path, scene: bool = False) -> mujoco.MjModel
         if not path.is_file():
             raise UserError(f"plant file not found: {path}")
         try:
+            if path.suffix.lower() == ".urdf":  # as a registered URDF: meshes dropped, ROS limits fixed
+                return mujoco.MjModel.from_xml_string(_strip_geometry(path.read_text()))
             return mujoco.MjModel.from_xml_path(str(path))
         except ValueError as exc:
             detail = " ".join(str(exc).split()) or "parse error"
-            raise UserError(f"invalid MJCF {path}: {detail}") from None
+            raise UserError(f"invalid {path.suffix.lstrip('.').upper() or 'MJCF'} {path}: {detail}") from None
     robot = get_robot(str(name_or_path))
     if robot.mjcf is not None:
         target = robot.scene if scene and robot.scene else robot.mjcf
