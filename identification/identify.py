@@ -33,6 +33,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from sklearn.base import clone
 from threadpoolctl import threadpool_limits
 
 from identification.errors import IdentificationError
@@ -160,10 +161,13 @@ def _identify(q, qd, qdd, tau, library: Library, holdout: float, tau_clean,
     theta = library.evaluate(q[:n_train], qd[:n_train], qdd[:n_train])
     cond = conditioning(theta, library.names)
     warn_if_rank_deficient(cond)
-    settings = regression.__dict__ if regression else {}
+
+    def per_joint() -> SparseRegression:  # a fresh copy of `regression`'s settings
+        return SparseRegression() if regression is None else clone(regression)
+
     if method == "coupled":
         basis = AtomBasis.from_atoms(library.atoms, library.dof, library.name)
-        fits = (CoupledRegression(**settings).fit(
+        fits = (CoupledRegression(selector=regression).fit(
             basis.evaluate(q[:n_train], qd[:n_train], qdd[:n_train]), tau[:n_train]),)
         joints = _coupled_joints(library, basis, fits[0])
     elif method == "jointwise":
@@ -172,16 +176,16 @@ def _identify(q, qd, qdd, tau, library: Library, holdout: float, tau_clean,
         fits, joints = [], []
         for j in range(library.dof):
             if restriction_pvalue(design[:, j], theta, tau[:n_train, j]) >= 0.01:
-                reg = CoupledRegression(**settings).fit(design[:, [j]], tau[:n_train, [j]])
+                reg = CoupledRegression(selector=regression).fit(design[:, [j]], tau[:n_train, [j]])
                 joints.append(_coupled_joints(library, basis, reg, j))
             else:
-                reg = SparseRegression(**settings).fit(theta, tau[:n_train, j])
+                reg = per_joint().fit(theta, tau[:n_train, j])
                 joints.append(_feature_joint(library, reg))
             fits.append(reg)
     else:
         basis, fits, joints = None, [], []
         for j in range(library.dof):
-            fits.append(SparseRegression(**settings).fit(theta, tau[:n_train, j]))
+            fits.append(per_joint().fit(theta, tau[:n_train, j]))
             joints.append(_feature_joint(library, fits[-1]))
     seconds = time.perf_counter() - start
     model = IdentifiedModel(library.dof, tuple(joints), library.name, method)
@@ -207,6 +211,6 @@ def _coupled_joints(library: Library, basis: AtomBasis, reg: CoupledRegression,
     joints = []
     for j, terms in enumerate(basis.expand(reg.coef_)):
         names = sorted(terms, key=lambda n: order.get(n, len(order)))
-        offset = reg.offsets_[0 if only is not None else j]
+        offset = reg.intercept_[0 if only is not None else j]
         joints.append(JointModel(tuple(names), tuple(terms[n] for n in names), float(offset)))
     return joints if only is None else joints[only]

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from identification.regression.base import validation_mask
 from identification.regression.peers import choose, tune
-from identification.regression.sparse import validation_mask
 
 
 @pytest.fixture(scope="module")

@@ -23,11 +23,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from sklearn.base import clone
 
 from identification.library.base import Library
 from identification.library.prior_knowledge import Atom, atom_torque
+from identification.regression.base import Regressor, validation_mask
 from identification.regression.oracle import base_columns
-from identification.regression.sparse import SparseRegression, validation_mask
+from identification.regression.sparse import SparseRegression
 
 
 @dataclass(frozen=True)
@@ -125,12 +127,26 @@ def weighted_lstsq(design: np.ndarray, tau: np.ndarray, cols, sigma: np.ndarray)
     return sol[:-dof], sol[-dof:], resid, cov
 
 
-class CoupledRegression:
-    """Stacked, noise-weighted Lasso + proportional filter + WLS refit over shared atoms."""
+class CoupledRegression(Regressor):
+    """Stacked, noise-weighted Lasso + proportional filter + WLS refit over shared atoms.
 
-    def __init__(self, familywise: float = 0.01, **selector):
+    selector: the SparseRegression whose settings choose alpha and pass rate (a copy is fitted;
+    None: the defaults). fit(design (n, dof, p) atom signatures, tau (n, dof)) sets coef_ (p,),
+    intercept_ (dof,) per-joint offsets (also offsets_), sigma_, support_, base_, folded_,
+    alpha_, pass_rate_, candidates_, path_, and the refit's covariance cov_ (p, p) and
+    stderr_ (p,).
+    """
+
+    stacked = True
+
+    def __init__(self, familywise: float = 0.01, selector: SparseRegression | None = None):
         self.familywise = familywise
-        self.selector = SparseRegression(**selector)
+        self.selector = selector
+
+    @property
+    def offsets_(self) -> np.ndarray:
+        """Per-joint sensor offsets (dof,) N m: intercept_."""
+        return self.intercept_
 
     def noise_sigma(self, design: np.ndarray, tau: np.ndarray, cols) -> np.ndarray:
         """Per-joint noise std (N m) from a two-step weighted fit on all base atoms."""
@@ -141,17 +157,14 @@ class CoupledRegression:
             sigma = np.maximum(resid.std(axis=0) / np.sqrt(1 - dof_used), 1e-12 * tau.std(axis=0))
         return sigma
 
-    def fit(self, design: np.ndarray, tau: np.ndarray) -> CoupledRegression:
-        """design (n, dof, p) atom signatures, tau (n, dof); sets coef_ (p,), offsets_ (dof,),
-        sigma_, support_, base_, folded_, alpha_, pass_rate_, candidates_, path_, and the
-        refit's covariance cov_ (p, p) and stderr_ (p,)."""
-        design, tau = np.asarray(design, float), np.asarray(tau, float)
+    def _fit(self, design: np.ndarray, tau: np.ndarray) -> None:
+        selector = SparseRegression() if self.selector is None else clone(self.selector)
         n, dof, p = design.shape
         self.base_, self.folded_ = base_atoms(design)
         self.sigma_ = self.noise_sigma(design, tau, self.base_)
         xw = design[:, :, self.base_] / self.sigma_[None, :, None]
         yw = tau / self.sigma_
-        val = validation_mask(n, self.selector.block, self.selector.every)
+        val = validation_mask(n, selector.block, selector.every)
         xc = xw - xw[~val].mean(axis=0)  # per-joint centring = unpenalized per-joint offset
         yc = yw - yw[~val].mean(axis=0)
         scale = xc[~val].reshape(-1, len(self.base_)).std(axis=0)
@@ -161,19 +174,16 @@ class CoupledRegression:
         def rows(mask):
             return xs[mask].reshape(-1, len(self.base_)), yc[mask].reshape(-1)
 
-        chosen = self.selector.select(*rows(~val), *rows(val))
+        chosen = selector.select(*rows(~val), *rows(val))
         self.alpha_, self.pass_rate_ = chosen.alpha, chosen.pass_rate
-        self.candidates_ = self.selector.candidates_
+        self.candidates_ = selector.candidates_
         self.path_ = self._path(xs, yc, val)
         support = self.base_[list(chosen.support)]
-        support, (coef, self.offsets_, _, cov) = self._significant(design, tau, support)
-        self.coef_, self.cov_ = np.zeros(p), np.zeros((p, p))
-        self.coef_[support] = coef
+        support, (coef, self.intercept_, _, cov) = self._significant(design, tau, support)
+        self._set_coef(p, support, coef)
+        self.cov_ = np.zeros((p, p))
         self.cov_[np.ix_(support, support)] = cov
         self.stderr_ = np.sqrt(np.maximum(np.diag(self.cov_), 0.0))
-        self.support_ = np.zeros(p, bool)
-        self.support_[support] = True
-        return self
 
     def _significant(self, design: np.ndarray, tau: np.ndarray, support: np.ndarray):
         """Backward elimination of atoms with |t| below the two-sided Bonferroni bound of
@@ -204,7 +214,3 @@ class CoupledRegression:
             coef = np.linalg.lstsq(gram[np.ix_(s, s)], rhs[s], rcond=None)[0]
             out.append((alpha, np.mean((yc[val] - xs[val][:, :, s] @ coef) ** 2, axis=0)))
         return out
-
-    def predict(self, design: np.ndarray) -> np.ndarray:
-        """Torque (n, dof) without the sensor offsets."""
-        return design @ self.coef_

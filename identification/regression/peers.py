@@ -1,12 +1,13 @@
 """pysindy peers tuned like our regression, for a like-for-like comparison (issue #3, item 4).
 
 Each peer's hyper-parameter is swept over a grid and chosen on the same validation blocks
-inside the training data as SparseRegression (sparse.validation_mask), by the same rule:
+inside the training data as SparseRegression (base.validation_mask), by the same rule:
 the sparsest candidate whose validation error is within one paired standard error (or the
 relative `tolerance`) of the best. The chosen setting is then refit on all training rows.
 As in ours, the data are centred (an unpenalized intercept: the sensor bias) and the columns
 scaled to unit std, so coefficients and thresholds are in torque units per column std and
-do not depend on the number of rows.
+do not depend on the number of rows. PeerRegression is the tuned peer as a Regressor
+(regression.base); tune(name, theta, y) fits one.
 
 - STLSQ: `threshold` swept over `n_grid` values, log-spaced over 1e-6..1 x std(y).
 - SSR: its elimination path (one coefficient dropped per iteration, max_iter = p - 1) is
@@ -18,33 +19,12 @@ from __future__ import annotations
 
 import time
 import warnings
-from dataclasses import dataclass
 
 import numpy as np
 
-from identification.regression.sparse import validation_mask
+from identification.regression.base import Regressor, standardize, validation_mask
 
-
-@dataclass(frozen=True)
-class PeerFit:
-    """One tuned peer on one target: chosen setting, coefficients on the raw library."""
-
-    name: str
-    setting_name: str  # "threshold" (STLSQ, torque units per column std) or "terms" (SSR)
-    setting: float
-    coef: np.ndarray  # (p,) on the unscaled library columns
-    intercept: float
-    seconds: float  # sweep + selection + refit
-
-    def predict(self, theta: np.ndarray, offset: bool = False) -> np.ndarray:
-        return theta @ self.coef + (self.intercept if offset else 0.0)
-
-
-def _standardize(theta, y, rows):
-    mean_x, mean_y = theta[rows].mean(0), y[rows].mean()
-    scale = theta[rows].std(0)
-    scale[scale == 0] = 1.0
-    return (theta - mean_x) / scale, y - mean_y, mean_x, mean_y, scale
+PEERS = ("STLSQ", "SSR")
 
 
 def choose(candidates, x_val, y_val, tolerance: float = 0.002):
@@ -79,26 +59,49 @@ def _ssr_path(x, y) -> list[np.ndarray]:
     return [full] + [np.asarray(h).ravel() for h in opt.history_[1:]]
 
 
+class PeerRegression(Regressor):
+    """pysindy's `name` ("STLSQ" or "SSR") tuned on validation blocks inside theta (n, p),
+    y (n,). fit sets setting_ (the chosen threshold, torque units per column std, or number
+    of terms), coef_ (p,) on the unscaled library columns, intercept_, support_ and seconds_
+    (sweep + selection + refit)."""
+
+    def __init__(self, name: str = "STLSQ", n_grid: int = 30, block: int = 50, every: int = 5):
+        self.name, self.n_grid, self.block, self.every = name, n_grid, block, every
+
+    @property
+    def setting_name(self) -> str:
+        return "threshold" if self.name == "STLSQ" else "terms"
+
+    def _fit(self, theta: np.ndarray, y: np.ndarray) -> None:
+        if self.name not in PEERS:
+            raise ValueError(f"unknown peer {self.name!r}: STLSQ or SSR")
+        start = time.perf_counter()
+        val = validation_mask(len(y), self.block, self.every)
+        xs, yc, *_ = standardize(theta, y, ~val)
+        if self.name == "STLSQ":
+            grid = y[~val].std() * np.logspace(-6, 0, self.n_grid)
+            cands = [(t, _stlsq(t).fit(xs[~val], yc[~val]).coef_.ravel()) for t in grid]
+        else:
+            cands = [(float(np.count_nonzero(c)), c) for c in _ssr_path(xs[~val], yc[~val])]
+        setting, _ = choose(cands, xs[val], yc[val])
+        xs, yc, mean_x, mean_y, scale = standardize(theta, y, slice(None))
+        if self.name == "STLSQ":
+            coef = _stlsq(setting).fit(xs, yc).coef_.ravel()
+        else:
+            coef = next(c for c in _ssr_path(xs, yc) if np.count_nonzero(c) <= setting)
+        coef = coef / scale
+        self.setting_, self.coef_, self.support_ = float(setting), coef, coef != 0
+        self.intercept_ = float(mean_y - mean_x @ coef)
+        self.seconds_ = time.perf_counter() - start
+
+    # the names the bench (harness.sections.identification) reads from tune's result
+    coef = property(lambda self: self.coef_)
+    intercept = property(lambda self: self.intercept_)
+    setting = property(lambda self: self.setting_)
+    seconds = property(lambda self: self.seconds_)
+
+
 def tune(name: str, theta: np.ndarray, y: np.ndarray, n_grid: int = 30, block: int = 50,
-         every: int = 5) -> PeerFit:
+         every: int = 5) -> PeerRegression:
     """Tune pysindy's `name` ("STLSQ" or "SSR") on theta (n, p), y (n,) training rows."""
-    start = time.perf_counter()
-    theta, y = np.asarray(theta, float), np.asarray(y, float)
-    val = validation_mask(len(y), block, every)
-    xs, yc, *_ = _standardize(theta, y, ~val)
-    if name == "STLSQ":
-        grid = y[~val].std() * np.logspace(-6, 0, n_grid)
-        cands = [(t, _stlsq(t).fit(xs[~val], yc[~val]).coef_.ravel()) for t in grid]
-    elif name == "SSR":
-        cands = [(float(np.count_nonzero(c)), c) for c in _ssr_path(xs[~val], yc[~val])]
-    else:
-        raise ValueError(f"unknown peer {name!r}: STLSQ or SSR")
-    setting, _ = choose(cands, xs[val], yc[val])
-    xs, yc, mean_x, mean_y, scale = _standardize(theta, y, slice(None))
-    if name == "STLSQ":
-        coef = _stlsq(setting).fit(xs, yc).coef_.ravel()
-    else:
-        coef = next(c for c in _ssr_path(xs, yc) if np.count_nonzero(c) <= setting)
-    coef = coef / scale
-    return PeerFit(name, "threshold" if name == "STLSQ" else "terms", float(setting), coef,
-                   float(mean_y - mean_x @ coef), time.perf_counter() - start)
+    return PeerRegression(name, n_grid, block, every).fit(theta, y)

@@ -1,4 +1,4 @@
-"""Sparse regression of one torque (paper II.B, II.C, III.F), sklearn style.
+"""Sparse regression of one torque (paper II.B, II.C, III.F): a Regressor (regression.base).
 
 Lasso over a swept alpha gives each alpha a support; the proportional filter
 then repeatedly drops the fraction 1 - pass_rate of the kept terms with the
@@ -22,6 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.linear_model import lasso_path
+
+from identification.regression.base import Regressor, standardize, validation_mask
 
 
 @dataclass(frozen=True)
@@ -56,20 +58,20 @@ class _Normal:
         return max(sq, 0.0) / self.n
 
 
-def validation_mask(n: int, block: int = 50, every: int = 5) -> np.ndarray:
-    """Every `every`-th block of `block` consecutive samples is validation."""
-    return (np.arange(n) // block) % every == every - 1
+class SparseRegression(Regressor):
+    """Lasso + proportional filter + unbiased refit, with held-out selection.
 
-
-class SparseRegression:
-    """Lasso + proportional filter + unbiased refit, with held-out selection."""
+    fit(theta (n, p) library, y (n,) target) sets coef_, intercept_, support_, stderr_ (each
+    kept coefficient's standard error), alpha_, pass_rate_, candidates_ (every tried alpha
+    and pass rate) and alphas_.
+    """
 
     def __init__(self, n_alphas: int = 30, alpha_ratio: float = 1e-5,
                  pass_rates=(0.5, 0.7, 0.8, 0.9), tolerance: float = 0.002,
                  rise_tolerance: float = 1e-9, block: int = 50, every: int = 5,
                  rank_by: str = "t", rule: str = "1se"):
         self.n_alphas, self.alpha_ratio, self.rule = n_alphas, alpha_ratio, rule
-        self.pass_rates, self.tolerance, self.rise_tolerance = tuple(pass_rates), tolerance, rise_tolerance
+        self.pass_rates, self.tolerance, self.rise_tolerance = pass_rates, tolerance, rise_tolerance
         self.block, self.every, self.rank_by = block, every, rank_by
 
     def _prune(self, support, fit: _Normal, val: _Normal, pass_rate: float, floor: float):
@@ -88,18 +90,11 @@ class SparseRegression:
             support, err = trial, trial_err
         return support, err
 
-    def fit(self, theta: np.ndarray, y: np.ndarray) -> SparseRegression:
-        """theta (n, p) library, y (n,) target; sets coef_, intercept_, support_, alpha_,
-        pass_rate_, candidates_ (every tried alpha and pass rate) and alphas_."""
-        theta, y = np.asarray(theta, float), np.asarray(y, float)
+    def _fit(self, theta: np.ndarray, y: np.ndarray) -> None:
         mask = validation_mask(len(y), self.block, self.every)
-        mean_x, mean_y = theta[~mask].mean(0), y[~mask].mean()
-        scale = theta[~mask].std(0)
-        scale[scale == 0] = 1.0
-        xs, yc = (theta - mean_x) / scale, y - mean_y
+        xs, yc, *_ = standardize(theta, y, ~mask)
         chosen = self.select(xs[~mask], yc[~mask], xs[mask], yc[mask])
         self._refit(theta, y, chosen.support)
-        return self
 
     def select(self, x_fit: np.ndarray, y_fit: np.ndarray, x_val: np.ndarray,
                y_val: np.ndarray) -> Candidate:
@@ -158,13 +153,7 @@ class SparseRegression:
         resid = y - design @ sol
         var = float(resid @ resid) / max(len(y) - design.shape[1], 1)
         cov = var * np.linalg.pinv(design.T @ design)
-        self.coef_, self.stderr_ = np.zeros(theta.shape[1]), np.zeros(theta.shape[1])
-        self.coef_[s] = sol[:-1]
+        self._set_coef(theta.shape[1], s, sol[:-1])
+        self.stderr_ = np.zeros(theta.shape[1])
         self.stderr_[s] = np.sqrt(np.maximum(np.diag(cov)[:-1], 0.0))
         self.intercept_ = float(sol[-1])
-        self.support_ = np.zeros(theta.shape[1], bool)
-        self.support_[s] = True
-
-    def predict(self, theta: np.ndarray) -> np.ndarray:
-        """theta @ coef_ + intercept_."""
-        return np.asarray(theta, float) @ self.coef_ + self.intercept_
