@@ -46,18 +46,16 @@ from harness.errors import UserError
 from harness.robots.plant import Plant, load_plant
 from harness.robots.registry import DEFAULT_ROBOT, load_pinocchio
 from harness.robots.torque_models import load_torque_model
-from identification.closeloop.effects import Effect, EffectDictionary, EffectTerm
-from identification.closeloop.extended import ExtendedModel
-from identification.closeloop.identified import KeptSpan, close_loop_identified, refit_kept
+from identification.closeloop.effects import Effect, EffectTerm
+from identification.closeloop.identified import close_loop_identified
 from identification.closeloop.loop import (
     CloseLoopResult,
     close_loop,
     is_unexplained,
-    projected_dictionary,
 )
-from identification.closeloop.residual import noise_sigma
-from identification.closeloop.selection import refine_coulomb, refit
-from identification.metrics import rel_error
+from identification.closeloop.truth import score_truth
+from identification.library.base import Library
+from identification.library.prior_knowledge import prior_knowledge_library
 from identification.torque_model import TorqueModel
 
 DECLARED_MODELS = ("pinocchio", "identified")  # both reported in closeloop.json
@@ -119,59 +117,12 @@ class CloseLoopRun:
         }
 
 
-def _reidentify(data: Dataset, split: int):
-    """The same identification as declared_model('identified'), on another training torque."""
-    from identification.identify import identify
-    from identification.library.prior_knowledge import prior_knowledge_library
-
-    tr = slice(0, split)
-    return lambda tau: identify(data.q[tr], data.qd[tr], data.qdd[tr], tau,
-                                prior_knowledge_library(3), holdout=0.0).model
-
-
-def declared_model(spec: str, data: Dataset, split: int) -> TorqueModel:
-    """'pinocchio', 'identified' (sparse model fitted on the training part of data) or a
-    MODEL.json path."""
-    if spec != "identified":
-        return load_torque_model(spec, DEFAULT_ROBOT)
-    return _reidentify(data, split)(data.tau[:split])
-
-
-def _oracle_fit(data: Dataset, dictionary: EffectDictionary, residual, truth, tr, project):
-    """The true effect set's coefficients (and Coulomb shapes) fitted on the training part."""
-    sigma = noise_sigma(residual)
-    chosen = [Effect(t.effect, t.joint) for t in truth]
-    return refine_coulomb(residual, dictionary, sigma, refit(residual, dictionary, sigma, chosen),
-                          data.q[tr], data.qd[tr], data.qdd[tr], project)
-
-
-def oracle(declared: TorqueModel, data: Dataset, truth: tuple[EffectTerm, ...], split: int,
-           payload: PayloadTorque, joint_refit: bool = False,
-           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[str, ...]]:
-    """Held-out errors of the true effect set refitted (noise floor) and at true values
-    (against the clean and the measured torque), and the labels of true effects the
-    declared model's terms span (absorbed).
-
-    joint_refit: the declared model is identified; its kept terms are refitted with the
-    effects (as close_loop_identified does); an effect they span exactly is absorbed."""
-    tr, held = slice(0, split), slice(split, None)
-    states = (data.q[tr], data.qd[tr], data.qdd[tr])
-    project = KeptSpan.of(declared, *states).project if joint_refit else None
-    residual = (project(data.tau[tr]) if project is not None
-                else data.tau[tr] - declared.torque(*states))
-    dictionary = projected_dictionary(*states, payload, project=project)
-    absorbed = tuple(e.label for i, e in enumerate(dictionary.effects)
-                     if not np.any(dictionary.columns[:, :, i])
-                     and any(Effect(t.effect, t.joint) == e for t in truth))
-    visible = tuple(t for t in truth if Effect(t.effect, t.joint).label not in absorbed)
-    fitted = _oracle_fit(data, dictionary, residual, visible, tr, project)
-    errors = []
-    for terms in (fitted, truth):
-        base = refit_kept(declared, terms, *states, data.tau[tr], payload) if joint_refit else declared
-        model = ExtendedModel(base, terms, payload)
-        errors.append(model.torque(data.q[held], data.qd[held], data.qdd[held]))
-    return (rel_error(errors[0], data.tau_clean[held]), rel_error(errors[1], data.tau_clean[held]),
-            rel_error(errors[1], data.tau[held]), absorbed)
+def declared_model(spec: str) -> TorqueModel | Library:
+    """'pinocchio' or a MODEL.json path: a fixed torque model; 'identified': the library the
+    loop identifies its declared model with (identification.closeloop.identified)."""
+    if spec == "identified":
+        return prior_knowledge_library(3)
+    return load_torque_model(spec, DEFAULT_ROBOT)
 
 
 def check_plant(plant: str | Path, dof: int) -> Plant:
@@ -197,24 +148,25 @@ def check_plant(plant: str | Path, dof: int) -> Plant:
 
 def _loop(spec: str, data: Dataset, split: int, payload: PayloadTorque, truth, outside: bool,
           holdout: float) -> CloseLoopRun:
-    model = declared_model(spec, data, split)
-    if model.dof != data.q.shape[1]:
-        raise UserError(f"declared model {spec} has {model.dof} joints, the plant "
+    declared = declared_model(spec)
+    if declared.dof != data.q.shape[1]:
+        raise UserError(f"declared model {spec} has {declared.dof} joints, the plant "
                         f"{data.q.shape[1]}")
     args = (data.q, data.qd, data.qdd, data.tau, data.tau_clean, holdout, payload, payload.symbolic)
-    identified = spec == "identified"
+    identified = isinstance(declared, Library)
     if identified:
-        result = close_loop_identified(model, *args, reidentify=_reidentify(data, split))
+        result = close_loop_identified(declared, *args)
         model = result.model.declared  # the terms of the last re-identification
     else:
-        result = close_loop(model, *args)
-    floor = exact = measured = None
-    absorbed: tuple[str, ...] = ()
-    if not outside:
-        floor, exact, measured, absorbed = oracle(model, data, truth, result.split, payload,
-                                                  identified)
-    return CloseLoopRun(str(data.meta["plant"]), spec, data, result, truth, outside, floor, exact,
-                        measured, absorbed)
+        result = close_loop(declared, *args)
+        model = declared
+    if outside:
+        return CloseLoopRun(str(data.meta["plant"]), spec, data, result, truth, outside,
+                            None, None, None)
+    s = score_truth(model, data.q, data.qd, data.qdd, data.tau, data.tau_clean, truth,
+                    result.split, payload, identified)
+    return CloseLoopRun(str(data.meta["plant"]), spec, data, result, truth, outside,
+                        s.noise_floor, s.truth_error, s.truth_error_measured, s.absorbed)
 
 
 def run_closeloop(plant: str | Path, samples: int = 4000, noise: float = 0.05, seed: int = 0,

@@ -97,7 +97,8 @@ def load_mujoco(name_or_path: str | Path, scene: bool = False) -> mujoco.MjModel
             return mujoco.MjModel.from_xml_path(str(path))
         except ValueError as exc:
             detail = " ".join(str(exc).split()) or "parse error"
-            raise UserError(f"invalid {path.suffix.lstrip('.').upper() or 'MJCF'} {path}: {detail}") from None
+            kind = "URDF" if path.suffix.lower() == ".urdf" else "MJCF"
+            raise UserError(f"invalid {kind} {path}: {detail}") from None
     robot = get_robot(str(name_or_path))
     if robot.mjcf is not None:
         target = robot.scene if scene and robot.scene else robot.mjcf

@@ -17,11 +17,15 @@ effect the kept terms span exactly (an armature on a joint with a qdd_j term,
 or a payload under a full rigid-body library) is invisible and is not named -
 the identified model carries it already. The kept terms are then refitted to
 the torque minus the named effects (`refit_kept`).
+
+The identification is the loop's own: `close_loop_identified` takes the library (the
+identification's configuration), fits it on the training part (identification.identify,
+nothing held out) and re-identifies with it as the named effects require; the caller
+supplies only data.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -36,9 +40,15 @@ from identification.closeloop.loop import (
     trace,
 )
 from identification.closeloop.residual import noise_sigma
+from identification.identify import identify
+from identification.library.base import Library
 from identification.model import IdentifiedModel, model_from_dict
 
-Reidentify = Callable[[np.ndarray], IdentifiedModel]  # training torque (n, dof) -> model
+
+def identified_model(library: Library, q, qd, qdd, tau) -> IdentifiedModel:
+    """The declared model of an identified loop: library fitted on all the given samples (the
+    training part; nothing held out)."""
+    return identify(q, qd, qdd, tau, library, holdout=0.0).model
 
 
 def term_columns(model: IdentifiedModel, q, qd, qdd) -> list[np.ndarray]:
@@ -129,30 +139,34 @@ def _joint_effects(terms: tuple[EffectTerm, ...]) -> tuple[EffectTerm, ...]:
     return tuple(t for t in terms if t.effect != "payload")
 
 
-def close_loop_identified(identified: IdentifiedModel, q, qd, qdd, tau, tau_clean,
+def close_loop_identified(library: Library, q, qd, qdd, tau, tau_clean,
                           holdout: float = 0.25, payload: PayloadTorque | None = None,
-                          symbolic_payload=None, reidentify: Reidentify | None = None,
-                          rounds: int = 3) -> CloseLoopResult:
-    """Trace effects jointly with the identified model's kept terms; error before is the
-    identified model's, error after that of its refit plus the named effects.
+                          symbolic_payload=None, rounds: int = 3) -> CloseLoopResult:
+    """Identify the declared model with library on the training part, then trace effects
+    jointly with its kept terms; error before is the identified model's, error after that of
+    its refit plus the named effects (result.model.original is the identified model).
 
-    reidentify(tau_train) -> model: the identification that produced `identified`, rerun on
-    the training torque minus the named joint effects. A sparse fit on data carrying
-    friction may drop rigid-body terms it needs; the dictionary's payload column then
-    stands in for them. Re-identifying without the joint effects (a payload is rigid-body
-    dynamics the identified model should carry itself) and tracing again, until the named
-    set stops changing (at most `rounds` times), removes that artefact."""
+    A sparse fit on data carrying friction may drop rigid-body terms it needs; the
+    dictionary's payload column then stands in for them. The loop therefore re-identifies
+    with the same library on the training torque minus the named joint effects (a payload is
+    rigid-body dynamics the identified model should carry itself) and traces again, until
+    the named set stops changing (at most `rounds` times), which removes that artefact."""
     q, qd, qdd, tau, tau_clean, split = check_data(q, qd, qdd, tau, tau_clean,
-                                                   identified.dof, holdout)
+                                                   library.dof, holdout)
     tr = slice(0, split)
     states = (q[tr], qd[tr], qdd[tr])
+
+    def reidentify(target: np.ndarray) -> IdentifiedModel:
+        return identified_model(library, *states, target)
+
+    identified = reidentify(tau[tr])
     model, named = identified, None
     for _ in range(rounds):
         span = KeptSpan.of(model, *states)
         residual = span.project(tau[tr])  # the residual of the kept terms refitted alone
         selection, terms = trace(residual, noise_sigma(residual), *states, payload, span.project)
         labels = _labels(terms)
-        if reidentify is None or labels == named:
+        if labels == named:
             break
         named = labels
         model = reidentify(tau[tr] - effect_torque(_joint_effects(terms), *states))
@@ -160,7 +174,7 @@ def close_loop_identified(identified: IdentifiedModel, q, qd, qdd, tau, tau_clea
     selection, screening = screened_trace(tau[tr], term_columns(model, *states),
                                           span.project(tau[tr]), noise_sigma(residual), states,
                                           payload, span.project)
-    if reidentify is not None and _labels(screening.named) != labels:
+    if _labels(screening.named) != labels:
         # the model was re-identified without effects that screening then rejected
         joint = _joint_effects(screening.named)
         model = reidentify(tau[tr] - effect_torque(joint, *states)) if joint else identified
