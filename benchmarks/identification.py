@@ -27,16 +27,16 @@ from harness.data.generate import generate  # noqa: E402
 from harness.io import write_json  # noqa: E402
 from harness.robots.baseline import PinocchioModel  # noqa: E402
 from harness.robots.registry import load_pinocchio  # noqa: E402
-from harness.sections import identification as section  # noqa: E402
+from harness.sections.identification import robustness, study  # noqa: E402
 
 
 def _context(samples: int) -> dict:
-    ctx = section.context()
+    ctx = study.context()
     if samples != len(ctx["clean"].q):  # more data: same robot, same excitation design
         clean = generate("lynxmotion", samples, 0.0, seed=0)
         ctx.update(clean=clean, theta=ctx["library"].evaluate(clean.q, clean.qd, clean.qdd),
-                   truth={k: section.true_terms(v, clean) for k, v in ctx["libraries"].items()},
-                   atoms={k: section.true_atoms(b, clean) for k, b in ctx["bases"].items()},
+                   truth={k: study.true_terms(v, clean) for k, v in ctx["libraries"].items()},
+                   atoms={k: study.true_atoms(b, clean) for k, b in ctx["bases"].items()},
                    regressor=PinocchioModel(load_pinocchio("lynxmotion")).regressor(
                        clean.q, clean.qd, clean.qdd))
     return ctx
@@ -56,9 +56,9 @@ def main() -> None:
             for level in args.levels:
                 shift = 0 if level == 0.05 else round(1000 * level)
                 seeds = tuple(1 + 1000 * k + shift for k in range(args.draws))
-                rob = section.robustness(ctx, seeds, level)
+                rob = robustness.robustness(ctx, seeds, level)
                 print(f"\n### {samples} samples, last 25 % held out")
-                print("\n".join(section.robustness_markdown(rob)))
+                print("\n".join(robustness.robustness_markdown(rob)))
                 results[f"{samples}/{level:g}"] = rob
     if args.out:
         write_json(args.out, results)

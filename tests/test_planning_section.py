@@ -6,7 +6,7 @@ import json
 from pathlib import Path
 
 from harness.replay.reference import plan_reference
-from harness.sections import planning as section
+from harness.sections.planning import section
 from tests.helpers import heavier_model as _heavier
 
 

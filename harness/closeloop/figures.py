@@ -4,14 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from harness.closeloop.run import CloseLoopRun  # noqa: E402
-from identification.closeloop.effects import UNITS, effect_torque  # noqa: E402
+from harness.closeloop.run import CloseLoopRun
+from harness.report.figures import plt, save_figure
+from identification.closeloop.effects import UNITS, effect_torque
 
 AXIS = {"viscous": ("qd", "rad/s"), "coulomb": ("qd + lead qdd", "rad/s"),
         "armature": ("qdd", "rad/s^2"), "offset": ("sample", "-"), "spring": ("q", "rad"),
@@ -57,9 +54,7 @@ def residual_figure(run: CloseLoopRun, path: Path) -> Path | None:
         ax.set_title(f"{term.effect} j{term.joint}: {term.coefficient:.4g} {UNITS[term.effect]}",
                      fontsize=9)
         ax.legend(fontsize=7, markerscale=4)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return path
 
 
@@ -86,7 +81,5 @@ def error_figure(runs: dict[str, CloseLoopRun], path: Path) -> Path:
         ax.set_ylabel("held-out rel. RMS torque error [-]")
         ax.set_title(name, fontsize=9)
         ax.legend(fontsize=6)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return path

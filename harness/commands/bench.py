@@ -70,13 +70,17 @@ def register(subparsers) -> None:
 
 
 def load_section(name: str):
-    """The module harness.sections.<name>, or None if it does not exist yet."""
+    """The module harness.sections.<name> (for a section grown into a package, its `section`
+    module), or None if it does not exist yet."""
     try:
-        return importlib.import_module(f"harness.sections.{name}")
+        module = importlib.import_module(f"harness.sections.{name}")
     except ModuleNotFoundError as exc:
         if exc.name != f"harness.sections.{name}":
             raise
         return None
+    if hasattr(module, "__path__"):  # a package: its entry point is harness.sections.<name>.section
+        return importlib.import_module(f"harness.sections.{name}.section")
+    return module
 
 
 def _error_line(exc: BaseException) -> str:

@@ -5,26 +5,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-from harness.replay.simulate import ReplayTrace  # noqa: E402
+from harness.replay.simulate import ReplayTrace
+from harness.report.figures import plt, save_figure
 
 MARGIN = 0.005  # m, acceptance band below the threshold
-
-
-def save_figure(fig, path: Path) -> Path:
-    """Write a finished matplotlib figure as PNG (120 dpi) and release it."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
-
-
-_save = save_figure
 
 
 def power_figure(traces: dict[str, ReplayTrace], path: Path) -> Path:
@@ -42,7 +26,7 @@ def power_figure(traces: dict[str, ReplayTrace], path: Path) -> Path:
         ax.legend(fontsize=7, loc="upper right")
     axes[-1, 0].set_xlabel("time t [s]")
     fig.suptitle("Power |Σ τ_i q̇_i| over time, replayed in MuJoCo", fontsize=10)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def model_power_figure(traces: dict[str, ReplayTrace], path: Path) -> Path:
@@ -66,7 +50,7 @@ def model_power_figure(traces: dict[str, ReplayTrace], path: Path) -> Path:
     bottom.axhline(0, color="k", lw=0.5)
     bottom.set_xlabel("time t [s]")
     bottom.grid(alpha=0.3)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def clearance_figure(traces: dict[str, ReplayTrace], threshold: float, path: Path) -> Path:
@@ -81,7 +65,7 @@ def clearance_figure(traces: dict[str, ReplayTrace], threshold: float, path: Pat
            title="Distance to obstacle vs threshold, replayed (cf. paper Fig. 10)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def path_figure(traces: dict[str, ReplayTrace], path: Path) -> Path:
@@ -96,7 +80,7 @@ def path_figure(traces: dict[str, ReplayTrace], path: Path) -> Path:
     ax.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]",
            title="Replayed paths and obstacle (cf. paper Fig. 9)")
     ax.legend(fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def tracking_figure(traces: dict[str, ReplayTrace], path: Path) -> Path:
@@ -111,4 +95,4 @@ def tracking_figure(traces: dict[str, ReplayTrace], path: Path) -> Path:
            title="Tracking error of feedforward + PD in MuJoCo")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, ncol=2)
-    return _save(fig, path)
+    return save_figure(fig, path)

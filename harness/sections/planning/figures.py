@@ -4,15 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
 import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-from harness.replay.figures import save_figure as _save  # noqa: E402
-from planning.energy import power as mechanical_power  # noqa: E402
-from planning.kinematics import ArmGeometry  # noqa: E402
+from harness.report.figures import plt, save_figure
+from planning.energy import power as mechanical_power
+from planning.kinematics import ArmGeometry
 
 COLORS = {"pinocchio": "tab:green", "identified": "tab:orange"}
 
@@ -36,7 +32,7 @@ def path3d(free, paper: dict, path: Path) -> Path:
     ax.set_zlabel("z (m)")
     ax.set_title("End-effector path, paper scenario")
     ax.legend(fontsize=7, loc="upper left")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def clearance(paper: dict, crossing, threshold: float, path: Path, swaying=None) -> Path:
@@ -57,7 +53,7 @@ def clearance(paper: dict, crossing, threshold: float, path: Path, swaying=None)
         ax.set_ylim(0, None)
     axes[0].set_ylabel("distance to obstacle centre (m)")
     axes[0].legend(fontsize=7)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def power(baseline, free, paper: dict, path: Path) -> Path:
@@ -73,7 +69,7 @@ def power(baseline, free, paper: dict, path: Path) -> Path:
     ax.set_xlabel("time (s)")
     ax.set_ylabel("power sum tau_i qd_i (W)")
     ax.legend(fontsize=7)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def _row(name: str, s: dict) -> str:
