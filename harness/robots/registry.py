@@ -8,7 +8,6 @@ resolve `package://` paths (inertias come from the URDF <inertial> elements).
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 from functools import cache
 from importlib import metadata
@@ -18,6 +17,8 @@ import mujoco
 import pinocchio as pin
 
 from harness.errors import UserError
+from harness.robots.urdf import arm_urdf, strip_geometry
+from identification.library.chain import ChainError, KinematicChain
 from models import MODELS
 
 
@@ -58,6 +59,7 @@ ROBOTS = {
         "double_pendulum", "double_pendulum_description/urdf/double_pendulum.urdf"
     ),
     "ur5": lambda: _erd("ur5", "ur_description/urdf/ur5_robot.urdf"),
+    "panda": lambda: _erd("panda", "panda_description/urdf/panda.urdf"),  # fingers held fixed
 }
 
 DEFAULT_ROBOT = "lynxmotion"
@@ -70,19 +72,6 @@ def get_robot(name: str) -> Robot:
     return ROBOTS[name]()
 
 
-def _strip_geometry(urdf_text: str) -> str:
-    """Drop <visual> and <collision> blocks and tell MuJoCo to keep every body."""
-    text = re.sub(r"<visual\b.*?</visual>", "", urdf_text, flags=re.S)
-    text = re.sub(r"<collision\b.*?</collision>", "", text, flags=re.S)
-    # ROS writes lower = upper = 0 for "no limit"; MuJoCo would warn and ignore it.
-    text = re.sub(r'lower="0"\s+upper="0"', "", text)
-    compiler = (
-        '<mujoco><compiler angle="radian" discardvisual="true" fusestatic="false" '
-        'inertiafromgeom="false" autolimits="true"/></mujoco>'
-    )
-    return re.sub(r"(<robot\b[^>]*>)", r"\1" + compiler, text, count=1)
-
-
 def load_mujoco(name_or_path: str | Path, scene: bool = False) -> mujoco.MjModel:
     """A MuJoCo model from a registered robot name or any MJCF or URDF file path."""
     path = Path(name_or_path)
@@ -92,8 +81,9 @@ def load_mujoco(name_or_path: str | Path, scene: bool = False) -> mujoco.MjModel
         if not path.is_file():
             raise UserError(f"plant file not found: {path}")
         try:
-            if path.suffix.lower() == ".urdf":  # as a registered URDF: meshes dropped, ROS limits fixed
-                return mujoco.MjModel.from_xml_string(_strip_geometry(path.read_text()))
+            if path.suffix.lower() == ".urdf":  # as a registered URDF: arm joints only, no meshes
+                return mujoco.MjModel.from_xml_string(strip_geometry(arm_urdf(path.read_text(),
+                                                                              str(path))))
             return mujoco.MjModel.from_xml_path(str(path))
         except ValueError as exc:
             detail = " ".join(str(exc).split()) or "parse error"
@@ -103,9 +93,40 @@ def load_mujoco(name_or_path: str | Path, scene: bool = False) -> mujoco.MjModel
     if robot.mjcf is not None:
         target = robot.scene if scene and robot.scene else robot.mjcf
         return mujoco.MjModel.from_xml_path(str(target))
-    return mujoco.MjModel.from_xml_string(_strip_geometry(robot.urdf.read_text()))
+    return mujoco.MjModel.from_xml_string(strip_geometry(arm_urdf(robot.urdf.read_text(),
+                                                                  robot.name)))
 
 
-def load_pinocchio(name: str) -> pin.Model:
-    """The Pinocchio model of a registered robot, built from its URDF."""
-    return pin.buildModelFromUrdf(str(get_robot(name).urdf))
+def load_pinocchio(name_or_path: str | Path) -> pin.Model:
+    """The Pinocchio model of a registered robot (from its URDF) or of a URDF or MJCF path;
+    non-arm joints held fixed as in load_mujoco."""
+    if str(name_or_path) in ROBOTS:
+        urdf = get_robot(str(name_or_path)).urdf
+        return pin.buildModelFromXML(arm_urdf(urdf.read_text(), str(name_or_path)))
+    path = Path(name_or_path)
+    if not path.is_file():
+        get_robot(str(name_or_path)) if path.suffix == "" else None  # unknown-robot error
+        raise UserError(f"robot file not found: {path}")
+    try:
+        if path.suffix.lower() == ".urdf":
+            return pin.buildModelFromXML(arm_urdf(path.read_text(), str(path)))
+        return pin.buildModelFromMJCF(str(path))
+    except (ValueError, RuntimeError) as exc:
+        detail = " ".join(str(exc).split()) or "parse error"
+        raise UserError(f"Pinocchio cannot read {path}: {detail}") from None
+
+
+def load_chain(name_or_path: str | Path) -> KinematicChain:
+    """The robot's kinematic chain (identification.library.chain); UserError unless it is a
+    fixed-base serial chain of revolute joints."""
+    model = load_pinocchio(name_or_path)
+    name = str(name_or_path) if str(name_or_path) in ROBOTS else Path(name_or_path).stem
+    try:
+        chain = KinematicChain.from_pinocchio(model, name)
+    except ChainError as exc:
+        raise UserError(f"robot {name_or_path}: {exc}") from None
+    branches = [j for j, p in enumerate(chain.parents) if p != j - 1]
+    if branches:
+        raise UserError(f"robot {name_or_path}: joint {branches[0] + 1} does not follow joint "
+                        f"{branches[0]}: not a serial chain")
+    return chain

@@ -1,0 +1,81 @@
+"""URDF text prepared for both engines: the arm's joints only, no meshes.
+
+A robot description often carries more than the arm: gripper fingers (prismatic
+joints at the end of the chain), meshes behind `package://` paths. The harness
+identifies and plans the arm, so:
+- a prismatic joint with no revolute joint below it (a finger, a gripper jaw) is
+  held fixed (its link's inertia stays, rigidly attached at its zero position);
+- a prismatic joint with revolute joints below it is an arm joint the harness cannot
+  handle, and a floating or planar joint is a moving base: both are errors;
+- visual and collision geometry is dropped (inertias come from <inertial>), and ROS's
+  lower = upper = 0 "no limit" removed, so MuJoCo loads the file without warnings.
+The same text goes to MuJoCo (mj compile) and Pinocchio (buildModelFromXML), so the
+two models agree by construction (checked in the tests).
+"""
+
+from __future__ import annotations
+
+import re
+import xml.etree.ElementTree as ET
+
+from harness.errors import UserError
+
+MOVING = ("revolute", "continuous")
+
+
+def arm_urdf(text: str, source: str) -> str:
+    """The URDF with non-arm joints held fixed; UserError if it is not a fixed-base arm."""
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as exc:
+        raise UserError(f"invalid URDF {source}: {exc}") from None
+    if root.tag != "robot":
+        raise UserError(f"invalid URDF {source}: the root element is <{root.tag}>, not <robot>")
+    joints = root.findall("joint")
+    below: dict[str, list[ET.Element]] = {}
+    for joint in joints:
+        parent = joint.find("parent")
+        if parent is not None:
+            below.setdefault(parent.get("link", ""), []).append(joint)
+
+    def moves_below(joint: ET.Element) -> bool:
+        child = joint.find("child")
+        stack = list(below.get(child.get("link", "") if child is not None else "", []))
+        while stack:
+            j = stack.pop()
+            if j.get("type") in MOVING:
+                return True
+            c = j.find("child")
+            stack += below.get(c.get("link", "") if c is not None else "", [])
+        return False
+
+    held = []
+    for joint in joints:
+        kind, name = joint.get("type"), joint.get("name")
+        if kind in ("floating", "planar"):
+            raise UserError(f"URDF {source}: joint '{name}' is {kind}: a moving base is not "
+                            "supported (fixed-base serial arms only)")
+        if kind == "prismatic":
+            if moves_below(joint):
+                raise UserError(f"URDF {source}: prismatic arm joint '{name}' is not supported "
+                                "(revolute arm joints only)")
+            held.append(name)
+    if not held:
+        return text
+    pattern = "|".join(re.escape(n) for n in held)
+    text = re.sub(rf'(<joint\b[^>]*name="(?:{pattern})"[^>]*type=")prismatic"', r'\1fixed"', text)
+    text = re.sub(rf'(<joint\b[^>]*type=")prismatic("[^>]*name="(?:{pattern})")', r"\1fixed\2", text)
+    return re.sub(r"<mimic\b[^>]*/>", "", text)
+
+
+def strip_geometry(urdf_text: str) -> str:
+    """Drop <visual> and <collision> blocks and tell MuJoCo to keep every body."""
+    text = re.sub(r"<visual\b.*?</visual>", "", urdf_text, flags=re.S)
+    text = re.sub(r"<collision\b.*?</collision>", "", text, flags=re.S)
+    # ROS writes lower = upper = 0 for "no limit"; MuJoCo would warn and ignore it.
+    text = re.sub(r'lower="0"\s+upper="0"', "", text)
+    compiler = (
+        '<mujoco><compiler angle="radian" discardvisual="true" fusestatic="false" '
+        'inertiafromgeom="false" autolimits="true"/></mujoco>'
+    )
+    return re.sub(r"(<robot\b[^>]*>)", r"\1" + compiler, text, count=1)
