@@ -37,7 +37,9 @@ from sklearn.base import clone
 from threadpoolctl import threadpool_limits
 
 from identification.errors import IdentificationError
+from identification.kinematic_model import KinematicModel
 from identification.library.base import Conditioning, Library, conditioning, warn_if_rank_deficient
+from identification.library.kinematic import KinematicLibrary
 from identification.metrics import rel_error
 from identification.model import IdentifiedModel, JointModel
 from identification.regression.coupled import AtomBasis, CoupledRegression, restriction_pvalue
@@ -137,26 +139,68 @@ def identify(q, qd, qdd, tau, library: Library, holdout: float = 0.25, tau_clean
     # thousands of rows by tens of columns: one BLAS thread is faster (no thread contention),
     # by 10-100x on a loaded two-core machine
     with threadpool_limits(limits=1, user_api="blas"):
+        if isinstance(library, KinematicLibrary):
+            return _identify_atoms(q, qd, qdd, tau, library, holdout, tau_clean, regression)
         return _identify(q, qd, qdd, tau, library, holdout, tau_clean, regression, method)
+
+
+def _split(q, qd, qdd, tau, dof: int, name: str, holdout: float, n_features: int):
+    """Validated arrays and the number of training samples (the first 1 - holdout)."""
+    if not 0.0 <= holdout < 1.0:
+        raise IdentificationError(f"holdout must be in [0, 1), got {holdout}")
+    q, qd, qdd, tau = check_data(q, qd, qdd, tau, 0)
+    if q.shape[1] != dof:
+        raise IdentificationError(f"data has {q.shape[1]} joints, library {name} has {dof}")
+    n_train = int(round(len(q) * (1 - holdout)))
+    if holdout > 0 and n_train >= len(q):
+        raise IdentificationError(f"holdout {holdout} of {len(q)} samples leaves no held-out sample")
+    check_data(q[:n_train], qd[:n_train], qdd[:n_train], tau[:n_train], n_features)
+    return q, qd, qdd, tau, n_train
+
+
+def _heldout(model, q, qd, qdd, tau, tau_clean, n_train: int):
+    truth = tau if tau_clean is None else check_data(q, qd, qdd, tau_clean, 0)[3]
+    if n_train < len(q):
+        return _score(model, q[n_train:], qd[n_train:], qdd[n_train:], truth[n_train:])
+    nan = np.full(q.shape[1], np.nan)  # holdout 0 (a final fit on all data): no held-out error
+    return nan, nan
+
+
+# An atom stays when its |t| exceeds sqrt(2) (Akaike's criterion for one coefficient: leaving
+# out an atom of true size t standard errors costs about t^2 in squared prediction error,
+# keeping it costs 1). A robot's base atoms are many and often all present (a real arm's
+# inertia tensors are full), so selection for prediction, not for the exact support, is what
+# keeps the model within the dense oracle's error (benchmarks/any_arm.py).
+PREDICTION_T = float(np.sqrt(2.0))
+
+
+def _identify_atoms(q, qd, qdd, tau, library: KinematicLibrary, holdout: float, tau_clean,
+                    regression: SparseRegression | None) -> Identification:
+    """Coupled sparse regression on a robot's base atoms (one coefficient per atom, shared by
+    every joint it acts on)."""
+    q, qd, qdd, tau, n_train = _split(q, qd, qdd, tau, library.dof, library.name, holdout,
+                                      len(library) // library.dof + 1)
+    start = time.perf_counter()
+    design = library.evaluate(q[:n_train], qd[:n_train], qdd[:n_train])
+    cond = conditioning(design.reshape(-1, len(library)), library.names)
+    warn_if_rank_deficient(cond)
+    reg = CoupledRegression(selector=regression, t_bound=PREDICTION_T).fit(design, tau[:n_train])
+    seconds = time.perf_counter() - start
+    model = KinematicModel(library, reg.coef_.copy(), np.asarray(reg.intercept_, float).copy())
+    rel, mse = _heldout(model, q, qd, qdd, tau, tau_clean, n_train)
+    return Identification(model, rel, mse, cond, seconds, (reg,), "coupled", library)
 
 
 def _identify(q, qd, qdd, tau, library: Library, holdout: float, tau_clean,
               regression: SparseRegression | None, method: str | None) -> Identification:
-    if not 0.0 <= holdout < 1.0:
-        raise IdentificationError(f"holdout must be in [0, 1), got {holdout}")
     method = method or ("coupled" if library.atoms else "per-joint")
     if method not in ("coupled", "per-joint", "jointwise"):
         raise IdentificationError(f"method must be 'coupled', 'per-joint' or 'jointwise', got {method!r}")
     if method in ("coupled", "jointwise") and not library.atoms:
         raise IdentificationError(f"library {library.name} has no Lagrangian atoms: "
                                   "use method 'per-joint'")
-    q, qd, qdd, tau = check_data(q, qd, qdd, tau, 0)
-    if q.shape[1] != library.dof:
-        raise IdentificationError(f"data has {q.shape[1]} joints, library {library.name} has {library.dof}")
-    n_train = int(round(len(q) * (1 - holdout)))
-    if holdout > 0 and n_train >= len(q):
-        raise IdentificationError(f"holdout {holdout} of {len(q)} samples leaves no held-out sample")
-    check_data(q[:n_train], qd[:n_train], qdd[:n_train], tau[:n_train], len(library))
+    q, qd, qdd, tau, n_train = _split(q, qd, qdd, tau, library.dof, library.name, holdout,
+                                      len(library))
     start = time.perf_counter()
     theta = library.evaluate(q[:n_train], qd[:n_train], qdd[:n_train])
     cond = conditioning(theta, library.names)
@@ -189,11 +233,7 @@ def _identify(q, qd, qdd, tau, library: Library, holdout: float, tau_clean,
             joints.append(_feature_joint(library, fits[-1]))
     seconds = time.perf_counter() - start
     model = IdentifiedModel(library.dof, tuple(joints), library.name, method)
-    truth = tau if tau_clean is None else check_data(q, qd, qdd, tau_clean, 0)[3]
-    if n_train < len(q):
-        rel, mse = _score(model, q[n_train:], qd[n_train:], qdd[n_train:], truth[n_train:])
-    else:  # holdout 0 (a final fit on all data): nothing is held out, so no held-out error
-        rel = mse = np.full(library.dof, np.nan)
+    rel, mse = _heldout(model, q, qd, qdd, tau, tau_clean, n_train)
     return Identification(model, rel, mse, cond, seconds, tuple(fits), method, basis)
 
 
