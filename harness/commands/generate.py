@@ -10,7 +10,8 @@ from harness.io import write_npz
 
 def register(sub) -> None:
     p = sub.add_parser("generate", help="torque data from MuJoCo (inverse dynamics or measured)")
-    p.add_argument("--plant", default="lynxmotion", help="robot name or MJCF path")
+    p.add_argument("--plant", "--robot", dest="plant", default="lynxmotion",
+                   help="robot name (lynxmotion, double_pendulum, ur5, panda) or URDF/MJCF path")
     p.add_argument("--samples", type=int, default=4000)
     p.add_argument("--noise", type=float, default=0.05, help="torque noise std / torque std")
     p.add_argument("--bias", type=float, default=0.2, help="noise mean in units of its std")

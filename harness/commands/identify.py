@@ -6,13 +6,16 @@ import sys
 import warnings
 
 from harness.data.dataset import load_arrays
+from harness.errors import UserError
 from harness.io import write_json
+from harness.robots.registry import DEFAULT_ROBOT, ROBOTS
+from harness.robots.torque_models import robot_library
 from identification.errors import IdentificationError, LibraryRankWarning
 from identification.identify import identify
 from identification.library.prior_knowledge import prior_knowledge_library
 from identification.library.published import generic_library, paper_library
 
-LIBRARIES = ("prior", "prior-general", "paper", "generic")
+LIBRARIES = ("auto", "kinematic", "prior", "prior-general", "paper", "generic")
 METHODS = ("auto", "coupled", "per-joint", "jointwise")
 
 
@@ -22,10 +25,15 @@ def register(sub) -> None:
     p.add_argument("--out", required=True, help="output MODEL.json")
     p.add_argument("--holdout", type=float, default=0.25,
                    help="last fraction of samples (time order) held out for scoring, in (0, 1)")
-    p.add_argument("--library", choices=LIBRARIES, default="prior",
-                   help="prior: derived from simple structures (3-DOF arm, symmetric links); "
+    p.add_argument("--robot", default=None,
+                   help="robot name or URDF/MJCF path (default: the robot the data were generated "
+                   f"on if registered, else {DEFAULT_ROBOT})")
+    p.add_argument("--library", choices=LIBRARIES, default="auto",
+                   help="kinematic: base atoms generated from the robot's kinematics (any arm); "
+                   "prior: derived from simple structures (3-DOF arm, symmetric links); "
                    "prior-general: the same without the symmetric-link assumption; paper: the published "
-                   "75 features; generic: polynomial x trig (any dof)")
+                   "75 features; generic: polynomial x trig (any dof); auto: prior on the "
+                   f"{DEFAULT_ROBOT} (the paper's reproduction), kinematic on any other robot")
     p.add_argument("--method", choices=METHODS, default="auto",
                    help="coupled: one Lagrangian, atoms shared by all joints (needs the prior "
                    "library); per-joint: the paper's regression of each joint alone; jointwise: "
@@ -35,7 +43,22 @@ def register(sub) -> None:
 
 
 
-def choose_library(name: str, dof: int):
+def data_robot(meta: dict, given: str | None) -> str:
+    """--robot if given, else the registered robot the data were generated on, else the default."""
+    if given:
+        return given
+    plant = str(meta.get("plant", ""))
+    return plant if plant in ROBOTS else DEFAULT_ROBOT
+
+
+def choose_library(name: str, dof: int, robot: str = DEFAULT_ROBOT):
+    if name == "auto":
+        name = "prior" if robot == DEFAULT_ROBOT else "kinematic"
+    if name == "kinematic":
+        library = robot_library(robot)
+        if library.dof != dof:
+            raise UserError(f"data have {dof} joints, robot {robot} has {library.dof}")
+        return library
     if name == "generic" or dof != 3:
         return generic_library(dof)
     if name == "paper":
@@ -46,9 +69,9 @@ def choose_library(name: str, dof: int):
 def run(args) -> int:
     if not 0.0 < args.holdout < 1.0:  # 0 would score the training data as "held out"
         raise IdentificationError(f"--holdout must be in (0, 1), got {args.holdout}")
-    data, _ = load_arrays(args.data, ("q", "qd", "qdd", "tau"), optional=("tau_clean",))
+    data, meta = load_arrays(args.data, ("q", "qd", "qdd", "tau"), optional=("tau_clean",))
     dof = data["q"].shape[1] if data["q"].ndim == 2 else 1
-    library = choose_library(args.library, dof)
+    library = choose_library(args.library, dof, data_robot(meta, args.robot))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LibraryRankWarning)
         result = identify(data["q"], data["qd"], data["qdd"], data["tau"], library,

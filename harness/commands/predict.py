@@ -13,7 +13,9 @@ def register(sub) -> None:
     p = sub.add_parser("predict", help="torques of a model (MODEL.json or 'pinocchio') on data")
     p.add_argument("--model", required=True, help="MODEL.json or 'pinocchio'")
     p.add_argument("--data", required=True, help="dataset .npz with q, qd, qdd")
-    p.add_argument("--robot", default=DEFAULT_ROBOT, help="robot for the pinocchio baseline")
+    p.add_argument("--robot", default=None,
+                   help=f"robot name or URDF/MJCF path: the pinocchio baseline's (default "
+                   f"{DEFAULT_ROBOT}); a MODEL.json's by default the robot it records")
     p.add_argument("--out", required=True, help="output .npz with key tau")
     p.set_defaults(func=run)
 

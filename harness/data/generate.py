@@ -97,31 +97,38 @@ def generate(
         meta.update(stats)
     else:
         raise UserError(f"--mode must be 'inverse' or 'measured', got '{mode}'")
-    meta.update(library_report(q, qd, qdd))
+    meta.update(library_report(q, qd, qdd, p.pinocchio()))
     tau = tau_clean + torque_noise(tau_clean, noise, bias, rng)
     return Dataset(t, q, qd, qdd, tau, tau_clean, meta, truth)
 
 
-def report_library(dof: int):
-    """The feature library whose conditioning is reported for a dof-joint dataset.
+def report_library(dof: int, pmodel=None):
+    """The library whose conditioning is reported for a dof-joint dataset.
 
-    3 joints: the paper's published 75 features. Otherwise the generic
-    polynomial x trig library (trig of the first two non-base joints' angle sums
-    beyond 2 joints, to keep it a few hundred features).
+    3 joints: the paper's published 75 features (the paper's arm). Otherwise the base atoms
+    generated from the plant's kinematics (identification.library.kinematic), or, with no
+    Pinocchio model of the plant, the generic polynomial x trig library.
     """
+    from identification.library.chain import ChainError, KinematicChain
+    from identification.library.kinematic import KinematicLibrary
     from identification.library.published import generic_library, paper_library
 
     if dof == 3:
         return paper_library()
+    if pmodel is not None and pmodel.nv == dof:
+        try:
+            return KinematicLibrary.generate(KinematicChain.from_pinocchio(pmodel))
+        except ChainError:
+            pass  # not a revolute chain: the generic library below
     return generic_library(dof) if dof <= 2 else generic_library(dof, trig_joints=(1, 2))
 
 
-def library_report(q, qd, qdd) -> dict:
+def library_report(q, qd, qdd, pmodel=None) -> dict:
     """Rank and normalized condition of the report library on this data."""
     from identification.library.base import conditioning
 
-    library = report_library(q.shape[1])
-    cond = conditioning(library.evaluate(q, qd, qdd), library.names)
+    library = report_library(q.shape[1], pmodel)
+    columns = library.evaluate(q, qd, qdd)
+    cond = conditioning(columns.reshape(-1, columns.shape[-1]), library.names)
     return {"library": library.name, "library_rank": cond.rank, "library_size": cond.size,
             "library_condition": cond.condition}
-

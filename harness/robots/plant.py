@@ -34,7 +34,7 @@ class Plant:
 
     def pinocchio(self) -> pin.Model | None:
         """The plant's rigid-body model in Pinocchio (registry URDF or parsed MJCF)."""
-        if self.name in ROBOTS:
+        if self.name in ROBOTS or self.name.lower().endswith(".urdf"):
             return load_pinocchio(self.name)
         try:
             return pin.buildModelFromMJCF(self.name)

@@ -2,21 +2,53 @@
 
 from __future__ import annotations
 
+import json
+from functools import cache
 from pathlib import Path
 
 from harness.errors import UserError
 from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import DEFAULT_ROBOT, load_pinocchio
+from harness.robots.registry import DEFAULT_ROBOT, ROBOTS, load_chain, load_pinocchio
+from identification.errors import IdentificationError
+from identification.library.kinematic import KinematicLibrary
 from identification.torque_model import TorqueModel
 
 
-def load_torque_model(spec: str, robot: str = DEFAULT_ROBOT) -> TorqueModel:
-    """'pinocchio' -> the closed-form baseline of robot; a path -> an identified model."""
+@cache
+def robot_library(robot: str) -> KinematicLibrary:
+    """The base atoms generated from robot's kinematics (cached per robot and process)."""
+    return KinematicLibrary.generate(load_chain(robot))
+
+
+def model_robot(path: str | Path) -> str | None:
+    """The robot a MODEL.json records (kinematic library), or None."""
+    try:
+        payload = json.loads(Path(path).read_text())
+    except (OSError, ValueError) as exc:
+        raise UserError(f"cannot read model {path}: {exc}") from None
+    robot = payload.get("robot") if isinstance(payload, dict) else None
+    return str(robot.get("name")) if isinstance(robot, dict) and robot.get("name") else None
+
+
+def load_torque_model(spec: str, robot: str | None = None) -> TorqueModel:
+    """'pinocchio' -> the closed-form baseline of robot; a path -> an identified model (one on
+    a robot's base atoms is checked against robot, by default the robot it records)."""
     if spec == "pinocchio":
-        return PinocchioModel(load_pinocchio(robot))
+        return PinocchioModel(load_pinocchio(robot or DEFAULT_ROBOT))
     path = Path(spec)
     if not path.is_file():
         raise UserError(f"model file not found: {path} (or use 'pinocchio')")
-    from identification.model import load_model  # provided by the identification package
+    from identification.kinematic_model import KinematicModel
+    from identification.model import load_model
 
-    return load_model(path)
+    recorded = model_robot(path)
+    if recorded is None:
+        return load_model(path)
+    robot = robot or recorded
+    if robot not in ROBOTS and not Path(robot).is_file():
+        raise UserError(f"model {path} was identified for robot '{recorded}': pass its URDF/MJCF "
+                        "with --robot")
+    try:
+        return KinematicModel.from_dict(json.loads(path.read_text()), robot_library(robot))
+    except IdentificationError as exc:
+        raise UserError(f"model {path}: {exc}") from None
