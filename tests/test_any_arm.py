@@ -1,0 +1,69 @@
+"""Any serial arm through the CLI: generate -> identify -> predict on the UR5 and the Panda
+with the library generated from their kinematics; noise-free data identified exactly, the
+model's CasADi form equal to its numeric form, and a model used with another robot or data
+of another robot refused with one line."""
+
+from __future__ import annotations
+
+import json
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from harness.cli import main
+from harness.robots.torque_models import load_torque_model, robot_library
+
+
+@pytest.fixture(scope="module", params=["ur5", "panda"])
+def noise_free(request, tmp_path_factory):
+    folder = tmp_path_factory.mktemp(request.param)
+    data, model = folder / "data.npz", folder / "MODEL.json"
+    assert main(["generate", "--robot", request.param, "--samples", "1200", "--noise", "0",
+                 "--out", str(data)]) == 0
+    assert main(["identify", "--data", str(data), "--out", str(model)]) == 0
+    return request.param, data, model
+
+
+def test_noise_free_data_are_identified_exactly(noise_free):
+    robot, _, model = noise_free
+    payload = json.loads(model.read_text())
+    assert payload["library"] == "kinematic" and payload["robot"]["name"] == robot
+    assert max(payload["metrics"]["heldout_rel_rmse"]) <= 1e-6
+    assert payload["atoms"] == robot_library(robot).names
+    for joint in payload["joints"]:  # the contract: terms and coefficients per joint
+        assert len(joint["terms"]) == len(joint["coefficients"]) > 0
+
+
+def test_predict_equals_the_clean_torque_and_the_symbolic_form(noise_free, tmp_path):
+    robot, data, model = noise_free
+    out = tmp_path / "pred.npz"
+    assert main(["predict", "--model", str(model), "--data", str(data), "--out", str(out)]) == 0
+    arrays = np.load(data)
+    tau = np.load(out)["tau"]
+    assert np.linalg.norm(tau - arrays["tau_clean"]) <= 1e-6 * np.linalg.norm(arrays["tau_clean"])
+    m = load_torque_model(str(model))
+    q, qd, qdd = (ca.SX.sym(s, m.dof) for s in ("q", "qd", "qdd"))
+    f = ca.Function("f", [q, qd, qdd], [m.symbolic_torque(q, qd, qdd)])
+    for k in (0, 500, 1100):
+        x = (arrays["q"][k], arrays["qd"][k], arrays["qdd"][k])
+        assert np.allclose(np.asarray(f(*x)).ravel(), tau[k], rtol=1e-10, atol=1e-10)
+
+
+def test_a_model_of_another_robot_is_one_line_and_no_file(noise_free, tmp_path, capsys):
+    robot, data, model = noise_free
+    other = "panda" if robot == "ur5" else "ur5"
+    out = tmp_path / "pred.npz"
+    assert main(["predict", "--model", str(model), "--data", str(data), "--robot", other,
+                 "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"identified for robot '{robot}'" in err[0] and not out.exists()
+
+
+def test_data_of_another_dof_are_one_line(noise_free, tmp_path, capsys):
+    _, data, _ = noise_free
+    out = tmp_path / "MODEL.json"
+    assert main(["identify", "--data", str(data), "--robot", "double_pendulum",
+                 "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "robot double_pendulum has 2" in err[0] and not out.exists()
