@@ -140,7 +140,7 @@ class CoupledRegression(Regressor):
     stacked = True
 
     def __init__(self, familywise: float = 0.01, selector: SparseRegression | None = None,
-                 t_bound: float | None = None):
+                 t_bound: float | np.ndarray | None = None):
         self.familywise = familywise
         self.t_bound = t_bound
         self.selector = selector
@@ -187,50 +187,50 @@ class CoupledRegression(Regressor):
         self.cov_[np.ix_(support, support)] = cov
         self.stderr_ = np.sqrt(np.maximum(np.diag(self.cov_), 0.0))
 
-    def _bound(self, n_atoms: int) -> float:
-        """|t| an atom must reach: t_bound if set, else the two-sided Bonferroni bound of
-        `familywise` over n_atoms candidates."""
+    def _bound(self, n_atoms: int) -> np.ndarray:
+        """|t| each atom must reach (n_atoms,): t_bound if set (a number or one per atom),
+        else the two-sided Bonferroni bound of `familywise` over n_atoms candidates."""
         from scipy.stats import norm
 
         if self.t_bound is not None:
-            return float(self.t_bound)
-        return float(norm.isf(self.familywise / (2 * n_atoms)))
+            return np.broadcast_to(np.asarray(self.t_bound, dtype=float), (n_atoms,))
+        return np.full(n_atoms, float(norm.isf(self.familywise / (2 * n_atoms))))
 
     def _stepwise(self, design: np.ndarray, tau: np.ndarray, support: np.ndarray):
         """Backward elimination (`_significant`), then while a base atom left out has |t| above
-        the same bound when added to the support, add the most significant one and eliminate
-        again: the Lasso path can drop a weak atom whose column is correlated with kept ones
-        (a wrist inertia beside the larger ones), which the t-test then recovers."""
+        its bound when added to the support, add the most significant one (relative to its
+        bound) and eliminate again: the Lasso path can drop a weak atom whose column is
+        correlated with kept ones (a wrist inertia beside the larger ones)."""
         bound = self._bound(design.shape[-1])
         support, fit = self._significant(design, tau, support)
         spread = np.linalg.norm(tau - tau.mean(axis=0))
         for _ in range(len(self.base_)):
             if np.linalg.norm(fit[2]) <= 1e-9 * spread:  # exact already: t is round-off
                 break
-            best, best_t = None, bound
+            best, best_ratio = None, 1.0
             for k in np.setdiff1d(self.base_, support):
                 trial = np.sort(np.append(support, k))
                 coef, _, _, cov = weighted_lstsq(design, tau, trial, self.sigma_)
                 i = int(np.searchsorted(trial, k))
-                t = abs(coef[i]) / max(np.sqrt(max(cov[i, i], 0.0)), 1e-300)
-                if t > best_t:
-                    best, best_t = k, t
+                ratio = abs(coef[i]) / max(np.sqrt(max(cov[i, i], 0.0)), 1e-300) / bound[k]
+                if ratio > best_ratio:
+                    best, best_ratio = k, ratio
             if best is None:
                 break
             support, fit = self._significant(design, tau, np.sort(np.append(support, best)))
         return support, fit
 
     def _significant(self, design: np.ndarray, tau: np.ndarray, support: np.ndarray):
-        """Backward elimination of atoms with |t| below the two-sided Bonferroni bound of
-        `familywise` over every candidate atom; returns the support and its refit."""
+        """Backward elimination of atoms with |t| below their bound (`_bound`), the weakest
+        relative to its bound first; returns the support and its refit."""
         bound = self._bound(design.shape[-1])
         while True:
             fit = weighted_lstsq(design, tau, support, self.sigma_)
             stderr = np.sqrt(np.maximum(np.diag(fit[3]), 0.0))
-            t = np.abs(fit[0]) / np.where(stderr > 0, stderr, np.inf)
-            if len(support) == 1 or t.min() >= bound:
+            ratio = np.abs(fit[0]) / np.where(stderr > 0, stderr, np.inf) / bound[support]
+            if len(support) == 1 or ratio.min() >= 1.0:
                 return support, fit
-            support = np.delete(support, int(np.argmin(t)))
+            support = np.delete(support, int(np.argmin(ratio)))
 
     def _path(self, xs, yc, val) -> list[tuple[float, np.ndarray]]:
         """(alpha, per-joint validation MSE in units of each joint's noise variance) of the
