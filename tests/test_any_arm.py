@@ -67,3 +67,26 @@ def test_data_of_another_dof_are_one_line(noise_free, tmp_path, capsys):
                  "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "robot double_pendulum has 2" in err[0] and not out.exists()
+
+
+def test_arm_section_scores_the_generated_library_against_the_oracle(tmp_path):
+    """The bench's arm section on the UR5 (quick: 2 draws): noise-free data identified
+    exactly, and per draw the generated library's fresh-trajectory error against the oracle's,
+    with the acceptance computed from those numbers."""
+    from harness.sections import arm_identification as section
+
+    out = section.run(tmp_path, quick=True, robot="ur5")
+    r = out["results"]
+    assert r["acceptance"]["noise_free_exact"] and max(r["noise_free_heldout"]) <= 1e-6
+    assert len(r["draws"]) == len(section.QUICK_SEEDS)
+    for draw in r["draws"]:
+        assert len(draw["kinematic"]["fresh"]) == len(draw["oracle"]["fresh"]) == 6
+        assert all(0 < e < 0.05 for e in draw["kinematic"]["fresh"] + draw["oracle"]["fresh"])
+    k = r["summary"]["kinematic"]
+    ratios = [max(np.array(d["kinematic"]["fresh"]) / np.array(d["oracle"]["fresh"]))
+              for d in r["draws"]]
+    assert np.allclose(k["max_ratio_per_draw"], ratios)
+    within = sum(m <= section.MEDIAN_LIMIT and x <= section.JOINT_LIMIT
+                 for m, x in zip(k["median_ratio_per_draw"], k["max_ratio_per_draw"], strict=True))
+    assert k["draws_within"] == within
+    assert "ur5" in out["markdown"]
