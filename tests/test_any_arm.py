@@ -90,3 +90,32 @@ def test_arm_section_scores_the_generated_library_against_the_oracle(tmp_path):
                  for m, x in zip(k["median_ratio_per_draw"], k["max_ratio_per_draw"], strict=True))
     assert k["draws_within"] == within
     assert "ur5" in out["markdown"]
+
+
+def test_closing_the_loop_on_the_ur5_names_every_effect_within_10_percent(tmp_path):
+    """A UR5 plant with viscous, Coulomb, armature, spring and a flange payload the declared
+    Pinocchio model lacks: each is named on its joint with its coefficient within 10 %, nothing
+    else is named, and no joint is worse after; the control plant names nothing."""
+    from harness.sections import arm_closeloop as section
+
+    out = section.run(tmp_path, robot="ur5")
+    effects = out["results"]["plants"]["effects"]
+    assert {(e["effect"], e["joint"]) for e in effects["effects"]} == {
+        ("viscous", 2), ("coulomb", 3), ("armature", 1), ("spring", 4), ("payload", 6)}
+    assert all(effects["acceptance"].values()), effects
+    for e in effects["effects"]:
+        assert abs(e["named"] - e["true"]) <= 0.10 * abs(e["true"])
+    control = out["results"]["plants"]["control"]
+    assert control["effects"] == [] and control["spurious"] == []
+    assert (tmp_path / "plants" / "ur5_effects.xml").is_file()
+
+
+def test_plant_of_another_arm_is_one_line(tmp_path, capsys):
+    from harness.closeloop.arm_plants import write_arm_variant
+    from harness.closeloop.plants import Variant
+
+    plant = write_arm_variant("ur5", Variant(name="control"), tmp_path)
+    out = tmp_path / "cl"
+    assert main(["closeloop", "--plant", str(plant), "--robot", "panda", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "not a variant" in err[0] and not out.exists()

@@ -38,13 +38,14 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from harness.closeloop.arm_plants import flange_frame
 from harness.closeloop.payload import PayloadTorque
 from harness.closeloop.plants import DECLARED_MJCF, true_effects
 from harness.data.dataset import Dataset
 from harness.data.generate import generate
 from harness.errors import UserError
 from harness.robots.plant import Plant, load_plant
-from harness.robots.registry import DEFAULT_ROBOT, load_pinocchio
+from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
 from harness.robots.torque_models import load_torque_model
 from identification.closeloop.effects import Effect, EffectTerm
 from identification.closeloop.identified import close_loop_identified
@@ -117,22 +118,26 @@ class CloseLoopRun:
         }
 
 
-def declared_model(spec: str) -> TorqueModel | Library:
+def declared_model(spec: str, robot: str = DEFAULT_ROBOT) -> TorqueModel | Library:
     """'pinocchio' or a MODEL.json path: a fixed torque model; 'identified': the library the
-    loop identifies its declared model with (identification.closeloop.identified)."""
+    loop identifies its declared model with (identification.closeloop.identified; the
+    Lynxmotion's prior-knowledge library)."""
     if spec == "identified":
+        if robot != DEFAULT_ROBOT:
+            raise UserError(f"--declared identified is built on the {DEFAULT_ROBOT}'s prior-"
+                            f"knowledge library; on {robot} use 'pinocchio' or a MODEL.json")
         return prior_knowledge_library(3)
-    return load_torque_model(spec, DEFAULT_ROBOT)
+    return load_torque_model(spec, robot)
 
 
-def check_plant(plant: str | Path, dof: int) -> Plant:
-    """The plant, or a UserError if it cannot be a variant of this robot: another number of
-    joints, or joints of another type, axis or place (the declared MJCF's kinematics)."""
+def check_plant(plant: str | Path, dof: int, robot: str = DEFAULT_ROBOT) -> Plant:
+    """The plant, or a UserError if it cannot be a variant of robot: another number of
+    joints, or joints of another type, axis or place (the declared model's kinematics)."""
     p = load_plant(plant)
     if p.dof != dof:
-        raise UserError(f"plant {plant} has {p.dof} joints; the declared {DEFAULT_ROBOT} model has "
+        raise UserError(f"plant {plant} has {p.dof} joints; the declared {robot} model has "
                         f"{dof}: not a variant of this robot")
-    ref = mujoco.MjModel.from_xml_path(str(DECLARED_MJCF))
+    ref = declared_mujoco(robot)
     m = p.model
     for j in range(dof):
         same = (m.jnt_type[j] == ref.jnt_type[j]
@@ -141,14 +146,21 @@ def check_plant(plant: str | Path, dof: int) -> Plant:
                 and np.allclose(m.body_pos[m.jnt_bodyid[j]], ref.body_pos[ref.jnt_bodyid[j]],
                                 atol=1e-9))
         if not same:
-            raise UserError(f"plant {plant}: joint {j + 1} differs from {DEFAULT_ROBOT}'s in type, "
+            raise UserError(f"plant {plant}: joint {j + 1} differs from {robot}'s in type, "
                             "axis or position: not a variant of this robot")
     return p
 
 
+def declared_mujoco(robot: str) -> mujoco.MjModel:
+    """The declared model of robot in MuJoCo (what a plant's effects are read against)."""
+    if robot == DEFAULT_ROBOT:
+        return mujoco.MjModel.from_xml_path(str(DECLARED_MJCF))
+    return load_mujoco(robot)
+
+
 def _loop(spec: str, data: Dataset, split: int, payload: PayloadTorque, truth, outside: bool,
-          holdout: float) -> CloseLoopRun:
-    declared = declared_model(spec)
+          holdout: float, robot: str = DEFAULT_ROBOT) -> CloseLoopRun:
+    declared = declared_model(spec, robot)
     if declared.dof != data.q.shape[1]:
         raise UserError(f"declared model {spec} has {declared.dof} joints, the plant "
                         f"{data.q.shape[1]}")
@@ -171,17 +183,21 @@ def _loop(spec: str, data: Dataset, split: int, payload: PayloadTorque, truth, o
 
 def run_closeloop(plant: str | Path, samples: int = 4000, noise: float = 0.05, seed: int = 0,
                   bias: float = 0.0, holdout: float = 0.25, declared: str = "pinocchio",
-                  compare: bool = False) -> CloseLoopRun:
-    """Generate measured data on plant, close the loop on the declared model, score it;
-    compare: also close it with the other built-in declared models (CloseLoopRun.others)."""
-    p = check_plant(plant, load_pinocchio(DEFAULT_ROBOT).nv)
+                  compare: bool = False, robot: str = DEFAULT_ROBOT) -> CloseLoopRun:
+    """Generate measured data on plant (a variant of robot), close the loop on the declared
+    model, score it; compare: also close it with the other built-in declared models of the
+    robot (CloseLoopRun.others)."""
+    model = load_pinocchio(robot)
+    p = check_plant(plant, model.nv, robot)
     data = generate(str(plant), samples, noise, seed, "measured", bias)
     split = int(round(samples * (1.0 - holdout)))
-    payload = PayloadTorque(load_pinocchio(DEFAULT_ROBOT))
-    truth, outside = true_effects(p.model)
-    run = _loop(declared, data, split, payload, truth, outside, holdout)
+    payload = (PayloadTorque(model) if robot == DEFAULT_ROBOT
+               else PayloadTorque(model, flange_frame(model) or ""))
+    truth, outside = true_effects(p.model, declared_mujoco(robot))
+    run = _loop(declared, data, split, payload, truth, outside, holdout, robot)
     if not compare:
         return run
-    others = tuple(_loop(spec, data, split, payload, truth, outside, holdout)
-                   for spec in DECLARED_MODELS if spec != declared)
+    specs = DECLARED_MODELS if robot == DEFAULT_ROBOT else ("pinocchio",)
+    others = tuple(_loop(spec, data, split, payload, truth, outside, holdout, robot)
+                   for spec in specs if spec != declared)
     return replace(run, others=others)

@@ -23,7 +23,7 @@ from harness.report.writer import SectionOutcome, write_report
 from harness.robots.registry import DEFAULT_ROBOT, ROBOTS
 
 SECTIONS = ("identification", "planning", "replay", "closeloop", "arm_identification")
-ARM_SECTIONS = ("arm_identification",)  # on another robot than the default
+ARM_SECTIONS = ("arm_identification", "arm_closeloop")  # on another robot than the default
 HEARTBEAT = 30.0  # s between "still running" lines of a long section
 
 

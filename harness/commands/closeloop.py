@@ -7,6 +7,7 @@ from pathlib import Path
 from harness.closeloop.run import run_closeloop
 from harness.errors import UserError
 from harness.io import write_json
+from harness.robots.registry import DEFAULT_ROBOT
 
 
 def register(sub) -> None:
@@ -18,6 +19,8 @@ def register(sub) -> None:
     p.add_argument("--bias", type=float, default=0.0,
                    help="torque-sensor bias in noise stds (non-zero: named as an offset)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--robot", default=DEFAULT_ROBOT,
+                   help="registered robot the plant is a variant of (its declared model)")
     p.add_argument("--holdout", type=float, default=0.25)
     p.add_argument("--declared", default="pinocchio",
                    help="declared model of the contract keys: 'pinocchio', 'identified' (fitted "
@@ -46,7 +49,7 @@ def run(args) -> int:
     if not 0.0 < args.holdout < 1.0:
         raise UserError(f"--holdout must be in (0, 1), got {args.holdout}")
     loop = run_closeloop(args.plant, args.samples, args.noise, args.seed, args.bias,
-                         args.holdout, args.declared, compare=True)
+                         args.holdout, args.declared, compare=True, robot=args.robot)
     out = Path(args.out) / "closeloop.json"
     write_json(out, loop.to_json())
     for run_ in (loop, *loop.others):

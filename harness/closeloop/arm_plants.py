@@ -1,0 +1,81 @@
+"""Plants of any registered arm with effects its declared model lacks.
+
+The arm's MuJoCo model (registry.load_mujoco: the URDF's arm joints, no meshes) is
+edited as a MuJoCo spec (mujoco.MjSpec): joint damping, frictionloss, armature and
+stiffness added on chosen joints, and a point payload fixed at the flange (the first
+of FLANGES the model has, else the last joint's body), then written as MJCF. The
+payload point is the one harness.closeloop.payload puts its unit mass at
+(the Pinocchio frame of the same link), so the dictionary's payload column is exact.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import mujoco
+import pinocchio as pin
+
+from harness.closeloop.plants import Variant
+from harness.errors import UserError
+from harness.robots.registry import get_robot, load_pinocchio
+from harness.robots.urdf import arm_urdf, strip_geometry
+
+FLANGES = ("tool0", "panda_link8", "ee_link", "end_effector")
+VECTOR_ATTRIBUTES = ("damping", "stiffness")  # polynomial coefficients in MuJoCo >= 3.3
+
+
+def flange_frame(model: pin.Model) -> str | None:
+    """The flange frame of the arm's Pinocchio model, or None (last joint's origin)."""
+    names = {f.name for f in model.frames}
+    return next((f for f in FLANGES if f in names), None)
+
+
+def arm_spec(robot: str) -> mujoco.MjSpec:
+    """The registered arm's MuJoCo spec (as registry.load_mujoco compiles it)."""
+    entry = get_robot(robot)
+    if entry.mjcf is not None:
+        return mujoco.MjSpec.from_file(str(entry.mjcf))
+    return mujoco.MjSpec.from_string(strip_geometry(arm_urdf(entry.urdf.read_text(), robot)))
+
+
+def arm_variant_xml(robot: str, variant: Variant) -> str:
+    """MJCF text of the arm plus the variant's joint effects and flange payload."""
+    from harness.closeloop.plants import JOINT_ATTRIBUTES
+
+    spec = arm_spec(robot)
+    hinges = [j for j in spec.joints if j.type == mujoco.mjtJoint.mjJNT_HINGE]
+    for effect, joint, value in variant.joint_effects:
+        if not 1 <= joint <= len(hinges):
+            raise UserError(f"{robot} has joints 1..{len(hinges)}, not {joint}")
+        attr = JOINT_ATTRIBUTES[effect]
+        target = hinges[joint - 1]
+        if attr in VECTOR_ATTRIBUTES:
+            current = list(getattr(target, attr))
+            setattr(target, attr, [current[0] + value, *current[1:]])
+        else:
+            setattr(target, attr, getattr(target, attr) + value)
+    if variant.coupling > 0:
+        raise UserError("a tendon coupling is built for the Lynxmotion plants only")
+    if variant.payload > 0:
+        frame = flange_frame(load_pinocchio(robot))
+        body = spec.body(frame) if frame else hinges[-1].parent
+        body.add_body(name="payload")
+    spec.compile()
+    text = spec.to_xml()
+    if variant.payload > 0:  # MjSpec.to_xml drops an added body's inertial: written here
+        inertial = (f'<inertial pos="0 0 0" mass="{variant.payload:.10g}" '
+                    'diaginertia="1e-9 1e-9 1e-9"/>')
+        text, n = re.subn(r'<body name="payload"\s*/>',
+                          f'<body name="payload">{inertial}</body>', text)
+        if n != 1:
+            raise RuntimeError("payload body not written by MjSpec.to_xml")
+    return text
+
+
+def write_arm_variant(robot: str, variant: Variant, directory: Path) -> Path:
+    """Write the variant MJCF to directory/<robot>_<name>.xml; returns its path."""
+    directory.mkdir(parents=True, exist_ok=True)
+    path = directory / f"{robot}_{variant.name}.xml"
+    path.write_text(arm_variant_xml(robot, variant))
+    return path
