@@ -128,7 +128,7 @@ def test_output_path_errors_are_one_line(tmp_path):
 
 def test_library_condition_is_reported_for_other_robots():
     ds = generate("double_pendulum", samples=4000, noise=0.0, seed=0)
-    assert ds.meta["library"] == "kinematic-double_pendulum"  # base atoms of its kinematics
+    assert ds.meta["library"].startswith("kinematic-")  # base atoms of its kinematics
     assert np.isfinite(ds.meta["library_condition"])
     assert ds.meta["library_rank"] == ds.meta["library_size"]
 
