@@ -125,3 +125,35 @@ def test_a_gripper_jaw_is_held_fixed(tmp_path):
     path = tmp_path / "arm.urdf"
     path.write_text(ARM.format(t1="revolute", t2="prismatic"))
     assert load_chain(path).dof == 1 and load_mujoco(path).nv == 1
+
+
+def test_a_closed_chain_is_one_clear_error(tmp_path):
+    path = tmp_path / "closed.xml"
+    path.write_text("""<mujoco><worldbody>
+      <body name="a"><joint name="j1" axis="0 0 1"/><geom size="0.05" mass="1"/>
+        <body name="b" pos="0.3 0 0"><joint name="j2" axis="0 1 0"/><geom size="0.05" mass="1"/>
+        </body></body></worldbody>
+      <equality><joint joint1="j1" joint2="j2"/></equality></mujoco>""")
+    with pytest.raises(UserError, match="close the chain"):
+        load_chain(path)
+
+
+def test_model_json_records_its_robot_and_refuses_another(tmp_path, capsys):
+    """A prior-library MODEL.json (the Lynxmotion's) records the robot too: planning or
+    predicting with it on another robot is one clear error."""
+    import json
+
+    from harness.cli import main
+
+    data, model = tmp_path / "d.npz", tmp_path / "MODEL.json"
+    assert main(["generate", "--samples", "1200", "--noise", "0.01", "--out", str(data)]) == 0
+    assert main(["identify", "--data", str(data), "--out", str(model)]) == 0
+    record = json.loads(model.read_text())["robot"]
+    assert record == {"name": "lynxmotion", "hash": load_chain("lynxmotion").digest()}
+    out = tmp_path / "p.npz"
+    assert main(["predict", "--model", str(model), "--data", str(data), "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["predict", "--model", str(model), "--data", str(data), "--robot", "ur5",
+                 "--out", str(tmp_path / "q.npz")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "identified for robot 'lynxmotion'" in err[0]

@@ -9,7 +9,7 @@ from harness.data.dataset import load_arrays
 from harness.errors import UserError
 from harness.io import write_json
 from harness.robots.registry import DEFAULT_ROBOT, ROBOTS
-from harness.robots.torque_models import robot_library
+from harness.robots.torque_models import robot_library, robot_record
 from identification.errors import IdentificationError, LibraryRankWarning
 from identification.identify import identify
 from identification.library.prior_knowledge import prior_knowledge_library
@@ -71,7 +71,8 @@ def run(args) -> int:
         raise IdentificationError(f"--holdout must be in (0, 1), got {args.holdout}")
     data, meta = load_arrays(args.data, ("q", "qd", "qdd", "tau"), optional=("tau_clean",))
     dof = data["q"].shape[1] if data["q"].ndim == 2 else 1
-    library = choose_library(args.library, dof, data_robot(meta, args.robot))
+    robot = data_robot(meta, args.robot)
+    library = choose_library(args.library, dof, robot)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", LibraryRankWarning)
         result = identify(data["q"], data["qd"], data["qdd"], data["tau"], library,
@@ -80,7 +81,7 @@ def run(args) -> int:
     for w in caught:
         if issubclass(w.category, LibraryRankWarning):
             print(f"torquebench identify: warning: {w.message}", file=sys.stderr)
-    payload = {**result.model.to_dict(), "metrics": result.metrics()}
+    payload = {"robot": robot_record(robot), **result.model.to_dict(), "metrics": result.metrics()}
     if result.lagrangian():
         payload["lagrangian"] = result.lagrangian()
     write_json(args.out, payload)

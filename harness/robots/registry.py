@@ -121,6 +121,10 @@ def load_chain(name_or_path: str | Path) -> KinematicChain:
     fixed-base serial chain of revolute joints."""
     model = load_pinocchio(name_or_path)
     name = str(name_or_path) if str(name_or_path) in ROBOTS else Path(name_or_path).stem
+    if str(name_or_path) not in ROBOTS and Path(name_or_path).suffix.lower() != ".urdf":
+        if load_mujoco(name_or_path).neq > 0:  # MJCF <equality> constraints close a loop
+            raise UserError(f"robot {name_or_path}: equality constraints close the chain: "
+                            "only open serial chains are supported")
     try:
         chain = KinematicChain.from_pinocchio(model, name)
     except ChainError as exc:

@@ -10,6 +10,7 @@ from harness.errors import UserError
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import DEFAULT_ROBOT, ROBOTS, load_chain, load_pinocchio
 from identification.errors import IdentificationError
+from identification.kinematic_model import LIBRARY, KinematicModel
 from identification.library.kinematic import KinematicLibrary
 from identification.torque_model import TorqueModel
 
@@ -20,14 +21,20 @@ def robot_library(robot: str) -> KinematicLibrary:
     return KinematicLibrary.generate(load_chain(robot))
 
 
-def model_robot(path: str | Path) -> str | None:
-    """The robot a MODEL.json records (kinematic library), or None."""
+def robot_record(robot: str) -> dict:
+    """What a MODEL.json records of the robot it was identified for: name, kinematics hash."""
+    chain = load_chain(robot)
+    return {"name": chain.name, "hash": chain.digest()}
+
+
+def _recorded(path: Path) -> tuple[dict, dict | None]:
+    """The MODEL.json payload and the robot it records (None for older files)."""
     try:
-        payload = json.loads(Path(path).read_text())
+        payload = json.loads(path.read_text())
     except (OSError, ValueError) as exc:
         raise UserError(f"cannot read model {path}: {exc}") from None
     robot = payload.get("robot") if isinstance(payload, dict) else None
-    return str(robot.get("name")) if isinstance(robot, dict) and robot.get("name") else None
+    return payload, robot if isinstance(robot, dict) and robot.get("name") else None
 
 
 def load_torque_model(spec: str, robot: str | None = None) -> TorqueModel:
@@ -38,17 +45,23 @@ def load_torque_model(spec: str, robot: str | None = None) -> TorqueModel:
     path = Path(spec)
     if not path.is_file():
         raise UserError(f"model file not found: {path} (or use 'pinocchio')")
-    from identification.kinematic_model import KinematicModel
     from identification.model import load_model
 
-    recorded = model_robot(path)
+    payload, recorded = _recorded(path)
     if recorded is None:
         return load_model(path)
-    robot = robot or recorded
+    robot = robot or str(recorded["name"])
     if robot not in ROBOTS and not Path(robot).is_file():
-        raise UserError(f"model {path} was identified for robot '{recorded}': pass its URDF/MJCF "
-                        "with --robot")
+        raise UserError(f"model {path} was identified for robot '{recorded['name']}': pass its "
+                        "URDF/MJCF with --robot")
     try:
-        return KinematicModel.from_dict(json.loads(path.read_text()), robot_library(robot))
+        if payload.get("library") == LIBRARY:
+            return KinematicModel.from_dict(payload, robot_library(robot))
+        chain = load_chain(robot)
+        if recorded.get("hash") != chain.digest():
+            raise IdentificationError(f"model was identified for robot '{recorded['name']}' "
+                                      f"(kinematics {recorded.get('hash')}), not '{chain.name}' "
+                                      f"({chain.digest()})")
     except IdentificationError as exc:
         raise UserError(f"model {path}: {exc}") from None
+    return load_model(path)
