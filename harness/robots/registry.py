@@ -63,6 +63,13 @@ ROBOTS = {
 }
 
 DEFAULT_ROBOT = "lynxmotion"
+FLANGES = ("tool0", "panda_link8", "ee_link", "end_effector")  # first one a model has
+
+
+def flange_frame(model: pin.Model) -> str | None:
+    """The flange frame of the arm's Pinocchio model, or None (last joint's origin)."""
+    names = {f.name for f in model.frames}
+    return next((f for f in FLANGES if f in names), None)
 
 
 def get_robot(name: str) -> Robot:
