@@ -18,8 +18,15 @@ import numpy as np
 import pinocchio as pin
 
 from harness.robots.plant import load_plant
-from harness.robots.registry import flange_frame, load_chain, load_mujoco, load_pinocchio
-from planning.config import PlannerConfig
+from harness.robots.registry import (
+    ROBOTS,
+    flange_frame,
+    get_robot,
+    load_chain,
+    load_mujoco,
+    load_pinocchio,
+)
+from planning.config import PlannerConfig, Scenario
 from planning.kinematics import ArmGeometry
 
 
@@ -86,3 +93,23 @@ def planner_config(robot: str, **changes) -> PlannerConfig:
     base = dict(geometry=arm_geometry(robot), lower=lower, upper=upper,
                 torque_limit=torque_limit(robot))
     return dataclasses.replace(PlannerConfig(), **{**base, **changes})
+
+
+def bench_motion(robot: str, duration: float = 2.0) -> tuple[Scenario, int]:
+    """The robot's planning motion (registry entry; else from 30 % to 70 % of every joint's
+    range) at rest, without obstacle, and the index (into the geometry's links) of the link
+    an obstacle should cross: the registered body's, else the last link."""
+    geometry = arm_geometry(robot)
+    entry = get_robot(robot) if robot in ROBOTS else None
+    if entry is not None and entry.motion is not None:
+        start, goal, body = entry.motion
+    else:
+        lower, upper = (np.maximum(np.asarray(b), -np.pi) if k == 0 else
+                        np.minimum(np.asarray(b), np.pi) for k, b in enumerate(joint_limits(robot)))
+        start, goal, body = tuple(lower + 0.3 * (upper - lower)), \
+            tuple(lower + 0.7 * (upper - lower)), ""
+    owners = [geometry.bodies[i] for i, _ in geometry.links]
+    link = owners.index(body) if body in owners else len(owners) - 1
+    dof = geometry.dof
+    return Scenario(tuple(map(float, start)), tuple(map(float, goal)), duration, None,
+                    (0.0,) * dof), link
