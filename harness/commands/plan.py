@@ -153,11 +153,13 @@ def run(args) -> int:
         raise UserError(f"model has {model.dof} joints, robot {args.robot} has "
                         f"{config.geometry.dof}")
     planner = Planner(model, config)
+    unreachable = torque_diagnosis(planner, scenario)  # before a long search that must fail
+    if unreachable:
+        raise PlanningError(unreachable)
     result = evaluate(execute(planner, scenario, replan=not args.no_replan), scenario, model,
                       config)
     if not result.feasible:
-        raise PlanningError(torque_diagnosis(planner, scenario)
-                            or "no feasible plan: " + "; ".join(result.problems))
+        raise PlanningError("no feasible plan: " + "; ".join(result.problems))
     write_json(args.out, to_json(result, scenario, config, args.model))
     print(f"wrote {args.out}: energy {result.energy:.4f} J, min clearance "
           f"{result.sample_clearance.min():.4f} m (closest: "

@@ -2,12 +2,15 @@
 
 The plant is driven only through its actuators by a tracking controller at the
 simulation timestep: model feedforward (the closed-form Pinocchio torque at the
-reference) plus joint PD with gains scaled by the plant's joint inertia at the
-reference configuration of each step (gain scheduling), so every joint keeps the
-same closed-loop natural frequency along the whole motion. With gains fixed at the
+reference) plus joint PD with gain matrices scaled by the plant's joint-space inertia
+matrix at the reference configuration of each step (gain scheduling), so every mode keeps
+the same closed-loop natural frequency along the whole motion. With gains fixed at the
 start pose, joint 1's inertia falling 48x when the arm folds (swaying scenario:
 0.023 -> 0.0005 kg m^2) pushed the explicit PD past its stability limit at the
-0.5 ms step: +-10 N m chatter, 12.9 J instead of 1.18 J. The obstacle moves as
+0.5 ms step: +-10 N m chatter, 12.9 J instead of 1.18 J. With diagonal gains (each joint
+its own inertia) the Panda chattered at its motors' limits (87 N m, 300 J instead of
+0.07 J): near q2 = 0 joints 1 and 3 turn about almost the same axis, and the mode q1 - q3
+has a tiny inertia that diagonal gains drive far past their frequency. The obstacle moves as
 a mocap body along the plan's path. Measured: energy integral |sum tau_i qd_i| dt
 from the torques the actuators applied, clearance (centre-to-segment and
 surface) and tracking error.
@@ -31,7 +34,7 @@ from planning.kinematics import ArmGeometry
 class TrackingGains:
     """PD gains as a closed-loop natural frequency (rad/s) and damping ratio."""
 
-    natural_frequency: float = 150.0  # 0.075 rad per 0.5 ms step: stable, stiff to friction
+    natural_frequency: float = 200.0  # 0.1 rad per 0.5 ms step: stable, stiff to friction
     damping_ratio: float = 1.0
 
 
@@ -66,19 +69,20 @@ def plant_joint_map(model: mujoco.MjModel, dof: int) -> tuple[np.ndarray, np.nda
 
 
 def joint_inertia(model: mujoco.MjModel, q: np.ndarray) -> np.ndarray:
-    """Diagonal of the joint-space inertia (kg m^2, incl. armature) at each row of q (n, nv)."""
-    data, full = mujoco.MjData(model), np.zeros((model.nv, model.nv))
-    out = np.empty((len(q), model.nv))
+    """Joint-space inertia matrices (n, nv, nv) in kg m^2 (incl. armature) at each row of q."""
+    data = mujoco.MjData(model)
+    out = np.zeros((len(q), model.nv, model.nv))
     for k, qk in enumerate(q):
         data.qpos[:] = qk
         mujoco.mj_fwdPosition(model, data)
-        mujoco.mj_fullM(model, data, full)
-        out[k] = np.diag(full)
+        mujoco.mj_fullM(model, data, out[k])
     return out
 
 
 def _pd_gains(model: mujoco.MjModel, q: np.ndarray, gains: TrackingGains):
-    """(kp, kd), each (n, nv), at the reference configurations q (n, nv)."""
+    """(kp, kd), each (n, nv, nv): the inertia matrix at the reference configurations q
+    (n, nv) times w^2 and 2 zeta w, so every mode of the arm, coupled joints included,
+    closes at the same natural frequency."""
     inertia = joint_inertia(model, q)
     w, z = gains.natural_frequency, gains.damping_ratio
     return inertia * w**2, 2 * z * inertia * w
@@ -109,7 +113,7 @@ def simulate(model: mujoco.MjModel, reference: PlanReference, feedforward: Torqu
     surface = np.empty((n + 1, len(probe.link_geoms))) if probe.has_surface else None
     for k in range(n + 1):
         probe.move_obstacle(data, obstacle[k])
-        tau = tau_ff[k] + kp[k] * (q_ref[k] - data.qpos) + kd[k] * (qd_ref[k] - data.qvel)
+        tau = tau_ff[k] + kp[k] @ (q_ref[k] - data.qpos) + kd[k] @ (qd_ref[k] - data.qvel)
         data.ctrl[:] = tau[joints] / gear
         rows["q"][k], rows["qd"][k] = data.qpos, data.qvel
         # mj_step evaluates forces and kinematics at the pre-step state, recorded here.

@@ -66,8 +66,8 @@ ROBOTS = {
                         ((1.2, -1.0, 1.2, -1.5, -1.5, 0.0), (-1.2, -1.4, 1.6, -1.0, -1.5, 0.5),
                          "forearm_link")),
     "panda": lambda: _erd("panda", "panda_description/urdf/panda.urdf",  # fingers held fixed
-                          ((1.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8),
-                           (-1.0, 0.2, 0.0, -1.8, 0.0, 2.2, 0.8), "panda_link4")),
+                          ((1.0, 0.5, 0.0, -2.4, 0.0, 2.8, 0.8),
+                           (-1.0, -0.3, 0.0, -1.5, 0.0, 1.6, 0.8), "panda_link4")),
 }
 
 DEFAULT_ROBOT = "lynxmotion"
