@@ -114,7 +114,7 @@ def _add_links(spec: mujoco.MjSpec, hinges, geometry: ArmGeometry) -> None:
 
 
 def _add_surroundings(spec: mujoco.MjSpec, geometry: ArmGeometry) -> None:
-    """Floor, light, mocap obstacle and a camera at 2.2 reaches looking at the arm."""
+    """Floor, light, mocap obstacle and a camera 1.3 reaches away looking at the arm."""
     reach = max(0.2, float(sum(geometry.link_lengths)))
     world = spec.worldbody
     world.add_light(pos=[0, 0, 2 * reach + 0.5], dir=[0, 0, -1], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL)
@@ -125,7 +125,7 @@ def _add_surroundings(spec: mujoco.MjSpec, geometry: ArmGeometry) -> None:
                       size=[OBSTACLE_RADIUS, 0, 0], contype=0, conaffinity=0,
                       rgba=[0.1, 0.1, 0.1, 0.8])
     target = np.array([0.0, 0.0, 0.4 * reach])
-    eye = target + 2.2 * reach * np.array([0.6, -0.6, 0.5])
+    eye = target + 1.3 * reach * np.array([0.6, -0.6, 0.45])
     world.add_camera(name="overview", pos=eye, quat=_look_at(eye, target))
 
 
