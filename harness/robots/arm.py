@@ -2,10 +2,10 @@
 (planning.kinematics.ArmGeometry), its joint limits and its motors' torque limits.
 
 Joint placements and axes come from the Pinocchio model (identification.library.chain);
-the flange is the first of registry.FLANGES the model has (else the last joint's origin). Joint
-limits are MuJoCo's (an unlimited hinge gets [-pi, pi]); torque limits are the MJCF
-motors' ctrlrange x gear when the model has one motor per joint, else the URDF's effort
-limits.
+the flange is the first of registry.FLANGES the model has (else the frame on the last
+body farthest from its joint). Joint limits are MuJoCo's (an unlimited hinge gets
+[-pi, pi]); torque limits are the MJCF motors' ctrlrange x gear when the model has one
+motor per joint, else the URDF's effort limits.
 """
 
 from __future__ import annotations
@@ -31,8 +31,8 @@ from planning.kinematics import ArmGeometry
 
 
 def robot_label(robot: str | Path) -> str:
-    """A registered name as is, a path as given (what PLAN.json records)."""
-    return str(robot)
+    """What PLAN.json records: a registered name as is, a path made absolute."""
+    return str(robot) if str(robot) in ROBOTS else str(Path(robot).resolve())
 
 
 @cache
@@ -41,12 +41,12 @@ def arm_geometry(robot: str) -> ArmGeometry:
     chain = load_chain(robot)
     model = load_pinocchio(robot)
     last = model.njoints - 1
-    frame = flange_frame(model)
-    flange = np.zeros(3)
-    if frame is not None:
-        placement = model.frames[model.getFrameId(frame, pin.FrameType.BODY)]
-        if placement.parentJoint == last:
-            flange = np.asarray(placement.placement.translation)
+    frames = [f for f in model.frames if f.parentJoint == last]
+    named = [f for f in frames if f.name == flange_frame(model)]
+    # the named flange (a body in a URDF, a site in an MJCF), else the frame of the last
+    # body farthest from its joint (the tip); none: the last joint's origin
+    tips = named or sorted(frames, key=lambda f: np.linalg.norm(f.placement.translation))
+    flange = np.asarray(tips[-1].placement.translation) if tips else np.zeros(3)
     bodies = []
     for j in range(1, model.njoints):
         names = [f.name for f in model.frames
