@@ -4,7 +4,8 @@ Modules, in the order the math flows:
 
 - trajectory: joint polynomials in normalized time (eqs. 11, 12), quartic by default
 - quadrature: where the power is sampled for the energy (eq. 18 or a dense rule)
-- kinematics, clearance: elbow / end effector (eqs. 9, 10) and obstacle-to-segment distance
+- kinematics, clearance: link points of any serial arm (data from the harness; the
+  Lynxmotion's eqs. 9, 10 as one chain) and the obstacle-to-link-segment distance
 - obstacle: the moving obstacle, its K samples and its constant-velocity prediction
 - nlp, limits: energy sigma/N sum |P| + alpha max(0, lambda - d)^2 with joint limits
 - solver: IPOPT through CasADi (exact derivatives), built once, warm-started

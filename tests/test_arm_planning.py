@@ -5,6 +5,7 @@ line, exit 2 and no file."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ from harness.cli import main
 from harness.robots.arm import bench_motion, planner_config
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
+from harness.sections import arm_replay
 from planning.clearance import link_clearances
 from planning.replanning import execute
 from planning.scenarios import crossing_scenario
@@ -62,6 +64,11 @@ def test_ur5_plan_avoids_with_every_link_and_replays_as_planned(tmp_path, crossi
     assert replayed["tracking_rms"] <= 1e-3
     assert abs(replayed["energy"] / plan["energy"] - 1) <= 0.02
     assert replayed["min_clearance"] >= plan["threshold"] - 5e-3
+    # the bench's replay section on the same plan: its checks, per-link figure, headline
+    section = arm_replay.run(tmp_path, quick=True, plans={"ur5_pinocchio": plan}, robot=ROBOT)
+    assert section["results"]["acceptance"] and all(section["results"]["acceptance"].values())
+    assert any(f.endswith("ur5_pinocchio_clearance.png") for f in section["figures"])
+    assert all(Path(f).is_file() for f in section["figures"])
 
 
 def _bad_inputs(scenario):

@@ -24,7 +24,7 @@ from harness.robots.arm import arm_geometry
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from harness.robots.scene import replay_scene
-from harness.sections.replay import checks, comparison, role, table_row, verdict_line
+from harness.sections.replay import checks, comparison, role, table_row
 
 IDENTIFIED_TOLERANCE = 0.01  # replayed energy, identified plan vs closed-form plan
 
@@ -77,12 +77,26 @@ def run(out_dir: Path, quick: bool = False, plans: dict | None = None, video: bo
                for name, r in results.items()}
     return {"markdown": _markdown(robot, results, verdicts, side, acceptance),
             "results": {"robot": robot, "plans": payload, "comparison": side,
-                        "videos": videos, "acceptance": acceptance},
+                        "videos": videos, "acceptance": acceptance,
+                        "headline": _headline(results, side)},
             "figures": [str(f) for f in figures]}
 
 
+def _headline(results: dict[str, ReplayResult], side: dict | None) -> dict:
+    out = {f"{name}: replayed energy vs plan (%)": 100 * r.energy_error
+           for name, r in results.items()}
+    out.update({f"{name}: tracking RMS (mrad)": 1e3 * r.tracking_rms
+                for name, r in results.items()})
+    if side:
+        out["identified vs closed-form replayed energy (%)"] = \
+            100 * (side["energy_ratio_replayed"] - 1)
+    return out
+
+
 def _markdown(robot, results, verdicts, side, acceptance) -> str:
-    lines = [verdict_line(verdicts), "",
+    failed = [k for k, ok in acceptance.items() if not ok]
+    lines = [f"{len(acceptance) - len(failed)} of {len(acceptance)} acceptance checks passed"
+             + (f"; failing: {', '.join(failed)}." if failed else "."), "",
              f"Scene built around `{robot}` with MjSpec; MuJoCo forward simulation at 0.5 ms "
              "through one motor per joint, Pinocchio feedforward + PD.", "",
              "| plan | energy planned [J] | energy of plan, dense [J] | energy replayed [J] "

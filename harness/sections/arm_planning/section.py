@@ -77,6 +77,7 @@ def run(out_dir: Path, quick: bool = False, robot: str = "ur5") -> dict:
                          stride=10 if quick else 1)
     results["speed"] = timings.summary()
     results["acceptance"] = _acceptance(results, robot)
+    results["headline"] = _headline(results)
     figure_dir = Path(out_dir) / "figures"
     figs = [figures.path3d(executed, scenario, config.geometry,
                            figure_dir / f"arm_planning_{robot}_path3d.png")]
@@ -100,6 +101,19 @@ def _acceptance(r: dict, robot: str) -> dict:
         out[f"warm_replan_median_le_{REPLAN_LIMIT_MS:g}ms"] = \
             speed["replan_median_ms"] <= REPLAN_LIMIT_MS
     return out
+
+
+def _headline(r: dict) -> dict:
+    p, speed = r["pinocchio"], r["speed"]
+    return {"min clearance over the whole path, closed form / identified (mm)":
+                f"{1e3 * p['min_clearance_m']:.1f} / {1e3 * r['identified']['min_clearance_m']:.1f}",
+            "closest link": p["closest_link"],
+            "identified plan's true energy vs closed form (%)":
+                100 * (true_energy_ratio(r) - 1),
+            "cold plan median ms (CPU)": f"{speed['cold_median_ms']:.0f} "
+                                         f"({speed['cold_cpu_median_ms']:.0f})",
+            "warm re-plan median ms (CPU)": f"{speed['replan_median_ms']:.1f} "
+                                            f"({speed['replan_cpu_median_ms']:.1f})"}
 
 
 def true_energy_ratio(r: dict) -> float:
