@@ -69,8 +69,12 @@ def main(argv: list[str] | None = None) -> int:
         _check_output(args)
         return int(args.func(args) or 0)
     except _user_errors() as exc:
-        print(f"torquebench {args.command}: error: {exc}", file=sys.stderr)
+        message = " ".join(str(exc).split())  # one line, whatever the library wrote
+        print(f"torquebench {args.command}: error: {message}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # result files are written atomically: none is left half-written
+        print(f"torquebench {args.command}: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-import json
 from dataclasses import asdict
 from pathlib import Path
 
-from harness.errors import UserError
-from harness.io import write_json
+from harness.io import read_json, write_json
 from harness.robots.registry import DEFAULT_ROBOT
 
 FEEDFORWARD = "pinocchio"  # closed-form model of the default robot
@@ -29,14 +27,8 @@ def register(subparsers) -> None:
 
 
 def read_plan(path: str | Path) -> dict:
-    """The JSON object in a PLAN.json file."""
-    path = Path(path)
-    if not path.is_file():
-        raise UserError(f"plan file not found: {path}")
-    try:
-        return json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise UserError(f"plan file {path} is not valid JSON: {exc}") from None
+    """The JSON object in a PLAN.json file (validated by plan_reference)."""
+    return read_json(path, "plan")
 
 
 def result_json(result, plant: str) -> dict:
