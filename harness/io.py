@@ -97,6 +97,11 @@ def write_json(path: str | Path, payload: dict) -> None:
     atomic_write(path, write)
 
 
+def write_text(path: str | Path, text: str) -> None:
+    """Write text to path atomically."""
+    atomic_write(path, lambda tmp: Path(tmp).write_text(text))
+
+
 def write_npz(path: str | Path, **arrays) -> None:
     """Write arrays to an .npz atomically (np.savez appends .npz unless the name has it)."""
     atomic_write(path, lambda tmp: np.savez(tmp, **arrays), suffix=".npz")

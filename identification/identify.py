@@ -42,6 +42,7 @@ from identification.library.base import Conditioning, Library, conditioning, war
 from identification.library.kinematic import KinematicLibrary
 from identification.metrics import rel_error
 from identification.model import IdentifiedModel, JointModel
+from identification.regression.base import validation_mask
 from identification.regression.coupled import AtomBasis, CoupledRegression, restriction_pvalue
 from identification.regression.sparse import SparseRegression
 
@@ -155,6 +156,9 @@ def _split(q, qd, qdd, tau, dof: int, name: str, holdout: float, n_features: int
     if holdout > 0 and n_train >= len(q):
         raise IdentificationError(f"holdout {holdout} of {len(q)} samples leaves no held-out sample")
     check_data(q[:n_train], qd[:n_train], qdd[:n_train], tau[:n_train], n_features)
+    if not validation_mask(n_train).any():  # the selection scores alpha on validation blocks
+        raise IdentificationError(f"{n_train} training samples are too few: the selection "
+                                  "validates on every 5th block of 50 samples (needs more than 200)")
     return q, qd, qdd, tau, n_train
 
 

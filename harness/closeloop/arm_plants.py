@@ -18,6 +18,7 @@ import pinocchio as pin
 
 from harness.closeloop.plants import Variant
 from harness.errors import UserError
+from harness.io import write_text
 from harness.robots.registry import get_robot, load_pinocchio
 from harness.robots.urdf import arm_urdf, strip_geometry
 
@@ -77,5 +78,5 @@ def write_arm_variant(robot: str, variant: Variant, directory: Path) -> Path:
     """Write the variant MJCF to directory/<robot>_<name>.xml; returns its path."""
     directory.mkdir(parents=True, exist_ok=True)
     path = directory / f"{robot}_{variant.name}.xml"
-    path.write_text(arm_variant_xml(robot, variant))
+    write_text(path, arm_variant_xml(robot, variant))
     return path

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict
 from pathlib import Path
 
@@ -35,7 +36,7 @@ def result_json(result, plant: str) -> dict:
     """REPLAY.json payload: the measured numbers plus how they were measured."""
     return {
         **asdict(result),
-        "energy_error": result.energy_error,
+        "energy_error": result.energy_error if math.isfinite(result.energy_error) else None,
         "plant": plant,
         "feedforward": FEEDFORWARD,
         "units": {"energy": "J", "clearance": "m", "tracking": "rad", "torque": "N m"},
