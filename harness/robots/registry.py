@@ -72,6 +72,15 @@ def get_robot(name: str) -> Robot:
     return ROBOTS[name]()
 
 
+def _arm_urdf_file(path: Path) -> str:
+    """arm_urdf of a URDF file; UserError if it is not text."""
+    try:
+        text = path.read_text()
+    except UnicodeDecodeError:
+        raise UserError(f"invalid URDF {path}: not a text file") from None
+    return arm_urdf(text, str(path))
+
+
 def load_mujoco(name_or_path: str | Path, scene: bool = False) -> mujoco.MjModel:
     """A MuJoCo model from a registered robot name or any MJCF or URDF file path."""
     path = Path(name_or_path)
@@ -80,10 +89,11 @@ def load_mujoco(name_or_path: str | Path, scene: bool = False) -> mujoco.MjModel
             get_robot(str(name_or_path))  # raises the unknown-robot error
         if not path.is_file():
             raise UserError(f"plant file not found: {path}")
+        # as a registered URDF: arm joints only (arm_urdf's own error stays as it is), no meshes
+        urdf = _arm_urdf_file(path) if path.suffix.lower() == ".urdf" else None
         try:
-            if path.suffix.lower() == ".urdf":  # as a registered URDF: arm joints only, no meshes
-                return mujoco.MjModel.from_xml_string(strip_geometry(arm_urdf(path.read_text(),
-                                                                              str(path))))
+            if urdf is not None:
+                return mujoco.MjModel.from_xml_string(strip_geometry(urdf))
             return mujoco.MjModel.from_xml_path(str(path))
         except ValueError as exc:
             detail = " ".join(str(exc).split()) or "parse error"
@@ -107,13 +117,21 @@ def load_pinocchio(name_or_path: str | Path) -> pin.Model:
     if not path.is_file():
         get_robot(str(name_or_path)) if path.suffix == "" else None  # unknown-robot error
         raise UserError(f"robot file not found: {path}")
+    urdf = _arm_urdf_file(path) if path.suffix.lower() == ".urdf" else None
     try:
-        if path.suffix.lower() == ".urdf":
-            return pin.buildModelFromXML(arm_urdf(path.read_text(), str(path)))
+        if urdf is not None:
+            return pin.buildModelFromXML(urdf)
         return pin.buildModelFromMJCF(str(path))
     except (ValueError, RuntimeError) as exc:
         detail = " ".join(str(exc).split()) or "parse error"
         raise UserError(f"Pinocchio cannot read {path}: {detail}") from None
+
+
+def check_open_chain(model: mujoco.MjModel, name_or_path: str | Path) -> None:
+    """UserError if MJCF <equality> constraints close a loop (only open chains are supported)."""
+    if model.neq > 0:
+        raise UserError(f"robot {name_or_path}: equality constraints close the chain: "
+                        "only open serial chains are supported")
 
 
 def load_chain(name_or_path: str | Path) -> KinematicChain:
@@ -122,9 +140,7 @@ def load_chain(name_or_path: str | Path) -> KinematicChain:
     model = load_pinocchio(name_or_path)
     name = str(name_or_path) if str(name_or_path) in ROBOTS else Path(name_or_path).stem
     if str(name_or_path) not in ROBOTS and Path(name_or_path).suffix.lower() != ".urdf":
-        if load_mujoco(name_or_path).neq > 0:  # MJCF <equality> constraints close a loop
-            raise UserError(f"robot {name_or_path}: equality constraints close the chain: "
-                            "only open serial chains are supported")
+        check_open_chain(load_mujoco(name_or_path), name_or_path)
     try:
         chain = KinematicChain.from_pinocchio(model, name)
     except ChainError as exc:
