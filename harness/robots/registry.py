@@ -167,15 +167,20 @@ def read_text(path: Path) -> str:
         raise UserError(f"cannot read robot file {path}: {exc.strerror}") from None
 
 
+def check_open_chain(model: mujoco.MjModel, name_or_path: str | Path) -> None:
+    """UserError if MJCF <equality> constraints close a loop (only open chains are supported)."""
+    if model.neq > 0:
+        raise UserError(f"robot {name_or_path}: equality constraints close the chain: "
+                        "only open serial chains are supported")
+
+
 def load_chain(name_or_path: str | Path) -> KinematicChain:
     """The robot's kinematic chain (identification.library.chain); UserError unless it is a
     fixed-base serial chain of revolute joints."""
     model = load_pinocchio(name_or_path)
     name = str(name_or_path) if str(name_or_path) in ROBOTS else Path(name_or_path).stem
     if str(name_or_path) not in ROBOTS and Path(name_or_path).suffix.lower() != ".urdf":
-        if load_mujoco(name_or_path).neq > 0:  # MJCF <equality> constraints close a loop
-            raise UserError(f"robot {name_or_path}: equality constraints close the chain: "
-                            "only open serial chains are supported")
+        check_open_chain(load_mujoco(name_or_path), name_or_path)
     try:
         chain = KinematicChain.from_pinocchio(model, name)
     except ChainError as exc:
