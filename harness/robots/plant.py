@@ -10,7 +10,7 @@ import numpy as np
 import pinocchio as pin
 
 from harness.errors import UserError
-from harness.robots.registry import ROBOTS, check_open_chain, load_mujoco, load_pinocchio
+from harness.robots.registry import check_open_chain, load_mujoco, load_pinocchio
 
 
 @dataclass(frozen=True)

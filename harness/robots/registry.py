@@ -35,6 +35,9 @@ class Robot:
     mjcf: Path | None = None  # robot-only MJCF; None: MuJoCo compiles the URDF
     scene: Path | None = None  # MJCF with floor, light, obstacle
     source: str = ""
+    # the bench's planning motion: start and goal (rad, one per joint) and the body whose
+    # link the obstacle crosses; None: derived from the joint limits
+    motion: tuple[tuple[float, ...], tuple[float, ...], str] | None = None
 
 
 @cache
@@ -47,8 +50,9 @@ def erd_robots_dir() -> Path:
     return path
 
 
-def _erd(name: str, relpath: str) -> Robot:
-    return Robot(name=name, urdf=erd_robots_dir() / relpath, source="example-robot-data")
+def _erd(name: str, relpath: str, motion=None) -> Robot:
+    return Robot(name=name, urdf=erd_robots_dir() / relpath, source="example-robot-data",
+                 motion=motion)
 
 
 ROBOTS = {
@@ -62,11 +66,22 @@ ROBOTS = {
     "double_pendulum": lambda: _erd(
         "double_pendulum", "double_pendulum_description/urdf/double_pendulum.urdf"
     ),
-    "ur5": lambda: _erd("ur5", "ur_description/urdf/ur5_robot.urdf"),
-    "panda": lambda: _erd("panda", "panda_description/urdf/panda.urdf"),  # fingers held fixed
+    "ur5": lambda: _erd("ur5", "ur_description/urdf/ur5_robot.urdf",
+                        ((1.2, -1.0, 1.2, -1.5, -1.5, 0.0), (-1.2, -1.4, 1.6, -1.0, -1.5, 0.5),
+                         "forearm_link")),
+    "panda": lambda: _erd("panda", "panda_description/urdf/panda.urdf",  # fingers held fixed
+                          ((1.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8),
+                           (-1.0, 0.2, 0.0, -1.8, 0.0, 2.2, 0.8), "panda_link4")),
 }
 
 DEFAULT_ROBOT = "lynxmotion"
+FLANGES = ("tool0", "panda_link8", "ee_link", "end_effector")  # first one a model has
+
+
+def flange_frame(model: pin.Model) -> str | None:
+    """The flange frame of the arm's Pinocchio model, or None (last joint's origin)."""
+    names = {f.name for f in model.frames}
+    return next((f for f in FLANGES if f in names), None)
 
 
 def get_robot(name: str) -> Robot:
