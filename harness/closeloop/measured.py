@@ -89,11 +89,12 @@ class MeasuredRun:
 
 
 def data_robot(meta: dict, given: str | None) -> str:
-    """--robot if given, else the registered robot the data record, else the default."""
+    """--robot if given, else the robot the data record (registered, or a file that exists),
+    else the default."""
     if given:
         return given
     plant = str(meta.get("robot") or meta.get("plant") or "")
-    return plant if plant in ROBOTS else DEFAULT_ROBOT
+    return plant if plant in ROBOTS or (plant and Path(plant).is_file()) else DEFAULT_ROBOT
 
 
 def run_measured(data: str | Path, robot: str | None = None, holdout: float = 0.25) -> MeasuredRun:
