@@ -156,8 +156,9 @@ BAD = {
     "duplicate": (_edit(_lines(), header="t,q1,q2,q2,tau1,tau2,tau3"), "appears twice"),
     "dof mismatch": (_lines(dof=4), "robot has 3 joints"),
     "NaN": (_edit(_lines(), 40, "0.039,nan,1,1,1,1,1"), "'q1' is NaN or infinite at line 41"),
-    "not a number": (_edit(_lines(), 40, "0.039,abc,1,1,1,1,1"), "abc"),
-    "ragged row": (_edit(_lines(), 40, "0.039,1,1,1,1,1"), "columns"),
+    "not a number": (_edit(_lines(), 40, "0.039,abc,1,1,1,1,1"),
+                     "line 41, column 'q1': 'abc' is not a number"),
+    "ragged row": (_edit(_lines(), 40, "0.039,1,1,1,1,1"), "line 41 has 6 values, the header names 7"),
     "non-monotonic time": (_edit(_lines(), 40, "0.037,1,1,1,1,1,1"), "strictly increase: line 41"),
     "gap": (_edit(_lines(), 40, "5.0,1,1,1,1,1,1")[:41] + [f"{5 + k * 1e-3:.6g},1,1,1,1,1,1"
                                                               for k in range(1, 300)], "gap"),

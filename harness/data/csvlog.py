@@ -40,7 +40,11 @@ class Log:
 
 
 def _open(path: Path):
-    return gzip.open(path, "rt") if path.suffix == ".gz" else open(path)
+    """Text lines of the file (gzip-compressed if it ends in .gz; a UTF-8 byte-order mark
+    dropped)."""
+    if path.suffix == ".gz":
+        return gzip.open(path, "rt", encoding="utf-8-sig")
+    return open(path, encoding="utf-8-sig")
 
 
 def _header(path: Path) -> list[str]:
@@ -49,7 +53,7 @@ def _header(path: Path) -> list[str]:
             line = f.readline()
     except (OSError, UnicodeDecodeError, EOFError) as exc:
         raise UserError(f"{path}: cannot read ({exc})") from None
-    names = [c.strip() for c in line.strip().split(",")]
+    names = [c.strip().strip('"') for c in line.strip().split(",")]
     if not line.strip() or names == [""]:
         raise UserError(f"{path}: empty file, expected a header 't, q1..qn, tau1..taun'")
     return names
@@ -90,17 +94,36 @@ def _layout(path: Path, names: list[str], dof: int) -> dict[str, list[int]]:
     return layout
 
 
-def _values(path: Path, width: int) -> np.ndarray:
+def _bad_line(path: Path, names: list[str]) -> str:
+    """The first line that is not len(names) numbers, described (slow: on error only)."""
+    with _open(path) as f:
+        next(f)
+        for number, line in enumerate(f, start=2):
+            if not line.strip():
+                continue
+            cells = [c.strip() for c in line.rstrip("\r\n").split(",")]
+            if len(cells) != len(names):
+                return f"line {number} has {len(cells)} values, the header names {len(names)}"
+            for name, cell in zip(names, cells, strict=True):
+                try:
+                    float(cell)
+                except ValueError:
+                    return f"line {number}, column '{name}': '{cell}' is not a number"
+    return "not a table of numbers"
+
+
+def _values(path: Path, names: list[str]) -> np.ndarray:
     try:
         with warnings.catch_warnings():  # a header-only file is reported as too short below
             warnings.filterwarnings("ignore", message=".*input contained no data")
             values = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2, dtype=float)
-    except ValueError as exc:
-        raise UserError(f"{path}: {' '.join(str(exc).split())}") from None
+    except ValueError:
+        raise UserError(f"{path}: {_bad_line(path, names)}") from None
     except (OSError, EOFError) as exc:
         raise UserError(f"{path}: cannot read ({exc})") from None
-    if values.size and values.shape[1] != width:
-        raise UserError(f"{path}: rows have {values.shape[1]} values, the header names {width}")
+    if values.size and values.shape[1] != len(names):
+        raise UserError(f"{path}: rows have {values.shape[1]} values, the header names "
+                        f"{len(names)}")
     return values
 
 
@@ -126,7 +149,7 @@ def read_log(path: str | Path, dof: int) -> Log:
         raise UserError(f"log file not found: {path}")
     names = _header(path)
     layout = _layout(path, names, dof)
-    values = _values(path, len(names))
+    values = _values(path, names)
     if len(values) < MIN_SAMPLES:
         raise UserError(f"{path}: {len(values)} samples, at least {MIN_SAMPLES} are needed")
     finite = np.isfinite(values)

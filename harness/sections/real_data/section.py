@@ -34,6 +34,7 @@ from harness.sections.real_data.figures import (
 )
 from harness.sections.real_data.models import score_models
 from harness.sections.real_data.report import markdown
+from identification.metrics import rel_error
 
 LOG = DATA / "panda_gaz2019"
 ROBOT = "panda"
@@ -68,7 +69,7 @@ def run(out_dir: Path, quick: bool = False) -> dict:
     ratio = identified / np.array(reference)
     same_data = identified / models["least_squares"].heldout
     tau = a["tau"]
-    nominal_whole = np.linalg.norm(tau - models["nominal"].torque, axis=0) / np.linalg.norm(tau, axis=0)
+    nominal_whole = rel_error(models["nominal"].torque, tau)
     before = r.declared.torque(*states)
     after = r.model.torque(*states)
     first = r.path[1][0].split("@")[0] if len(r.path) > 1 else ""
