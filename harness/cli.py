@@ -22,7 +22,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 from harness.errors import UserError  # noqa: E402 - after the environment set-up above
 
-COMMANDS = ["generate", "identify", "predict", "plan", "replay", "closeloop", "bench"]
+COMMANDS = ["generate", "ingest", "identify", "predict", "plan", "replay", "closeloop", "bench"]
 
 
 def build_parser() -> argparse.ArgumentParser:
