@@ -17,6 +17,7 @@ import mujoco
 
 from harness.closeloop.plants import Variant
 from harness.errors import UserError
+from harness.io import write_text
 from harness.robots.registry import flange_frame, get_robot, load_pinocchio
 from harness.robots.urdf import arm_urdf, strip_geometry
 
@@ -69,5 +70,5 @@ def write_arm_variant(robot: str, variant: Variant, directory: Path) -> Path:
     """Write the variant MJCF to directory/<robot>_<name>.xml; returns its path."""
     directory.mkdir(parents=True, exist_ok=True)
     path = directory / f"{robot}_{variant.name}.xml"
-    path.write_text(arm_variant_xml(robot, variant))
+    write_text(path, arm_variant_xml(robot, variant))
     return path

@@ -22,7 +22,8 @@ from harness.report.headline import headline
 from harness.report.writer import SectionOutcome, write_report
 from harness.robots.registry import DEFAULT_ROBOT, ROBOTS
 
-SECTIONS = ("identification", "planning", "replay", "closeloop", "arm_identification")
+SECTIONS = ("identification", "planning", "replay", "closeloop", "arm_identification",
+            "real_data")
 ARM_SECTIONS = ("arm_identification", "arm_planning", "arm_replay",
                 "arm_closeloop")  # on another robot than the default
 HEARTBEAT = 30.0  # s between "still running" lines of a long section

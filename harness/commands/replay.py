@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import json
+import math
 from dataclasses import asdict
 from pathlib import Path
 
 from harness.errors import UserError
-from harness.io import write_json
+from harness.io import read_json, write_json
 from harness.robots.registry import DEFAULT_ROBOT
 
 FEEDFORWARD = "pinocchio"  # closed-form model of the robot
@@ -33,21 +33,15 @@ def register(subparsers) -> None:
 
 
 def read_plan(path: str | Path) -> dict:
-    """The JSON object in a PLAN.json file."""
-    path = Path(path)
-    if not path.is_file():
-        raise UserError(f"plan file not found: {path}")
-    try:
-        return json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise UserError(f"plan file {path} is not valid JSON: {exc}") from None
+    """The JSON object in a PLAN.json file (validated by plan_reference)."""
+    return read_json(path, "plan")
 
 
 def result_json(result, plant: str) -> dict:
     """REPLAY.json payload: the measured numbers plus how they were measured."""
     return {
         **asdict(result),
-        "energy_error": result.energy_error,
+        "energy_error": result.energy_error if math.isfinite(result.energy_error) else None,
         "plant": plant,
         "feedforward": FEEDFORWARD,
         "units": {"energy": "J", "clearance": "m", "tracking": "rad", "torque": "N m"},

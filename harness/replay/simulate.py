@@ -151,7 +151,9 @@ class ReplayResult:
 
     @property
     def energy_error(self) -> float:
-        """Relative deviation of replayed from planned energy."""
+        """Relative deviation of replayed from planned energy (NaN if the plan spends none)."""
+        if self.energy_planned == 0:
+            return float("nan")
         return (self.energy - self.energy_planned) / self.energy_planned
 
 
