@@ -77,5 +77,13 @@ def run(args) -> int:
 
 def _recorded_robot(plan: dict) -> str:
     """The robot a PLAN.json was made for (older plans: the default robot)."""
+    from harness.robots.registry import ROBOTS
+
     robot = plan.get("robot") if isinstance(plan, dict) else None
-    return robot if isinstance(robot, str) and robot else DEFAULT_ROBOT
+    if robot is None:
+        return DEFAULT_ROBOT
+    if not isinstance(robot, str) or not (robot in ROBOTS or ("\0" not in robot
+                                                              and Path(robot).is_file())):
+        raise UserError(f"plan field 'robot' ({str(robot)[:60]!r}) is neither a registered "
+                        "robot nor an existing URDF/MJCF file: pass --robot")
+    return robot
