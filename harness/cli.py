@@ -20,7 +20,8 @@ if sys.platform.startswith("linux"):
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-from harness.errors import UserError  # noqa: E402 - after the environment set-up above
+from harness import interrupt  # noqa: E402 - after the environment set-up above
+from harness.errors import UserError  # noqa: E402
 
 COMMANDS = ["generate", "ingest", "identify", "predict", "plan", "replay", "closeloop", "bench",
             "sweep"]
@@ -66,6 +67,7 @@ def _check_output(args) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    interrupt.install()
     try:
         _check_output(args)
         return int(args.func(args) or 0)

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from harness import interrupt
 from harness.errors import UserError
 
 
@@ -27,6 +28,7 @@ def atomic_write(path: str | Path, write: Callable[[str], None], suffix: str = "
     try:
         write(tmp)
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; results are ordinary files
+        interrupt.check()  # no new result after Ctrl-C, even one a library swallowed
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

@@ -96,3 +96,44 @@ def incomplete_files(folder: Path) -> tuple[list[str], list[str]]:
                 ElementTree.ParseError) as exc:
             bad.append(f"{path}: {exc or type(exc).__name__}")
     return bad, temporaries
+
+
+def interrupt(argv: list[str], sig: int, when: float | str, timeout: float = 300.0,
+              env: dict | None = None) -> tuple[int | None, str]:
+    """Run `python -m harness *argv` and send it sig `when` seconds after the start, or as soon
+    as a stderr line contains the text `when` (a progress line such as 'done in'); (exit
+    status, stderr). The exit status is None if the command had already finished."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import threading
+    import time
+
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1]),
+           "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"), **(env or {})}
+    proc = subprocess.Popen([sys.executable, "-m", "harness", *argv], stderr=subprocess.PIPE,
+                            stdout=subprocess.DEVNULL, text=True, env=env)
+    lines: list[str] = []
+    seen = threading.Event()
+
+    def read() -> None:
+        for line in proc.stderr:
+            lines.append(line)
+            if isinstance(when, str) and when in line:
+                seen.set()
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    if isinstance(when, str):
+        seen.wait(timeout)
+    else:
+        time.sleep(when)
+    sent = proc.poll() is None
+    if sent:
+        proc.send_signal(sig)
+    code = proc.wait(timeout)
+    reader.join(5)
+    if sig == signal.SIGKILL and sent:
+        assert code == -signal.SIGKILL
+    return (code if sent else None), "".join(lines)

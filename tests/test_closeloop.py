@@ -92,22 +92,22 @@ def test_tendon_with_an_effect_in_the_dictionary_names_that_effect(tmp_path):
     assert np.all(r.error_after <= r.error_before)
 
 
-def _measured_error(loop, terms):
+def _clean_error(loop, terms):
     r, d = loop.result, loop.data
     held = slice(r.split, None)
     model = ExtendedModel(r.model.declared, terms, r.model._payload)
-    return rel_error(model.torque(d.q[held], d.qd[held], d.qdd[held]), d.tau[held])
+    return rel_error(model.torque(d.q[held], d.qd[held], d.qdd[held]), d.tau_clean[held])
 
 
 def test_noise_bar_fails_for_a_missing_or_wrong_effect():
-    """The bar (error against the measured torque within 1.5x of the true plant model's)
-    holds for the named effects and fails when one is missing or replaced by a wrong one."""
+    """The bar (error against the clean torque within 1.5x of the noise floor: the true effect
+    set refitted) holds for the named effects and fails when one is missing or wrong."""
     loop = run_closeloop(DECLARED_MJCF.parent / "lynxmotion_friction.xml", samples=3000)
     r, d = loop.result, loop.data
-    truth = loop.truth_error_measured
+    truth = loop.noise_floor
     assert checks(loop)["noise_bar"]
-    assert not meets_noise_bar(r.error_before_measured, truth)  # the declared model alone
-    missing = replace(loop, result=replace(r, error_after_measured=r.error_before_measured))
+    assert not meets_noise_bar(r.error_before, truth)  # the declared model alone
+    missing = replace(loop, result=replace(r, error_after=r.error_before))
     assert checks(missing)["noise_bar"] is False
     tr = slice(0, r.split)
     residual = d.tau[tr] - r.model.declared.torque(d.q[tr], d.qd[tr], d.qdd[tr])
@@ -115,7 +115,7 @@ def test_noise_bar_fails_for_a_missing_or_wrong_effect():
     for chosen in ([Effect("viscous", 2), Effect("viscous", 3)],  # viscous j1 missing
                    [Effect("coulomb", 1), Effect("coulomb", 2), Effect("viscous", 3)]):  # wrong
         terms = refit(residual, dictionary, noise_sigma(residual), chosen)
-        error = _measured_error(loop, terms)
+        error = _clean_error(loop, terms)
         assert error[0] > 1.5 * truth[0], (chosen, error / truth)
         assert not meets_noise_bar(error, truth)
 

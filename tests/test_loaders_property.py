@@ -5,7 +5,7 @@ and exit 2 with no output file; never a traceback.
 
 Each property starts from a real, valid input (a generated dataset, identified models, a
 plan, the robot's MJCF and URDF) and mutates it. `TORQUEBENCH_HYPOTHESIS=full` (make test,
-CI) runs 250 cases per property (1500 in all), the default 30.
+CI) runs 250 cases per property (1250 in all), the default 30.
 """
 
 from __future__ import annotations

@@ -11,19 +11,21 @@
 - absorbed_not_worse: on the joints only absorbed effects act on (nothing to name, so
   nothing to improve by 5x), the error after is not above the error before; these joints
   are listed in the report (`absorbed_joints`), never dropped silently.
-- noise_bar: what the noise allows on the same data. On every joint, the extended model's
-  held-out error against the *measured* torque (`error_after_measured`) is within 1.5x
-  of the true plant model's (`truth_error_measured`: declared model + the plant's true
-  effects at its own coefficients, on the same estimated states and measured torque). A
-  missing or wrong effect leaves its torque in that error and fails it.
+- noise_bar: what the noise allows on the same data, judged against the clean torque (the
+  truth is known here). On every joint, the extended model's held-out error against the
+  clean torque (`error_after`) is within 1.5x of the noise floor (`noise_floor`: the
+  declared model plus the plant's true effect set, refitted on the same training part and
+  scored on the same held-out samples). A missing or wrong effect leaves its torque in that
+  error and fails it. (Against the measured torque both errors are dominated by the noise,
+  and the bar would hold for nearly any model.)
 - not_worse (a plant with an effect outside the dictionary): error after <= before on
   every joint.
 - unexplained: equals "the plant carries an effect outside the dictionary".
 
-Reported beside them, not required (`reference_ratios`): error after / noise floor (the
-true effect set refitted: equal to 1 by construction when the names are right) and error
-after / truth error (true coefficients, clean torque: any fitted coefficient costs about
-sqrt(k / n) noise sigmas there).
+Reported beside them (`reference_ratios`): error after / noise floor (the bar's ratio: 1
+when the names are right), error after / truth error (true coefficients, clean torque: any
+fitted coefficient costs about sqrt(k / n) noise sigmas there) and the same against the
+measured torque.
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ from harness.closeloop.run import CloseLoopRun
 COEFFICIENT_TOLERANCE = 0.10
 IMPROVEMENT = 5.0
 FLOOR_FACTOR = 1.5
-NOISE_BAR = "error_after_measured <= 1.5 x truth_error_measured"
+NOISE_BAR = "error_after <= 1.5 x noise_floor, both against the clean torque"
 
 
 def _joints(terms, dof: int) -> set[int]:
@@ -62,9 +64,9 @@ def coefficient_errors(run: CloseLoopRun) -> dict[str, float]:
             / abs(t.coefficient) for t in run.expected if (t.effect, t.joint) in named}
 
 
-def meets_noise_bar(error_measured: np.ndarray, truth_measured: np.ndarray) -> bool:
-    """Every joint's error against the measured torque within FLOOR_FACTOR of the truth's."""
-    return bool(np.all(np.asarray(error_measured) <= FLOOR_FACTOR * np.asarray(truth_measured)))
+def meets_noise_bar(error: np.ndarray, floor: np.ndarray) -> bool:
+    """Every joint's error against the clean torque within FLOOR_FACTOR of the noise floor."""
+    return bool(np.all(np.asarray(error) <= FLOOR_FACTOR * np.asarray(floor)))
 
 
 def checks(run: CloseLoopRun) -> dict[str, bool]:
@@ -85,7 +87,7 @@ def checks(run: CloseLoopRun) -> dict[str, bool]:
     absorbed = absorbed_joints(run)
     if absorbed:
         out["absorbed_not_worse"] = bool(np.all(r.error_after[absorbed] <= r.error_before[absorbed]))
-    out["noise_bar"] = meets_noise_bar(r.error_after_measured, run.truth_error_measured)
+    out["noise_bar"] = meets_noise_bar(r.error_after, run.noise_floor)
     return out
 
 

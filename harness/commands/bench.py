@@ -3,20 +3,25 @@
 Sections run in data-flow order (identification -> planning -> replay ->
 closeloop); each is imported on demand, so a section not written yet is
 reported as "not available" and a section that raises is reported as failed
-with its message, and the command exits 1 at the end. Progress goes to stderr
+with its message. The report is always written; the command then exits 1 if a
+section failed, 3 if an acceptance check failed (naming each on stderr), else 0. Progress goes to stderr
 as one line per event with the elapsed wall time.
 """
 
 from __future__ import annotations
 
 import importlib
+import os
+import platform
 import sys
 import threading
 import time
 import traceback
 from contextlib import contextmanager
+from datetime import UTC, datetime
 from pathlib import Path
 
+from harness import interrupt
 from harness.errors import UserError
 from harness.report.headline import headline
 from harness.report.writer import SectionOutcome, write_report
@@ -73,7 +78,24 @@ def register(subparsers) -> None:
                    "every section; another arm: identification from its kinematics, planning and "
                    "replay, closing the loop")
     p.add_argument("--no-video", action="store_true", help="do not render replay videos")
+    p.add_argument("--sections", default=None,
+                   help="comma-separated sections to run, in pipeline order (default: all of the "
+                   f"robot's: {', '.join(SECTIONS)}; another arm: {', '.join(ARM_SECTIONS)}); "
+                   "replay replays the plans of planning, so without it there is nothing to replay")
     p.set_defaults(func=run)
+
+
+def chosen_sections(robot: str, names: str | None) -> tuple[str, ...]:
+    """The robot's sections, restricted to names (comma-separated) in pipeline order."""
+    available = SECTIONS if robot == DEFAULT_ROBOT else ARM_SECTIONS
+    if names is None:
+        return available
+    wanted = [n.strip() for n in names.split(",") if n.strip()]
+    unknown = [n for n in wanted if n not in available]
+    if unknown or not wanted:
+        raise UserError(f"--sections: unknown section(s) {', '.join(unknown) or '(none given)'} "
+                        f"for robot {robot} (known: {', '.join(available)})")
+    return tuple(n for n in available if n in wanted)
 
 
 def load_section(name: str):
@@ -128,10 +150,11 @@ def run_section(name: str, progress: Progress, out_dir: Path, quick: bool,
 
 
 def run_pipeline(out_dir: Path, quick: bool, video: bool, progress: Progress,
-                 robot: str = DEFAULT_ROBOT):
-    """All sections of robot in order, each fed what the previous ones produced."""
+                 robot: str = DEFAULT_ROBOT, sections: tuple[str, ...] | None = None):
+    """The sections of robot (all, or those given) in order, each fed what the previous ones
+    produced."""
     outcomes, raws = [], {}
-    for name in SECTIONS if robot == DEFAULT_ROBOT else ARM_SECTIONS:
+    for name in sections or chosen_sections(robot, None):
         kwargs = {"robot": robot} if name in ARM_SECTIONS else {}
         if name == "planning" and raws.get("identification", {}).get("model") is not None:
             kwargs["identified_model"] = raws["identification"]["model"]
@@ -140,23 +163,35 @@ def run_pipeline(out_dir: Path, quick: bool, video: bool, progress: Progress,
         if name == "arm_replay":
             kwargs.update(plans=raws.get("arm_planning", {}).get("plans") or {}, video=video)
         outcome, raws[name] = run_section(name, progress, out_dir, quick, **kwargs)
+        interrupt.check()  # Ctrl-C during a section that swallowed it: stop here
         outcomes.append(outcome)
     return outcomes, raws.get("planning", {}).get("plans") or {}
 
 
 def run(args) -> int:
     out_dir = Path(args.out)
+    started = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     if args.robot not in ROBOTS:
         raise UserError(f"unknown robot '{args.robot}' (known: {', '.join(sorted(ROBOTS))})")
     if out_dir.exists() and not out_dir.is_dir():
         raise UserError(f"--out {out_dir} exists and is not a directory")
+    sections = chosen_sections(args.robot, args.sections)
     out_dir.mkdir(parents=True, exist_ok=True)
     progress = Progress()
     progress(f"bench on '{args.robot}' -> {out_dir}{' (quick)' if args.quick else ''}")
-    outcomes, plans = run_pipeline(out_dir, args.quick, not args.no_video, progress, args.robot)
+    outcomes, plans = run_pipeline(out_dir, args.quick, not args.no_video, progress, args.robot,
+                                   sections)
     numbers = headline({o.name: o.results for o in outcomes if o.status == "ok"}, plans)
-    meta = {"robot": args.robot, "quick": bool(args.quick), "elapsed_s": progress.elapsed}
+    meta = {"robot": args.robot, "quick": bool(args.quick), "sections": list(sections),
+            "command": command_line(args), "machine": machine(),
+            "timing": {"elapsed_s": progress.elapsed, "started_utc": started}}
     write_report(out_dir, outcomes, numbers, meta)
+    return verdict(outcomes, numbers, progress, out_dir)
+
+
+def verdict(outcomes, numbers: dict, progress: Progress, out_dir: Path) -> int:
+    """Exit status: 1 if a section failed, 3 if an acceptance check failed (each named on
+    stderr), 0 otherwise; the report is written either way."""
     failed = [o.name for o in outcomes if o.status == "failed"]
     missing = [o.name for o in outcomes if o.status == "not available"]
     progress(f"report: {out_dir / 'report.md'}")
@@ -165,4 +200,29 @@ def run(args) -> int:
     if failed:
         progress(f"bench FAILED: {', '.join(failed)}")
         return 1
+    checks = numbers.get("acceptance") or {}
+    if checks.get("failed"):
+        progress(f"bench FAILED acceptance: {len(checks['failed'])} of {checks['total']} checks "
+                 f"failed: {', '.join(checks['failed'])}")
+        return 3
     return 0
+
+
+def command_line(args) -> str:
+    """The bench command that reproduces this run (output folder aside)."""
+    return " ".join(filter(None, ["torquebench bench", "--quick" if args.quick else "",
+                                  f"--robot {args.robot}" if args.robot != DEFAULT_ROBOT else "",
+                                  f"--sections {args.sections}" if args.sections else "",
+                                  "--no-video" if args.no_video else ""]))
+
+
+def machine() -> dict:
+    """What the timings were measured on: CPU model, cores, platform, Python."""
+    cpu = platform.processor() or platform.machine()
+    cpuinfo = Path("/proc/cpuinfo")
+    if cpuinfo.is_file():
+        names = [line.split(":", 1)[1].strip() for line in cpuinfo.read_text().splitlines()
+                 if line.startswith("model name")]
+        cpu = names[0] if names else cpu
+    return {"cpu": cpu, "cores": os.cpu_count(), "platform": platform.platform(terse=True),
+            "python": platform.python_version()}

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -53,12 +53,21 @@ def _clean(x):
     return repr(x)
 
 
+def _relative_figures(outcome: SectionOutcome, out_dir: Path) -> SectionOutcome:
+    """The outcome with figure paths relative to out_dir (report.json does not depend on
+    where the run wrote)."""
+    base = out_dir.resolve()
+    rel = tuple(Path(f).resolve().relative_to(base).as_posix()
+                if Path(f).resolve().is_relative_to(base) else f for f in outcome.figures)
+    return replace(outcome, figures=rel)
+
+
 def report_json(outcomes: list[SectionOutcome], numbers: dict, meta: dict) -> dict:
     """The machine-readable report: headline, per-section status and results."""
     return _clean({
         **meta,
         "ok": all(o.status != "failed" for o in outcomes),
-        "acceptance_failed": numbers.get("acceptance", {}).get("failed", ""),
+        "acceptance_failed": (numbers.get("acceptance") or {}).get("failed", []),
         "headline": numbers,
         "sections": {o.name: {k: v for k, v in asdict(o).items() if k not in ("name", "markdown")}
                      for o in outcomes},
@@ -97,16 +106,21 @@ def report_markdown(outcomes: list[SectionOutcome], numbers: dict, meta: dict,
     """The human-readable report."""
     failed = [o.name for o in outcomes if o.status == "failed"]
     missing = [o.name for o in outcomes if o.status == "not available"]
-    status = "all sections ran" if not failed and not missing else "; ".join(
+    status = f"all {len(outcomes)} sections ran" if not failed and not missing else "; ".join(
         filter(None, [f"failed: {', '.join(failed)}" if failed else "",
                       f"not available: {', '.join(missing)}" if missing else ""]))
-    verdict = numbers.get("acceptance", {})
-    status += f"; acceptance: {verdict['checks failed']}" if verdict else ""
-    if verdict.get("failed"):
-        status += f" ({verdict['failed']})"
+    verdict = numbers.get("acceptance") or {}
+    if not verdict:
+        status += "; no acceptance checks"
+    elif verdict["failed"]:
+        status += (f"; **{len(verdict['failed'])} of {verdict['total']} acceptance checks "
+                   f"failed** ({', '.join(verdict['failed'])})")
+    else:
+        status += f"; all {verdict['total']} acceptance checks passed"
+    elapsed = (meta.get("timing") or {}).get("elapsed_s", 0.0)
     lines = [
         "# torquebench report", "",
-        f"Robot `{meta.get('robot')}`, {meta.get('elapsed_s', 0):.0f} s in total"
+        f"Robot `{meta.get('robot')}`, {elapsed:.0f} s in total"
         f"{' (quick mode)' if meta.get('quick') else ''}: {status}.", "",
         "## Headline", "", headline_markdown(numbers), "",
     ]
@@ -119,7 +133,7 @@ def write_report(out_dir: Path, outcomes: list[SectionOutcome], numbers: dict,
                  meta: dict) -> dict:
     """Write report.json, report.md and headline.md into out_dir; returns the JSON payload."""
     out_dir = Path(out_dir)
-    payload = report_json(outcomes, numbers, meta)
+    payload = report_json([_relative_figures(o, out_dir) for o in outcomes], numbers, meta)
     json.dumps(payload, allow_nan=False)  # fail before writing anything
     write_text(out_dir / "headline.md", headline_markdown(payload["headline"]) + "\n")
     write_text(out_dir / "report.md", report_markdown(outcomes, numbers, meta, out_dir))
