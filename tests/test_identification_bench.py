@@ -44,6 +44,11 @@ def test_robustness_summary_matches_its_draws(ctx):
         np.testing.assert_allclose(m["ratio_worst"], ratio.max(axis=0))
         assert np.all(np.array(m["ratio_median"]) <= np.array(m["ratio_worst"]))
         assert m["draws_within_limit"] == int(np.sum(np.all(ratio <= study.RATIO_LIMIT, axis=1)))
+    perfect = np.array(rob["true_support"]) / np.array(rob["oracle"])
+    assert rob["true_support_draws_within_limit"] == int(np.sum(np.all(perfect <= study.RATIO_LIMIT,
+                                                                       axis=1)))
+    assert rob["methods"]["coupled"]["draws_true_atoms_exactly"] == 3
+    assert "a perfect selector" in robustness.robust_note(rob)[1]
     # both coupled fits keep every true term on these draws and nothing else: the general
     # atoms' null atoms fall to the significance bound, leaving the symmetric fit's atoms
     for label in ("coupled", "coupled general"):

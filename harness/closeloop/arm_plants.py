@@ -2,7 +2,9 @@
 
 The arm's MuJoCo model (registry.load_mujoco: the URDF's arm joints, no meshes) is
 edited as a MuJoCo spec (mujoco.MjSpec): joint damping, frictionloss, armature and
-stiffness added on chosen joints, and a point payload fixed at the flange (the first
+stiffness added on chosen joints, a spring on a fixed tendon q2 + q3 (an effect outside
+the close-the-loop dictionary, as the Lynxmotion's coupled plant), and a point payload
+fixed at the flange (the first
 of registry.FLANGES the model has, else the last joint's body), then written as MJCF. The
 payload point is the one harness.closeloop.payload puts its unit mass at
 (the Pinocchio frame of the same link), so the dictionary's payload column is exact.
@@ -48,8 +50,13 @@ def arm_variant_xml(robot: str, variant: Variant) -> str:
             setattr(target, attr, [current[0] + value, *current[1:]])
         else:
             setattr(target, attr, getattr(target, attr) + value)
-    if variant.coupling > 0:
-        raise UserError("a tendon coupling is built for the Lynxmotion plants only")
+    if variant.coupling > 0:  # a fixed tendon q2 + q3 with a spring: outside the dictionary
+        if len(hinges) < 3:
+            raise UserError(f"a tendon coupling joins joints 2 and 3; {robot} has {len(hinges)}")
+        tendon = spec.add_tendon(name="coupling", stiffness=[variant.coupling, 0.0, 0.0],
+                                 springlength=[0.0, 0.0])
+        for joint in hinges[1:3]:
+            tendon.wrap_joint(joint.name, 1.0)
     if variant.payload > 0:
         frame = flange_frame(load_pinocchio(robot))
         body = spec.body(frame) if frame else hinges[-1].parent

@@ -38,13 +38,21 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from harness.closeloop.arm_plants import arm_variant_xml
 from harness.closeloop.payload import PayloadTorque
-from harness.closeloop.plants import DECLARED_MJCF, true_effects
+from harness.closeloop.plants import DECLARED_MJCF, Variant, true_effects
 from harness.data.dataset import Dataset
 from harness.data.generate import generate
 from harness.errors import UserError
 from harness.robots.plant import Plant, load_plant
-from harness.robots.registry import DEFAULT_ROBOT, flange_frame, load_chain, load_mujoco, load_pinocchio
+from harness.robots.registry import (
+    DEFAULT_ROBOT,
+    ROBOTS,
+    flange_frame,
+    load_chain,
+    load_mujoco,
+    load_pinocchio,
+)
 from harness.robots.torque_models import load_torque_model
 from identification.closeloop.effects import Effect, EffectTerm
 from identification.closeloop.identified import close_loop_identified
@@ -157,6 +165,15 @@ def declared_mujoco(robot: str) -> mujoco.MjModel:
     return load_mujoco(robot)
 
 
+def effects_reference(robot: str) -> mujoco.MjModel:
+    """What a plant's true effects are read against: declared_mujoco, or for a registered arm
+    the arm as its plants are written (harness.closeloop.arm_plants; MjSpec.to_xml keeps 6
+    significant digits, so masses rounded alike are not read as a payload)."""
+    if robot == DEFAULT_ROBOT or robot not in ROBOTS:
+        return declared_mujoco(robot)
+    return mujoco.MjModel.from_xml_string(arm_variant_xml(robot, Variant(name="declared")))
+
+
 def _loop(spec: str, data: Dataset, split: int, payload: PayloadTorque, truth, outside: bool,
           holdout: float, robot: str = DEFAULT_ROBOT) -> CloseLoopRun:
     declared = declared_model(spec, robot)
@@ -193,7 +210,7 @@ def run_closeloop(plant: str | Path, samples: int = 4000, noise: float = 0.05, s
     split = int(round(samples * (1.0 - holdout)))
     payload = (PayloadTorque(model) if robot == DEFAULT_ROBOT
                else PayloadTorque(model, flange_frame(model) or ""))
-    truth, outside = true_effects(p.model, declared_mujoco(robot))
+    truth, outside = true_effects(p.model, effects_reference(robot))
     run = _loop(declared, data, split, payload, truth, outside, holdout, robot)
     if not compare:
         return run

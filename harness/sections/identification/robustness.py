@@ -25,7 +25,10 @@ def robustness(ctx: dict, seeds=ROBUST_SEEDS, level: float = 0.05) -> dict:
     oracle = np.array([d["oracle"] for d in draws])
     support = np.array([d["true_support"] for d in draws])
     out: dict = {"level": level, "seeds": list(seeds), "oracle": oracle.tolist(),
-                 "true_support": support.tolist(), "methods": {}}
+                 "true_support": support.tolist(), "methods": {},
+                 # the bar met by WLS on exactly the true atoms: what a perfect selector reaches
+                 "true_support_draws_within_limit": int(np.sum(np.all(
+                     support <= RATIO_LIMIT * oracle, axis=1)))}
     for label, _, _ in METHODS:
         rel = np.array([[j["rel"] for j in d[label]["joints"]] for d in draws])
         ratio = rel / oracle
@@ -43,6 +46,8 @@ def robustness(ctx: dict, seeds=ROBUST_SEEDS, level: float = 0.05) -> dict:
             "seconds_mean": float(np.mean([d[label]["seconds"] for d in draws]))}
         if "lagrangian" in draws[0][label]:
             out["methods"][label]["atoms"] = [d[label]["lagrangian"]["atoms"] for d in draws]
+            out["methods"][label]["draws_true_atoms_exactly"] = int(sum(
+                d[label]["atom_recall"] == 1 and d[label]["atom_precision"] == 1 for d in draws))
     return out
 
 
@@ -176,7 +181,18 @@ def robust_note(rob: dict) -> list[str]:
     k = rob["seeds"].index(cp["worst_seed"][worst])
     rel, orc = cp["rel"][k][worst], rob["oracle"][k][worst]
     typical = float(np.median(np.array(rob["oracle"])[:, worst]))
-    return ["", f"Worst single draw (coupled): joint {worst + 1}, seed {rob['seeds'][k]}: "
+    n, exact, perfect = len(rob["seeds"]), cp["draws_true_atoms_exactly"], \
+        rob["true_support_draws_within_limit"]
+    cause = (" On every draw the coupled fit kept exactly the true atoms, so its misses are the "
+             "perfect selector's own: a better support cannot lift the count; the bar asks "
+             "for a draw-by-draw ratio that an unbiased fit on the true atoms misses by chance "
+             "(benchmarks/lynxmotion_draw_ceiling.py estimates that chance on many more draws)."
+             if exact == n else "")
+    return ["", f"Draws within {RATIO_LIMIT} x the oracle on every joint: coupled "
+            f"{cp['draws_within_limit']} of {n} (exactly the true atoms kept on {exact} of {n}); "
+            f"weighted least squares on exactly the true atoms (a perfect selector) {perfect} of "
+            f"{n}.{cause}",
+            "", f"Worst single draw (coupled): joint {worst + 1}, seed {rob['seeds'][k]}: "
             f"{rel:.2e} vs oracle {orc:.2e} (the oracle's median on this joint over the draws is "
             f"{typical:.2e}). A per-draw ratio of two estimators' errors is heavy-tailed even "
             "when both are unbiased: the two fits share the noise but not the parameter "
