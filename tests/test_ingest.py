@@ -197,3 +197,19 @@ def test_the_reference_figures_are_read_from_the_shipped_readme():
 
     ls, nominal = readme_reference("least squares"), readme_reference("nominal")
     assert len(ls) == len(nominal) == 7 and ls[0] == 0.22 and nominal[6] == 0.99
+
+
+@pytest.mark.parametrize("window, ok", [(51, True), (50, False), (3, False)])
+def test_a_given_window_replaces_the_chosen_one(tmp_path, capsys, window, ok):
+    path = tmp_path / "ok.csv"
+    path.write_text("\n".join(_lines()) + "\n")
+    out = tmp_path / "d.npz"
+    code = main(["ingest", "--csv", str(path), "--robot", "lynxmotion", "--out", str(out),
+                 "--window", str(window)])
+    assert code == (0 if ok else 2) and out.exists() == ok
+    if ok:
+        with np.load(out) as d:
+            meta = json.loads(str(d["meta"]))["derivatives"]
+        assert meta["window_samples"] == 51 and meta["rule"] == "given"
+    else:
+        assert "--window must be odd" in capsys.readouterr().err
