@@ -213,3 +213,27 @@ def test_a_given_window_replaces_the_chosen_one(tmp_path, capsys, window, ok):
         assert meta["window_samples"] == 51 and meta["rule"] == "given"
     else:
         assert "--window must be odd" in capsys.readouterr().err
+
+
+def test_an_ingested_log_identifies_and_scores_against_the_measured_torque(tmp_path, log):
+    """ingest -> identify: the torque carries a sensor offset; the held-out error against the
+    measured torque (no tau_clean) counts the model's fitted offsets, and is recomputed here."""
+    t, noisy, _ = log
+    offset = np.array([0.05, -0.03, 0.02])
+    path = _csv(tmp_path / "log.csv", t, {"q": noisy["q"], "qd": noisy["qd"],
+                                          "tau": noisy["tau"] + offset})
+    data, model = tmp_path / "d.npz", tmp_path / "MODEL.json"
+    assert main(["ingest", "--csv", str(path), "--robot", "lynxmotion", "--rate", "100",
+                 "--out", str(data)]) == 0
+    assert main(["identify", "--data", str(data), "--out", str(model)]) == 0
+    payload = json.loads(model.read_text())
+    offsets = np.array([j["offset"] for j in payload["joints"]])
+    np.testing.assert_allclose(offsets, offset, atol=0.01)
+    from identification.model import load_model
+
+    with np.load(data) as d:
+        held = slice(int(round(0.75 * len(d["q"]))), None)
+        pred = load_model(model).torque(d["q"][held], d["qd"][held], d["qdd"][held]) + offsets
+        expected = np.linalg.norm(pred - d["tau"][held], axis=0) / np.linalg.norm(d["tau"][held], axis=0)
+    np.testing.assert_allclose(payload["metrics"]["heldout_rel_rmse"], expected, rtol=1e-9)
+    assert max(expected) < 0.02
