@@ -50,6 +50,8 @@ def _models_table(models, reference, nominal_ref, nominal_whole, ratio, same, so
             (f"*source README: least squares (window {w})*", reference),
             (f"least squares, window {w} (reproduction)", source["least_squares"]),
             (f"identified, window {w}", source["identified"]),
+            ("*source README: Gaz et al.'s published model, window 101 (not held out)*",
+             source["published"]),
             (f"identified, window {w} / README least squares",
              source["identified_ratio_to_reference"])]
     dof = len(reference)

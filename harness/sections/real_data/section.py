@@ -73,7 +73,8 @@ def _reproduction(reference, nominal_ref) -> dict:
     published = np.r_[reference, nominal_ref]
     ok = np.abs(ours - published) <= np.maximum(REPRODUCED[0] * published, REPRODUCED[1])
     ratio = models["identified"].heldout / np.array(reference)
-    return {"window": SOURCE_WINDOW, "least_squares": models["least_squares"].heldout,
+    return {"window": SOURCE_WINDOW, "published": readme_reference("window 101 "),
+            "least_squares": models["least_squares"].heldout,
             "nominal_whole_log": whole, "identified": models["identified"].heldout,
             "identified_ratio_to_reference": ratio, "reproduced": bool(np.all(ok)),
             "largest_deviation": float(np.max(np.abs(ours - published)))}
