@@ -40,7 +40,12 @@ import numpy as np
 from scipy.optimize import minimize
 
 from identification.closeloop.crossval import BlockValidation, weighted_fit
-from identification.closeloop.effects import COULOMB_SHAPES, EffectTerm, effect_torque
+from identification.closeloop.effects import (
+    COULOMB_SHAPES,
+    MEASURED_EFFECTS,
+    EffectTerm,
+    effect_torque,
+)
 from identification.closeloop.extended import ExtendedModel
 from identification.closeloop.loop import check_data
 from identification.closeloop.residual import noise_sigma
@@ -50,7 +55,6 @@ from identification.kinematic_model import KinematicModel
 from identification.library.kinematic import KinematicLibrary
 from identification.metrics import rel_error
 
-MEASURED_EFFECTS = ("viscous", "coulomb", "sigmoid", "armature", "spring")
 VALIDATION_BLOCKS = 5
 MIN_GAIN = 0.02  # an effect must cut its joint's validation error power by >= 2 %
 EXPLAINED = 0.5  # effects removing less of a structured residual's power: unexplained
