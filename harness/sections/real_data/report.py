@@ -73,15 +73,27 @@ def _loop(loop) -> list[str]:
     for k, t in enumerate(js["effects"], 1):
         out.append(f"| {k} | {t['joint']} | {t['effect']} | {t['coefficient']:.4g} {t['unit']} | "
                    f"{_shape(t)} |")
-    out += ["", f"Held-out error before [{_fmt(r.error_before)}], after [{_fmt(r.error_after)}]; "
-            f"validation power the effects remove per joint [{_fmt(r.explained, 2)}]."]
+    out += ["", f"Held-out error before [{_fmt(r.error_before)}], after [{_fmt(r.error_after)}]. "
+            f"On validation blocks of the training part the effects remove "
+            f"[{_fmt(r.power_removed, 2)}] of each joint's residual power; its structure (RMS "
+            f"above the white-noise level, in noise sigmas) goes from "
+            f"[{_fmt(r.structure_before, 2)}] to [{_fmt(r.structure_after, 2)}], "
+            f"[{_fmt(r.explained, 2)}] of the structured power removed."]
     bad = list(r.unexplained_joints)
     if bad:
         out.append(f"Unexplained: joint(s) {', '.join(map(str, bad))} keep structure the named "
-                   "effects do not remove (less than half of their residual's validation power); "
-                   "no candidate in the dictionary accounts for it.")
+                   "effects do not remove (less than half of it); no candidate in the "
+                   "dictionary accounts for it.")
     else:
-        out.append("Every joint's residual structure is at least half removed by the named effects.")
+        out.append("No joint is unexplained: the named effects remove at least half of every "
+                   "structured residual. The white-noise level comes from second differences, "
+                   "which also count the residual's fast unmodelled part (the power removed "
+                   "above is the other measure).")
+    kept = [j + 1 for j in np.flatnonzero(r.structure_after > 1.0)]
+    if kept:
+        out.append(f"Joint(s) {', '.join(map(str, kept))} still carry more than one noise sigma "
+                   f"of structure after the effects "
+                   f"({', '.join(f'{r.structure_after[j - 1]:.2f}' for j in kept)}).")
     left = "; ".join(f"joint {j}: {e} ({why})" for j, e, _, why in r.not_named)
     out.append(f"Best candidate left per joint when selection stopped: {left}.")
     return out
