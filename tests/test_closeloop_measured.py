@@ -88,6 +88,7 @@ def test_cli_closeloop_data_writes_the_contract(tmp_path, capsys):
     ([], "exactly one of"),
     (["--data", "missing.npz"], "not found"),
     (["--data", "d.npz", "--robot", "panda"], "robot panda has 7"),
+    (["--data", "d.npz", "--declared", "identified"], "--declared applies to --plant"),
 ])
 def test_closeloop_data_errors_are_one_line(tmp_path, capsys, monkeypatch, args, message):
     monkeypatch.chdir(tmp_path)
