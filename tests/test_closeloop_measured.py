@@ -88,6 +88,7 @@ def test_cli_closeloop_data_writes_the_contract(tmp_path, capsys):
     ([], "exactly one of"),
     (["--data", "missing.npz"], "not found"),
     (["--data", "d.npz", "--robot", "panda"], "robot panda has 7"),
+    (["--data", "d.npz", "--declared", "identified"], "--declared applies to --plant"),
 ])
 def test_closeloop_data_errors_are_one_line(tmp_path, capsys, monkeypatch, args, message):
     monkeypatch.chdir(tmp_path)
@@ -119,3 +120,15 @@ def test_a_mujoco_friction_plant_log_names_its_true_effects():
     for key, value in truth.items():
         assert named[key] == pytest.approx(value, rel=0.05), key
     assert not r.unexplained
+
+
+def test_the_extended_model_symbolic_form_equals_its_torque(loop):
+    """The planner's CasADi form of the closed-loop model (sigmoid friction included)."""
+    import casadi as ca
+
+    rng = np.random.default_rng(3)
+    states = [rng.normal(size=(5, 3)) for _ in range(3)]
+    sym = [ca.SX.sym(n, 3) for n in ("q", "qd", "qdd")]
+    f = ca.Function("tau", sym, [loop.model.symbolic_torque(*sym)])
+    symbolic = np.array([np.asarray(f(*(s[i] for s in states))).ravel() for i in range(5)])
+    np.testing.assert_allclose(symbolic, loop.model.torque(*states), atol=1e-10)

@@ -197,3 +197,96 @@ def test_the_reference_figures_are_read_from_the_shipped_readme():
 
     ls, nominal = readme_reference("least squares"), readme_reference("nominal")
     assert len(ls) == len(nominal) == 7 and ls[0] == 0.22 and nominal[6] == 0.99
+
+
+@pytest.mark.parametrize("window, ok", [(51, True), (50, False), (3, False)])
+def test_a_given_window_replaces_the_chosen_one(tmp_path, capsys, window, ok):
+    path = tmp_path / "ok.csv"
+    path.write_text("\n".join(_lines()) + "\n")
+    out = tmp_path / "d.npz"
+    code = main(["ingest", "--csv", str(path), "--robot", "lynxmotion", "--out", str(out),
+                 "--window", str(window)])
+    assert code == (0 if ok else 2) and out.exists() == ok
+    if ok:
+        with np.load(out) as d:
+            meta = json.loads(str(d["meta"]))["derivatives"]
+        assert meta["window_samples"] == 51 and meta["rule"] == "given"
+    else:
+        assert "--window must be odd" in capsys.readouterr().err
+
+
+def test_an_ingested_log_identifies_and_scores_against_the_measured_torque(tmp_path, log):
+    """ingest -> identify: the torque carries a sensor offset; the held-out error against the
+    measured torque (no tau_clean) counts the model's fitted offsets, and is recomputed here."""
+    t, noisy, _ = log
+    offset = np.array([0.05, -0.03, 0.02])
+    path = _csv(tmp_path / "log.csv", t, {"q": noisy["q"], "qd": noisy["qd"],
+                                          "tau": noisy["tau"] + offset})
+    data, model = tmp_path / "d.npz", tmp_path / "MODEL.json"
+    assert main(["ingest", "--csv", str(path), "--robot", "lynxmotion", "--rate", "100",
+                 "--out", str(data)]) == 0
+    assert main(["identify", "--data", str(data), "--out", str(model)]) == 0
+    payload = json.loads(model.read_text())
+    offsets = np.array([j["offset"] for j in payload["joints"]])
+    np.testing.assert_allclose(offsets, offset, atol=0.01)
+    from identification.model import load_model
+
+    with np.load(data) as d:
+        held = slice(int(round(0.75 * len(d["q"]))), None)
+        pred = load_model(model).torque(d["q"][held], d["qd"][held], d["qdd"][held]) + offsets
+        expected = np.linalg.norm(pred - d["tau"][held], axis=0) / np.linalg.norm(d["tau"][held], axis=0)
+    np.testing.assert_allclose(payload["metrics"]["heldout_rel_rmse"], expected, rtol=1e-9)
+    assert max(expected) < 0.02
+
+
+def _mutations(text: str, rng: np.random.Generator):
+    """Damaged versions of a valid log: a character deleted, replaced or inserted, a cell
+    replaced by text, NaN or inf, two lines swapped, the file cut short, a line duplicated."""
+    lines = text.splitlines()
+    for _ in range(60):
+        kind = rng.integers(7)
+        out = list(lines)
+        i = int(rng.integers(len(out)))
+        if kind == 0:
+            k = int(rng.integers(len(text)))
+            yield text[:k] + text[k + 1:]
+        elif kind == 1:
+            k = int(rng.integers(len(text)))
+            yield text[:k] + rng.choice(list(",.-e9x \t\"")) + text[k:]
+        elif kind == 2:
+            cells = out[i].split(",")
+            cells[int(rng.integers(len(cells)))] = str(rng.choice(["nan", "inf", "-inf", "", "1e999",
+                                                                   "abc", "1,2", "--1"]))
+            out[i] = ",".join(cells)
+            yield "\n".join(out)
+        elif kind == 3:
+            j = int(rng.integers(len(out)))
+            out[i], out[j] = out[j], out[i]
+            yield "\n".join(out)
+        elif kind == 4:
+            yield text[:int(rng.integers(len(text)))]
+        elif kind == 5:
+            yield "\n".join(out[:i] + [out[i]] + out[i:])
+        else:
+            yield "\n".join(out[:i] + out[i + 1:])
+
+
+def test_damaged_logs_are_ingested_or_refused_in_one_line(tmp_path, capsys):
+    """Whatever the damage, ingest either writes a finite dataset or exits 2 with one line
+    (never a traceback, never a partial file)."""
+    rng = np.random.default_rng(7)
+    text = "\n".join(_lines(260)) + "\n"
+    outcomes = {0: 0, 2: 0}
+    for k, damaged in enumerate(_mutations(text, rng)):
+        path, out = tmp_path / f"log{k}.csv", tmp_path / f"d{k}.npz"
+        path.write_text(damaged)
+        code = main(["ingest", "--csv", str(path), "--robot", "lynxmotion", "--out", str(out)])
+        err = capsys.readouterr().err.strip()
+        assert code in outcomes, (code, damaged[:200])
+        outcomes[code] += 1
+        if code == 2:
+            assert len(err.splitlines()) == 1 and not out.exists(), err
+        else:
+            with np.load(out) as d:
+                assert all(np.all(np.isfinite(d[key])) for key in ("t", "q", "qd", "qdd", "tau"))
+    assert outcomes[0] and outcomes[2]  # both kinds of damage occurred

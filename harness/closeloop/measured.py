@@ -61,7 +61,7 @@ class MeasuredRun:
                "unexplained": r.unexplained, "unexplained_joints": list(r.unexplained_joints),
                "declared": "rigid-body identification on the training part (the robot's "
                            "rigid-body base atoms, coupled sparse regression, per-joint offset)",
-               "explained": r.explained.tolist(),
+               "explained": r.explained.tolist(), "power_removed": r.power_removed.tolist(),
                "structure_before": r.structure_before.tolist(),
                "structure_after": r.structure_after.tolist(), "noise_sigma": r.noise.tolist(),
                "validation_before": r.validation_before.tolist(),
@@ -74,8 +74,9 @@ class MeasuredRun:
                                      f"blocks of the training part; named if it cuts its "
                                      f"joint's validation error power by >= {MIN_GAIN:.0%}; a "
                                      f"joint is unexplained if its residual has structure "
-                                     f"(> {STRUCTURE} noise sigmas above the white noise) and "
-                                     f"the effects remove < {EXPLAINED:.0%} of its power"},
+                                     f"(> {STRUCTURE} noise sigmas RMS above the white noise) "
+                                     f"and the effects remove < {EXPLAINED:.0%} of that "
+                                     "structured power"},
                "error_definition": "held-out relative RMS ||tau_hat - tau|| / ||tau|| per joint "
                                    f"on the last {self.holdout:.0%} of the samples (time order), "
                                    "against the measured torque",

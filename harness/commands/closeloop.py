@@ -68,6 +68,10 @@ def run(args) -> int:
     if args.data is not None:
         from harness.closeloop.measured import run_measured
 
+        if args.declared != "pinocchio":
+            raise UserError("--declared applies to --plant; with --data the declared model is "
+                            "the robot's rigid-body identification on the data")
+
         measured = run_measured(args.data, args.robot, args.holdout)
         out = Path(args.out) / "closeloop.json"
         write_json(out, measured.to_json())

@@ -20,18 +20,22 @@ def register(sub) -> None:
     p.add_argument("--rate", type=float, default=None,
                    help="output rate in Hz (every k-th resampled sample, after the "
                    "derivatives; default: the log's median step)")
+    p.add_argument("--window", type=int, default=None,
+                   help="Savitzky-Golay window (odd, samples of the resampled grid) instead of "
+                   "the one chosen from the data")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
     dof = load_chain(args.robot).dof
-    data = ingest(args.csv, dof, args.robot, args.rate)
+    data = ingest(args.csv, dof, args.robot, args.rate, args.window)
     write_npz(args.out, **data.npz())
     meta, d = data.meta, data.meta["derivatives"]
     how = ("qd, qdd as logged" if not d["estimated"] else
            f"{', '.join(d['estimated'])} from {d['source']} by Savitzky-Golay (order "
            f"{d['polyorder']}, window {d['window_samples']} samples = {d['window_s']:.3g} s, "
-           f"signal band up to {max(d['band_edge_hz']):.3g} Hz)")
+           + (f"signal band up to {max(d['band_edge_hz']):.3g} Hz)" if "band_edge_hz" in d
+              else "given)"))
     print(f"wrote {args.out}: {meta['samples']} samples of {dof} joints at "
           f"{meta['resampling']['rate_out_hz']:.6g} Hz from {meta['raw_samples']} logged "
           f"(steps {meta['raw_step_s']['min'] * 1e3:.3g}-{meta['raw_step_s']['max'] * 1e3:.3g} ms); "

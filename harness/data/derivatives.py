@@ -87,15 +87,6 @@ def response(window: int, polyorder: int, deriv: int, rate: float, nfft: int) ->
     return np.fft.rfft(h)
 
 
-def gain_error(window: int, polyorder: int, deriv: int, freq: np.ndarray, rate: float) -> np.ndarray:
-    """|H(f) / (i 2 pi f)^d - 1| of the Savitzky-Golay filter of order deriv at freq (Hz)."""
-    freq = np.atleast_1d(np.asarray(freq, dtype=float))
-    c = savgol_coeffs(window, polyorder, deriv=deriv, delta=1.0 / rate, use="conv")
-    k = np.arange(window) - window // 2
-    h = np.exp(-2j * np.pi * np.outer(freq, k) / rate) @ c
-    return np.abs(h / (2j * np.pi * freq) ** deriv - 1.0)
-
-
 @dataclass(frozen=True)
 class WindowChoice:
     """A Savitzky-Golay window chosen from a signal: samples, seconds, and why."""
@@ -148,10 +139,9 @@ def choose_window(x: np.ndarray, rate: float, polyorder: int, orders=(1, 2)) -> 
     exact = {d: (2j * np.pi * f) ** d for d in orders}
     power = {d: np.maximum(np.sum(np.abs(exact[d][:, None]) ** 2 * signal, 0), 1e-300)
              for d in orders}
-    low, high = max(MIN_WINDOW, (polyorder + 2) | 1), max(MIN_WINDOW, min(len(x) // 4, nfft) | 1)
-    if high > min(len(x) // 4, nfft):
-        high -= 2
-    candidates = sorted({int(w) | 1 for w in np.geomspace(low, max(high, low), 60)} - {high + 2})
+    low = max(MIN_WINDOW, (polyorder + 2) | 1)
+    high = max(low, min(len(x) // 4, nfft) - 1 | 1)  # odd, <= the limit unless below low
+    candidates = sorted({int(w) | 1 for w in np.geomspace(low, high, 60)} & set(range(low, high + 1)))
 
     def predicted(window: int) -> dict[int, np.ndarray]:
         out = {}

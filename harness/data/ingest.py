@@ -53,26 +53,38 @@ def uniform_grid(t: np.ndarray) -> tuple[np.ndarray, float]:
     return t[0] + step * np.arange(n), 1.0 / step
 
 
-def estimate(log: Log, grid: np.ndarray, rate: float) -> tuple[dict[str, np.ndarray], dict]:
-    """q, qd, qdd, tau on the grid (missing derivatives estimated) and their description."""
+def estimate(log: Log, grid: np.ndarray, rate: float,
+             window: int | None = None) -> tuple[dict[str, np.ndarray], dict]:
+    """q, qd, qdd, tau on the grid (missing derivatives estimated) and their description;
+    window (odd, samples): given instead of chosen from the data."""
     out = {g: resample(log.t, x, grid) for g, x in log.groups.items()}
     missing = [g for g in ("qd", "qdd") if g not in out]
     if not missing:
         return out, {"method": "logged", "estimated": []}
     source = "qd" if "qd" in out else "q"
     orders = tuple(("q", "qd", "qdd").index(g) - ("q", "qd").index(source) for g in missing)
-    choice = choose_window(out[source], rate, POLYORDER, orders)
-    estimates = savgol_window_derivatives(out[source], rate, choice.window, POLYORDER, orders)
+    if window is None:
+        described = choose_window(out[source], rate, POLYORDER, orders).to_json()
+    else:
+        if window < POLYORDER + 1 or window % 2 == 0 or window > len(grid):
+            raise UserError(f"--window must be odd, in [{POLYORDER + 1}, {len(grid)}] samples, "
+                            f"got {window}")
+        described = {"method": "savitzky-golay", "window_samples": window,
+                     "window_s": window / rate, "polyorder": POLYORDER, "rule": "given"}
+    estimates = savgol_window_derivatives(out[source], rate, described["window_samples"],
+                                          POLYORDER, orders)
     out.update(dict(zip(missing, estimates, strict=True)))
-    return out, {**choice.to_json(), "source": source, "estimated": missing}
+    return out, {**described, "source": source, "estimated": missing}
 
 
-def ingest(path: str | Path, dof: int, robot: str, rate: float | None = None) -> Ingested:
+def ingest(path: str | Path, dof: int, robot: str, rate: float | None = None,
+           window: int | None = None) -> Ingested:
     """The log at path of a robot with dof joints, as a dataset at rate Hz (default: the
-    resampling rate, the log's median step)."""
+    resampling rate, the log's median step); window: the Savitzky-Golay window in samples
+    of the resampled grid (default: chosen from the data)."""
     log = read_log(path, dof)
     grid, grid_rate = uniform_grid(log.t)
-    states, derivatives = estimate(log, grid, grid_rate)
+    states, derivatives = estimate(log, grid, grid_rate, window)
     every = 1
     if rate is not None:
         if not 0 < rate <= grid_rate * (1 + 1e-9):

@@ -53,6 +53,9 @@ import numpy as np
 from scipy.special import expit
 
 JOINT_EFFECTS = ("viscous", "coulomb", "armature", "offset", "spring")
+# the candidates on a measured log (identification.closeloop.measured): Gaz et al.'s sigmoid
+# friction beside viscous and Coulomb; the offset is part of the declared model there
+MEASURED_EFFECTS = ("viscous", "coulomb", "sigmoid", "armature", "spring")
 UNITS = {"viscous": "N m s/rad", "coulomb": "N m", "armature": "kg m^2", "offset": "N m",
          "spring": "N m/rad", "payload": "kg", "sigmoid": "N m"}
 SIGMOID_STEEPNESS = 10.0  # s/rad, default phi2 of the sigmoid friction
