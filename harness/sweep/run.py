@@ -21,7 +21,7 @@ from harness.errors import UserError
 from harness.sweep.cell import CellFailure, CellResult, run_cell
 from harness.sweep.grid import Cell, Grid
 from harness.sweep.progress import Progress
-from harness.sweep.store import ResultsStore
+from harness.sweep.store import ResultsStore, read
 from identification.regression.base import validation_mask
 
 BLAS_ENV = {v: "1" for v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")}
@@ -96,16 +96,22 @@ def check_samples(grid: Grid) -> None:
 
 
 def run_sweep(grid: Grid, out: Path, address: str | None = None, progress_every: float = 10.0):
-    """Run the cells of grid not yet in out/results.csv; returns (store, cells run here)."""
+    """Run the cells of grid not yet in out/results.csv; returns (store, cells run here).
+
+    Nothing is written before the cells can run (bad input, an unreachable cluster: no file)."""
     check_samples(grid)
-    store = ResultsStore(out / "results.csv", _joints(grid))
-    todo = [c for c in grid.cells() if c not in store]
+    joints, path = _joints(grid), out / "results.csv"
+    if path.is_dir():
+        raise UserError(f"{path} is a directory")
+    todo = [c for c in grid.cells() if c.key not in read(path)[0]]
     progress = Progress(len(grid), len(grid) - len(todo), every=progress_every)
-    if todo:
-        with ray_session(address) as ray:
-            for result in ray_cells(ray, todo):
-                if isinstance(result, CellFailure):
-                    raise UserError(f"cell {result.cell.label()}: {result.message}")
-                store.append(result)
-                progress.update()
+    if not todo:
+        return ResultsStore(path, joints), 0
+    with ray_session(address) as ray:
+        store = ResultsStore(path, joints)
+        for result in ray_cells(ray, todo):
+            if isinstance(result, CellFailure):
+                raise UserError(f"cell {result.cell.label()}: {result.message}")
+            store.append(result)
+            progress.update()
     return store, len(todo)
