@@ -50,8 +50,9 @@ def ray_session(address: str | None = None):
     else:
         for var, value in BLAS_ENV.items():  # local workers inherit the driver's environment
             os.environ.setdefault(var, value)
-        ray.init(num_cpus=os.cpu_count(), include_dashboard=False, _node_ip_address="127.0.0.1",
-                 **quiet)
+        # "local": always a new instance, never a cluster `ray start` left running on this machine
+        ray.init(address="local", num_cpus=os.cpu_count(), include_dashboard=False,
+                 _node_ip_address="127.0.0.1", **quiet)
     try:
         yield ray
     finally:
