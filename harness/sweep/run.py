@@ -104,7 +104,8 @@ def run_sweep(grid: Grid, out: Path, address: str | None = None, progress_every:
     joints, path = _joints(grid), out / "results.csv"
     if path.is_dir():
         raise UserError(f"{path} is a directory")
-    todo = [c for c in grid.cells() if c.key not in read(path)[0]]
+    finished = read(path)[0]
+    todo = [c for c in grid.cells() if c.key not in finished]
     progress = Progress(len(grid), len(grid) - len(todo), every=progress_every)
     if not todo:
         return ResultsStore(path, joints), 0
