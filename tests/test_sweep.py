@@ -174,3 +174,12 @@ def test_progress_counts_cells_and_reused_ones():
     assert [line.split(" | ")[0] for line in lines] == ["sweep: 3/5 cells, 2 reused",
                                                         "sweep: 5/5 cells, 2 reused"]
     assert lines[-1].endswith("~0:00 left") and "elapsed" in lines[0]
+
+
+def test_a_small_window_of_tasks_runs_every_cell_once(ray_local):
+    from harness.sweep.run import ray_cells
+
+    cells = [Cell("double_pendulum", 0.05, s, "oracle", 300) for s in range(5)]
+    results = list(ray_cells(ray_local, cells, window=2))
+    assert sorted(r.cell for r in results) == cells
+    assert all(r.errors == run_cell(r.cell).errors for r in results[:1])

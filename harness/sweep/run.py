@@ -9,6 +9,7 @@ process that has already initialized Ray (a library user, the tests) keeps its i
 
 from __future__ import annotations
 
+import itertools
 import logging
 import os
 from collections.abc import Iterable, Iterator
@@ -59,11 +60,20 @@ def ray_session(address: str | None = None):
         ray.shutdown()
 
 
-def ray_cells(ray, cells: Iterable[Cell]) -> Iterator[CellResult | CellFailure]:
-    """Every cell as one Ray task (one CPU each); results in the order they finish."""
+def ray_cells(ray, cells: Iterable[Cell], window: int | None = None) -> Iterator[CellResult | CellFailure]:
+    """Every cell as one Ray task (one CPU each); results in the order they finish.
+
+    At most `window` tasks are in flight (default 4 per CPU of the cluster, at least 16), the
+    next cells submitted as results come back: the driver's bookkeeping stays small however
+    large the grid, and the cells run in grid order (seeds outermost)."""
     task = ray.remote(num_cpus=1)(run_cell)
-    pending = {task.remote(c): c for c in cells}
-    while pending:
+    window = window or max(16, 4 * int(ray.cluster_resources().get("CPU", 1)))
+    todo, pending = iter(cells), {}
+    while True:
+        for cell in itertools.islice(todo, window - len(pending)):
+            pending[task.remote(cell)] = cell
+        if not pending:
+            return
         ready, _ = ray.wait(list(pending), num_returns=1, timeout=1.0)
         if ready:  # everything else already finished too, without waiting
             ready, _ = ray.wait(list(pending), num_returns=len(pending), timeout=0)
