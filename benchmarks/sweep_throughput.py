@@ -76,6 +76,16 @@ def tree_cpu(root: int | None = None) -> float:
     return sum(stats[pid][1] for pid in tree if pid in stats) / os.sysconf("SC_CLK_TCK")
 
 
+def autogroup() -> bool:
+    """Linux autogroup scheduling: CPU is shared between sessions first, so every process of
+    this run (serial or Ray) together gets one session's share of a loaded machine."""
+    try:
+        with open("/proc/sys/kernel/sched_autogroup_enabled") as f:
+            return f.read().strip() == "1"
+    except OSError:
+        return False
+
+
 def _pass(name: str, results, wall: float, total_cpu: float) -> dict:
     cpu = sum(r.cpu_seconds for r in results)
     return {"pass": name, "cells": len(results), "wall_s": wall, "cells_per_min": len(results) / wall * 60,
@@ -129,8 +139,13 @@ def main(argv: list[str] | None = None) -> dict:
           f"rate); identical errors in both passes: {same}; BLAS threads per Ray "
           f"worker: {blas}; load average after: "
           f"{os.getloadavg()[0]:.2f}")
+    if autogroup():
+        print("Linux autogroup scheduling is on: both passes share this session's CPU share with "
+              "the other sessions, so on a loaded machine the wall ratio is capped by that share; "
+              "'cores busy' shows what each pass got.")
     results = {"passes": passes, "ratio": ratio, "ratio_cpu_time_estimate": idle, "cpus": cpus,
                "warm_up_s": warm_s, "worker_blas_threads": blas,
+               "autogroup": autogroup(), "load_average": os.getloadavg()[0],
                "acceptance": {f"ray_rate_at_least_{bar:.2f}x_serial": bool(ratio >= bar),
                               "identical_errors": same}}
     if args.out:
