@@ -1,7 +1,8 @@
 """Run a sweep's unfinished cells as Ray tasks and record each as it finishes.
 
-By default a local Ray instance with one worker slot per CPU (`ray.init(num_cpus=os.cpu_count(),
-include_dashboard=False)`, bound to the loopback address, usage statistics off, quiet logs);
+By default a new local Ray instance with one worker slot per CPU (`ray.init(address="local",
+num_cpus=os.cpu_count(), include_dashboard=False)`, bound to the loopback address, usage
+statistics off, quiet logs, one BLAS thread per worker);
 with `address`, the cells run on that Ray cluster instead (the harness, identification and
 model packages travel with the job; its nodes need the project's dependencies installed). A
 process that has already initialized Ray (a library user, the tests) keeps its instance.
