@@ -39,16 +39,20 @@ from harness.sweep.run import ray_cells, ray_session  # noqa: E402
 TARGET = 0.8  # of the ideal speed-up (one per CPU)
 
 
-def _warm(ray, workers: int) -> None:
-    """Start every worker and import the cell runner there (as this process already has)."""
+def _warm(ray, workers: int) -> list[int]:
+    """Start every worker and import the cell runner there (as this process already has);
+    returns each worker's BLAS thread counts as its numpy loaded them."""
     @ray.remote(num_cpus=1)
-    def imported() -> int:
+    def imported() -> list[int]:
+        from threadpoolctl import threadpool_info
+
         import harness.sweep.cell  # noqa: F401
 
         time.sleep(0.5)  # keep the slot busy so every worker gets one
-        return os.getpid()
+        return [p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"]
 
-    ray.get([imported.remote() for _ in range(workers)])
+    return sorted({n for threads in ray.get([imported.remote() for _ in range(workers)])
+                   for n in threads})
 
 
 def tree_cpu(root: int | None = None) -> float:
@@ -70,6 +74,16 @@ def tree_cpu(root: int | None = None) -> float:
         tree |= new
         grew = bool(new)
     return sum(stats[pid][1] for pid in tree if pid in stats) / os.sysconf("SC_CLK_TCK")
+
+
+def autogroup() -> bool:
+    """Linux autogroup scheduling: CPU is shared between sessions first, so every process of
+    this run (serial or Ray) together gets one session's share of a loaded machine."""
+    try:
+        with open("/proc/sys/kernel/sched_autogroup_enabled") as f:
+            return f.read().strip() == "1"
+    except OSError:
+        return False
 
 
 def _pass(name: str, results, wall: float, total_cpu: float) -> dict:
@@ -101,7 +115,7 @@ def main(argv: list[str] | None = None) -> dict:
 
     with ray_session() as ray:
         tic = time.perf_counter()
-        _warm(ray, cpus)
+        blas = _warm(ray, cpus)
         warm_s = time.perf_counter() - tic
         start, cpu = time.perf_counter(), tree_cpu()
         parallel = list(ray_cells(ray, cells))
@@ -122,10 +136,16 @@ def main(argv: list[str] | None = None) -> dict:
     print(f"\nRay / serial cells per minute: {ratio:.2f} (target >= {TARGET} x {cpus} = {bar:.2f}: "
           f"{'met' if ratio >= bar else 'NOT met'}); from CPU time, on an otherwise idle machine with "
           f"every core kept busy: {idle:.2f}; Ray worker warm-up {warm_s:.1f} s (not in the "
-          f"rate); identical errors in both passes: {same}; load average after: "
+          f"rate); identical errors in both passes: {same}; BLAS threads per Ray "
+          f"worker: {blas}; load average after: "
           f"{os.getloadavg()[0]:.2f}")
+    if autogroup():
+        print("Linux autogroup scheduling is on: both passes share this session's CPU share with "
+              "the other sessions, so on a loaded machine the wall ratio is capped by that share; "
+              "'cores busy' shows what each pass got.")
     results = {"passes": passes, "ratio": ratio, "ratio_cpu_time_estimate": idle, "cpus": cpus,
-               "warm_up_s": warm_s,
+               "warm_up_s": warm_s, "worker_blas_threads": blas,
+               "autogroup": autogroup(), "load_average": os.getloadavg()[0],
                "acceptance": {f"ray_rate_at_least_{bar:.2f}x_serial": bool(ratio >= bar),
                               "identical_errors": same}}
     if args.out:

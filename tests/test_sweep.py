@@ -11,6 +11,7 @@ numpy's over the csv rows."""
 from __future__ import annotations
 
 import csv
+import io
 import itertools
 
 import numpy as np
@@ -18,9 +19,10 @@ import pytest
 from matplotlib.image import imread
 
 from harness.cli import main
-from harness.sweep.cell import CellResult, run_cell
+from harness.sweep.cell import CellFailure, CellResult, run_cell
 from harness.sweep.figures import write_figures
 from harness.sweep.grid import Cell, parse_grid
+from harness.sweep.progress import Progress
 from harness.sweep.store import ResultsStore, read
 from harness.sweep.summary import bands
 
@@ -155,3 +157,29 @@ def test_store_drops_a_torn_line_and_widens_for_more_joints(tmp_path):
     (tmp_path / "other.csv").write_text("a,b\n1,2\n")
     with pytest.raises(ValueError, match="not a sweep's results file"):
         ResultsStore(tmp_path / "other.csv", 2)
+
+
+def test_a_cell_a_user_can_fix_comes_back_as_a_failure(tmp_path):
+    missing = tmp_path / "arm.urdf"
+    failure = run_cell(Cell(str(missing), 0.05, 0, "oracle", 300))
+    assert isinstance(failure, CellFailure) and str(missing) in failure.message
+
+
+def test_progress_counts_cells_and_reused_ones():
+    stream = io.StringIO()
+    progress = Progress(total=5, done=2, stream=stream, every=0.0)
+    progress.update()
+    progress.update(2)
+    lines = stream.getvalue().splitlines()
+    assert [line.split(" | ")[0] for line in lines] == ["sweep: 3/5 cells, 2 reused",
+                                                        "sweep: 5/5 cells, 2 reused"]
+    assert lines[-1].endswith("~0:00 left") and "elapsed" in lines[0]
+
+
+def test_a_small_window_of_tasks_runs_every_cell_once(ray_local):
+    from harness.sweep.run import ray_cells
+
+    cells = [Cell("double_pendulum", 0.05, s, "oracle", 300) for s in range(5)]
+    results = list(ray_cells(ray_local, cells, window=2))
+    assert sorted(r.cell for r in results) == cells
+    assert all(r.errors == run_cell(r.cell).errors for r in results[:1])

@@ -39,34 +39,35 @@ def _curves(ax, bands: list[Band], methods, x_of) -> dict:
     return drawn
 
 
-def error_vs_noise(bands: list[Band], grid: Grid, path: Path) -> dict:
-    samples = max(grid.samples)
-    fig, axes = _panels(len(grid.robots), f"Error against noise ({samples} samples; median and "
-                        f"IQR over {len(grid.seeds)} seeds)")
+def _error_figure(bands: list[Band], grid: Grid, path: Path, title: str, keep, x_of, xlabel: str,
+                  xscale: str = "linear") -> dict:
+    """One panel per robot of the bands `keep` selects, against x_of(band)."""
+    fig, axes = _panels(len(grid.robots), f"{title}; median and IQR over {len(grid.seeds)} seeds")
     drawn = {}
     for ax, robot in zip(axes, grid.robots, strict=True):
-        at = [b for b in bands if b.robot == robot and b.samples == samples]
-        drawn[robot] = _curves(ax, at, grid.methods, lambda b: b.noise * 100)
-        ax.set(title=robot, xlabel="torque noise (% of torque std)",
+        drawn[robot] = _curves(ax, [b for b in bands if b.robot == robot and keep(b)], grid.methods, x_of)
+        ax.set(title=robot, xlabel=xlabel, xscale=xscale,
                ylabel="relative RMS error (%, median over joints)")
+        if xscale == "log":  # the grid's own values as ticks, not powers of ten
+            ticks = sorted({x_of(b) for b in bands})
+            ax.set_xticks(ticks, [f"{t:g}" for t in ticks], minor=False)
+            ax.set_xticks([], minor=True)
     axes[0].legend(fontsize=8)
     save_figure(fig, path)
     return drawn
+
+
+def error_vs_noise(bands: list[Band], grid: Grid, path: Path) -> dict:
+    samples = max(grid.samples)
+    return _error_figure(bands, grid, path, f"Error against noise ({samples} samples)",
+                         lambda b: b.samples == samples, lambda b: b.noise * 100,
+                         "torque noise (% of torque std)")
 
 
 def error_vs_samples(bands: list[Band], grid: Grid, path: Path) -> dict:
     noise = max(grid.noise)
-    fig, axes = _panels(len(grid.robots), f"Error against sample count ({noise:.0%} noise; median "
-                        f"and IQR over {len(grid.seeds)} seeds)")
-    drawn = {}
-    for ax, robot in zip(axes, grid.robots, strict=True):
-        at = [b for b in bands if b.robot == robot and b.noise == noise]
-        drawn[robot] = _curves(ax, at, grid.methods, lambda b: b.samples)
-        ax.set(title=robot, xlabel="training samples", xscale="log",
-               ylabel="relative RMS error (%, median over joints)")
-    axes[0].legend(fontsize=8)
-    save_figure(fig, path)
-    return drawn
+    return _error_figure(bands, grid, path, f"Error against sample count ({noise:.0%} noise)",
+                         lambda b: b.noise == noise, lambda b: b.samples, "training samples", "log")
 
 
 def time_per_method(results, grid: Grid, path: Path) -> dict:

@@ -1,7 +1,8 @@
 """Run a sweep's unfinished cells as Ray tasks and record each as it finishes.
 
-By default a local Ray instance with one worker slot per CPU (`ray.init(num_cpus=os.cpu_count(),
-include_dashboard=False)`, bound to the loopback address, usage statistics off, quiet logs);
+By default a new local Ray instance with one worker slot per CPU (`ray.init(address="local",
+num_cpus=os.cpu_count(), include_dashboard=False)`, bound to the loopback address, usage
+statistics off, quiet logs, one BLAS thread per worker);
 with `address`, the cells run on that Ray cluster instead (the harness, identification and
 model packages travel with the job; its nodes need the project's dependencies installed). A
 process that has already initialized Ray (a library user, the tests) keeps its instance.
@@ -9,6 +10,7 @@ process that has already initialized Ray (a library user, the tests) keeps its i
 
 from __future__ import annotations
 
+import itertools
 import logging
 import os
 from collections.abc import Iterable, Iterator
@@ -21,7 +23,7 @@ from harness.errors import UserError
 from harness.sweep.cell import CellFailure, CellResult, run_cell
 from harness.sweep.grid import Cell, Grid
 from harness.sweep.progress import Progress
-from harness.sweep.store import ResultsStore
+from harness.sweep.store import ResultsStore, read
 from identification.regression.base import validation_mask
 
 BLAS_ENV = {v: "1" for v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")}
@@ -50,19 +52,29 @@ def ray_session(address: str | None = None):
     else:
         for var, value in BLAS_ENV.items():  # local workers inherit the driver's environment
             os.environ.setdefault(var, value)
-        ray.init(num_cpus=os.cpu_count(), include_dashboard=False, _node_ip_address="127.0.0.1",
-                 **quiet)
+        # "local": always a new instance, never a cluster `ray start` left running on this machine
+        ray.init(address="local", num_cpus=os.cpu_count(), include_dashboard=False,
+                 _node_ip_address="127.0.0.1", **quiet)
     try:
         yield ray
     finally:
         ray.shutdown()
 
 
-def ray_cells(ray, cells: Iterable[Cell]) -> Iterator[CellResult | CellFailure]:
-    """Every cell as one Ray task (one CPU each); results in the order they finish."""
+def ray_cells(ray, cells: Iterable[Cell], window: int | None = None) -> Iterator[CellResult | CellFailure]:
+    """Every cell as one Ray task (one CPU each); results in the order they finish.
+
+    At most `window` tasks are in flight (default 4 per CPU of the cluster, at least 16), the
+    next cells submitted as results come back: the driver's bookkeeping stays small however
+    large the grid, and the cells run in grid order (seeds outermost)."""
     task = ray.remote(num_cpus=1)(run_cell)
-    pending = {task.remote(c): c for c in cells}
-    while pending:
+    window = window or max(16, 4 * int(ray.cluster_resources().get("CPU", 1)))
+    todo, pending = iter(cells), {}
+    while True:
+        for cell in itertools.islice(todo, window - len(pending)):
+            pending[task.remote(cell)] = cell
+        if not pending:
+            return
         ready, _ = ray.wait(list(pending), num_returns=1, timeout=1.0)
         if ready:  # everything else already finished too, without waiting
             ready, _ = ray.wait(list(pending), num_returns=len(pending), timeout=0)
@@ -96,16 +108,23 @@ def check_samples(grid: Grid) -> None:
 
 
 def run_sweep(grid: Grid, out: Path, address: str | None = None, progress_every: float = 10.0):
-    """Run the cells of grid not yet in out/results.csv; returns (store, cells run here)."""
+    """Run the cells of grid not yet in out/results.csv; returns (store, cells run here).
+
+    Nothing is written before the cells can run (bad input, an unreachable cluster: no file)."""
     check_samples(grid)
-    store = ResultsStore(out / "results.csv", _joints(grid))
-    todo = [c for c in grid.cells() if c not in store]
+    joints, path = _joints(grid), out / "results.csv"
+    if path.is_dir():
+        raise UserError(f"{path} is a directory")
+    finished = read(path)[0]
+    todo = [c for c in grid.cells() if c.key not in finished]
     progress = Progress(len(grid), len(grid) - len(todo), every=progress_every)
-    if todo:
-        with ray_session(address) as ray:
-            for result in ray_cells(ray, todo):
-                if isinstance(result, CellFailure):
-                    raise UserError(f"cell {result.cell.label()}: {result.message}")
-                store.append(result)
-                progress.update()
+    if not todo:
+        return ResultsStore(path, joints), 0
+    with ray_session(address) as ray:
+        store = ResultsStore(path, joints)
+        for result in ray_cells(ray, todo):
+            if isinstance(result, CellFailure):
+                raise UserError(f"cell {result.cell.label()}: {result.message}")
+            store.append(result)
+            progress.update()
     return store, len(todo)
