@@ -10,7 +10,7 @@ import numpy as np
 import pinocchio as pin
 
 from harness.errors import UserError
-from harness.robots.registry import ROBOTS, load_mujoco, load_pinocchio
+from harness.robots.registry import check_open_chain, load_mujoco, load_pinocchio
 
 
 @dataclass(frozen=True)
@@ -32,19 +32,21 @@ class Plant:
         hi = np.where(limited, self.model.jnt_range[ids, 1], np.pi)
         return lo, hi
 
-    def pinocchio(self) -> pin.Model | None:
-        """The plant's rigid-body model in Pinocchio (registry URDF or parsed MJCF)."""
-        if self.name in ROBOTS or self.name.lower().endswith(".urdf"):
-            return load_pinocchio(self.name)
-        try:
-            return pin.buildModelFromMJCF(self.name)
-        except Exception:  # noqa: BLE001 - pin raises bare exceptions on MJCF it cannot map
-            return None
+    def pinocchio(self) -> pin.Model:
+        """The plant's rigid-body model in Pinocchio (registry URDF or parsed MJCF); UserError
+        if Pinocchio cannot read it: the excitation design, the estimated-state report and every
+        model of the plant need it, so there is no silent states-only fallback."""
+        model = load_pinocchio(self.name)
+        if model.nv != self.dof:
+            raise UserError(f"plant {self.name}: Pinocchio reads {model.nv} joints, MuJoCo {self.dof}")
+        return model
 
 
 def load_plant(name_or_path: str | Path) -> Plant:
-    """Load a plant by registry name or MJCF path; only hinge/slide joints are supported."""
+    """Load a plant by registry name or MJCF path; only hinge/slide joints of an open chain
+    are supported."""
     model = load_mujoco(name_or_path)
     if model.nq != model.nv or model.nv == 0:
         raise UserError(f"plant {name_or_path}: needs 1-DOF joints only (nq={model.nq}, nv={model.nv})")
+    check_open_chain(model, name_or_path)
     return Plant(str(name_or_path), model)
