@@ -45,7 +45,14 @@ class PlannerConfig:
     limit_samples: int = 8
     torque_limit: tuple[float, ...] | None = (10.0, 10.0, 10.0)
     geometry: ArmGeometry = field(default_factory=paper_arm)  # links for clearance
-    hessian: str = "exact"  # or "limited-memory"
+    hessian: str = "exact"  # or "limited-memory" (IPOPT, sqpmethod)
+    solver: str = "fatrop"  # planning.backends: "fatrop", "sqpmethod" or "ipopt"
+    compile_code: bool = False  # NLP functions as C compiled once (planning.compiled)
+    dual_warm_start: bool = True  # warm re-plans also start from the last multipliers
+    starts: int = 1  # cold plans solve from this many start points (planning.starts)
+    # a re-plan still unfinished after this much CPU time of the planning thread (ms) is
+    # abandoned and the arm keeps its last plan (Algorithm 2); None: no deadline
+    replan_deadline_ms: float | None = None
     max_iterations: int = 300
     warm_max_iterations: int = 60  # a warm solve that needs more restarts cold
     power_smoothing: float = 0.0  # W; 0: exact epigraph of |P|, > 0: sqrt(P^2 + eps^2) - eps

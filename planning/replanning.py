@@ -11,6 +11,7 @@ concatenation of the segments actually followed.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,10 +23,12 @@ from planning.limits import limit_excess
 from planning.obstacle import predict_linear
 from planning.screening import screen
 from planning.solver import ObstacleForecast, Planner, SegmentPlan
+from planning.starts import rank, start_points
 
 TRIGGER_TOLERANCE = 1e-3  # m: predicted dips smaller than this do not trigger a re-plan
 PREDICTION_TOLERANCE = 1e-3  # m: a forecast this close to the last one brings nothing new
 LIMIT_SETTLED = 1e-8  # rad: a plan this close to its limits (dense grid) needs no re-solve
+DEADLINE = "deadline exceeded"  # status of a re-plan abandoned at its deadline
 
 
 @dataclass(frozen=True)
@@ -37,29 +40,38 @@ class Execution:
     solve_ms: tuple[float, ...]  # wall time of every solve (incl. re-screening rounds)
     failures: tuple[str, ...]  # IPOPT status of a failed first plan (the result is unusable)
     replan_failures: tuple[str, ...] = ()  # failed re-plans: the arm kept its last plan
+    solve_cpu_ms: tuple[float, ...] = ()  # CPU time of the planning thread, per solve_ms entry
 
 
 def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goal,
                  forecast: ObstacleForecast | None, warm: SegmentPlan | None = None,
-                 rounds: int = 4) -> tuple[SegmentPlan, float, float]:
+                 rounds: int = 4, x0: np.ndarray | None = None,
+                 deadline_ms: float | None = None) -> tuple[SegmentPlan, float, float]:
     """Plan one segment: screened solves (see _screened), with the penalty weight raised
     while the solution still dips below the threshold (exterior penalty method).
 
-    Without a warm start the unobstructed optimum is solved first and serves as the
-    reference. Returns the plan and the total wall and CPU time (ms) of its solves.
+    deadline_ms: CPU time (ms) after which no further solve starts; a plan that took longer
+    is returned unsuccessful with status DEADLINE (it would arrive too late to be followed).
+
+    Without a warm start the unobstructed optimum is solved first (from x0, default the
+    planner's initial guess) and serves as the reference. Returns the plan and the total
+    wall and CPU time (ms) of its solves.
     """
     config, total, cpu = planner.config, 0.0, 0.0
     alpha = config.penalty_weight if warm is None else warm.penalty_weight
     if warm is None:
-        warm = planner.solve(q0, qd0, duration, goal, None, t_begin, alpha=alpha)
+        warm = planner.solve(q0, qd0, duration, goal, None, t_begin, alpha=alpha, x0=x0)
         total, cpu = warm.solve_ms, warm.solve_cpu_ms
         first = True
     else:
         first = False
+    budget = np.inf if deadline_ms is None else deadline_ms
     while True:
         plan, ms, cpu_ms = _screened(planner, q0, qd0, t_begin, duration, goal, forecast,
-                                     warm, first, alpha, rounds)
+                                     warm, first, alpha, rounds, budget - cpu)
         total, cpu = total + ms, cpu + cpu_ms
+        if cpu > budget:
+            return dataclasses.replace(plan, success=False, status=DEADLINE), total, cpu
         if forecast is None or alpha >= config.max_penalty_weight or not plan.success or \
                 _predicted_clearance(planner, plan, forecast) >= config.threshold \
                 - config.penalty_tolerance:
@@ -68,8 +80,23 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
         warm, first = plan, False
 
 
+def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, goal,
+                    forecast: ObstacleForecast | None, count: int | None = None
+                    ) -> tuple[SegmentPlan, float, float, list[SegmentPlan]]:
+    """The best of `count` (default config.starts) cold plans of one segment (plan_segment
+    from each of planning.starts' start points); total wall and CPU ms; all the plans."""
+    count = planner.config.starts if count is None else count
+    plans, wall, cpu = [], 0.0, 0.0
+    for x0 in start_points(planner, q0, qd0, duration, goal, count):
+        plan, ms, cpu_ms = plan_segment(planner, q0, qd0, t_begin, duration, goal, forecast,
+                                        x0=x0)
+        plans.append(plan)
+        wall, cpu = wall + ms, cpu + cpu_ms
+    return min(plans, key=rank), wall, cpu, plans
+
+
 def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan, cold: bool,
-              alpha: float, rounds: int) -> tuple[SegmentPlan, float, float]:
+              alpha: float, rounds: int, budget: float = np.inf) -> tuple[SegmentPlan, float, float]:
     """Solve with the obstacle samples screened on a reference (`plan`, re-expressed on
     this horizon) and the limits at its turning points; re-screen on the result until
     the constraints that matter are the ones imposed. cold: `plan` already solves this
@@ -82,13 +109,13 @@ def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan
         times = set() if subset is None else set(subset.times)
         settled = times <= chosen and limit_excess(plan.trajectory, config.lower,
                                                    config.upper) <= LIMIT_SETTLED
-        if settled and (round_ > 0 or cold):
+        if (settled and (round_ > 0 or cold)) or cpu > budget:
             break
         chosen |= times
         attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin, warm=plan,
                                 reference=reference, alpha=alpha)
         total, cpu = total + attempt.solve_ms, cpu + attempt.solve_cpu_ms
-        if not attempt.success:  # a warm start far from the new optimum can stall
+        if not attempt.success and cpu <= budget:  # a warm start far from the optimum can stall
             attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin,
                                     reference=reference, alpha=alpha)
             total, cpu = total + attempt.solve_ms, cpu + attempt.solve_cpu_ms
@@ -108,23 +135,30 @@ def check_start(planner: Planner, scenario: Scenario) -> None:
 
 
 def execute(planner: Planner, scenario: Scenario, replan: bool = True,
-            avoid: bool = True) -> Execution:
+            avoid: bool = True, starts: int | None = None,
+            first_start: np.ndarray | None = None) -> Execution:
     """Run Algorithm 2 on the scenario.
 
     replan=False follows the first plan throughout; avoid=False ignores the obstacle
-    (the energy-optimal motion without obstacle, paper Fig. 9 red line).
+    (the energy-optimal motion without obstacle, paper Fig. 9 red line); starts: of the
+    first plan (default config.starts, planning.starts), or first_start: its one start point.
     """
     scenario.validate(planner.config)
     obstacle, goal, T = scenario.obstacle if avoid else None, scenario.goal, scenario.duration
     if avoid:
         check_start(planner, scenario)
     forecast = None if obstacle is None else forecast_at(obstacle, 0.0)
-    plan, ms, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0, T, goal,
-                               forecast)
-    segments, times, solve_ms = [plan], [0.0], [ms]
+    if first_start is None:
+        plan, ms, cpu, _ = plan_multistart(planner, scenario.start, scenario.start_velocity,
+                                           0.0, T, goal, forecast, starts)
+    else:
+        plan, ms, cpu = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0, T,
+                                     goal, forecast, x0=first_start)
+    segments, times, solve_ms, solve_cpu = [plan], [0.0], [ms], [cpu]
     failures, replan_failures = ([] if plan.success else [plan.status]), []
     if obstacle is None or not replan:
-        return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures))
+        return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures),
+                         (), tuple(solve_cpu))
     planned_with = forecast
     for t in obstacle.sample_times[:-1]:
         forecast = forecast_at(obstacle, t)
@@ -133,8 +167,10 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
             continue  # safe, or nothing new to plan with: the last plan already saw this
         planned_with = forecast
         q, qd, _ = plan.trajectory.state(t)
-        new, ms, _ = plan_segment(planner, q[0], qd[0], t, T - t, goal, forecast, warm=plan)
+        new, ms, cpu = plan_segment(planner, q[0], qd[0], t, T - t, goal, forecast, warm=plan,
+                                    deadline_ms=planner.config.replan_deadline_ms)
         solve_ms.append(ms)
+        solve_cpu.append(cpu)
         if not new.success:
             replan_failures.append(new.status)
             continue  # keep following the last good plan; evaluate() checks what it does
@@ -142,7 +178,7 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
         segments.append(plan)
         times.append(float(t))
     return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures),
-                     tuple(replan_failures))
+                     tuple(replan_failures), tuple(solve_cpu))
 
 
 def forecast_at(obstacle, t: float) -> ObstacleForecast:

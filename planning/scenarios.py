@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from planning.clearance import link_clearances
 from planning.config import Scenario
 from planning.kinematics import ArmGeometry
 from planning.obstacle import LinearObstacle, SwayingObstacle
@@ -53,3 +54,51 @@ def swaying_scenario(free: PolynomialTrajectory, geometry: ArmGeometry, amplitud
     obstacle = SwayingObstacle(base.obstacle.start, base.obstacle.end, base.duration,
                                sway=tuple(sway), periods=periods)
     return Scenario(base.start, base.goal, base.duration, obstacle, base.start_velocity)
+
+
+def random_scenario(rng: np.random.Generator, free_motion, geometry: ArmGeometry, lower, upper,
+                    threshold: float = 0.08, duration: float = 2.0) -> Scenario:
+    """A scenario drawn from rng whose obstacle is active: start and goal uniform in the
+    middle 80 % of each joint's range (>= 0.6 rad apart on joint 1), an obstacle that passes
+    about 1.5 cm from the outer part of a moving link of the unobstructed optimum
+    (`free_motion(start, goal, duration)` -> PolynomialTrajectory) at a random time in
+    [0.3, 0.7] duration, moving at 0.1-0.4 m per motion in a random direction, and swaying
+    0-4 cm at 0.5-2 periods per motion; redrawn until start and goal are clear of it."""
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    while True:
+        start, goal = (lower + (upper - lower) * rng.uniform(0.1, 0.9, len(lower))
+                       for _ in range(2))
+        if abs(goal[0] - start[0]) < 0.6:
+            continue
+        free = free_motion(tuple(start), tuple(goal), duration)
+        t_cross = duration * rng.uniform(0.3, 0.7)
+        a, b = _link_ends(free, geometry, t_cross, int(rng.integers(len(geometry.links))))
+        crossing = a + rng.uniform(0.4, 0.9) * (b - a)
+        crossing = crossing + rng.normal(0.0, 0.015, 3)
+        sweep = _direction(rng) * rng.uniform(0.1, 0.4)
+        frac = t_cross / duration
+        obstacle = SwayingObstacle(_floats(crossing - frac * sweep),
+                                   _floats(crossing + (1 - frac) * sweep), duration,
+                                   sway=_floats(_direction(rng) * rng.uniform(0.0, 0.04)),
+                                   periods=float(rng.uniform(0.5, 2.0)))
+        ends = np.asarray([start, goal])
+        centres = obstacle.position(np.array([0.0, duration]))
+        if link_clearances(geometry, ends, centres).min() > threshold + 0.02:
+            return Scenario(_floats(start), _floats(goal), duration, obstacle)
+
+
+def random_scenarios(count: int, seed: int, free_motion, geometry, lower, upper,
+                     threshold: float = 0.08) -> list[Scenario]:
+    """`count` scenarios of random_scenario from one seed."""
+    rng = np.random.default_rng(seed)
+    return [random_scenario(rng, free_motion, geometry, lower, upper, threshold)
+            for _ in range(count)]
+
+
+def _direction(rng: np.random.Generator) -> np.ndarray:
+    v = rng.normal(size=3)
+    return v / np.linalg.norm(v)
+
+
+def _floats(v) -> tuple[float, ...]:
+    return tuple(float(x) for x in v)

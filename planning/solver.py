@@ -1,4 +1,5 @@
-"""IPOPT on the planning NLP: one build, many solves (cold or warm-started)."""
+"""The planning NLP's solver (planning.backends: fatrop, sqpmethod or IPOPT): one build, many
+solves (cold or warm-started)."""
 
 from __future__ import annotations
 
@@ -10,23 +11,11 @@ import casadi as ca
 import numpy as np
 
 from identification.torque_model import TorqueModel
+from planning import backends
 from planning.config import PlannerConfig
 from planning.limits import END_MARGIN, goal_limit_signs, quotient_turning_points
 from planning.nlp import PlanningNLP
 from planning.trajectory import PolynomialTrajectory
-
-_COMMON = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
-           "ipopt.tol": 1e-8, "ipopt.constr_viol_tol": 1e-9}
-# Measured on the re-plan sweep of the paper scenario (199 re-plans): a primal-dual warm
-# start (previous plan re-expressed on the new horizon, previous multipliers) with a tiny
-# barrier and bound pushes took a median of 6 and at most 25 iterations; a primal-only start
-# took a median of 11 and up to 81 (with mu_strategy adaptive) or 300 (monotone). Warm solves
-# stop at config.warm_max_iterations; planning.replanning then retries cold.
-# A re-plan stops at tol 1e-6 instead of 1e-8: 3 instead of 6 iterations (median), the
-# objective differing by < 1e-6 relative (tests/test_planning_scenario.py checks warm = cold).
-_WARM = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-7,
-         "ipopt.warm_start_bound_push": 1e-7, "ipopt.warm_start_mult_bound_push": 1e-7,
-         "ipopt.tol": 1e-6}
 
 
 @dataclass(frozen=True)
@@ -39,7 +28,7 @@ class ObstacleForecast:
 
 @dataclass(frozen=True)
 class SegmentPlan:
-    """One IPOPT solve: the segment, its objective parts (J) and how the solve went."""
+    """One solve: the segment, its objective parts (J) and how the solve went."""
 
     trajectory: PolynomialTrajectory
     energy: float  # sigma/N sum |P|, J
@@ -59,7 +48,7 @@ TORQUE_GRID = 65  # points of normalized time where a segment's torque is checke
 
 @dataclass(frozen=True)
 class _Solvers:
-    """One NLP and its cold and warm IPOPT instances."""
+    """One NLP and its cold and warm solver instances."""
 
     nlp: PlanningNLP
     cold: ca.Function
@@ -69,12 +58,14 @@ class _Solvers:
 
 def _build(nlp: PlanningNLP, config: PlannerConfig, name: str) -> _Solvers:
     problem = {"x": nlp.x, "p": nlp.p, "f": nlp.f, "g": nlp.g}
-    options = dict(_COMMON, **{"ipopt.max_iter": config.max_iterations,
-                               "ipopt.hessian_approximation": config.hessian})
-    warm = dict(options, **_WARM, **{"ipopt.max_iter": config.warm_max_iterations})
+    common = {"equality": nlp.lbg == nlp.ubg, "hessian": config.hessian,
+              "compile_code": config.compile_code}
+    cold = backends.solver(f"{name}_cold", config.solver, problem, warm=False,
+                           max_iter=config.max_iterations, **common)
+    warm = backends.solver(f"{name}_warm", config.solver, problem, warm=True,
+                           max_iter=config.warm_max_iterations, **common)
     parts = ca.Function("objective_parts", [nlp.x, nlp.p], [nlp.energy, nlp.penalty])
-    return _Solvers(nlp, ca.nlpsol(f"{name}_cold", "ipopt", problem, options),
-                    ca.nlpsol(f"{name}_warm", "ipopt", problem, warm), parts)
+    return _Solvers(nlp, cold, warm, parts)
 
 
 class Planner:
@@ -93,6 +84,7 @@ class Planner:
         self.nlp = PlanningNLP(model, dataclasses.replace(self.config, torque_limit=None))
         self._relaxed = _build(self.nlp, self.config, "plan")
         self._limited: _Solvers | None = None
+        self._rescue: dict[int, ca.Function] = {}
 
     def _torque_limited(self) -> _Solvers:
         if self._limited is None:
@@ -154,12 +146,17 @@ class Planner:
             lbg[nlp.quotient_rows[j]] = 0.0
         return lbg, ubg
 
-    def initial_guess(self, q0, qd0, duration: float, goal) -> np.ndarray:
-        """A cubic that reaches the goal at rest, and zero power slacks."""
+    def initial_guess(self, q0, qd0, duration: float, goal, bumps=None) -> np.ndarray:
+        """A cubic that reaches the goal at rest, plus bumps (dof, degree - 2) in rad times
+        the shapes s^(k+2) (1 - s) (k = 0..degree - 3, zero at both ends) for a multi-start;
+        zero power slacks."""
         v = np.asarray(qd0, float) * duration
         d = np.asarray(goal, float) - np.asarray(q0, float) - v
         free = np.zeros((len(d), self.config.degree - 1))
         free[:, 0], free[:, 1] = 3 * d + v, -v - 2 * d
+        if bumps is not None:  # s^(k+2) - s^(k+3): column k up, column k + 1 down
+            free[:, :-1] += bumps
+            free[:, 1:] -= bumps
         return np.concatenate([free.ravel(), np.zeros(self._slacks)])
 
     @property
@@ -170,16 +167,19 @@ class Planner:
     def solve(self, q0, qd0, duration: float, goal, forecast: ObstacleForecast | None = None,
               t_begin: float = 0.0, warm: SegmentPlan | None = None,
               reference: PolynomialTrajectory | None = None,
-              alpha: float | None = None) -> SegmentPlan:
+              alpha: float | None = None, x0: np.ndarray | None = None) -> SegmentPlan:
         """Plan from (q0, qd0) at t_begin to goal at t_begin + duration.
 
         reference: a motion on the same horizon whose turning points get limit constraints
         in addition to the fixed samples (see PlanningNLP, planning.limits).
         alpha: penalty weight (J/m^2 per sample), default config.penalty_weight.
+        x0: start point of a cold solve (default: initial_guess).
         """
         alpha = self.config.penalty_weight if alpha is None else float(alpha)
         p = self.parameters(q0, qd0, duration, goal, forecast, t_begin, reference, alpha)
-        segment = (q0, qd0, duration, t_begin, p, alpha)
+        if x0 is None:
+            x0 = self.initial_guess(q0, qd0, duration, goal)
+        segment = (q0, qd0, duration, t_begin, p, alpha, x0)
         plan = self._solve(self._relaxed, goal, warm, segment)
         if not plan.success or self.torque_excess(plan.trajectory) <= 0:
             return plan
@@ -190,18 +190,30 @@ class Planner:
 
     def _solve(self, solvers: _Solvers, goal, warm: SegmentPlan | None,
                segment: tuple) -> SegmentPlan:
-        q0, qd0, duration, t_begin, p, alpha = segment
+        q0, qd0, duration, t_begin, p, alpha, x0 = segment
         lbg, ubg = self.bounds(goal, solvers.nlp)
         args = {"p": p, "lbg": lbg, "ubg": ubg}
         if warm is None:
-            solver, args["x0"] = solvers.cold, self.initial_guess(q0, qd0, duration, goal)
+            solver, args["x0"] = solvers.cold, x0
         else:
             solver = solvers.warm
             args.update(self._warm_start(warm, t_begin, duration, len(lbg)))
         start, cpu = time.perf_counter(), time.thread_time()
-        result = solver(**args)
+        result, stats = solver(**args), backends.stats(solver)
+        if not stats.success and warm is None and self.config.solver != "ipopt":
+            solver = self._rescuer(solvers)  # a cold solve the fast solver could not finish
+            result, stats = solver(**args), backends.stats(solver)
         elapsed = (1e3 * (time.perf_counter() - start), 1e3 * (time.thread_time() - cpu))
-        return self._segment(solvers, result, solver.stats(), elapsed, segment)
+        return self._segment(solvers, result, stats, elapsed, segment)
+
+    def _rescuer(self, solvers: _Solvers) -> ca.Function:
+        """IPOPT (CasADi's virtual machine, built on first need) on the same NLP: measured, a
+        cold fatrop solve at a raised penalty weight can stop short of convergence."""
+        key = id(solvers)
+        if key not in self._rescue:
+            rescue = dataclasses.replace(self.config, solver="ipopt", compile_code=False)
+            self._rescue[key] = _build(solvers.nlp, rescue, "plan_rescue").cold
+        return self._rescue[key]
 
     def _warm_start(self, warm: SegmentPlan, t_begin: float, duration: float,
                     rows: int) -> dict:
@@ -217,10 +229,12 @@ class Planner:
         lam_g = np.zeros(rows)
         kept = min(rows, len(warm.multipliers[0]))
         lam_g[:kept] = warm.multipliers[0][:kept]
+        if not self.config.dual_warm_start:
+            return {"x0": x}
         return {"x0": x, "lam_g0": lam_g, "lam_x0": warm.multipliers[1]}
 
     def _segment(self, solvers: _Solvers, result, stats, elapsed, segment) -> SegmentPlan:
-        q0, qd0, duration, t_begin, p, alpha = segment
+        q0, qd0, duration, t_begin, p, alpha, _ = segment
         x = np.asarray(result["x"]).ravel()
         width = self.config.degree - 1
         free = x[: width * self.model.dof].reshape(self.model.dof, width)
@@ -228,8 +242,8 @@ class Planner:
         energy, penalty = (float(v) for v in solvers.parts(x, p))
         return SegmentPlan(
             trajectory=trajectory, energy=energy, penalty=penalty,
-            success=bool(stats["success"]), status=str(stats["return_status"]),
-            iterations=int(stats.get("iter_count", -1)), solve_ms=elapsed[0],
+            success=stats.success, status=stats.status,
+            iterations=stats.iterations, solve_ms=elapsed[0],
             solve_cpu_ms=elapsed[1], penalty_weight=alpha, x=x,
             multipliers=(np.asarray(result["lam_g"]).ravel(), np.asarray(result["lam_x"]).ravel()),
         )

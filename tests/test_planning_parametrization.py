@@ -162,7 +162,7 @@ def test_plan_command_with_degree_quadrature_and_sway(tmp_path):
     from harness.cli import main
 
     out = tmp_path / "plan.json"
-    assert main(["plan", "--model", "pinocchio", "--degree", "5", "--energy-quadrature",
+    assert main(["plan", "--no-compile", "--model", "pinocchio", "--degree", "5", "--energy-quadrature",
                  "gauss", "--energy-samples", "20", "--obstacle-sway", "0,0.04,0",
                  "--out", str(out)]) == 0
     plan = json.loads(out.read_text())
@@ -172,4 +172,4 @@ def test_plan_command_with_degree_quadrature_and_sway(tmp_path):
     assert np.asarray(plan["coefficients"]).shape[1:] == (3, 6)
     assert plan["replans"] >= 2  # the forecast is wrong at every sample near the arm
     assert plan["min_clearance"] >= plan["threshold"] - 2e-3
-    assert main(["plan", "--model", "pinocchio", "--degree", "3", "--out", str(out)]) == 2
+    assert main(["plan", "--no-compile", "--model", "pinocchio", "--degree", "3", "--out", str(out)]) == 2

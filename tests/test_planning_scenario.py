@@ -94,7 +94,7 @@ def test_solver_failure_is_flagged(baseline):
 
 def test_plan_command_writes_the_contract(tmp_path):
     out = tmp_path / "plan.json"
-    assert main(["plan", "--model", "pinocchio", "--out", str(out)]) == 0
+    assert main(["plan", "--no-compile", "--model", "pinocchio", "--out", str(out)]) == 0
     plan = json.loads(out.read_text())
     for key in ("coefficients", "t", "q", "qd", "qdd", "obstacle", "threshold", "energy",
                 "min_clearance", "replans", "solve_ms"):
@@ -109,7 +109,7 @@ def test_plan_command_writes_the_contract(tmp_path):
 
 def test_plan_command_bad_input_exits_2_without_file(tmp_path, capsys):
     out = tmp_path / "plan.json"
-    assert main(["plan", "--model", "pinocchio", "--goal", "0,4,-1", "--out", str(out)]) == 2
+    assert main(["plan", "--no-compile", "--model", "pinocchio", "--goal", "0,4,-1", "--out", str(out)]) == 2
     assert not out.exists()
     assert "outside the joint limits" in capsys.readouterr().err
 
@@ -185,7 +185,7 @@ def test_penalty_weight_rises_until_the_threshold_holds(paper, baseline):
 
 def test_plan_command_takes_vectors_starting_with_a_minus(tmp_path):
     out = tmp_path / "plan.json"
-    assert main(["plan", "--model", "pinocchio", "--goal", "-1.0,1.0,-1.2",
+    assert main(["plan", "--no-compile", "--model", "pinocchio", "--goal", "-1.0,1.0,-1.2",
                  "--obstacle-from", "-0.1,0.3,0.2", "--out", str(out)]) == 0
     plan = json.loads(out.read_text())
     assert np.allclose(plan["q"][-1], [-1.0, 1.0, -1.2], atol=1e-6)

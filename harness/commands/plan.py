@@ -18,6 +18,7 @@ from harness.io import write_json
 from harness.robots.arm import planner_config, torque_limit
 from harness.robots.registry import DEFAULT_ROBOT
 from harness.robots.torque_models import load_torque_model
+from planning.backends import SOLVERS
 from planning.config import PlannerConfig, Scenario
 from planning.errors import PlanningError
 from planning.obstacle import LinearObstacle, SwayingObstacle
@@ -82,6 +83,17 @@ def register(sub) -> None:
     p.add_argument("--torque-limit", default=None,
                    help="per-joint torque limits (N m, one per joint), or 'none'; default: the "
                         "robot MJCF's motor ctrlrange times gear, else the URDF effort limits")
+    p.add_argument("--solver", choices=SOLVERS, default=PlannerConfig.solver,
+                   help="NLP solver (CasADi plugin); ipopt is the paper's")
+    p.add_argument("--starts", type=int, default=PlannerConfig.starts,
+                   help="start points of the cold plan (the best is kept)")
+    p.add_argument("--deadline-ms", type=float, default=0.0,
+                   help="CPU ms a re-plan may take; a later one is dropped and the last plan "
+                        "kept, as on a real-time controller (0, the default: no deadline; "
+                        "the obstacle's sample period is 10 ms)")
+    p.add_argument("--no-compile", action="store_true",
+                   help="evaluate the NLP in CasADi's virtual machine instead of compiled C "
+                        "(compiled once per problem with the system C compiler, cached)")
     p.add_argument("--rest-at-goal", action="store_true", help="also require zero end velocity")
     p.add_argument("--no-replan", action="store_true", help="follow the first plan throughout")
     p.add_argument("--out", required=True, help="output PLAN.json")
@@ -119,6 +131,8 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
             or args.energy_samples < 1:
         raise UserError("--threshold must be > 0, --penalty >= 0, --samples >= 2, "
                         "--energy-samples >= 1")
+    if args.starts < 1 or not (math.isfinite(args.deadline_ms) and args.deadline_ms >= 0):
+        raise UserError("--starts must be >= 1 and --deadline-ms a finite number >= 0")
     if not 4 <= args.degree <= 9:
         raise UserError(f"--degree must be in 4..9, got {args.degree}")
     if args.energy_quadrature == "simpson" and (args.energy_samples < 3
@@ -135,6 +149,9 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  torque_limit=None)
     dof = config.geometry.dof
     config = dataclasses.replace(config, torque_limit=_torque_limit(args, dof))
+    config = dataclasses.replace(config, solver=args.solver, starts=args.starts,
+                                 compile_code=not args.no_compile,
+                                 replan_deadline_ms=args.deadline_ms or None)
     path = (_vector(args.obstacle_from, "obstacle-from"),
             _vector(args.obstacle_to, "obstacle-to"), args.duration, args.samples)
     sway = _vector(args.obstacle_sway, "obstacle-sway")

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.report.figures import plt, save_figure
+from harness.sections.planning import realtime
 from planning.config import Scenario
 from planning.energy import power as mechanical_power
 from planning.kinematics import paper_arm
@@ -89,7 +90,9 @@ def markdown(results: dict, config) -> str:
         f"Quartic joint polynomials, energy sum |P| sigma/N (N = {config.energy_samples}) plus "
         f"alpha max(0, lambda - d)^2 (alpha = {config.penalty_weight}, lambda = "
         f"{config.threshold} m) to the link *segments* at every predicted obstacle sample, "
-        "IPOPT with exact CasADi derivatives; re-planning per Algorithm 2. alpha is raised "
+        f"{config.solver} with exact CasADi derivatives; re-planning per Algorithm 2 (the "
+        "paper's parametrization; the row 'default' is the default planner, which integrates "
+        "the true energy: see below). alpha is raised "
         "x10 while a solution dips more than 1 mm below lambda (exterior penalty method); "
         "largest alpha used: " + ", ".join(f"{k} {v['max_penalty_weight_used']:g}" for k, v in
                                            {**paper, "crossing": cross}.items())
@@ -144,6 +147,7 @@ def markdown(results: dict, config) -> str:
         "sees one observation (a standing obstacle), the first re-plan a moving one.",
         "", *_parametrization_lines(results["parametrizations"]),
         "", *_swaying_lines(results["swaying"], config.threshold),
+        "", *realtime.markdown_lines(results["realtime"]),
         "", "Acceptance: " + ", ".join(f"{k} {'yes' if v else 'NO'}"
                                        for k, v in results["acceptance"].items()) + ".",
     ]

@@ -7,8 +7,8 @@ import dataclasses
 from pathlib import Path
 
 from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import DEFAULT_ROBOT, load_pinocchio
-from harness.sections.planning import figures
+from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
+from harness.sections.planning import figures, realtime
 from harness.sections.planning.studies import (
     minimum_jerk_study,
     parametrization_study,
@@ -23,6 +23,7 @@ from planning.result import PlanResult, to_json
 from planning.scenarios import crossing_scenario, paper_scenario
 from planning.solver import Planner
 from planning.speed import measure
+from planning.variants import PAPER
 
 CLEARANCE_SLACK = 2e-3  # m: acceptance allows lambda - 2 mm where avoidance is needed
 
@@ -52,19 +53,24 @@ def run(out_dir: Path, quick: bool = False, identified_model=None) -> dict:
     """Plan, evaluate, time and draw; returns markdown, results, figures and plans."""
     out_dir = Path(out_dir)
     baseline = PinocchioModel(load_pinocchio(DEFAULT_ROBOT))
-    config, scenario = PlannerConfig(), paper_scenario()
+    # the paper reproduction plans with the paper's quadrature (eq. 18, N = 10); the
+    # default planner (true energy) runs beside it as "default"
+    config, scenario = PAPER.config(), paper_scenario()
     models = {"pinocchio": baseline}
     if identified_model is not None:
         models["identified"] = identified_model
-    free = plan_scenario(baseline, scenario, avoid=False)
+    free = plan_scenario(baseline, scenario, config, avoid=False)
     paper, summaries, plans = {}, {}, {}
     for name, model in models.items():
-        paper[name] = plan_scenario(model, scenario)
+        paper[name] = plan_scenario(model, scenario, config)
         summaries[name] = _summary(paper[name], free, baseline, config.threshold)
         plans[f"paper_{name}"] = to_json(paper[name], scenario, config, name)
+    paper["default"] = plan_scenario(baseline, scenario, PlannerConfig())
+    summaries["default"] = _summary(paper["default"], free, baseline, config.threshold)
+    plans["paper_default"] = to_json(paper["default"], scenario, PlannerConfig(), "pinocchio")
     crossing = crossing_scenario(free.execution.segments[0].trajectory, config.geometry)
-    crossing_free = plan_scenario(baseline, crossing, avoid=False)
-    crossing_avoid = plan_scenario(baseline, crossing)
+    crossing_free = plan_scenario(baseline, crossing, config, avoid=False)
+    crossing_avoid = plan_scenario(baseline, crossing, config)
     plans["crossing_obstacle"] = to_json(crossing_avoid, crossing, config, "pinocchio")
     crossing_summary = _summary(crossing_avoid, crossing_free, baseline, config.threshold)
     crossing_summary["energy_unobstructed_J"] = _summary(crossing_free, crossing_free, baseline,
@@ -82,11 +88,11 @@ def run(out_dir: Path, quick: bool = False, identified_model=None) -> dict:
                ["energy_pinocchio_J"]}
     samples["difference_pct"] = 100 * (samples["energy_N10_J"] - samples["energy_N40_J"]) \
         / samples["energy_N40_J"]
-    speed = speed_study(baseline, scenario, quick)
-    crossing_timings, _ = measure(Planner(baseline), crossing, cold_repeats=3)
+    speed = speed_study(baseline, scenario, quick, config)
+    crossing_timings, _ = measure(Planner(baseline, config), crossing, cold_repeats=3)
     speed["crossing"] = crossing_timings.summary()
     free_trajectory = free.execution.segments[0].trajectory
-    sway, sway_result, sway_scenario = swaying_study(baseline, free_trajectory, quick)
+    sway, sway_result, sway_scenario = swaying_study(baseline, free_trajectory, quick, config)
     plans["swaying_obstacle"] = to_json(sway_result, sway_scenario, config, "pinocchio")
     speed["scenarios"] = {**{f"paper ({k})": scenario_replans(v.execution.solve_ms)
                                 for k, v in paper.items()},
@@ -96,8 +102,10 @@ def run(out_dir: Path, quick: bool = False, identified_model=None) -> dict:
                "parametrizations": parametrization_study(baseline, scenario, quick),
                "swaying": sway,
                "energy_samples": samples, "speed": speed,
+               "realtime": realtime.run(baseline, load_mujoco(DEFAULT_ROBOT, scene=True), quick),
                "unobstructed_min_clearance_m": float(free.sample_clearance.min())}
-    results["acceptance"] = _acceptance(results, config.threshold)
+    results["acceptance"] = {**_acceptance(results, config.threshold),
+                             **realtime.acceptance(results["realtime"])}
     results["headline"] = _headline(results)
     figure_dir = out_dir / "figures"
     figs = [figures.path3d(free, paper, figure_dir / "planning_path3d.png"),

@@ -88,10 +88,11 @@ def parametrization_study(baseline, scenario, quick: bool) -> dict:
     return out
 
 
-def swaying_study(baseline, free_trajectory, quick: bool) -> tuple[dict, PlanResult, object]:
+def swaying_study(baseline, free_trajectory, quick: bool,
+                  config: PlannerConfig | None = None) -> tuple[dict, PlanResult, object]:
     """The crossing obstacle swaying sideways: the constant-velocity prediction from the last
     two samples is never exact, so Algorithm 2 re-plans wherever the forecast threatens."""
-    planner = Planner(baseline)
+    planner = Planner(baseline, config)
     scenario = swaying_scenario(free_trajectory, planner.config.geometry)
     result = evaluate(execute(planner, scenario), scenario, baseline, planner.config)
     replan_ms = np.asarray(result.execution.solve_ms[1:])
@@ -125,9 +126,9 @@ def scenario_replans(solve_ms) -> dict:
             "replan_max_ms": float(np.max(replans)) if len(replans) else None}
 
 
-def speed_study(baseline, scenario, quick: bool) -> dict:
-    """IPOPT cold and warm timings, and scipy trust-constr on the same cold problem."""
-    planner = Planner(baseline)
+def speed_study(baseline, scenario, quick: bool, config: PlannerConfig | None = None) -> dict:
+    """Cold and warm timings, and scipy trust-constr on the same cold problem."""
+    planner = Planner(baseline, config)
     # one obstacle sample apart, over the whole motion, also in quick mode (about 2 s)
     timings, _ = measure(planner, scenario, cold_repeats=3 if quick else 5)
     out = timings.summary()

@@ -1,0 +1,77 @@
+"""NLP functions compiled to machine code with the system C compiler, cached per problem.
+
+CasADi evaluates SX functions in a virtual machine; the same functions as C code,
+compiled once, evaluate ~8x faster (measured on the planning NLP's Lagrangian
+Hessian). A solver instance writes the functions it needs
+(`Function.generate_dependencies`), the C text is hashed (with the compiler and
+its flags), and the shared library is built once into a user cache directory
+($TORQUEBENCH_CACHE, else $XDG_CACHE_HOME/torquebench, else ~/.cache/torquebench);
+`nlpsol(name, plugin, library)` then loads it. Builds are atomic (a temporary name,
+then a rename), so concurrent processes never load a half-written library.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import casadi as ca
+
+COMPILER = os.environ.get("CC", "gcc")
+# -O1: measured on the planning NLP, a warm fatrop solve 2.0 ms against 5.0 ms at -O0;
+# -O2 compiles ~3x longer than -O1 for no measured gain at this size
+FLAGS = ("-O1", "-fPIC", "-shared")
+
+
+class CompilerMissing(RuntimeError):
+    """No C compiler on this machine: the caller falls back to CasADi's virtual machine."""
+
+
+def cache_dir() -> Path:
+    """Where compiled NLP libraries are kept (created on demand)."""
+    root = os.environ.get("TORQUEBENCH_CACHE")
+    if root is None:
+        base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+        root = Path(base) / "torquebench"
+    path = Path(root) / "nlp"
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def available() -> bool:
+    """True if the C compiler can be found."""
+    return shutil.which(COMPILER) is not None
+
+
+def library(solver: ca.Function) -> Path:
+    """The compiled shared library of `solver`'s NLP functions (built on first need)."""
+    if not available():
+        raise CompilerMissing(f"C compiler '{COMPILER}' not found")
+    folder = cache_dir()
+    with tempfile.TemporaryDirectory(dir=folder) as tmp:
+        source = Path(tmp) / "nlp.c"
+        cwd = os.getcwd()
+        os.chdir(tmp)  # generate_dependencies writes into the working directory
+        try:
+            solver.generate_dependencies(source.name)
+        finally:
+            os.chdir(cwd)
+        text = source.read_bytes()
+        key = hashlib.sha256(text + " ".join((COMPILER, *FLAGS, ca.__version__)).encode())
+        target = folder / f"{key.hexdigest()[:20]}.so"
+        if not target.exists():
+            built = Path(tmp) / "nlp.so"
+            subprocess.run([COMPILER, *FLAGS, str(source), "-o", str(built), "-lm"],
+                           check=True, capture_output=True)
+            os.replace(built, target)
+    return target
+
+
+def nlpsol(name: str, plugin: str, problem: dict, options: dict) -> ca.Function:
+    """ca.nlpsol on `problem` (x, p, f, g) with its functions compiled (cached)."""
+    generator = ca.nlpsol(f"{name}_source", plugin, problem, options)
+    return ca.nlpsol(name, plugin, str(library(generator)), options)

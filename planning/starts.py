@@ -1,0 +1,34 @@
+"""Multi-start cold plans: the energy landscape has local optima (a motion can swing a joint
+either way round a gravity-neutral pose, pass an obstacle above or below), so a cold plan
+solves from several start points and keeps the best.
+
+Start 0 is the planner's initial guess (a cubic to the goal); start i > 0 adds to it bumps
+that vanish at both ends, drawn from a fixed seed (the same problem always gets the same
+starts), with amplitudes of half each joint's range.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planning.solver import Planner, SegmentPlan
+
+SEED = 20240515
+
+
+def start_points(planner: Planner, q0, qd0, duration: float, goal, count: int,
+                 seed: int = SEED) -> list[np.ndarray]:
+    """`count` cold start points x0 of the planning NLP (the first: the initial guess)."""
+    config = planner.config
+    rng = np.random.default_rng(seed)
+    scale = 0.5 * (np.asarray(config.upper) - np.asarray(config.lower))
+    points = [planner.initial_guess(q0, qd0, duration, goal)]
+    for _ in range(count - 1):
+        bumps = rng.normal(size=(planner.model.dof, config.degree - 2)) * scale[:, None]
+        points.append(planner.initial_guess(q0, qd0, duration, goal, bumps))
+    return points
+
+
+def rank(plan: SegmentPlan) -> tuple[bool, float]:
+    """Sort key of candidate plans: converged first, then the lower objective (J)."""
+    return (not plan.success, plan.energy + plan.penalty)

@@ -1,0 +1,114 @@
+"""Compiled NLP functions, the solver plugins, multi-start, the re-plan deadline and the random
+scenarios (speed itself is measured by the bench, never asserted here)."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
+from planning import compiled
+from planning.clearance import link_clearances
+from planning.config import PlannerConfig, Scenario
+from planning.replanning import DEADLINE, execute, forecast_at, plan_segment
+from planning.scenarios import random_scenarios
+from planning.solver import Planner
+from planning.starts import start_points
+from planning.trajectory import PolynomialTrajectory
+
+
+@pytest.fixture(scope="module")
+def baseline():
+    return PinocchioModel(load_pinocchio("lynxmotion"))
+
+
+def _toy():
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p")
+    return {"x": x, "p": p, "f": (1 - x[0]) ** 2 + 100 * (x[1] - x[0] ** 2) ** 2,
+            "g": x[0] ** 2 + x[1] ** 2 - p}
+
+
+@pytest.mark.skipif(not compiled.available(), reason="no C compiler")
+def test_compiled_nlp_matches_the_virtual_machine_and_is_cached(tmp_path, monkeypatch):
+    monkeypatch.setenv("TORQUEBENCH_CACHE", str(tmp_path))
+    options = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes"}
+    args = {"x0": [-1.0, 1.0], "p": 0.5, "lbg": -np.inf, "ubg": 0.0}
+    reference = ca.nlpsol("vm", "ipopt", _toy(), options)(**args)
+    solver = compiled.nlpsol("toy", "ipopt", _toy(), options)
+    result = solver(**args)
+    assert np.allclose(result["x"], reference["x"], atol=1e-9)
+    libraries = list((tmp_path / "nlp").glob("*.so"))
+    assert len(libraries) == 1
+    stamp = libraries[0].stat().st_mtime_ns
+    compiled.nlpsol("toy_again", "ipopt", _toy(), options)  # same problem: no rebuild
+    assert [p.stat().st_mtime_ns for p in (tmp_path / "nlp").glob("*.so")] == [stamp]
+
+
+def test_fatrop_and_ipopt_find_the_same_optimum(baseline):
+    scenario = Scenario()
+    args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
+    plans = {name: Planner(baseline, PlannerConfig(solver=name)).solve(*args)
+             for name in ("fatrop", "ipopt")}
+    assert all(plan.success for plan in plans.values())
+    fatrop, ipopt = plans["fatrop"], plans["ipopt"]
+    assert abs(fatrop.energy - ipopt.energy) <= 1e-6 * ipopt.energy
+    t = np.linspace(0.0, scenario.duration, 101)  # the optimum is flat: paths agree closely
+    assert np.abs(fatrop.trajectory.position(t) - ipopt.trajectory.position(t)).max() < 1e-3
+
+
+def test_start_points_keep_the_boundary_conditions(baseline):
+    planner = Planner(baseline)
+    q0, qd0, goal, duration = np.array([0.3, 1.0, -1.2]), np.array([0.1, -0.2, 0.3]), \
+        np.array([-0.5, 1.5, -0.8]), 1.7
+    points = start_points(planner, q0, qd0, duration, goal, 5)
+    assert np.array_equal(points[0], planner.initial_guess(q0, qd0, duration, goal))
+    width = planner.config.degree - 1
+    for x in points:
+        free = x[: width * 3].reshape(3, width)
+        motion = PolynomialTrajectory.from_free(0.0, duration, q0, qd0, free)
+        q, qd, _ = motion.state(np.array([0.0, duration]))
+        assert np.allclose(q[0], q0) and np.allclose(qd[0], qd0) and np.allclose(q[1], goal)
+    assert len({x.tobytes() for x in points}) == 5
+
+
+def test_a_replan_past_its_deadline_is_dropped_and_counted(baseline):
+    planner = Planner(baseline, PlannerConfig(replan_deadline_ms=1e-6))
+    scenario = Scenario()
+    first, _, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0,
+                               scenario.duration, scenario.goal,
+                               forecast_at(scenario.obstacle, 0.0))
+    t = 0.5
+    q, qd, _ = first.trajectory.state(t)
+    late, _, cpu = plan_segment(planner, q[0], qd[0], t, scenario.duration - t, scenario.goal,
+                                forecast_at(scenario.obstacle, t), warm=first, deadline_ms=1e-6)
+    assert not late.success and late.status == DEADLINE and cpu > 1e-6
+    run = execute(planner, scenario)
+    assert len(run.segments) == 1 and run.replan_failures  # every re-plan came too late
+    assert all(status == DEADLINE for status in run.replan_failures)
+    assert len(run.solve_cpu_ms) == len(run.solve_ms) == 1 + len(run.replan_failures)
+
+
+def test_random_scenarios_are_seeded_and_put_the_obstacle_in_the_way(baseline):
+    config = PlannerConfig()
+    planner = Planner(baseline, config)
+    paths = {}
+
+    def free_motion(start, goal, duration):
+        paths[(start, goal)] = planner.solve(start, (0.0, 0.0, 0.0), duration, goal).trajectory
+        return paths[(start, goal)]
+
+    cases = random_scenarios(3, 11, free_motion, config.geometry, config.lower, config.upper)
+    again = random_scenarios(3, 11, free_motion, config.geometry, config.lower, config.upper)
+    assert cases == again
+    for case in cases:
+        free = paths[(case.start, case.goal)]
+        t = case.obstacle.sample_times
+        clearance = link_clearances(config.geometry, free.position(t), case.obstacle.position(t))
+        assert clearance.min() < config.threshold  # the unobstructed optimum must avoid
+        ends = link_clearances(config.geometry, np.array([case.start, case.goal]),
+                               case.obstacle.position(np.array([0.0, case.duration])))
+        assert ends.min() > config.threshold
+        assert np.all(np.asarray(case.start) >= config.lower) and \
+            np.all(np.asarray(case.goal) <= config.upper)
