@@ -18,8 +18,7 @@ Target (issue #14): Ray's cells per minute >= 0.8 x (CPUs x the serial rate), he
 
     python -m benchmarks.sweep_throughput [--seeds 3] [--samples 1000] [--out FILE.json]
 
-(as a module from the repository root: run as a script, benchmarks/identification.py would
-shadow the identification package).
+(from the repository root).
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Identification benchmark: paper per-joint vs coupled (symmetric, general) vs the oracle,
 over independent noise draws, noise levels and data sizes.
 
-    python benchmarks/identification.py [--draws 20] [--levels 0.01 0.05 0.1]
+    python -m benchmarks.identification_draws [--draws 20] [--levels 0.01 0.05 0.1]
                                         [--samples 4000 8000] [--out FILE.json]
 
 The bench section runs 20 draws at 5 %; this script repeats that robustness summary at
