@@ -79,10 +79,20 @@ class AtomBasis:
                 for e in self.factors]
 
 
+OFFSET_RTOL = 1e-3  # an atom whose spread about its per-joint means is below this share of its
+# size acts as an offset on this data (a Coulomb atom of a joint that never reverses: 3e-7)
+
+
 def base_atoms(design: np.ndarray, rtol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
     """Independent atom columns of the stacked (n*dof, p) design by pivoted QR, and the
-    folded ones (linearly dependent on the base columns on this data)."""
+    folded ones (linearly dependent on the base columns on this data). An atom constant on
+    every joint over the data (a Coulomb atom whose joint never reverses) is the per-joint
+    offset the fit always has: folded, never fitted beside it (the two would cancel with huge
+    coefficients that blow up on any motion that does reverse)."""
     base = base_columns(design, rtol)
+    spread = np.linalg.norm((design - design.mean(axis=0)).reshape(-1, design.shape[-1]), axis=0)
+    size = np.linalg.norm(design.reshape(-1, design.shape[-1]), axis=0)
+    base = base[spread[base] > OFFSET_RTOL * size[base]]
     return base, np.setdiff1d(np.arange(design.shape[-1]), base)
 
 
