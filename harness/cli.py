@@ -22,7 +22,8 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 from harness.errors import UserError  # noqa: E402 - after the environment set-up above
 
-COMMANDS = ["generate", "identify", "predict", "plan", "replay", "closeloop", "bench"]
+COMMANDS = ["generate", "ingest", "identify", "predict", "plan", "replay", "closeloop", "bench",
+            "sweep"]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -51,7 +52,7 @@ def _user_errors() -> tuple[type[BaseException], ...]:
     return UserError, FileNotFoundError, IdentificationError, PlanningError
 
 
-DIR_OUTPUTS = ("bench", "closeloop")  # commands whose --out is a folder
+DIR_OUTPUTS = ("bench", "closeloop", "sweep")  # commands whose --out is a folder
 
 
 def _check_output(args) -> None:
@@ -69,8 +70,12 @@ def main(argv: list[str] | None = None) -> int:
         _check_output(args)
         return int(args.func(args) or 0)
     except _user_errors() as exc:
-        print(f"torquebench {args.command}: error: {exc}", file=sys.stderr)
+        message = " ".join(str(exc).split())  # one line, whatever the library wrote
+        print(f"torquebench {args.command}: error: {message}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # result files are written atomically: none is left half-written
+        print(f"torquebench {args.command}: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

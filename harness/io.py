@@ -60,6 +60,32 @@ def _jsonable(x):
     raise TypeError(f"not JSON serializable: {type(x).__name__}")
 
 
+def read_json(path: str | Path, what: str) -> dict:
+    """The JSON object in the file path (`what` names it in errors: "model", "plan");
+    UserError on a missing, unreadable, empty or malformed file and on anything but an object
+    at the top level. NaN/Infinity parse: the caller's validation names the field holding one."""
+    path = Path(path)
+    if not path.is_file():
+        raise UserError(f"{what} file not found: {path}")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise UserError(f"{what} file {path} is not UTF-8 text") from None
+    except OSError as exc:
+        raise UserError(f"cannot read {what} file {path}: {exc.strerror}") from None
+    if not text.strip():
+        raise UserError(f"{what} file {path} is empty")
+    try:
+        payload = json.loads(text)
+    except ValueError as exc:  # JSONDecodeError, or an integer too long to convert
+        raise UserError(f"{what} file {path} is not valid JSON: {exc}") from None
+    except RecursionError:
+        raise UserError(f"{what} file {path} is nested too deeply") from None
+    if not isinstance(payload, dict):
+        raise UserError(f"{what} file {path} must hold a JSON object, not {type(payload).__name__}")
+    return payload
+
+
 def write_json(path: str | Path, payload: dict) -> None:
     """Write payload as indented JSON atomically (numpy arrays become lists)."""
 
@@ -69,6 +95,11 @@ def write_json(path: str | Path, payload: dict) -> None:
             f.write("\n")
 
     atomic_write(path, write)
+
+
+def write_text(path: str | Path, text: str) -> None:
+    """Write text to path atomically."""
+    atomic_write(path, lambda tmp: Path(tmp).write_text(text))
 
 
 def write_npz(path: str | Path, **arrays) -> None:

@@ -76,23 +76,67 @@ class IdentifiedModel:
                             "offset": jm.offset} for jm in self.joints]}
 
 
+MAX_DOF = 64
+MAX_COEFFICIENT = 1e9  # |c| in the units of its term; beyond it a file is corrupt, not a robot
+
+
+def finite_number(x, where: str) -> float:
+    """x as a float if it is a JSON number (not a bool or a string), finite and within
+    MAX_COEFFICIENT; IdentificationError naming `where` otherwise."""
+    if isinstance(x, bool) or not isinstance(x, int | float):
+        raise IdentificationError(f"malformed model: {where} must be a number, got {x!r:.40}")
+    value = float(x)
+    if not np.isfinite(value) or abs(value) > MAX_COEFFICIENT:
+        raise IdentificationError(f"malformed model: {where} = {value:.3g} is not a finite number "
+                                  f"within +/-{MAX_COEFFICIENT:g}")
+    return value
+
+
+def joint_entries(payload: dict, dof: int | None = None) -> list[dict]:
+    """payload['joints'] checked: a list of dof objects, each with lists 'terms' (strings) and
+    'coefficients' (numbers, see finite_number) of one length and an optional numeric 'offset'."""
+    if not isinstance(payload, dict):
+        raise IdentificationError("malformed model: not a JSON object")
+    if dof is None:
+        raw = payload.get("dof")
+        if isinstance(raw, bool) or not isinstance(raw, int) or not 1 <= raw <= MAX_DOF:
+            raise IdentificationError(f"malformed model: 'dof' must be an integer in 1..{MAX_DOF}, "
+                                      f"got {raw!r:.40}")
+        dof = raw
+    joints = payload.get("joints")
+    if not isinstance(joints, list) or len(joints) != dof:
+        got = f"{len(joints)} entries" if isinstance(joints, list) else repr(joints)[:40]
+        raise IdentificationError(f"malformed model: 'joints' must list {dof} joints, got {got}")
+    for j, joint in enumerate(joints, start=1):
+        if not isinstance(joint, dict) or not isinstance(joint.get("terms"), list) \
+                or not isinstance(joint.get("coefficients"), list):
+            raise IdentificationError(f"malformed model: joint {j} needs lists 'terms' and "
+                                      "'coefficients'")
+        if len(joint["terms"]) != len(joint["coefficients"]):
+            raise IdentificationError(f"malformed model: joint {j} has {len(joint['terms'])} terms "
+                                      f"and {len(joint['coefficients'])} coefficients")
+        if not all(isinstance(t, str) for t in joint["terms"]):
+            raise IdentificationError(f"malformed model: joint {j}'s terms must be strings")
+        for k, c in enumerate(joint["coefficients"]):
+            finite_number(c, f"joint {j} coefficient {k + 1}")
+        finite_number(joint.get("offset", 0.0), f"joint {j} offset")
+    return joints
+
+
 def model_from_dict(payload: dict) -> IdentifiedModel:
-    """Inverse of IdentifiedModel.to_dict (extra keys such as metrics are ignored)."""
-    try:
-        dof = int(payload["dof"])
-        joints = tuple(JointModel(tuple(j["terms"]), tuple(float(c) for c in j["coefficients"]),
-                                  float(j.get("offset", 0.0))) for j in payload["joints"])
-    except (KeyError, TypeError, ValueError) as exc:
-        raise IdentificationError(f"malformed model: {exc!r}") from None
-    if len(joints) != dof or any(len(j.terms) != len(j.coefficients) for j in joints):
-        raise IdentificationError("malformed model: joints/terms/coefficients lengths disagree")
-    model = IdentifiedModel(dof, joints, str(payload.get("library", "")),
-                            str(payload.get("method", "")))
-    try:
-        for j in range(dof):
+    """Inverse of IdentifiedModel.to_dict (extra keys such as metrics are ignored);
+    IdentificationError naming what is malformed."""
+    joints = joint_entries(payload)
+    dof = len(joints)
+    model = IdentifiedModel(dof, tuple(JointModel(tuple(j["terms"]), tuple(float(c) for c in
+                                                  j["coefficients"]), float(j.get("offset", 0.0)))
+                                       for j in joints),
+                            str(payload.get("library", "")), str(payload.get("method", "")))
+    for j in range(dof):
+        try:
             model._features(j)
-    except ValueError as exc:
-        raise IdentificationError(f"malformed model: {exc}") from None
+        except ValueError as exc:
+            raise IdentificationError(f"malformed model: joint {j + 1}: {exc}") from None
     return model
 
 
@@ -100,6 +144,6 @@ def load_model(path: str | Path) -> IdentifiedModel:
     """Read a MODEL.json written by `torquebench identify`."""
     try:
         payload = json.loads(Path(path).read_text())
-    except (OSError, json.JSONDecodeError) as exc:
+    except (OSError, ValueError) as exc:
         raise IdentificationError(f"cannot read model {path}: {exc}") from None
     return model_from_dict(payload)

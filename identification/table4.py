@@ -21,7 +21,6 @@ pendulum" row, fitted by the coupled (one-Lagrangian) regression.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -122,9 +121,7 @@ def fit_system(system: System, noise: float = 0.05, seed: int = 8) -> SystemFit:
     rng = np.random.default_rng(seed)
     noisy = tau + noise * tau.std(0) * (rng.normal(size=tau.shape) + 0.2)
     library = system.library()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        r = identify(m.q, m.qd, m.qdd, noisy, library, 0.25, tau, method=system.method)
+    r = identify(m.q, m.qd, m.qdd, noisy, library, 0.25, tau, method=system.method)
     stderr = _stderr(r, library)
     coefs, extras = [], []
     for j, eq in enumerate(system.true):

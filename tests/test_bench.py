@@ -44,8 +44,11 @@ def sections(monkeypatch):
     def closeloop(out_dir, quick=False):
         raise RuntimeError("residual analysis diverged\nsecond line")
 
+    def real_data(out_dir, quick=False):  # the real log's section has its own tests
+        return {"markdown": "real", "results": {"acceptance": {"stand_in": True}}, "figures": []}
+
     for name, run in (("identification", identification), ("planning", planning),
-                      ("closeloop", closeloop)):
+                      ("closeloop", closeloop), ("real_data", real_data)):
         monkeypatch.setitem(sys.modules, SECTION + name, _module(name, run))
     return calls
 
@@ -93,7 +96,7 @@ def test_missing_section_is_reported_not_failed(tmp_path, monkeypatch, capsys):
     out = tmp_path / "bench"
     assert main(["bench", "--out", str(out), "--no-video"]) == 0
     md = (out / "report.md").read_text()
-    assert md.count("Section not available yet") == 4  # with arm_identification
+    assert md.count("Section not available yet") == 5  # with arm_identification, real_data
     assert "No plans to replay" in md
     assert json.loads((out / "report.json").read_text())["ok"] is True
 

@@ -162,7 +162,7 @@ def test_model_json_records_its_robot_and_refuses_another(tmp_path, capsys):
 BAD_ROBOTS = [
     ("floating.urdf", ARM.format(t1="floating", t2="revolute"), "moving base"),
     ("prismatic.urdf", ARM.format(t1="prismatic", t2="revolute"), "prismatic arm joint"),
-    ("binary.urdf", "\udcff", "not a text file"),
+    ("binary.urdf", "\udcff", "not UTF-8 text"),
     ("closed.xml", """<mujoco><worldbody>
       <body name="a"><joint name="j1" axis="0 0 1"/><geom size="0.05" mass="1"/>
         <body name="b" pos="0.3 0 0"><joint name="j2" axis="0 1 0"/><geom size="0.05" mass="1"/>

@@ -4,8 +4,8 @@ The arm's MuJoCo model (registry.load_mujoco: the URDF's arm joints, no meshes) 
 edited as a MuJoCo spec (mujoco.MjSpec): joint damping, frictionloss, armature and
 stiffness added on chosen joints, a spring on a fixed tendon q2 + q3 (an effect outside
 the close-the-loop dictionary, as the Lynxmotion's coupled plant), and a point payload
-fixed at the flange (the first
-of FLANGES the model has, else the last joint's body), then written as MJCF. The
+fixed at the flange (the first of registry.FLANGES the model has, else the last joint's
+body), then written as MJCF. The
 payload point is the one harness.closeloop.payload puts its unit mass at
 (the Pinocchio frame of the same link), so the dictionary's payload column is exact.
 """
@@ -16,21 +16,14 @@ import re
 from pathlib import Path
 
 import mujoco
-import pinocchio as pin
 
 from harness.closeloop.plants import Variant
 from harness.errors import UserError
-from harness.robots.registry import get_robot, load_pinocchio
+from harness.io import write_text
+from harness.robots.registry import flange_frame, get_robot, load_pinocchio
 from harness.robots.urdf import arm_urdf, strip_geometry
 
-FLANGES = ("tool0", "panda_link8", "ee_link", "end_effector")
 VECTOR_ATTRIBUTES = ("damping", "stiffness")  # polynomial coefficients in MuJoCo >= 3.3
-
-
-def flange_frame(model: pin.Model) -> str | None:
-    """The flange frame of the arm's Pinocchio model, or None (last joint's origin)."""
-    names = {f.name for f in model.frames}
-    return next((f for f in FLANGES if f in names), None)
 
 
 def arm_spec(robot: str) -> mujoco.MjSpec:
@@ -84,5 +77,5 @@ def write_arm_variant(robot: str, variant: Variant, directory: Path) -> Path:
     """Write the variant MJCF to directory/<robot>_<name>.xml; returns its path."""
     directory.mkdir(parents=True, exist_ok=True)
     path = directory / f"{robot}_{variant.name}.xml"
-    path.write_text(arm_variant_xml(robot, variant))
+    write_text(path, arm_variant_xml(robot, variant))
     return path

@@ -16,6 +16,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from harness.io import write_text
 from identification.closeloop.effects import EffectTerm
 from models import MODELS
 
@@ -61,7 +62,7 @@ def write_variant(variant: Variant, directory: Path) -> Path:
     """Write the variant MJCF to directory/lynxmotion_<name>.xml; returns its path."""
     directory.mkdir(parents=True, exist_ok=True)
     path = directory / f"lynxmotion_{variant.name}.xml"
-    path.write_text(variant_text(variant))
+    write_text(path, variant_text(variant))
     return path
 
 

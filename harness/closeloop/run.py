@@ -38,14 +38,21 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from harness.closeloop.arm_plants import arm_variant_xml, flange_frame
+from harness.closeloop.arm_plants import arm_variant_xml
 from harness.closeloop.payload import PayloadTorque
 from harness.closeloop.plants import DECLARED_MJCF, Variant, true_effects
 from harness.data.dataset import Dataset
 from harness.data.generate import generate
 from harness.errors import UserError
 from harness.robots.plant import Plant, load_plant
-from harness.robots.registry import DEFAULT_ROBOT, ROBOTS, load_chain, load_mujoco, load_pinocchio
+from harness.robots.registry import (
+    DEFAULT_ROBOT,
+    ROBOTS,
+    flange_frame,
+    load_chain,
+    load_mujoco,
+    load_pinocchio,
+)
 from harness.robots.torque_models import load_torque_model
 from identification.closeloop.effects import Effect, EffectTerm
 from identification.closeloop.identified import close_loop_identified

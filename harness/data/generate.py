@@ -31,19 +31,16 @@ def _condition_fn(plant: Plant, rate: float, samples: int):
     base regressor (Pinocchio) and of the paper's feature library (3-DOF)."""
     pmodel = plant.pinocchio()
     t = np.linspace(0.0, samples / rate, min(samples, 400), endpoint=False)
-    baseline = PinocchioModel(pmodel) if pmodel is not None and pmodel.nv == plant.dof else None
+    baseline = PinocchioModel(pmodel)
     base: list[np.ndarray] = []  # base-parameter columns: structural, found on the first candidate
 
     def condition(exc: FourierExcitation) -> float:
         states = exc.evaluate(t)
         conds = [library_report(*states)["library_condition"]] if plant.dof == 3 else []
-        if baseline is not None:
-            Y = baseline.regressor(*states).reshape(-1, 10 * (pmodel.njoints - 1))
-            if not base:
-                base.append(base_columns(Y))
-            conds.append(normalized_condition(Y[:, base[0]]))
-        else:
-            conds.append(normalized_condition(np.hstack(states)))
+        Y = baseline.regressor(*states).reshape(-1, 10 * (pmodel.njoints - 1))
+        if not base:
+            base.append(base_columns(Y))
+        conds.append(normalized_condition(Y[:, base[0]]))
         return max(conds)
 
     return condition

@@ -120,8 +120,6 @@ def state_errors(p: Plant, est: tuple, true: tuple) -> dict:
     """Relative RMS errors of estimated qd, qdd and of the torque they imply."""
     out = {"qd_rel_rmse": rel_error(est[1], true[1]).tolist(),
            "qdd_rel_rmse": rel_error(est[2], true[2]).tolist()}
-    pmodel = p.pinocchio()
-    if pmodel is not None and pmodel.nv == p.dof:
-        baseline = PinocchioModel(pmodel)
-        out["tau_from_states_rel_rmse"] = rel_error(baseline.torque(*est), baseline.torque(*true)).tolist()
+    baseline = PinocchioModel(p.pinocchio())
+    out["tau_from_states_rel_rmse"] = rel_error(baseline.torque(*est), baseline.torque(*true)).tolist()
     return out

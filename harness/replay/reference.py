@@ -16,6 +16,10 @@ from harness.errors import UserError
 
 REQUIRED = ("t", "q", "qd", "qdd", "obstacle", "threshold")
 LIMIT_TOLERANCE = 1e-3  # rad: a plan ending on a limit may overshoot it between its samples
+MAX_DURATION = 600.0  # s of simulated motion; a longer plan is a corrupt file, not a motion
+MAX_SAMPLES = 1_000_000
+# Magnitudes no arm's plan reaches (a file beyond them is corrupt or in other units)
+MAGNITUDE = {"t": 1e6, "q": 1e3, "qd": 1e4, "qdd": 1e6, "obstacle": 1e3, "threshold": 1e3}
 
 
 @dataclass(frozen=True)
@@ -74,12 +78,18 @@ def _quintic(s, start, end):
 
 
 def _array(plan: dict, key: str, shape_tail: tuple[int, ...] | None = None) -> np.ndarray:
+    value = plan[key]
+    if isinstance(value, list) and len(value) > MAX_SAMPLES:
+        raise UserError(f"plan field '{key}' has {len(value)} samples, more than {MAX_SAMPLES}")
     try:
-        x = np.asarray(plan[key], dtype=float)
-    except (TypeError, ValueError):
-        raise UserError(f"plan field '{key}' is not numeric") from None
+        x = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):  # strings, nulls, ragged lists
+        raise UserError(f"plan field '{key}' is not a numeric array of one shape") from None
     if not np.all(np.isfinite(x)):
         raise UserError(f"plan field '{key}' contains NaN or inf")
+    if x.size and np.abs(x).max() > MAGNITUDE[key]:
+        raise UserError(f"plan field '{key}' reaches {np.abs(x).max():.3g}, beyond any plan's "
+                        f"{MAGNITUDE[key]:g} (SI units)")
     if shape_tail is not None and (x.ndim != 1 + len(shape_tail) or x.shape[1:] != shape_tail):
         raise UserError(f"plan field '{key}' has shape {x.shape}, expected (K, {shape_tail[0]})")
     return x
@@ -97,17 +107,23 @@ def plan_reference(plan: dict) -> PlanReference:
         raise UserError(f"plan field 't' must hold at least 2 distinct times, got {t.shape}")
     if np.any(np.diff(t) < 0):
         raise UserError("plan field 't' must be increasing")
+    if t[-1] - t[0] > MAX_DURATION:
+        raise UserError(f"plan lasts {t[-1] - t[0]:.3g} s, more than {MAX_DURATION:g} s")
     q = _array(plan, "q")
-    if q.ndim != 2 or len(q) != len(t):
+    if q.ndim != 2 or len(q) != len(t) or q.shape[1] == 0:
         raise UserError(f"plan field 'q' has shape {q.shape}, expected ({len(t)}, dof)")
     arrays = {key: _array(plan, key, (q.shape[1],)) for key in ("qd", "qdd")}
     arrays["obstacle"] = _array(plan, "obstacle", (3,))
     for key, x in arrays.items():
         if len(x) != len(t):
             raise UserError(f"plan field '{key}' has {len(x)} samples, 't' has {len(t)}")
-    threshold = float(_array(plan, "threshold"))
+    threshold = _array(plan, "threshold")
+    if threshold.ndim != 0 or not threshold > 0:
+        raise UserError(f"plan field 'threshold' must be one distance > 0 m, got {plan['threshold']!r:.40}")
+    threshold = float(threshold)
     optional = {k: float(plan[k]) for k in ("energy", "min_clearance")
-                if isinstance(plan.get(k), int | float)}
+                if isinstance(plan.get(k), int | float) and not isinstance(plan.get(k), bool)
+                and np.isfinite(plan[k])}
     keep = _distinct_times(t, q, arrays["qd"])
     arrays = {key: x[keep] for key, x in arrays.items()}
     return PlanReference(t=t[keep], q=q[keep], threshold=threshold, **arrays, **optional)

@@ -13,6 +13,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from harness.io import atomic_write  # noqa: E402
+
 __all__ = ["plt", "save_figure"]
 
 
@@ -22,9 +24,12 @@ def save_figure(fig, path: Path, dpi: int = 120, tight: str = "layout") -> Path:
     tight: "layout" (fig.tight_layout before saving), "bbox" (crop to the drawn content,
     bbox_inches="tight") or "none"."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     if tight == "layout":
         fig.tight_layout()
-    fig.savefig(path, dpi=dpi, bbox_inches="tight" if tight == "bbox" else None)
-    plt.close(fig)
+    try:  # complete or absent, like every result file
+        atomic_write(path, lambda tmp: fig.savefig(tmp, format="png", dpi=dpi,
+                                                  bbox_inches="tight" if tight == "bbox" else None),
+                     suffix=".png")
+    finally:
+        plt.close(fig)
     return path

@@ -14,6 +14,7 @@ import re
 import sys
 from pathlib import Path
 
+from harness.io import write_text
 from harness.report.headline import headline_markdown
 
 READING = """\
@@ -159,7 +160,7 @@ def update_readme(bench_dir: Path, readme: Path) -> None:
     text = readme.read_text() if readme.exists() else ""
     text = replace_section(text, "Latest benchmark", latest_benchmark(report, bench_dir.name))
     text = replace_section(text, "Reading the report", READING)
-    readme.write_text(text)
+    write_text(readme, text)
 
 
 def main(argv: list[str]) -> int:

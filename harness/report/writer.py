@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.io import atomic_write, write_json
+from harness.io import write_json, write_text
 from harness.report.headline import headline_markdown
 
 TITLES = {
@@ -17,6 +17,7 @@ TITLES = {
     "planning": "Planning (paper Figs. 9–11)",
     "replay": "Replay in MuJoCo",
     "closeloop": "Closing the loop on measured data",
+    "real_data": "Real measured data: a Franka Emika Panda (Gaz et al. 2019)",
 }
 
 
@@ -114,20 +115,13 @@ def report_markdown(outcomes: list[SectionOutcome], numbers: dict, meta: dict,
     return "\n".join(lines).rstrip() + "\n"
 
 
-def _write_text(path: Path, text: str) -> None:
-    def write(tmp: str) -> None:
-        Path(tmp).write_text(text)
-
-    atomic_write(path, write)
-
-
 def write_report(out_dir: Path, outcomes: list[SectionOutcome], numbers: dict,
                  meta: dict) -> dict:
     """Write report.json, report.md and headline.md into out_dir; returns the JSON payload."""
     out_dir = Path(out_dir)
     payload = report_json(outcomes, numbers, meta)
     json.dumps(payload, allow_nan=False)  # fail before writing anything
-    _write_text(out_dir / "headline.md", headline_markdown(payload["headline"]) + "\n")
-    _write_text(out_dir / "report.md", report_markdown(outcomes, numbers, meta, out_dir))
+    write_text(out_dir / "headline.md", headline_markdown(payload["headline"]) + "\n")
+    write_text(out_dir / "report.md", report_markdown(outcomes, numbers, meta, out_dir))
     write_json(out_dir / "report.json", payload)
     return payload

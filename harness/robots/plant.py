@@ -10,7 +10,7 @@ import numpy as np
 import pinocchio as pin
 
 from harness.errors import UserError
-from harness.robots.registry import ROBOTS, check_open_chain, load_mujoco, load_pinocchio
+from harness.robots.registry import check_open_chain, load_mujoco, load_pinocchio
 
 
 @dataclass(frozen=True)
@@ -32,14 +32,14 @@ class Plant:
         hi = np.where(limited, self.model.jnt_range[ids, 1], np.pi)
         return lo, hi
 
-    def pinocchio(self) -> pin.Model | None:
-        """The plant's rigid-body model in Pinocchio (registry URDF or parsed MJCF)."""
-        if self.name in ROBOTS or self.name.lower().endswith(".urdf"):
-            return load_pinocchio(self.name)
-        try:
-            return pin.buildModelFromMJCF(self.name)
-        except Exception:  # noqa: BLE001 - pin raises bare exceptions on MJCF it cannot map
-            return None
+    def pinocchio(self) -> pin.Model:
+        """The plant's rigid-body model in Pinocchio (registry URDF or parsed MJCF); UserError
+        if Pinocchio cannot read it: the excitation design, the estimated-state report and every
+        model of the plant need it, so there is no silent states-only fallback."""
+        model = load_pinocchio(self.name)
+        if model.nv != self.dof:
+            raise UserError(f"plant {self.name}: Pinocchio reads {model.nv} joints, MuJoCo {self.dof}")
+        return model
 
 
 def load_plant(name_or_path: str | Path) -> Plant:

@@ -8,6 +8,10 @@ resolve `package://` paths (inertias come from the URDF <inertial> elements).
 
 from __future__ import annotations
 
+import os
+import sys
+import tempfile
+from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import cache
 from importlib import metadata
@@ -31,6 +35,9 @@ class Robot:
     mjcf: Path | None = None  # robot-only MJCF; None: MuJoCo compiles the URDF
     scene: Path | None = None  # MJCF with floor, light, obstacle
     source: str = ""
+    # the bench's planning motion: start and goal (rad, one per joint) and the body whose
+    # link the obstacle crosses; None: derived from the joint limits
+    motion: tuple[tuple[float, ...], tuple[float, ...], str] | None = None
 
 
 @cache
@@ -43,8 +50,9 @@ def erd_robots_dir() -> Path:
     return path
 
 
-def _erd(name: str, relpath: str) -> Robot:
-    return Robot(name=name, urdf=erd_robots_dir() / relpath, source="example-robot-data")
+def _erd(name: str, relpath: str, motion=None) -> Robot:
+    return Robot(name=name, urdf=erd_robots_dir() / relpath, source="example-robot-data",
+                 motion=motion)
 
 
 ROBOTS = {
@@ -58,11 +66,22 @@ ROBOTS = {
     "double_pendulum": lambda: _erd(
         "double_pendulum", "double_pendulum_description/urdf/double_pendulum.urdf"
     ),
-    "ur5": lambda: _erd("ur5", "ur_description/urdf/ur5_robot.urdf"),
-    "panda": lambda: _erd("panda", "panda_description/urdf/panda.urdf"),  # fingers held fixed
+    "ur5": lambda: _erd("ur5", "ur_description/urdf/ur5_robot.urdf",
+                        ((1.2, -1.0, 1.2, -1.5, -1.5, 0.0), (-1.2, -1.4, 1.6, -1.0, -1.5, 0.5),
+                         "forearm_link")),
+    "panda": lambda: _erd("panda", "panda_description/urdf/panda.urdf",  # fingers held fixed
+                          ((1.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8),
+                           (-1.0, 0.2, 0.0, -1.8, 0.0, 2.2, 0.8), "panda_link4")),
 }
 
 DEFAULT_ROBOT = "lynxmotion"
+FLANGES = ("tool0", "panda_link8", "ee_link", "end_effector")  # first one a model has
+
+
+def flange_frame(model: pin.Model) -> str | None:
+    """The flange frame of the arm's Pinocchio model, or None (last joint's origin)."""
+    names = {f.name for f in model.frames}
+    return next((f for f in FLANGES if f in names), None)
 
 
 def get_robot(name: str) -> Robot:
@@ -72,13 +91,49 @@ def get_robot(name: str) -> Robot:
     return ROBOTS[name]()
 
 
-def _arm_urdf_file(path: Path) -> str:
-    """arm_urdf of a URDF file; UserError if it is not text."""
+# What Pinocchio's bindings raise on a description they cannot map (boost.python's
+# translation of std::invalid_argument, runtime_error, out_of_range, overflow_error).
+PINOCCHIO_ERRORS = (ValueError, RuntimeError, IndexError, OverflowError)
+
+
+@contextmanager
+def native_output(lines: list[str]):
+    """Collect what C/C++ parsers print on file descriptors 1 and 2 (urdfdom's parse errors,
+    TinyXML's warnings) into lines instead of the user's terminal; the caller decides."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = [os.dup(1), os.dup(2)]
+    with tempfile.TemporaryFile() as tmp:
+        os.dup2(tmp.fileno(), 1)
+        os.dup2(tmp.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            for fd in saved:
+                os.close(fd)
+            tmp.seek(0)
+            lines += [x.strip() for x in tmp.read().decode(errors="replace").splitlines()
+                      if x.strip()]
+
+
+def _parse(build, path: Path, problem: str):
+    """build() under native_output: its printout is re-issued as one warning line on success
+    and becomes the detail of the UserError on failure."""
+    printed: list[str] = []
     try:
-        text = path.read_text()
-    except UnicodeDecodeError:
-        raise UserError(f"invalid URDF {path}: not a text file") from None
-    return arm_urdf(text, str(path))
+        with native_output(printed):
+            model = build()
+    except (mujoco.FatalError, *PINOCCHIO_ERRORS) as exc:
+        detail = " ".join(str(exc).split()) or "; ".join(printed[:2]) or "parse error"
+        raise UserError(f"{problem}: {detail}") from None
+    errors = [line for line in printed if line.lower().startswith("error")]
+    if errors:  # urdfdom reports an element it could not parse, and goes on without it
+        raise UserError(f"{problem}: {'; '.join(' '.join(e.split()) for e in errors[:2])}")
+    if printed:
+        print(f"torquebench: warning: {path}: {'; '.join(printed[:3])}", file=sys.stderr)
+    return model
 
 
 def load_mujoco(name_or_path: str | Path, scene: bool = False) -> mujoco.MjModel:
@@ -89,16 +144,10 @@ def load_mujoco(name_or_path: str | Path, scene: bool = False) -> mujoco.MjModel
             get_robot(str(name_or_path))  # raises the unknown-robot error
         if not path.is_file():
             raise UserError(f"plant file not found: {path}")
-        # as a registered URDF: arm joints only (arm_urdf's own error stays as it is), no meshes
-        urdf = _arm_urdf_file(path) if path.suffix.lower() == ".urdf" else None
-        try:
-            if urdf is not None:
-                return mujoco.MjModel.from_xml_string(strip_geometry(urdf))
-            return mujoco.MjModel.from_xml_path(str(path))
-        except ValueError as exc:
-            detail = " ".join(str(exc).split()) or "parse error"
-            kind = "URDF" if path.suffix.lower() == ".urdf" else "MJCF"
-            raise UserError(f"invalid {kind} {path}: {detail}") from None
+        if path.suffix.lower() == ".urdf":  # as a registered URDF: arm joints only, no meshes
+            text = strip_geometry(arm_urdf(read_text(path), str(path)))
+            return _parse(lambda: mujoco.MjModel.from_xml_string(text), path, f"invalid URDF {path}")
+        return _parse(lambda: mujoco.MjModel.from_xml_path(str(path)), path, f"invalid MJCF {path}")
     robot = get_robot(str(name_or_path))
     if robot.mjcf is not None:
         target = robot.scene if scene and robot.scene else robot.mjcf
@@ -117,14 +166,20 @@ def load_pinocchio(name_or_path: str | Path) -> pin.Model:
     if not path.is_file():
         get_robot(str(name_or_path)) if path.suffix == "" else None  # unknown-robot error
         raise UserError(f"robot file not found: {path}")
-    urdf = _arm_urdf_file(path) if path.suffix.lower() == ".urdf" else None
+    if path.suffix.lower() == ".urdf":
+        text = arm_urdf(read_text(path), str(path))
+        return _parse(lambda: pin.buildModelFromXML(text), path, f"Pinocchio cannot read {path}")
+    return _parse(lambda: pin.buildModelFromMJCF(str(path)), path, f"Pinocchio cannot read {path}")
+
+
+def read_text(path: Path) -> str:
+    """A robot description's text; UserError if it is not readable UTF-8 text."""
     try:
-        if urdf is not None:
-            return pin.buildModelFromXML(urdf)
-        return pin.buildModelFromMJCF(str(path))
-    except (ValueError, RuntimeError) as exc:
-        detail = " ".join(str(exc).split()) or "parse error"
-        raise UserError(f"Pinocchio cannot read {path}: {detail}") from None
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise UserError(f"robot file {path} is not UTF-8 text") from None
+    except OSError as exc:
+        raise UserError(f"cannot read robot file {path}: {exc.strerror}") from None
 
 
 def check_open_chain(model: mujoco.MjModel, name_or_path: str | Path) -> None:

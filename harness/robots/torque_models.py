@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import json
 from functools import cache
 from pathlib import Path
 
 from harness.errors import UserError
+from harness.io import read_json
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import DEFAULT_ROBOT, ROBOTS, load_chain, load_pinocchio
 from identification.errors import IdentificationError
@@ -27,41 +27,43 @@ def robot_record(robot: str) -> dict:
     return {"name": chain.name, "hash": chain.digest()}
 
 
-def _recorded(path: Path) -> tuple[dict, dict | None]:
-    """The MODEL.json payload and the robot it records (None for older files)."""
-    try:
-        payload = json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
-        raise UserError(f"cannot read model {path}: {exc}") from None
-    robot = payload.get("robot") if isinstance(payload, dict) else None
-    return payload, robot if isinstance(robot, dict) and robot.get("name") else None
+def _recorded(payload: dict) -> dict | None:
+    """The robot a MODEL.json records (None for files written before models recorded it)."""
+    robot = payload.get("robot")
+    if robot is None:
+        return None
+    if not isinstance(robot, dict) or not isinstance(robot.get("name"), str) or not robot["name"]:
+        raise IdentificationError("'robot' must be an object with the robot's 'name' and 'hash'")
+    return robot
 
 
 def load_torque_model(spec: str, robot: str | None = None) -> TorqueModel:
     """'pinocchio' -> the closed-form baseline of robot; a path -> an identified model (one on
-    a robot's base atoms is checked against robot, by default the robot it records)."""
+    a robot's base atoms is checked against robot, by default the robot it records).
+    UserError naming the file and what is wrong with it."""
     if spec == "pinocchio":
         return PinocchioModel(load_pinocchio(robot or DEFAULT_ROBOT))
     path = Path(spec)
     if not path.is_file():
         raise UserError(f"model file not found: {path} (or use 'pinocchio')")
-    from identification.model import load_model
+    from identification.model import model_from_dict
 
-    payload, recorded = _recorded(path)
-    if recorded is None:
-        return load_model(path)
-    robot = robot or str(recorded["name"])
-    if robot not in ROBOTS and not Path(robot).is_file():
-        raise UserError(f"model {path} was identified for robot '{recorded['name']}': pass its "
-                        "URDF/MJCF with --robot")
+    payload = read_json(path, "model")
     try:
+        recorded = _recorded(payload)
+        if recorded is None:
+            return model_from_dict(payload)
+        robot = robot or recorded["name"]
+        if robot not in ROBOTS and not Path(robot).is_file():
+            raise UserError(f"model {path} was identified for robot '{recorded['name']:.60}': "
+                            "pass its URDF/MJCF with --robot")
         if payload.get("library") == LIBRARY:
             return KinematicModel.from_dict(payload, robot_library(robot))
         chain = load_chain(robot)
         if recorded.get("hash") != chain.digest():
-            raise IdentificationError(f"model was identified for robot '{recorded['name']}' "
-                                      f"(kinematics {recorded.get('hash')}), not '{chain.name}' "
-                                      f"({chain.digest()})")
+            raise IdentificationError(f"model was identified for robot '{recorded['name']:.60}' "
+                                      f"(kinematics {str(recorded.get('hash')):.20}), not "
+                                      f"'{chain.name}' ({chain.digest()})")
+        return model_from_dict(payload)
     except IdentificationError as exc:
         raise UserError(f"model {path}: {exc}") from None
-    return load_model(path)

@@ -98,6 +98,8 @@ def motion(*factors: str) -> tuple[tuple[str, int], ...]:
 
 _ANGLE_TERM = re.compile(r"([+-]?)(\d*)\*?q(\d+)")
 _TRIG = re.compile(r"^(sin|cos)\(([^()]*)\)(?:\^(\d+))?$")
+MAX_POWER = 8  # no torque term of an arm has a higher power; more is a corrupt file
+MAX_MULTIPLE = 16  # of a joint angle inside sin/cos
 _MOTION = re.compile(r"^(qdd|qd|q)(\d+)(?:\^(\d+))?$")
 
 
@@ -120,6 +122,8 @@ def parse_feature(name: str, dof: int) -> Feature:
     trigs: list[Trig] = []
     for factor in _split_factors(name.replace(" ", "")):
         m, t = _MOTION.match(factor), _TRIG.match(factor)
+        if (m and int(m.group(3) or 1) > MAX_POWER) or (t and int(t.group(3) or 1) > MAX_POWER):
+            raise ValueError(f"power above {MAX_POWER} in feature {name!r}")
         if m and 1 <= int(m.group(2)) <= dof:
             motions += [(m.group(1), int(m.group(2)) - 1)] * int(m.group(3) or 1)
         elif t:
@@ -133,6 +137,8 @@ def parse_feature(name: str, dof: int) -> Feature:
                 if not 0 <= j < dof:
                     raise ValueError(f"joint q{j + 1} out of range in feature {name!r}")
                 coeffs[j] += (-1 if x.group(1) == "-" else 1) * int(x.group(2) or 1)
+                if abs(coeffs[j]) > MAX_MULTIPLE:
+                    raise ValueError(f"multiple of q{j + 1} above {MAX_MULTIPLE} in {name!r}")
             trigs.append(Trig(t.group(1), tuple(coeffs), int(t.group(3) or 1)))
         else:
             raise ValueError(f"cannot parse factor {factor!r} in feature {name!r}")

@@ -41,12 +41,15 @@ def choose(candidates, x_val, y_val, tolerance: float = 0.002):
     return candidates[min(good)[2]]
 
 
-def _stlsq(threshold: float):
+def _stlsq_coef(threshold: float, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """pysindy's STLSQ coefficients (p,) at threshold on x (n, p), y (n,)."""
     import pysindy as ps
 
-    # thresholds above every coefficient are grid points too: pysindy warns, we just score them
-    warnings.filterwarnings("ignore", "Sparsity parameter is too big", UserWarning)
-    return ps.STLSQ(threshold=threshold, alpha=0.0, normalize_columns=False, max_iter=20)
+    opt = ps.STLSQ(threshold=threshold, alpha=0.0, normalize_columns=False, max_iter=20)
+    with warnings.catch_warnings():
+        # thresholds above every coefficient are grid points too: pysindy warns, we score them
+        warnings.filterwarnings("ignore", "Sparsity parameter is too big", UserWarning)
+        return opt.fit(x, y).coef_.ravel()
 
 
 def _ssr_path(x, y) -> list[np.ndarray]:
@@ -80,13 +83,13 @@ class PeerRegression(Regressor):
         xs, yc, *_ = standardize(theta, y, ~val)
         if self.name == "STLSQ":
             grid = y[~val].std() * np.logspace(-6, 0, self.n_grid)
-            cands = [(t, _stlsq(t).fit(xs[~val], yc[~val]).coef_.ravel()) for t in grid]
+            cands = [(t, _stlsq_coef(t, xs[~val], yc[~val])) for t in grid]
         else:
             cands = [(float(np.count_nonzero(c)), c) for c in _ssr_path(xs[~val], yc[~val])]
         setting, _ = choose(cands, xs[val], yc[val])
         xs, yc, mean_x, mean_y, scale = standardize(theta, y, slice(None))
         if self.name == "STLSQ":
-            coef = _stlsq(setting).fit(xs, yc).coef_.ravel()
+            coef = _stlsq_coef(setting, xs, yc)
         else:
             coef = next(c for c in _ssr_path(xs, yc) if np.count_nonzero(c) <= setting)
         coef = coef / scale
