@@ -194,8 +194,9 @@ def _heldout(model, q, qd, qdd, tau, tau_clean, n_train: int):
 # coefficient's variance (dense fits with the Coulomb columns reach 2.2x the oracle's error
 # on a Panda joint, without them equal it), while real gearbox friction passes any bound.
 # The kept coefficients are then shrunk by max(0, 1 - 1/t^2) (regression.coupled
-# .shrink_factors): an atom kept at t ~ 1-3 (a null one past the bound, a real one barely
-# excited) costs less than its full variance; atoms at t of tens are left as fitted.
+# .shrink_factors): a null atom past the bound then costs about a third of its variance, a
+# real one at 2-5 standard errors up to 1.45x more, atoms at t of tens are left as fitted; a
+# robot's base atoms are mostly of the first kind, and the trade pays:
 # Measured on the same 10 draws per arm (arm section's, fresh trajectory, ratio to the
 # oracle, median over draws per joint): Lynxmotion 0.88-0.97 -> 0.66-0.80, UR5 0.82-0.97
 # -> 0.59-0.82, Panda 0.76-1.04 -> 0.76-1.00; every draw within the bars either way.
