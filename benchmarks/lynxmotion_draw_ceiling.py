@@ -10,6 +10,11 @@ generated from the kinematics (identification.library.kinematic; its true atoms 
 non-zero coefficient in the noise-free fit). Printed per atom set: the fraction of draws
 within the bar on every joint, per joint the fraction above it and the median ratio, the
 expected count out of the section's 20 draws and the chance that all 20 are within.
+First, on the section's own 20 draws, side by side: the section's coupled fit (prior
+atoms), the coupled fit on the generated atoms with identify's bounds (|t| > 1; Coulomb
+atoms at the familywise bound) and with the familywise (Bonferroni) bound on every atom,
+and the perfect selector on each atom set: draws within the bar, draws that kept exactly
+the true atoms.
 
     python -m benchmarks.lynxmotion_draw_ceiling [draws]    (default 300; ~1 min)
 """
@@ -32,6 +37,7 @@ from harness.sections.identification.study import (  # noqa: E402
     noisy,
     true_atoms,
 )
+from identification.identify import _atom_bounds, identify  # noqa: E402
 from identification.metrics import rel_error  # noqa: E402
 from identification.regression.coupled import CoupledRegression, weighted_lstsq  # noqa: E402
 from identification.regression.oracle import fit_base_parameters  # noqa: E402
@@ -43,6 +49,35 @@ def _true_fit_error(design, cols, d, k) -> np.ndarray:
     sigma = CoupledRegression().noise_sigma(design[:k], d.tau[:k], cols)
     coef = weighted_lstsq(design[:k], d.tau[:k], cols, sigma)[0]
     return rel_error(design[k:][:, :, cols] @ coef, d.tau_clean[k:])
+
+
+def section_draws(ctx: dict, sets: dict, kinematic) -> None:
+    """The section's 20 draws: each fit's draws within the bar and exact supports."""
+    clean, k = ctx["clean"], n_train(len(ctx["clean"].q))
+    design, true_cols = sets["kinematic base atoms"]
+    rules = {"|t| > 1 (identify's)": _atom_bounds(kinematic), "familywise bound": None}
+    within: dict[str, int] = {}
+    exact: dict[str, int] = {}
+    for seed in ROBUST_SEEDS:
+        d = noisy(clean, 0.05, seed)
+        oracle = fit_base_parameters(ctx["regressor"][:k], d.tau[:k])
+        ref = rel_error(oracle.predict(ctx["regressor"][k:]), d.tau_clean[k:])
+        fit = identify(d.q, d.qd, d.qdd, d.tau, ctx["library"], 0.25, d.tau_clean, method="coupled")
+        rows = {"prior atoms, coupled (the section's)": (fit.heldout_rel_rmse, set(
+            fit.lagrangian()["atoms"]) == ctx["atoms"]["symmetric"])}
+        for rule, bound in rules.items():
+            reg = CoupledRegression(t_bound=bound).fit(design[:k], d.tau[:k])
+            rows[f"generated atoms, {rule}"] = (
+                rel_error(design[k:] @ reg.coef_, d.tau_clean[k:]),
+                set(np.flatnonzero(reg.support_)) == set(true_cols))
+        for name, (design_, cols) in sets.items():
+            rows[f"{name}, perfect selector"] = (_true_fit_error(design_, cols, d, k), True)
+        for name, (rel, same) in rows.items():
+            within[name] = within.get(name, 0) + bool(np.all(rel <= RATIO_LIMIT * ref))
+            exact[name] = exact.get(name, 0) + bool(same)
+    for name in within:
+        print(f"section's {len(ROBUST_SEEDS)} draws: {name}: {within[name]} within "
+              f"{RATIO_LIMIT} x oracle on every joint, exact support on {exact[name]}")
 
 
 def main(draws: int) -> None:
@@ -60,6 +95,7 @@ def main(draws: int) -> None:
     size = np.abs(coef) * np.linalg.norm(flat, axis=0) / np.linalg.norm(clean.tau_clean)
     sets["kinematic base atoms"] = (design, list(np.flatnonzero(size > 1e-9)))
     assert len(true_atoms(prior, clean)) == len(sets["prior-knowledge atoms"][1])
+    section_draws(ctx, sets, kinematic)
     ratios: dict[str, list] = {name: [] for name in sets}
     for seed in range(FIRST_SEED, FIRST_SEED + draws):
         d = noisy(clean, 0.05, seed)

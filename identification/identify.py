@@ -193,8 +193,16 @@ def _heldout(model, q, qd, qdd, tau, tau_clean, n_train: int):
 # close to a per-joint offset plus viscous term, so a spurious one costs much more than one
 # coefficient's variance (dense fits with the Coulomb columns reach 2.2x the oracle's error
 # on a Panda joint, without them equal it), while real gearbox friction passes any bound.
+# The kept coefficients are then shrunk by max(0, 1 - 1/t^2) (regression.coupled
+# .shrink_factors): a null atom past the bound then costs about a third of its variance, a
+# real one at 2-5 standard errors up to 1.45x more, atoms at t of tens are left as fitted; a
+# robot's base atoms are mostly of the first kind, and the trade pays:
+# Measured on the same 10 draws per arm (arm section's, fresh trajectory, ratio to the
+# oracle, median over draws per joint): Lynxmotion 0.88-0.97 -> 0.66-0.80, UR5 0.82-0.97
+# -> 0.59-0.82, Panda 0.76-1.04 -> 0.76-1.00; every draw within the bars either way.
 KEEP_T = 1.0
 FAMILYWISE = 0.01
+SHRINK = True
 
 
 def _atom_bounds(library: KinematicLibrary) -> np.ndarray:
@@ -215,8 +223,8 @@ def _identify_atoms(q, qd, qdd, tau, library: KinematicLibrary, holdout: float, 
     design = library.evaluate(q[:n_train], qd[:n_train], qdd[:n_train])
     cond = conditioning(design.reshape(-1, len(library)), library.names)
     warn_if_rank_deficient(cond)
-    reg = CoupledRegression(selector=regression, t_bound=_atom_bounds(library)).fit(
-        design, tau[:n_train])
+    reg = CoupledRegression(selector=regression, t_bound=_atom_bounds(library),
+                            shrink=SHRINK).fit(design, tau[:n_train])
     seconds = time.perf_counter() - start
     model = KinematicModel(library, reg.coef_.copy(), np.asarray(reg.intercept_, float).copy())
     rel, mse = _heldout(model, q, qd, qdd, tau, tau_clean, n_train)

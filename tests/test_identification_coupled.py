@@ -146,3 +146,22 @@ def test_an_atom_constant_on_the_data_is_folded_into_the_offset():
     reg = CoupledRegression().fit(design, tau)
     assert reg.coef_[2] == 0.0 and np.all(np.abs(reg.coef_) < 10)
     np.testing.assert_allclose(reg.coef_[:2], [2.0, -1.0], atol=0.01)
+
+
+def test_shrink_factors_trade_weak_for_moderate_coefficients():
+    """1 - 1/t^2 on b ~ N(beta, s^2) (Monte Carlo, 200 000 draws): the shrunk estimate's mean
+    squared error is a third of b's for a null coefficient, below b's up to beta = s, at most
+    1.5x b's for beta of 2-3 s, within 4 % at 10 s and 1 % at 30 s (the profile documented
+    in shrink_factors); a coefficient with no standard error (exact data) is kept."""
+    from identification.regression.coupled import shrink_factors
+
+    rng = np.random.default_rng(0)
+    s = 0.3
+    for ratio, low, high in ((0.0, 0.30, 0.37), (1.0, 0.80, 0.95), (2.0, 1.3, 1.5),
+                             (3.0, 1.3, 1.5), (10.0, 1.0, 1.04), (30.0, 1.0, 1.01)):
+        b = ratio * s + s * rng.normal(size=200_000)
+        shrunk = b * shrink_factors(b, np.full_like(b, s))
+        relative = np.mean((shrunk - ratio * s) ** 2) / np.mean((b - ratio * s) ** 2)
+        assert low <= relative <= high, (ratio, relative)
+    assert shrink_factors(np.array([2.0, 0.5, -3.0]), np.array([0.0, 1.0, 1.0])).tolist() == \
+        [1.0, 0.0, pytest.approx(1 - 1 / 9)]

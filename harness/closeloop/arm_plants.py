@@ -4,8 +4,8 @@ The arm's MuJoCo model (registry.load_mujoco: the URDF's arm joints, no meshes) 
 edited as a MuJoCo spec (mujoco.MjSpec): joint damping, frictionloss, armature and
 stiffness added on chosen joints, a spring on a fixed tendon q2 + q3 (an effect outside
 the close-the-loop dictionary, as the Lynxmotion's coupled plant), and a point payload
-fixed at the flange (the first
-of registry.FLANGES the model has, else the last joint's body), then written as MJCF. The
+fixed at the flange (the first of registry.FLANGES the model has, else the last joint's
+body), then written as MJCF. The
 payload point is the one harness.closeloop.payload puts its unit mass at
 (the Pinocchio frame of the same link), so the dictionary's payload column is exact.
 """
