@@ -23,6 +23,9 @@ from harness.closeloop.plants import Variant
 from harness.closeloop.run import run_closeloop
 from harness.robots.registry import DEFAULT_ROBOT
 
+SAMPLES = 4000  # measured samples per plant
+NOISE = 0.05  # torque noise std / torque std
+
 COEFFICIENT_TOL = 0.10  # relative
 PLANTS = (Variant((("viscous", 2, 0.8), ("coulomb", 3, 1.5), ("armature", 1, 0.1),
                    ("spring", 4, 3.0)), payload=1.0, name="effects"),
@@ -56,9 +59,9 @@ def run(out_dir: Path, quick: bool = False, robot: str = DEFAULT_ROBOT) -> dict:
     results: dict = {"robot": robot, "plants": {}}
     for variant in PLANTS:
         path = write_arm_variant(robot, variant, plant_dir)
-        results["plants"][variant.name] = _score(run_closeloop(path, robot=robot))
+        results["plants"][variant.name] = _score(run_closeloop(path, SAMPLES, NOISE, robot=robot))
     md = [f"Closing the loop on `{robot}` (declared model: Pinocchio on its URDF; measured data "
-          "at 5 % noise, 4000 samples; coefficient bar "
+          f"at {100 * NOISE:g} % noise, {SAMPLES} samples; coefficient bar "
           f"{COEFFICIENT_TOL:.0%}).", "",
           "| plant | effect | joint | true | named | error | ", "|---|---|---|---|---|---|"]
     for name, s in results["plants"].items():
