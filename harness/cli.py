@@ -23,7 +23,8 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 from harness import interrupt  # noqa: E402 - after the environment set-up above
 from harness.errors import UserError  # noqa: E402
 
-COMMANDS = ["generate", "identify", "predict", "plan", "replay", "closeloop", "bench"]
+COMMANDS = ["generate", "ingest", "identify", "predict", "plan", "replay", "closeloop", "bench",
+            "sweep"]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -52,7 +53,7 @@ def _user_errors() -> tuple[type[BaseException], ...]:
     return UserError, FileNotFoundError, IdentificationError, PlanningError
 
 
-DIR_OUTPUTS = ("bench", "closeloop")  # commands whose --out is a folder
+DIR_OUTPUTS = ("bench", "closeloop", "sweep")  # commands whose --out is a folder
 
 
 def _check_output(args) -> None:

@@ -118,8 +118,8 @@ def check_data(q, qd, qdd, tau, n_features: int) -> tuple[np.ndarray, ...]:
     return tuple(arrays)
 
 
-def _score(model, q, qd, qdd, truth) -> tuple[np.ndarray, np.ndarray]:
-    pred = model.torque(q, qd, qdd)
+def _score(model, q, qd, qdd, truth, offsets=0.0) -> tuple[np.ndarray, np.ndarray]:
+    pred = model.torque(q, qd, qdd) + offsets
     return rel_error(pred, truth), np.mean((pred - truth) ** 2, axis=0)
 
 
@@ -162,10 +162,21 @@ def _split(q, qd, qdd, tau, dof: int, name: str, holdout: float, n_features: int
     return q, qd, qdd, tau, n_train
 
 
+def _offsets(model) -> np.ndarray:
+    """The fitted per-joint intercepts (sensor offsets, N m) of an identified model."""
+    if isinstance(model, KinematicModel):
+        return model.offsets
+    return np.array([j.offset for j in model.joints])
+
+
 def _heldout(model, q, qd, qdd, tau, tau_clean, n_train: int):
+    """Held-out errors against the clean torque, or, without one (a measured log), against
+    the measured torque, which carries the sensor offsets: the model's torque plus its
+    fitted offsets is then what predicts the measurement."""
     truth = tau if tau_clean is None else check_data(q, qd, qdd, tau_clean, 0)[3]
+    offsets = _offsets(model) if tau_clean is None else 0.0
     if n_train < len(q):
-        return _score(model, q[n_train:], qd[n_train:], qdd[n_train:], truth[n_train:])
+        return _score(model, q[n_train:], qd[n_train:], qdd[n_train:], truth[n_train:], offsets)
     nan = np.full(q.shape[1], np.nan)  # holdout 0 (a final fit on all data): no held-out error
     return nan, nan
 

@@ -1,7 +1,9 @@
 """Distance from an obstacle centre to the arm's link segments (paper eq. 16, as segments).
 
 The paper's code measured the distance to the infinite line through a link;
-here it is the distance to the segment (shoulder-elbow, elbow-end effector),
+here it is the distance to the segment (each moving link of planning.kinematics: between
+consecutive joint origins and to the flange; on the Lynxmotion shoulder-elbow and
+elbow-end effector),
 via the clamped projection. The distance to a segment is continuously
 differentiable away from the segment itself (the clamp only switches where
 its derivative does not matter), which is enough for IPOPT with a quadratic
@@ -33,20 +35,16 @@ def symbolic_segment_distance(point, a, b, length: float):
 
 
 def link_clearances(geometry: ArmGeometry, q: np.ndarray, obstacle: np.ndarray) -> np.ndarray:
-    """Distances (n, 2) of obstacle centres (n, 3) to link 2 and link 3 at angles q (n, 3)."""
-    shoulder, elbow, end = geometry.points(q)
-    obstacle = np.broadcast_to(obstacle, elbow.shape)
-    return np.stack(
-        [segment_distance(obstacle, shoulder, elbow), segment_distance(obstacle, elbow, end)],
-        axis=1,
-    )
+    """Distances (n, links) of obstacle centres (n, 3) or (3,) to each link of the arm
+    (geometry.links) at joint angles q (n, dof)."""
+    points = geometry.points(q)
+    obstacle = np.broadcast_to(obstacle, points[:, 0].shape)
+    return np.stack([segment_distance(obstacle, points[:, i], points[:, j])
+                     for i, j in geometry.links], axis=1)
 
 
-def symbolic_link_clearances(geometry: ArmGeometry, q, obstacle):
-    """CasADi distances (link 2, link 3) of an obstacle centre at joint vector q."""
-    elbow, end = geometry.symbolic_points(q)
-    shoulder = ca.DM(geometry.shoulder)
-    return (
-        symbolic_segment_distance(obstacle, shoulder, elbow, geometry.l2),
-        symbolic_segment_distance(obstacle, elbow, end, geometry.l3),
-    )
+def symbolic_link_clearances(geometry: ArmGeometry, q, obstacle) -> list:
+    """CasADi distances of an obstacle centre to each link at joint vector q."""
+    points = geometry.symbolic_points(q)
+    return [symbolic_segment_distance(obstacle, points[i], points[j], length)
+            for (i, j), length in zip(geometry.links, geometry.link_lengths, strict=True)]

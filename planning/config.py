@@ -8,7 +8,7 @@ from math import pi
 import numpy as np
 
 from planning.errors import PlanningError
-from planning.kinematics import ArmGeometry
+from planning.kinematics import ArmGeometry, paper_arm
 from planning.obstacle import LinearObstacle
 
 
@@ -44,7 +44,7 @@ class PlannerConfig:
     upper: tuple[float, ...] = (pi / 2, pi, 0.0)
     limit_samples: int = 8
     torque_limit: tuple[float, ...] | None = (10.0, 10.0, 10.0)
-    geometry: ArmGeometry = field(default_factory=ArmGeometry)
+    geometry: ArmGeometry = field(default_factory=paper_arm)  # links for clearance
     hessian: str = "exact"  # or "limited-memory"
     max_iterations: int = 300
     warm_max_iterations: int = 60  # a warm solve that needs more restarts cold
@@ -55,11 +55,11 @@ class PlannerConfig:
 class Scenario:
     """Where the arm goes and what crosses its way (rad, rad/s, s, m)."""
 
-    start: tuple[float, float, float] = (pi / 2, pi / 5, -pi / 4)
-    goal: tuple[float, float, float] = (-pi / 2, 2 * pi / 5, -pi / 3)
+    start: tuple[float, ...] = (pi / 2, pi / 5, -pi / 4)
+    goal: tuple[float, ...] = (-pi / 2, 2 * pi / 5, -pi / 3)
     duration: float = 2.0
     obstacle: LinearObstacle | None = LinearObstacle((0.15, 0.40, 0.22), (0.18, -0.35, 0.28), 2.0)
-    start_velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    start_velocity: tuple[float, ...] = (0.0, 0.0, 0.0)  # one per joint
 
     def validate(self, config: PlannerConfig) -> None:
         """Raise PlanningError on input no plan can satisfy."""
@@ -69,10 +69,17 @@ class Scenario:
         if not self.duration > 0:
             raise PlanningError(f"duration must be > 0 s, got {self.duration}")
         lower, upper = np.asarray(config.lower), np.asarray(config.upper)
-        for name, q in (("start", self.start), ("goal", self.goal)):
+        if config.geometry.dof != len(lower):
+            raise PlanningError(f"the arm has {config.geometry.dof} joints, the limits "
+                                f"{len(lower)}")
+        for name, q in (("start", self.start), ("goal", self.goal),
+                        ("start velocity", self.start_velocity)):
             q = np.asarray(q, float)
             if len(q) != len(lower):
-                raise PlanningError(f"{name} must have {len(lower)} joint angles, got {len(q)}")
+                raise PlanningError(f"{name} must have {len(lower)} values (one per joint), "
+                                    f"got {len(q)}")
+            if name == "start velocity":
+                continue
             bad = np.flatnonzero((q < lower - 1e-9) | (q > upper + 1e-9))
             if bad.size:
                 i = bad[0]

@@ -1,54 +1,159 @@
-"""Forward kinematics of the simplified 3-DOF Lynxmotion arm, paper eqs. (9) and (10).
+"""Forward kinematics of any serial arm of revolute joints, given as data.
 
-Distal DH: joint 1 turns about the vertical axis, joints 2 and 3 lift the
-links; positions in metres, angles in radians. The same formulas serve numpy
-arrays (vectorized over samples) and CasADi expressions (for the planner).
+ArmGeometry holds what the planner needs of a robot's kinematics: for each joint j its
+frame's placement in the previous joint's frame (the base for joint 1) at q = 0 (rotation
+R_j, translation p_j in m), its unit axis a_j in its own frame, and the flange point in the
+last joint's frame. The harness builds it from the robot's model (planning never reads
+models); the paper's Lynxmotion arm is `paper_arm()`, one chain like any other (its eqs. 9
+and 10 are a cross-check in the tests).
+
+The link points are the joint origins and the flange; a link is the segment between two
+consecutive points, kept when it has length and moves (an endpoint off an earlier joint's
+axis). One forward-kinematics recursion (`_points`) serves numpy arrays (vectorized over
+samples) and CasADi expressions (exact derivatives for the NLP).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import casadi as ca
 import numpy as np
 
+AXIS_TOLERANCE = 1e-9  # m: a point this close to a joint axis does not move with that joint
+
+
+def _tuple(x) -> tuple:
+    return tuple(_tuple(v) for v in x) if np.ndim(x) else float(x)
+
 
 @dataclass(frozen=True)
 class ArmGeometry:
-    """Link lengths of the arm in metres (d1 shoulder height, l2 upper arm, l3 forearm)."""
+    """A fixed-base serial chain of revolute joints (m, rad); hashable, as plain tuples.
 
-    d1: float = 0.086
-    l2: float = 0.146
-    l3: float = 0.187
+    rotations (dof, 3, 3) and translations (dof, 3): joint j's frame in joint j-1's frame
+    (joint 1: in the world) at q = 0; axes (dof, 3): unit joint axes in their own frames;
+    flange (3,): the flange point in the last joint's frame; bodies: the name of the body
+    each joint moves (for reports).
+    """
+
+    rotations: tuple
+    translations: tuple
+    axes: tuple
+    flange: tuple
+    name: str = "arm"
+    bodies: tuple[str, ...] = ()
+
+    @classmethod
+    def of(cls, rotations, translations, axes, flange, name: str = "arm",
+           bodies=()) -> ArmGeometry:
+        """From array-likes; axes are normalized."""
+        axes = np.asarray(axes, float)
+        axes = axes / np.linalg.norm(axes, axis=1, keepdims=True)
+        return cls(_tuple(rotations), _tuple(translations), _tuple(axes), _tuple(flange), name,
+                   tuple(bodies))
 
     @property
-    def shoulder(self) -> np.ndarray:
-        """Shoulder position P1 (m); it does not move."""
-        return np.array([0.0, 0.0, self.d1])
+    def dof(self) -> int:
+        return len(self.axes)
 
-    def points(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Shoulder, elbow, end effector (each (n, 3), m) at joint angles q of shape (n, 3)."""
-        q = np.atleast_2d(q)
-        elbow, end = _points(q[:, 0], q[:, 1], q[:, 2], self, np.cos, np.sin)
-        shoulder = np.broadcast_to(self.shoulder, elbow.shape)
-        return shoulder, elbow, end
+    def points(self, q) -> np.ndarray:
+        """Link points (n, dof + 1, 3) in m: joint origins 1..dof and the flange, at joint
+        angles q (n, dof) or (dof,)."""
+        q = np.atleast_2d(np.asarray(q, float))
+        if q.shape[1] != self.dof:
+            raise ValueError(f"q has {q.shape[1]} joints, the arm {self.dof}")
+        c, s = np.cos(q)[:, :, None, None], np.sin(q)[:, :, None, None]
+        points = _points(self, lambda j: (c[:, j], s[:, j]), np.eye(3), np.zeros(3))
+        return np.stack([np.broadcast_to(p, (len(q), 3)) for p in points], axis=1)
 
-    def symbolic_points(self, q) -> tuple[ca.SX, ca.SX]:
-        """Elbow and end effector (3 x 1 CasADi) at a CasADi joint vector q."""
-        elbow, end = _points(q[0], q[1], q[2], self, ca.cos, ca.sin)
-        return elbow, end
+    def symbolic_points(self, q) -> list:
+        """Link points (dof + 1 CasADi 3 x 1 expressions, m) at a CasADi joint vector q."""
+        return _points(self, lambda j: (ca.cos(q[j]), ca.sin(q[j])), ca.DM.eye(3),
+                       ca.DM.zeros(3, 1))
+
+    @cached_property
+    def links(self) -> tuple[tuple[int, int], ...]:
+        """Index pairs (i, i + 1) into `points` of the links checked for clearance."""
+        home = self.points(np.zeros(self.dof))[0]
+        fixed = [self._fixed(i, home) for i in range(self.dof + 1)]
+        return tuple((i, i + 1) for i in range(self.dof)
+                     if np.linalg.norm(home[i + 1] - home[i]) > AXIS_TOLERANCE
+                     and not (fixed[i] and fixed[i + 1]))
+
+    def _fixed(self, i: int, home: np.ndarray) -> bool:
+        """Point i stays put iff it lies on the axes of all joints before it (at q = 0)."""
+        rotation = np.eye(3)
+        for j in range(i):
+            rotation = rotation @ np.asarray(self.rotations[j])
+            axis = rotation @ np.asarray(self.axes[j])
+            offset = home[i] - home[j]
+            if np.linalg.norm(offset - axis * (offset @ axis)) > AXIS_TOLERANCE:
+                return False
+        return True
+
+    @cached_property
+    def link_lengths(self) -> tuple[float, ...]:
+        """Length (m) of each link (constant: the chain is rigid between joints)."""
+        home = self.points(np.zeros(self.dof))[0]
+        return tuple(float(np.linalg.norm(home[j] - home[i])) for i, j in self.links)
+
+    @property
+    def link_names(self) -> tuple[str, ...]:
+        """'link j' for the segment moved by joint j, with its body's name when known."""
+        names = []
+        for i, _ in self.links:
+            body = self.bodies[i] if i < len(self.bodies) else ""
+            names.append(f"link {i + 1}" + (f" ({body})" if body else ""))
+        return tuple(names)
+
+    def flange_position(self, q) -> np.ndarray:
+        """Flange (n, 3) in m at joint angles q (n, dof)."""
+        return self.points(q)[:, -1]
 
 
-def _points(q1, q2, q3, geometry: ArmGeometry, cos, sin):
-    """Elbow P2 (eq. 10) and end effector P3 (eq. 9) with the given cos/sin."""
-    reach2 = geometry.l2 * cos(q2)
-    reach3 = reach2 + geometry.l3 * cos(q2 + q3)
-    height2 = geometry.d1 + geometry.l2 * sin(q2)
-    height3 = height2 + geometry.l3 * sin(q2 + q3)
-    if isinstance(q1, np.ndarray):
-        elbow = np.stack([reach2 * cos(q1), reach2 * sin(q1), height2], axis=-1)
-        end = np.stack([reach3 * cos(q1), reach3 * sin(q1), height3], axis=-1)
-        return elbow, end
-    elbow = ca.vertcat(reach2 * cos(q1), reach2 * sin(q1), height2)
-    end = ca.vertcat(reach3 * cos(q1), reach3 * sin(q1), height3)
-    return elbow, end
+def _points(geometry: ArmGeometry, cos_sin, identity, origin) -> list:
+    """World positions of the joint origins and the flange: one recursion for numpy
+    batches (cos/sin of shape (n, 1, 1)) and CasADi scalars."""
+    rotation, position, out = identity, origin, []
+    for j in range(geometry.dof):
+        position = position + _apply(rotation, geometry.translations[j])
+        out.append(position)
+        c, s = cos_sin(j)
+        rotation = rotation @ _constant(geometry.rotations[j], identity) @ _rodrigues(
+            geometry.axes[j], c, s, identity)
+    out.append(position + _apply(rotation, geometry.flange))
+    return out
+
+
+def _constant(matrix, like):
+    matrix = np.asarray(matrix, float)
+    return ca.sparsify(ca.DM(matrix)) if isinstance(like, ca.DM) else matrix
+
+
+def _apply(rotation, vector):
+    """rotation @ vector for a numpy batch (n, 3, 3) or a CasADi 3 x 3."""
+    if isinstance(rotation, np.ndarray):
+        return rotation @ np.asarray(vector)
+    return rotation @ ca.sparsify(ca.DM(np.asarray(vector, float)))
+
+
+def _rodrigues(axis, c, s, identity):
+    """Rotation by angle (cos c, sin s) about a constant unit axis: c I + s K + (1 - c) a a^T."""
+    a = np.asarray(axis)
+    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    outer = np.outer(a, a)
+    if isinstance(identity, ca.DM):
+        return c * ca.DM.eye(3) + s * ca.sparsify(ca.DM(k)) + (1 - c) * ca.sparsify(ca.DM(outer))
+    return c * np.eye(3) + s * k + (1 - c) * outer
+
+
+def paper_arm(d1: float = 0.086, l2: float = 0.146, l3: float = 0.187) -> ArmGeometry:
+    """The paper's simplified Lynxmotion arm (distal DH, eqs. 9 and 10): joint 1 about the
+    vertical at the base, joint 2 at height d1 and joint 3 at the elbow about -y (a positive
+    angle lifts the link), the end effector l3 beyond the elbow; m."""
+    eye = np.eye(3)
+    return ArmGeometry.of([eye, eye, eye], [[0, 0, 0], [0, 0, d1], [l2, 0, 0]],
+                          [[0, 0, 1], [0, -1, 0], [0, -1, 0]], [l3, 0, 0], "lynxmotion",
+                          ("link1", "link2", "link3"))

@@ -3,7 +3,7 @@
 Decision variables x = [free polynomial coefficients (dof x (degree - 1), row-major),
 e (N)]: e_i >= |P(s_i)| is the epigraph of the absolute power, so the objective
 sigma sum_i w_i e_i (planning.quadrature; the paper's w_i = 1/N, s_i = i/N)
-+ alpha sum_k w_k (max(0, lambda - D1_k)^2 + max(0, lambda - D2_k)^2)
++ alpha sum_k w_k sum_links max(0, lambda - D_link,k)^2
 is smooth enough for exact derivatives. Parameters p = [q0, qd0, sigma, q_end,
 obstacle centres (3 K), their normalized times s_k (K), weights w_k (K), the
 normalized times of each joint's turning points (dof x (degree - 1)) and 0/1 flags
@@ -127,13 +127,12 @@ class PlanningNLP:
         return self.sigma * ca.dot(w, self.slack)
 
     def _penalty(self, obstacle, s_obs, weight):
-        """sum_k w_k (max(0, lambda - D1)^2 + max(0, lambda - D2)^2) (eq. 17), per sample."""
+        """sum_k w_k sum_links max(0, lambda - D_link)^2 (eq. 17 over every moving link)."""
         config, total = self.config, 0
         for j in range(config.obstacle_slots):
-            d2, d3 = symbolic_link_clearances(config.geometry, self.state(s_obs[j])[0],
-                                              obstacle[:, j])
-            gap = ca.fmax(0, config.threshold - d2) ** 2 + ca.fmax(0, config.threshold - d3) ** 2
-            total += weight[j] * gap
+            distances = symbolic_link_clearances(config.geometry, self.state(s_obs[j])[0],
+                                                 obstacle[:, j])
+            total += weight[j] * sum(ca.fmax(0, config.threshold - d) ** 2 for d in distances)
         return total
 
     def _joint_limits(self, extremum, newton) -> None:

@@ -26,7 +26,7 @@ class PlanResult(Motion):
     time, with what it costs and how close it comes."""
 
     obstacle: np.ndarray  # (n, 3) m, the obstacle centre at t
-    clearance: np.ndarray  # (n, 2) m, link 2 and link 3
+    clearance: np.ndarray  # (n, links) m, each moving link (config.geometry.links)
     sample_clearance: np.ndarray  # (K,) m, min over links at the obstacle sample times
     energy: float  # J, integral of |P| on t under the planning model
     end_error: float  # rad, max |q(T) - goal|
@@ -59,7 +59,7 @@ def evaluate(execution: Execution, scenario: Scenario, model: TorqueModel,
     q, qd, qdd = sample_execution(execution, t)
     obstacle = scenario.obstacle.position(t) if scenario.obstacle else np.full((len(t), 3), np.nan)
     clearance = (link_clearances(config.geometry, q, obstacle) if scenario.obstacle
-                 else np.full((len(t), 2), np.inf))
+                 else np.full((len(t), len(config.geometry.links)), np.inf))
     sample_clearance = clearance[refine::refine].min(axis=1)
     end_error = float(np.max(np.abs(q[-1] - np.asarray(scenario.goal))))
     limit = float(max(0.0, np.max(np.asarray(config.lower) - q), np.max(q - np.asarray(config.upper))))
@@ -108,6 +108,7 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
         "energy_quadrature": config.energy_quadrature, "degree": config.degree,
         "energy": result.energy,
         "min_clearance": float(result.sample_clearance.min()) if scenario.obstacle else None,
+        **closest_link(result, config),
         "replans": len(segments) - 1,
         "replan_times": result.execution.replan_times,
         "solve_ms": result.execution.solve_ms,
@@ -117,5 +118,15 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
         "feasible": result.feasible, "problems": result.problems,
         "duration": scenario.duration, "start": scenario.start, "goal": scenario.goal,
         "start_velocity": scenario.start_velocity, "rest_at_goal": config.rest_at_goal,
-        "model": model_name,
+        "model": model_name, "robot": config.geometry.name,
     }
+
+
+def closest_link(result: PlanResult, config: PlannerConfig) -> dict:
+    """Which link came closest to the obstacle, and each link's smallest clearance (m)."""
+    names = config.geometry.link_names
+    if not np.all(np.isfinite(result.clearance)):
+        return {"links": names, "closest_link": None, "link_min_clearance": None}
+    per_link = result.clearance.min(axis=0)
+    return {"links": names, "closest_link": names[int(np.argmin(per_link))],
+            "link_min_clearance": per_link}

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from planning.config import Scenario
+from planning.kinematics import ArmGeometry
 from planning.obstacle import LinearObstacle, SwayingObstacle
 from planning.trajectory import PolynomialTrajectory
 
@@ -15,31 +16,40 @@ def paper_scenario() -> Scenario:
     return Scenario()
 
 
-def crossing_scenario(free: PolynomialTrajectory, geometry, t_cross: float = 1.0,
-                      sweep: tuple[float, float, float] = (0.0, 0.0, 0.5)) -> Scenario:
-    """The paper's motion with an obstacle that passes exactly through the middle of the
-    forearm (elbow-end effector) of the unobstructed optimum `free` at t_cross (s),
-    moving at constant velocity `sweep` (m per motion duration) centred on t_cross."""
-    base = Scenario()
-    _, elbow, end = geometry.points(free.state(t_cross)[0])
-    crossing = 0.5 * (elbow[0] + end[0])
+def _link_ends(free: PolynomialTrajectory, geometry: ArmGeometry, t: float, link: int):
+    """Both ends (3,) of link `link` (index into geometry.links) of `free` at time t (s)."""
+    points = geometry.points(free.state(t)[0])[0]
+    i, j = geometry.links[link]
+    return points[i], points[j]
+
+
+def crossing_scenario(free: PolynomialTrajectory, geometry: ArmGeometry, t_cross: float = 1.0,
+                      sweep: tuple[float, float, float] = (0.0, 0.0, 0.5),
+                      base: Scenario | None = None, link: int = -1) -> Scenario:
+    """base's motion (default: the paper's) with an obstacle that passes exactly through the
+    middle of one moving link (default the last: the Lynxmotion's forearm) of the
+    unobstructed optimum `free` at t_cross (s), moving at constant velocity `sweep` (m per
+    motion duration) centred on t_cross."""
+    base = base or Scenario()
+    crossing = 0.5 * np.add(*_link_ends(free, geometry, t_cross, link))
     frac = t_cross / base.duration
     start = crossing - frac * np.asarray(sweep)
     stop = crossing + (1 - frac) * np.asarray(sweep)
     obstacle = LinearObstacle(tuple(start), tuple(stop), base.duration)
-    return Scenario(base.start, base.goal, base.duration, obstacle)
+    return Scenario(base.start, base.goal, base.duration, obstacle, base.start_velocity)
 
 
-def swaying_scenario(free: PolynomialTrajectory, geometry, amplitude: float = 0.04,
-                     periods: float = 1.0) -> Scenario:
+def swaying_scenario(free: PolynomialTrajectory, geometry: ArmGeometry, amplitude: float = 0.04,
+                     periods: float = 1.0, base: Scenario | None = None,
+                     link: int = -1) -> Scenario:
     """The crossing scenario's obstacle swaying sideways (horizontal, perpendicular to the
-    forearm of `free` at the crossing) by `amplitude` (m), `periods` times over the motion;
-    with whole periods it still passes through the forearm's middle at t = 1 s."""
-    base = crossing_scenario(free, geometry)
-    _, elbow, end = geometry.points(free.state(1.0)[0])
-    forearm = (end - elbow)[0]
-    side = np.array([-forearm[1], forearm[0], 0.0])
+    crossed link of `free` at the crossing) by `amplitude` (m), `periods` times over the
+    motion; with whole periods it still passes through the link's middle at t = 1 s."""
+    base = crossing_scenario(free, geometry, base=base, link=link)
+    a, b = _link_ends(free, geometry, 1.0, link)
+    along = b - a
+    side = np.array([-along[1], along[0], 0.0])
     sway = amplitude * side / np.linalg.norm(side)
     obstacle = SwayingObstacle(base.obstacle.start, base.obstacle.end, base.duration,
                                sway=tuple(sway), periods=periods)
-    return Scenario(base.start, base.goal, base.duration, obstacle)
+    return Scenario(base.start, base.goal, base.duration, obstacle, base.start_velocity)

@@ -157,3 +157,35 @@ def test_model_json_records_its_robot_and_refuses_another(tmp_path, capsys):
                  "--out", str(tmp_path / "q.npz")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "identified for robot 'lynxmotion'" in err[0]
+
+
+BAD_ROBOTS = [
+    ("floating.urdf", ARM.format(t1="floating", t2="revolute"), "moving base"),
+    ("prismatic.urdf", ARM.format(t1="prismatic", t2="revolute"), "prismatic arm joint"),
+    ("binary.urdf", "\udcff", "not UTF-8 text"),
+    ("closed.xml", """<mujoco><worldbody>
+      <body name="a"><joint name="j1" axis="0 0 1"/><geom size="0.05" mass="1"/>
+        <body name="b" pos="0.3 0 0"><joint name="j2" axis="0 1 0"/><geom size="0.05" mass="1"/>
+        </body></body></worldbody>
+      <equality><joint joint1="j1" joint2="j2"/></equality></mujoco>""", "close the chain"),
+    ("empty.xml", '<mujoco><worldbody><body name="a"><geom size="0.05" mass="1"/></body>'
+                  "</worldbody></mujoco>", "joint"),
+]
+
+
+@pytest.mark.parametrize("command", ["generate", "closeloop"])
+@pytest.mark.parametrize("file,text,message", BAD_ROBOTS)
+def test_a_bad_robot_is_one_line_on_every_command(tmp_path, capsys, command, file, text, message):
+    from harness.cli import main
+
+    path = tmp_path / file
+    path.write_bytes(text.encode("utf-8", "surrogateescape"))
+    out = tmp_path / ("data.npz" if command == "generate" else "cl")
+    args = {"generate": ["generate", "--robot", str(path), "--samples", "300", "--out", str(out)],
+            "closeloop": ["closeloop", "--robot", str(path), "--plant", str(path),
+                          "--samples", "300", "--out", str(out)]}[command]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0] and str(path) in err[0], err
+    assert err[0].count(str(path)) == 1  # said once, not wrapped in a second error
+    assert not out.exists()

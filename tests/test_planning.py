@@ -10,7 +10,7 @@ from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_mujoco, load_pinocchio
 from planning.clearance import link_clearances, segment_distance
 from planning.config import PlannerConfig
-from planning.kinematics import ArmGeometry
+from planning.kinematics import paper_arm
 from planning.nlp import PlanningNLP
 from planning.obstacle import LinearObstacle, predict_linear
 from planning.solver import ObstacleForecast, Planner
@@ -23,11 +23,11 @@ RNG = np.random.default_rng(7)
 def test_forward_kinematics_matches_mujoco_sites():
     model = load_mujoco("lynxmotion")
     data = mujoco.MjData(model)
-    geometry = ArmGeometry()
+    geometry = paper_arm()
     for q in RNG.uniform([-1.5, 0, -3], [1.5, 3, 0], (10, 3)):
         data.qpos[:] = q
         mujoco.mj_kinematics(model, data)
-        shoulder, elbow, end = (p[0] for p in geometry.points(q))
+        _, shoulder, elbow, end = geometry.points(q)[0]
         for name, point in (("shoulder", shoulder), ("elbow", elbow), ("end_effector", end)):
             assert np.allclose(data.site(name).xpos, point, atol=1e-12), name
 
@@ -43,9 +43,9 @@ def test_segment_distance_matches_dense_sampling():
 
 def test_segment_not_infinite_line():
     """Beyond the end effector the distance is to the tip, not to the extended line."""
-    geometry = ArmGeometry()
+    geometry = paper_arm()
     q = np.array([[0.0, 0.0, 0.0]])  # arm straight out along +x at shoulder height
-    beyond = np.array([geometry.l2 + geometry.l3 + 0.1, 0.0, geometry.d1])
+    beyond = np.array([0.146 + 0.187 + 0.1, 0.0, 0.086])
     assert np.isclose(link_clearances(geometry, q, beyond)[0, 1], 0.1)
 
 
@@ -86,7 +86,7 @@ def nlp_functions():
                                       RNG.normal(scale=0.3, size=(3, 3)))
     times = np.linspace(0.25, 2.0, 8)
     # obstacle centres 5 cm from the end effector: the penalty is active
-    _, _, tip = config.geometry.points(arm.state(times)[0])
+    tip = config.geometry.flange_position(arm.state(times)[0])
     forecast = ObstacleForecast(times, tip + np.array([0.0, 0.05, 0.0]))
     # goal q1 on its lower limit: the goal-limit quotient rows are part of the check
     goal[0] = config.lower[0]

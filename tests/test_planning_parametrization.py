@@ -42,7 +42,7 @@ def test_degree_seven_gradients_match_finite_differences(baseline, smoothing):
     arm = PolynomialTrajectory.from_free(0.0, 2.0, Q0, np.zeros(3),
                                          RNG.normal(scale=0.3, size=(3, 6)))
     times = np.linspace(0.3, 2.0, 6)
-    _, _, tip = config.geometry.points(arm.state(times)[0])
+    tip = config.geometry.flange_position(arm.state(times)[0])
     forecast = ObstacleForecast(times, tip + np.array([0.0, 0.05, 0.0]))
     p = planner.parameters(Q0, np.array([0.1, -0.2, 0.3]), 2.0, GOAL, forecast, 0.0, arm)
     slacks = RNG.uniform(0.1, 1, 0 if smoothing else 12)

@@ -116,7 +116,7 @@ def test_plan_command_bad_input_exits_2_without_file(tmp_path, capsys):
 
 def test_obstacle_parked_on_the_goal_is_flagged(paper, baseline):
     planner, scenario, _, _ = paper
-    _, _, tip = planner.config.geometry.points(np.asarray([scenario.goal]))
+    tip = planner.config.geometry.flange_position(np.asarray([scenario.goal]))
     parked = dataclasses.replace(scenario.obstacle, start=tuple(tip[0]), end=tuple(tip[0]))
     blocked = dataclasses.replace(scenario, obstacle=parked)
     result = evaluate(execute(planner, blocked), blocked, baseline, planner.config)

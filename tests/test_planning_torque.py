@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.commands.plan import plant_torque_limit
 from harness.replay.reference import plan_reference
 from harness.replay.simulate import replay
+from harness.robots.arm import motor_torque_limit
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_mujoco, load_pinocchio
 from harness.sections.replay import checks
@@ -43,7 +43,7 @@ def _dense_peak(model, result) -> np.ndarray:
 
 
 def test_default_limit_is_the_mjcf_motor_range():
-    assert plant_torque_limit("lynxmotion") == (10.0, 10.0, 10.0)
+    assert motor_torque_limit("lynxmotion") == (10.0, 10.0, 10.0)
     assert PlannerConfig().torque_limit == (10.0, 10.0, 10.0)
 
 
@@ -54,7 +54,7 @@ def test_overdriving_plan_is_refused_without_file(tmp_path, capsys):
     assert code == 2
     assert not out.exists()
     err = capsys.readouterr().err.strip()
-    assert "no feasible plan" in err and len(err.splitlines()) == 1
+    assert "not reachable in 0.05 s within the torque limits" in err and len(err.splitlines()) == 1
 
 
 def test_default_plan_torque_within_limits(baseline):

@@ -3,7 +3,7 @@
 The arm's MuJoCo model (registry.load_mujoco: the URDF's arm joints, no meshes) is
 edited as a MuJoCo spec (mujoco.MjSpec): joint damping, frictionloss, armature and
 stiffness added on chosen joints, and a point payload fixed at the flange (the first
-of FLANGES the model has, else the last joint's body), then written as MJCF. The
+of registry.FLANGES the model has, else the last joint's body), then written as MJCF. The
 payload point is the one harness.closeloop.payload puts its unit mass at
 (the Pinocchio frame of the same link), so the dictionary's payload column is exact.
 """
@@ -14,22 +14,14 @@ import re
 from pathlib import Path
 
 import mujoco
-import pinocchio as pin
 
 from harness.closeloop.plants import Variant
 from harness.errors import UserError
 from harness.io import write_text
-from harness.robots.registry import get_robot, load_pinocchio
+from harness.robots.registry import flange_frame, get_robot, load_pinocchio
 from harness.robots.urdf import arm_urdf, strip_geometry
 
-FLANGES = ("tool0", "panda_link8", "ee_link", "end_effector")
 VECTOR_ATTRIBUTES = ("damping", "stiffness")  # polynomial coefficients in MuJoCo >= 3.3
-
-
-def flange_frame(model: pin.Model) -> str | None:
-    """The flange frame of the arm's Pinocchio model, or None (last joint's origin)."""
-    names = {f.name for f in model.frames}
-    return next((f for f in FLANGES if f in names), None)
 
 
 def arm_spec(robot: str) -> mujoco.MjSpec:

@@ -38,14 +38,13 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from harness.closeloop.arm_plants import flange_frame
 from harness.closeloop.payload import PayloadTorque
 from harness.closeloop.plants import DECLARED_MJCF, true_effects
 from harness.data.dataset import Dataset
 from harness.data.generate import generate
 from harness.errors import UserError
 from harness.robots.plant import Plant, load_plant
-from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
+from harness.robots.registry import DEFAULT_ROBOT, flange_frame, load_chain, load_mujoco, load_pinocchio
 from harness.robots.torque_models import load_torque_model
 from identification.closeloop.effects import Effect, EffectTerm
 from identification.closeloop.identified import close_loop_identified
@@ -187,6 +186,7 @@ def run_closeloop(plant: str | Path, samples: int = 4000, noise: float = 0.05, s
     """Generate measured data on plant (a variant of robot), close the loop on the declared
     model, score it; compare: also close it with the other built-in declared models of the
     robot (CloseLoopRun.others)."""
+    load_chain(robot)  # a fixed-base open serial chain of revolute joints, or one clear error
     model = load_pinocchio(robot)
     p = check_plant(plant, model.nv, robot)
     data = generate(str(plant), samples, noise, seed, "measured", bias)

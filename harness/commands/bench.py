@@ -27,8 +27,10 @@ from harness.report.headline import headline
 from harness.report.writer import SectionOutcome, write_report
 from harness.robots.registry import DEFAULT_ROBOT, ROBOTS
 
-SECTIONS = ("identification", "planning", "replay", "closeloop", "arm_identification")
-ARM_SECTIONS = ("arm_identification", "arm_closeloop")  # on another robot than the default
+SECTIONS = ("identification", "planning", "replay", "closeloop", "arm_identification",
+            "real_data")
+ARM_SECTIONS = ("arm_identification", "arm_planning", "arm_replay",
+                "arm_closeloop")  # on another robot than the default
 HEARTBEAT = 30.0  # s between "still running" lines of a long section
 
 
@@ -73,7 +75,8 @@ def register(subparsers) -> None:
     p.add_argument("--quick", action="store_true", help="smaller data and fewer sweeps")
     p.add_argument("--robot", default=DEFAULT_ROBOT,
                    help=f"registered robot; {DEFAULT_ROBOT} (default): the paper reproduction and "
-                   "every section; another arm: identification from its kinematics")
+                   "every section; another arm: identification from its kinematics, planning and "
+                   "replay, closing the loop")
     p.add_argument("--no-video", action="store_true", help="do not render replay videos")
     p.add_argument("--sections", default=None,
                    help="comma-separated sections to run, in pipeline order (default: all of the "
@@ -157,6 +160,8 @@ def run_pipeline(out_dir: Path, quick: bool, video: bool, progress: Progress,
             kwargs["identified_model"] = raws["identification"]["model"]
         if name == "replay":
             kwargs = {"plans": raws.get("planning", {}).get("plans") or {}, "video": video}
+        if name == "arm_replay":
+            kwargs.update(plans=raws.get("arm_planning", {}).get("plans") or {}, video=video)
         outcome, raws[name] = run_section(name, progress, out_dir, quick, **kwargs)
         interrupt.check()  # Ctrl-C during a section that swallowed it: stop here
         outcomes.append(outcome)

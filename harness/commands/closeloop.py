@@ -12,15 +12,20 @@ from harness.robots.registry import DEFAULT_ROBOT
 
 def register(sub) -> None:
     p = sub.add_parser("closeloop", help="residual -> missing effect -> add it -> error before/after")
-    p.add_argument("--plant", required=True, help="MJCF of the arm (may carry undeclared effects)")
+    p.add_argument("--plant", help="MJCF of the arm (may carry undeclared effects): measured "
+                   "data are simulated on it")
+    p.add_argument("--data", help="a dataset .npz instead (a measured log from `ingest`): the "
+                   "loop on the robot's rigid-body identification, scored against its torque")
     p.add_argument("--out", required=True, help="output directory (closeloop.json)")
     p.add_argument("--samples", type=int, default=4000)
     p.add_argument("--noise", type=float, default=0.05, help="torque noise std / torque std")
     p.add_argument("--bias", type=float, default=0.0,
                    help="torque-sensor bias in noise stds (non-zero: named as an offset)")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--robot", default=DEFAULT_ROBOT,
-                   help="registered robot the plant is a variant of (its declared model)")
+    p.add_argument("--robot", default=None,
+                   help="registered robot (or URDF/MJCF path) the plant is a variant of (its "
+                   f"declared model; default {DEFAULT_ROBOT}), or the data's robot (default: "
+                   "the one the data record)")
     p.add_argument("--holdout", type=float, default=0.25)
     p.add_argument("--declared", default="pinocchio",
                    help="declared model of the contract keys: 'pinocchio', 'identified' (fitted "
@@ -45,11 +50,33 @@ def _print(run) -> None:
         print(f"    joints {list(r.fallback)} fall back to the declared model")
 
 
+def _print_measured(run) -> None:
+    r, fmt = run.loop, ", ".join
+    named = fmt(f"joint {t.joint} {t.effect} {t.coefficient:.4g}" for t in r.terms) or "none"
+    print(f"  robot {run.robot}, declared: its rigid-body identification; named [{named}]")
+    print(f"    held-out error vs measured torque: before [{fmt(f'{e:.3f}' for e in r.error_before)}]"
+          f" after [{fmt(f'{e:.3f}' for e in r.error_after)}]")
+    print(f"    unexplained joints: {list(r.unexplained_joints) or 'none'}")
+
+
 def run(args) -> int:
     if not 0.0 < args.holdout < 1.0:
         raise UserError(f"--holdout must be in (0, 1), got {args.holdout}")
+    if (args.plant is None) == (args.data is None):
+        raise UserError("give exactly one of --plant MJCF (simulated measurement) and "
+                        "--data FILE.npz (given data)")
+    if args.data is not None:
+        from harness.closeloop.measured import run_measured
+
+        measured = run_measured(args.data, args.robot, args.holdout)
+        out = Path(args.out) / "closeloop.json"
+        write_json(out, measured.to_json())
+        _print_measured(measured)
+        print(f"wrote {out}")
+        return 0
     loop = run_closeloop(args.plant, args.samples, args.noise, args.seed, args.bias,
-                         args.holdout, args.declared, compare=True, robot=args.robot)
+                         args.holdout, args.declared, compare=True,
+                         robot=args.robot or DEFAULT_ROBOT)
     out = Path(args.out) / "closeloop.json"
     write_json(out, loop.to_json())
     for run_ in (loop, *loop.others):

@@ -15,14 +15,15 @@ import numpy as np
 
 from harness.errors import UserError
 from harness.io import write_json
-from harness.robots.registry import DEFAULT_ROBOT, load_mujoco
+from harness.robots.arm import planner_config, torque_limit
+from harness.robots.registry import DEFAULT_ROBOT
 from harness.robots.torque_models import load_torque_model
 from planning.config import PlannerConfig, Scenario
 from planning.errors import PlanningError
 from planning.obstacle import LinearObstacle, SwayingObstacle
 from planning.quadrature import RULES
 from planning.replanning import execute
-from planning.result import evaluate, to_json
+from planning.result import closest_link, evaluate, to_json
 from planning.solver import Planner
 
 DEFAULT = Scenario()
@@ -45,9 +46,15 @@ def _csv(values) -> str:
 def register(sub) -> None:
     p = sub.add_parser("plan", help="energy-optimal trajectory avoiding a moving obstacle")
     p.add_argument("--model", required=True, help="MODEL.json or 'pinocchio'")
-    p.add_argument("--robot", default=DEFAULT_ROBOT, help="robot for the pinocchio baseline")
-    p.add_argument("--start", default=_csv(DEFAULT.start), help="start angles q1,q2,q3 (rad)")
-    p.add_argument("--goal", default=_csv(DEFAULT.goal), help="goal angles q1,q2,q3 (rad)")
+    p.add_argument("--robot", default=DEFAULT_ROBOT,
+                   help="registered robot or URDF/MJCF path: its links, joint and torque limits "
+                        "and its pinocchio baseline")
+    p.add_argument("--start", default=None,
+                   help="start angles, one per joint (rad); default on the Lynxmotion: "
+                        + _csv(DEFAULT.start))
+    p.add_argument("--goal", default=None,
+                   help="goal angles, one per joint (rad); default on the Lynxmotion: "
+                        + _csv(DEFAULT.goal))
     p.add_argument("--duration", type=float, default=DEFAULT.duration, help="motion time (s)")
     p.add_argument("--obstacle-from", default=_csv(DEFAULT.obstacle.start),
                    help="obstacle centre at t = 0 (m)")
@@ -73,8 +80,8 @@ def register(sub) -> None:
                         "sway sin(2 pi periods t / duration)")
     p.add_argument("--sway-periods", type=float, default=1.0, help="sway periods over the motion")
     p.add_argument("--torque-limit", default=None,
-                   help="per-joint torque limits t1,t2,t3 (N m), or 'none'; default: the "
-                        "robot MJCF's motor ctrlrange times gear")
+                   help="per-joint torque limits (N m, one per joint), or 'none'; default: the "
+                        "robot MJCF's motor ctrlrange times gear, else the URDF effort limits")
     p.add_argument("--rest-at-goal", action="store_true", help="also require zero end velocity")
     p.add_argument("--no-replan", action="store_true", help="follow the first plan throughout")
     p.add_argument("--out", required=True, help="output PLAN.json")
@@ -84,29 +91,25 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def plant_torque_limit(robot: str) -> tuple[float, ...] | None:
-    """|tau_i| bound (N m) of each joint from the robot's MJCF motors (ctrlrange x gear), in
-    joint order; None if a motor is unlimited or the motors do not map 1:1 to joints."""
-    model = load_mujoco(robot)
-    joints = model.actuator_trnid[:, 0]
-    if model.nu != model.njnt or sorted(joints) != list(range(model.njnt)) \
-            or not all(model.actuator_ctrllimited):
-        return None
-    reach = np.abs(model.actuator_ctrlrange).min(axis=1) * np.abs(model.actuator_gear[:, 0])
-    limit = np.empty(model.njnt)
-    limit[joints] = reach
-    return tuple(float(v) for v in limit)
-
-
-def _torque_limit(args) -> tuple[float, ...] | None:
+def _torque_limit(args, dof: int) -> tuple[float, ...] | None:
     if args.torque_limit is None:
-        return plant_torque_limit(args.robot)
+        return torque_limit(args.robot)
     if args.torque_limit.strip().lower() == "none":
         return None
-    limit = _vector(args.torque_limit, "torque-limit")
+    limit = _vector(args.torque_limit, "torque-limit", dof)
     if not all(v > 0 for v in limit):
         raise UserError(f"--torque-limit must be positive, got '{args.torque_limit}'")
     return limit
+
+
+def _angles(args, name: str, dof: int) -> tuple[float, ...]:
+    text = getattr(args, name)
+    if text is None:
+        if args.robot != DEFAULT_ROBOT:
+            raise UserError(f"--{name} is needed on robot {args.robot}: {dof} comma-separated "
+                            "joint angles (rad)")
+        return getattr(DEFAULT, name)
+    return _vector(text, name, dof)
 
 
 def _setup(args) -> tuple[PlannerConfig, Scenario]:
@@ -124,19 +127,21 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
     if not (math.isfinite(args.power_smoothing) and args.power_smoothing >= 0
             and math.isfinite(args.sway_periods)):
         raise UserError("--power-smoothing must be >= 0 and --sway-periods finite")
-    config = dataclasses.replace(PlannerConfig(), threshold=args.threshold,
+    config = dataclasses.replace(planner_config(args.robot), threshold=args.threshold,
                                  penalty_weight=args.penalty, rest_at_goal=args.rest_at_goal,
                                  energy_samples=args.energy_samples,
                                  energy_quadrature=args.energy_quadrature, degree=args.degree,
                                  power_smoothing=args.power_smoothing,
-                                 torque_limit=_torque_limit(args))
+                                 torque_limit=None)
+    dof = config.geometry.dof
+    config = dataclasses.replace(config, torque_limit=_torque_limit(args, dof))
     path = (_vector(args.obstacle_from, "obstacle-from"),
             _vector(args.obstacle_to, "obstacle-to"), args.duration, args.samples)
     sway = _vector(args.obstacle_sway, "obstacle-sway")
     obstacle = (SwayingObstacle(*path, sway=sway, periods=args.sway_periods) if any(sway)
                 else LinearObstacle(*path))
-    scenario = Scenario(_vector(args.start, "start"), _vector(args.goal, "goal"),
-                        args.duration, obstacle)
+    scenario = Scenario(_angles(args, "start", dof), _angles(args, "goal", dof),
+                        args.duration, obstacle, (0.0,) * dof)
     scenario.validate(config)
     return config, scenario
 
@@ -144,14 +149,40 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
 def run(args) -> int:
     config, scenario = _setup(args)
     model = load_torque_model(args.model, args.robot)
-    if model.dof != 3:
-        raise UserError(f"the planner drives the 3-joint arm; model has {model.dof} joints")
+    if model.dof != config.geometry.dof:
+        raise UserError(f"model has {model.dof} joints, robot {args.robot} has "
+                        f"{config.geometry.dof}")
     planner = Planner(model, config)
     result = evaluate(execute(planner, scenario, replan=not args.no_replan), scenario, model,
                       config)
     if not result.feasible:
-        raise PlanningError("no feasible plan: " + "; ".join(result.problems))
+        raise PlanningError(torque_diagnosis(planner, scenario)
+                            or "no feasible plan: " + "; ".join(result.problems))
     write_json(args.out, to_json(result, scenario, config, args.model))
     print(f"wrote {args.out}: energy {result.energy:.4f} J, min clearance "
-          f"{result.sample_clearance.min():.4f} m, {len(result.execution.segments) - 1} re-plans")
+          f"{result.sample_clearance.min():.4f} m (closest: "
+          f"{closest_link(result, config)['closest_link']}), "
+          f"{len(result.execution.segments) - 1} re-plans")
     return 0
+
+
+def torque_diagnosis(planner: Planner, scenario: Scenario) -> str | None:
+    """A one-line reason when the torque limits are what make the goal unreachable: the
+    torque-limited problem has no solution and the unobstructed optimum without limits
+    needs more torque than a motor has."""
+    config, model = planner.config, planner.model
+    if config.torque_limit is None:
+        return None
+    args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
+    limited = planner.solve(*args)
+    if limited.success and planner.torque_excess(limited.trajectory) <= 0:
+        return None
+    free = Planner(model, dataclasses.replace(config, torque_limit=None)).solve(*args)
+    t = np.linspace(0.0, scenario.duration, 201)
+    peak = np.abs(model.torque(*free.trajectory.state(t))).max(axis=0)
+    limit = np.asarray(config.torque_limit)
+    j = int(np.argmax(peak / limit))
+    if peak[j] <= limit[j]:
+        return None
+    return (f"goal not reachable in {scenario.duration:g} s within the torque limits: the "
+            f"best motion needs {peak[j]:.3g} N m on joint {j + 1} (limit {limit[j]:g} N m)")

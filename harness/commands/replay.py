@@ -6,10 +6,11 @@ import math
 from dataclasses import asdict
 from pathlib import Path
 
+from harness.errors import UserError
 from harness.io import read_json, write_json
 from harness.robots.registry import DEFAULT_ROBOT
 
-FEEDFORWARD = "pinocchio"  # closed-form model of the default robot
+FEEDFORWARD = "pinocchio"  # closed-form model of the robot
 
 
 def register(subparsers) -> None:
@@ -20,8 +21,12 @@ def register(subparsers) -> None:
         "feedforward + PD at the simulation timestep), moving the obstacle along its path.",
     )
     p.add_argument("--plan", required=True, help="PLAN.json written by `torquebench plan`")
+    p.add_argument("--robot", default=None,
+                   help="registered robot or URDF/MJCF path (default: the robot PLAN.json "
+                        "records, else lynxmotion): its scene, built around it if it has none, "
+                        "and its Pinocchio feedforward")
     p.add_argument("--plant", default=None,
-                   help="plant MJCF (default: the lynxmotion scene with its obstacle)")
+                   help="plant MJCF (default: the robot's scene with floor, light, obstacle)")
     p.add_argument("--out", required=True, help="REPLAY.json to write")
     p.add_argument("--video", default=None, help="also render the replay to this mp4")
     p.set_defaults(func=run)
@@ -46,16 +51,31 @@ def result_json(result, plant: str) -> dict:
 def run(args) -> int:
     from harness.replay.reference import plan_reference
     from harness.replay.simulate import replay
+    from harness.robots.arm import arm_geometry
     from harness.robots.baseline import PinocchioModel
     from harness.robots.registry import load_mujoco, load_pinocchio
+    from harness.robots.scene import replay_scene
 
-    reference = plan_reference(read_plan(args.plan))
-    plant = args.plant or DEFAULT_ROBOT
-    model = load_mujoco(plant, scene=True)
-    result, trace = replay(model, reference, PinocchioModel(load_pinocchio(DEFAULT_ROBOT)))
-    write_json(args.out, result_json(result, str(plant)))
+    plan = read_plan(args.plan)
+    reference = plan_reference(plan)
+    robot = args.robot or _recorded_robot(plan)
+    model = load_mujoco(args.plant, scene=True) if args.plant else replay_scene(robot)
+    geometry = arm_geometry(robot)
+    if geometry.dof != reference.dof:
+        raise UserError(f"the plan has {reference.dof} joints, robot {robot} has {geometry.dof}")
+    result, trace = replay(model, reference, PinocchioModel(load_pinocchio(robot)),
+                           geometry=geometry)
+    write_json(args.out, {**result_json(result, str(args.plant or robot)), "robot": robot,
+                          "links": geometry.link_names,
+                          "link_min_clearance": trace.clearance.min(axis=0)})
     if args.video:
         from harness.replay.video import render_video
 
         render_video(model, trace, args.video)
     return 0
+
+
+def _recorded_robot(plan: dict) -> str:
+    """The robot a PLAN.json was made for (older plans: the default robot)."""
+    robot = plan.get("robot") if isinstance(plan, dict) else None
+    return robot if isinstance(robot, str) and robot else DEFAULT_ROBOT

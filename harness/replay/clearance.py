@@ -1,11 +1,13 @@
 """Link-obstacle clearance measured on a MuJoCo plant.
 
-Two measures, both in m:
-- centre-to-segment: distance from the obstacle centre to the link segments
-  shoulder->elbow (link 2) and elbow->end effector (link 3), the paper's D1, D2
-  (eq. 16, with the projection clamped to the segment);
-- surface: MuJoCo's `mj_geomDistance` between the link capsules 'link2',
-  'link3' and the obstacle sphere 'obstacle' (centre distance minus radii).
+Two measures, both in m, over every link the planner checks (planning.kinematics:
+segments between consecutive joint origins and to the flange, those that move):
+- centre-to-segment: distance from the obstacle centre to each link segment, its ends
+  read from MuJoCo (joint anchors `xanchor`, the flange site 'end_effector'); on the
+  Lynxmotion link 2 (shoulder->elbow) and link 3 (elbow->end effector), the paper's D1,
+  D2 (eq. 16, with the projection clamped to the segment);
+- surface: MuJoCo's `mj_geomDistance` between the link capsules 'link<j>' and the
+  obstacle sphere 'obstacle' (centre distance minus radii), when the scene has them.
 """
 
 from __future__ import annotations
@@ -17,9 +19,9 @@ import numpy as np
 
 from harness.errors import UserError
 from planning.clearance import segment_distance
+from planning.kinematics import ArmGeometry, paper_arm
 
-LINK_SITES = (("shoulder", "elbow"), ("elbow", "end_effector"))
-LINK_GEOMS = ("link2", "link3")
+FLANGE_SITE = "end_effector"
 OBSTACLE = "obstacle"
 SURFACE_CUTOFF = 1.0  # m: mj_geomDistance reports distances up to this bound
 
@@ -30,24 +32,38 @@ def _id(model: mujoco.MjModel, kind: mujoco.mjtObj, name: str) -> int:
 
 @dataclass(frozen=True)
 class ClearanceProbe:
-    """Where to look on a plant: link segments from sites, optional geoms for surfaces."""
+    """Where to look on a plant: link points (joint anchors, flange site), the links as
+    index pairs into them, optional geoms for surfaces."""
 
-    segments: tuple[tuple[int, int], ...]  # site id pairs
-    link_geoms: tuple[int, ...]  # capsule geom ids ('link2', 'link3'), may be empty
+    joints: tuple[int, ...]  # hinge joint ids, in the arm's joint order
+    flange_site: int
+    segments: tuple[tuple[int, int], ...]  # index pairs into (joint anchors..., flange)
+    link_geoms: tuple[int, ...]  # capsule geom ids ('link<j>'), may be empty
     obstacle_geom: int  # -1 if the plant has no obstacle sphere
     obstacle_mocap: int  # -1 if the plant has no mocap obstacle body
 
     @classmethod
-    def of(cls, model: mujoco.MjModel) -> ClearanceProbe:
-        site = mujoco.mjtObj.mjOBJ_SITE
-        segments = tuple((_id(model, site, a), _id(model, site, b)) for a, b in LINK_SITES)
-        if any(i < 0 for pair in segments for i in pair):
-            raise UserError("plant has no sites 'shoulder', 'elbow', 'end_effector' for clearance")
-        geoms = tuple(_id(model, mujoco.mjtObj.mjOBJ_GEOM, g) for g in LINK_GEOMS)
+    def of(cls, model: mujoco.MjModel, geometry: ArmGeometry | None = None) -> ClearanceProbe:
+        """The probe of the arm `geometry` (default: the paper's Lynxmotion) on model."""
+        geometry = geometry or paper_arm()
+        joints = tuple(int(j) for j in range(model.njnt)
+                       if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE)
+        if len(joints) != geometry.dof:
+            raise UserError(f"plant has {len(joints)} hinge joints, the arm {geometry.dof}")
+        flange = _id(model, mujoco.mjtObj.mjOBJ_SITE, FLANGE_SITE)
+        if flange < 0:
+            raise UserError(f"plant has no site '{FLANGE_SITE}' at the flange for clearance")
+        geoms = tuple(_id(model, mujoco.mjtObj.mjOBJ_GEOM, f"link{i + 1}")
+                      for i, _ in geometry.links)
         obstacle_geom = _id(model, mujoco.mjtObj.mjOBJ_GEOM, OBSTACLE)
         body = _id(model, mujoco.mjtObj.mjOBJ_BODY, OBSTACLE)
         mocap = int(model.body_mocapid[body]) if body >= 0 else -1
-        return cls(segments, geoms if min(geoms) >= 0 else (), obstacle_geom, mocap)
+        return cls(joints, flange, tuple(geometry.links),
+                   geoms if min(geoms) >= 0 else (), obstacle_geom, mocap)
+
+    def points(self, data: mujoco.MjData) -> np.ndarray:
+        """Link points (dof + 1, 3) in m at the current kinematics."""
+        return np.vstack([data.xanchor[list(self.joints)], data.site_xpos[self.flange_site]])
 
     @property
     def has_surface(self) -> bool:
@@ -60,8 +76,9 @@ class ClearanceProbe:
 
     def centre_distances(self, data: mujoco.MjData, centre: np.ndarray) -> np.ndarray:
         """Distance (m) from centre to each link segment at the current kinematics."""
-        a = np.stack([data.site_xpos[i] for i, _ in self.segments])
-        b = np.stack([data.site_xpos[j] for _, j in self.segments])
+        points = self.points(data)
+        a = points[[i for i, _ in self.segments]]
+        b = points[[j for _, j in self.segments]]
         return segment_distance(np.broadcast_to(centre, a.shape), a, b)
 
     def surface_distances(self, model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:

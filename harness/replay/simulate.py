@@ -24,6 +24,7 @@ from harness.errors import UserError
 from harness.replay.clearance import ClearanceProbe
 from harness.replay.reference import PlanReference, check_joint_limits
 from identification.torque_model import TorqueModel
+from planning.kinematics import ArmGeometry
 
 
 @dataclass(frozen=True)
@@ -46,8 +47,8 @@ class ReplayTrace:
     power_reference: np.ndarray  # (n,) W, feedforward torque times reference velocity
     obstacle: np.ndarray  # (n, 3) m
     end_effector: np.ndarray  # (n, 3) m
-    clearance: np.ndarray  # (n, 2) m, centre-to-segment per link
-    surface: np.ndarray | None  # (n, 2) m, mj_geomDistance per link capsule
+    clearance: np.ndarray  # (n, links) m, centre-to-segment per link
+    surface: np.ndarray | None  # (n, links) m, mj_geomDistance per link capsule
 
 
 def plant_joint_map(model: mujoco.MjModel, dof: int) -> tuple[np.ndarray, np.ndarray]:
@@ -84,13 +85,15 @@ def _pd_gains(model: mujoco.MjModel, q: np.ndarray, gains: TrackingGains):
 
 
 def simulate(model: mujoco.MjModel, reference: PlanReference, feedforward: TorqueModel,
-             gains: TrackingGains = TrackingGains()) -> ReplayTrace:
-    """Track reference on model (the plant) and record every simulation step."""
+             gains: TrackingGains = TrackingGains(),
+             geometry: ArmGeometry | None = None) -> ReplayTrace:
+    """Track reference on model (the plant) and record every simulation step; clearance is
+    measured to the links of geometry (default: the Lynxmotion's)."""
     joints, gear = plant_joint_map(model, reference.dof)
     if feedforward.dof != reference.dof:
         raise UserError(f"feedforward model has {feedforward.dof} joints, the plan {reference.dof}")
     check_joint_limits(reference, model.jnt_range, model.jnt_limited.astype(bool))
-    probe = ClearanceProbe.of(model)
+    probe = ClearanceProbe.of(model, geometry)
     dt = model.opt.timestep
     n = int(round(reference.duration / dt))
     t = reference.t[0] + dt * np.arange(n + 1)
@@ -102,9 +105,8 @@ def simulate(model: mujoco.MjModel, reference: PlanReference, feedforward: Torqu
     data = mujoco.MjData(model)
     data.qpos[:], data.qvel[:] = q_ref[0], qd_ref[0]
     rows = {k: np.empty((n + 1, reference.dof)) for k in ("q", "qd", "tau")}
-    ee, clearance = np.empty((n + 1, 3)), np.empty((n + 1, 2))
+    ee, clearance = np.empty((n + 1, 3)), np.empty((n + 1, len(probe.segments)))
     surface = np.empty((n + 1, len(probe.link_geoms))) if probe.has_surface else None
-    ee_site = probe.segments[-1][1]
     for k in range(n + 1):
         probe.move_obstacle(data, obstacle[k])
         tau = tau_ff[k] + kp[k] * (q_ref[k] - data.qpos) + kd[k] * (qd_ref[k] - data.qvel)
@@ -113,7 +115,7 @@ def simulate(model: mujoco.MjModel, reference: PlanReference, feedforward: Torqu
         # mj_step evaluates forces and kinematics at the pre-step state, recorded here.
         (mujoco.mj_step if k < n else mujoco.mj_forward)(model, data)
         rows["tau"][k] = data.qfrc_actuator
-        ee[k] = data.site_xpos[ee_site]
+        ee[k] = data.site_xpos[probe.flange_site]
         clearance[k] = probe.centre_distances(data, obstacle[k])
         if surface is not None:
             surface[k] = probe.surface_distances(model, data)
@@ -132,7 +134,7 @@ class ReplayResult:
     energy: float  # J, integral |sum tau qd| dt of the applied torques
     energy_planned: float  # J, the plan's own figure (or the reference's when absent)
     energy_reference: float  # J, same integral of feedforward torque along the reference
-    min_clearance: float  # m, centre-to-segment, both links
+    min_clearance: float  # m, centre-to-segment, all links
     surface_clearance: float | None  # m, mj_geomDistance, None without an obstacle geom
     planned_min_clearance: float | None  # m, the plan's own figure
     threshold: float  # m, lambda
@@ -178,7 +180,8 @@ def summarize(trace: ReplayTrace, reference: PlanReference, dt: float) -> Replay
 
 
 def replay(model: mujoco.MjModel, reference: PlanReference, feedforward: TorqueModel,
-           gains: TrackingGains = TrackingGains()) -> tuple[ReplayResult, ReplayTrace]:
+           gains: TrackingGains = TrackingGains(),
+           geometry: ArmGeometry | None = None) -> tuple[ReplayResult, ReplayTrace]:
     """Simulate and summarize: the measured result and its time series."""
-    trace = simulate(model, reference, feedforward, gains)
+    trace = simulate(model, reference, feedforward, gains, geometry)
     return summarize(trace, reference, model.opt.timestep), trace

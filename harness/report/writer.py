@@ -17,6 +17,7 @@ TITLES = {
     "planning": "Planning (paper Figs. 9–11)",
     "replay": "Replay in MuJoCo",
     "closeloop": "Closing the loop on measured data",
+    "real_data": "Real measured data: a Franka Emika Panda (Gaz et al. 2019)",
 }
 
 

@@ -10,7 +10,7 @@ import numpy as np
 import pinocchio as pin
 
 from harness.errors import UserError
-from harness.robots.registry import load_mujoco, load_pinocchio
+from harness.robots.registry import check_open_chain, load_mujoco, load_pinocchio
 
 
 @dataclass(frozen=True)
@@ -43,8 +43,10 @@ class Plant:
 
 
 def load_plant(name_or_path: str | Path) -> Plant:
-    """Load a plant by registry name or MJCF path; only hinge/slide joints are supported."""
+    """Load a plant by registry name or MJCF path; only hinge/slide joints of an open chain
+    are supported."""
     model = load_mujoco(name_or_path)
     if model.nq != model.nv or model.nv == 0:
         raise UserError(f"plant {name_or_path}: needs 1-DOF joints only (nq={model.nq}, nv={model.nv})")
+    check_open_chain(model, name_or_path)
     return Plant(str(name_or_path), model)

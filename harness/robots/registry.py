@@ -35,6 +35,9 @@ class Robot:
     mjcf: Path | None = None  # robot-only MJCF; None: MuJoCo compiles the URDF
     scene: Path | None = None  # MJCF with floor, light, obstacle
     source: str = ""
+    # the bench's planning motion: start and goal (rad, one per joint) and the body whose
+    # link the obstacle crosses; None: derived from the joint limits
+    motion: tuple[tuple[float, ...], tuple[float, ...], str] | None = None
 
 
 @cache
@@ -47,8 +50,9 @@ def erd_robots_dir() -> Path:
     return path
 
 
-def _erd(name: str, relpath: str) -> Robot:
-    return Robot(name=name, urdf=erd_robots_dir() / relpath, source="example-robot-data")
+def _erd(name: str, relpath: str, motion=None) -> Robot:
+    return Robot(name=name, urdf=erd_robots_dir() / relpath, source="example-robot-data",
+                 motion=motion)
 
 
 ROBOTS = {
@@ -62,11 +66,22 @@ ROBOTS = {
     "double_pendulum": lambda: _erd(
         "double_pendulum", "double_pendulum_description/urdf/double_pendulum.urdf"
     ),
-    "ur5": lambda: _erd("ur5", "ur_description/urdf/ur5_robot.urdf"),
-    "panda": lambda: _erd("panda", "panda_description/urdf/panda.urdf"),  # fingers held fixed
+    "ur5": lambda: _erd("ur5", "ur_description/urdf/ur5_robot.urdf",
+                        ((1.2, -1.0, 1.2, -1.5, -1.5, 0.0), (-1.2, -1.4, 1.6, -1.0, -1.5, 0.5),
+                         "forearm_link")),
+    "panda": lambda: _erd("panda", "panda_description/urdf/panda.urdf",  # fingers held fixed
+                          ((1.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8),
+                           (-1.0, 0.2, 0.0, -1.8, 0.0, 2.2, 0.8), "panda_link4")),
 }
 
 DEFAULT_ROBOT = "lynxmotion"
+FLANGES = ("tool0", "panda_link8", "ee_link", "end_effector")  # first one a model has
+
+
+def flange_frame(model: pin.Model) -> str | None:
+    """The flange frame of the arm's Pinocchio model, or None (last joint's origin)."""
+    names = {f.name for f in model.frames}
+    return next((f for f in FLANGES if f in names), None)
 
 
 def get_robot(name: str) -> Robot:
@@ -167,15 +182,20 @@ def read_text(path: Path) -> str:
         raise UserError(f"cannot read robot file {path}: {exc.strerror}") from None
 
 
+def check_open_chain(model: mujoco.MjModel, name_or_path: str | Path) -> None:
+    """UserError if MJCF <equality> constraints close a loop (only open chains are supported)."""
+    if model.neq > 0:
+        raise UserError(f"robot {name_or_path}: equality constraints close the chain: "
+                        "only open serial chains are supported")
+
+
 def load_chain(name_or_path: str | Path) -> KinematicChain:
     """The robot's kinematic chain (identification.library.chain); UserError unless it is a
     fixed-base serial chain of revolute joints."""
     model = load_pinocchio(name_or_path)
     name = str(name_or_path) if str(name_or_path) in ROBOTS else Path(name_or_path).stem
     if str(name_or_path) not in ROBOTS and Path(name_or_path).suffix.lower() != ".urdf":
-        if load_mujoco(name_or_path).neq > 0:  # MJCF <equality> constraints close a loop
-            raise UserError(f"robot {name_or_path}: equality constraints close the chain: "
-                            "only open serial chains are supported")
+        check_open_chain(load_mujoco(name_or_path), name_or_path)
     try:
         chain = KinematicChain.from_pinocchio(model, name)
     except ChainError as exc:

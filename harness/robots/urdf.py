@@ -15,12 +15,33 @@ two models agree by construction (checked in the tests).
 
 from __future__ import annotations
 
+import math
 import re
 import xml.etree.ElementTree as ET
 
 from harness.errors import UserError
 
 MOVING = ("revolute", "continuous")
+# Attributes that hold numbers: a NaN or inf there is one clear error, never a model that
+# one engine accepts with a warning and the other refuses.
+NUMERIC = ("xyz", "rpy", "value", "ixx", "ixy", "ixz", "iyy", "iyz", "izz", "lower", "upper",
+           "effort", "velocity", "damping", "friction")
+
+
+def _check_numbers(root: ET.Element, source: str) -> None:
+    """UserError naming the first numeric attribute that is not a list of finite numbers."""
+    for element in root.iter():
+        for key in NUMERIC:
+            raw = element.get(key)
+            if raw is None:
+                continue
+            try:
+                ok = all(math.isfinite(float(v)) for v in raw.split())
+            except ValueError:
+                ok = False
+            if not ok:
+                raise UserError(f"invalid URDF {source}: <{element.tag} {key}=\"{raw}\">: "
+                                "expected finite numbers")
 
 
 def arm_urdf(text: str, source: str) -> str:
@@ -31,6 +52,7 @@ def arm_urdf(text: str, source: str) -> str:
         raise UserError(f"invalid URDF {source}: {exc}") from None
     if root.tag != "robot":
         raise UserError(f"invalid URDF {source}: the root element is <{root.tag}>, not <robot>")
+    _check_numbers(root, source)
     joints = root.findall("joint")
     below: dict[str, list[ET.Element]] = {}
     for joint in joints:

@@ -71,7 +71,7 @@ def comparison(results: dict[str, ReplayResult]) -> dict | None:
     }
 
 
-def _row(name: str, r: ReplayResult, ok: dict[str, bool]) -> str:
+def table_row(name: str, r: ReplayResult, ok: dict[str, bool]) -> str:
     surface = "–" if r.surface_clearance is None else f"{r.surface_clearance * 1e3:.1f}"
     failed = [k for k, v in ok.items() if not v]
     verdict = "FAIL: " + ", ".join(failed) if failed else "pass"
@@ -104,7 +104,7 @@ def markdown(results: dict[str, ReplayResult], verdicts: dict, side: dict | None
         "centre–segment [mm] | min surface distance [mm] | λ [mm] | tracking RMS [mrad] "
         "| max error [mrad] | acceptance |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
-        *(_row(name, r, verdicts[name]) for name, r in results.items()),
+        *(table_row(name, r, verdicts[name]) for name, r in results.items()),
     ]
     if side:
         lines += ["", f"Identified vs closed-form, replayed energy ratio "

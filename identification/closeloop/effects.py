@@ -19,6 +19,13 @@ coefficient follow the CLI contract:
                                                 a non-zero q_ref shows up as an offset)
 - `payload`  tau = m * tau_unit(q, qd, qdd)     m in kg, a point mass at the end effector;
                                                 tau_unit couples all joints.
+- `sigmoid`  tau_j = phi1 [s(phi2 (qd_j + phi3)) - s(phi2 phi3)], s(x) = 1 / (1 + e^-x)
+                                                phi1 in N m; the friction model Gaz et al.
+                                                (RA-L 2019) identified on a real Panda:
+                                                steepness phi2 (s/rad) and shift phi3 (rad/s)
+                                                are shape parameters estimated from the data
+                                                (identification.closeloop.measured). Not in
+                                                the default dictionary of simulated plants.
 
 Why that Coulomb shape. MuJoCo's dry friction (joint `frictionloss` f) is a soft
 constraint row whose force F minimizes a Huber cost of the constraint acceleration
@@ -43,10 +50,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import expit
 
 JOINT_EFFECTS = ("viscous", "coulomb", "armature", "offset", "spring")
 UNITS = {"viscous": "N m s/rad", "coulomb": "N m", "armature": "kg m^2", "offset": "N m",
-         "spring": "N m/rad", "payload": "kg"}
+         "spring": "N m/rad", "payload": "kg", "sigmoid": "N m"}
+SIGMOID_STEEPNESS = 10.0  # s/rad, default phi2 of the sigmoid friction
 COULOMB_EPS = 0.01  # rad/s, default half-width of the linear zone
 COULOMB_LEAD = 0.01  # s, default lead of the switching velocity
 COULOMB_SHAPES = tuple((lead, eps) for lead in (0.0, 0.005, 0.01, 0.02)
@@ -77,20 +86,32 @@ class EffectTerm:
     coefficient: float
     lead: float = COULOMB_LEAD  # s, coulomb shape only
     eps: float = COULOMB_EPS  # rad/s, coulomb shape only
+    steepness: float = SIGMOID_STEEPNESS  # s/rad, sigmoid shape only (phi2)
+    shift: float = 0.0  # rad/s, sigmoid shape only (phi3)
 
     def to_json(self) -> dict:
         out = {"joint": self.joint, "effect": self.effect, "coefficient": self.coefficient,
                "unit": UNITS[self.effect]}
         if self.effect == "coulomb":
             out.update(lead=self.lead, eps=self.eps)
+        if self.effect == "sigmoid":
+            out.update(steepness=self.steepness, shift=self.shift)
         return out
 
 
+def sigmoid_friction(qd: np.ndarray, steepness: float, shift: float) -> np.ndarray:
+    """Gaz et al.'s friction at unit phi1: s(phi2 (qd + phi3)) - s(phi2 phi3), 0 at rest."""
+    return expit(steepness * (qd + shift)) - expit(steepness * shift)
+
+
 def joint_signal(effect: str, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
-                 lead: float = COULOMB_LEAD, eps: float = COULOMB_EPS) -> np.ndarray:
+                 lead: float = COULOMB_LEAD, eps: float = COULOMB_EPS,
+                 steepness: float = SIGMOID_STEEPNESS, shift: float = 0.0) -> np.ndarray:
     """The (n, dof) per-joint signal of a joint effect for unit coefficient."""
     if effect == "viscous":
         return qd
+    if effect == "sigmoid":
+        return sigmoid_friction(qd, steepness, shift)
     if effect == "coulomb":
         return np.clip((qd + lead * qdd) / eps, -1.0, 1.0)
     if effect == "armature":
@@ -151,5 +172,6 @@ def effect_torque(terms: tuple[EffectTerm, ...], q: np.ndarray, qd: np.ndarray, 
             tau += term.coefficient * payload(q, qd, qdd)
         else:
             tau[:, term.joint - 1] += term.coefficient * joint_signal(
-                term.effect, q, qd, qdd, term.lead, term.eps)[:, term.joint - 1]
+                term.effect, q, qd, qdd, term.lead, term.eps, term.steepness,
+                term.shift)[:, term.joint - 1]
     return tau

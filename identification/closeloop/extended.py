@@ -55,10 +55,13 @@ class ExtendedModel:
                 tau = tau + t.coefficient * self._symbolic_payload(q, qd, qdd)
                 continue
             j = t.joint - 1
-            coulomb = 0
+            coulomb = sigmoid = 0
             if t.effect == "coulomb":
                 coulomb = ca.fmin(ca.fmax((qd[j] + t.lead * qdd[j]) / t.eps, -1), 1)
-            signal = {"viscous": qd[j], "coulomb": coulomb,
+            if t.effect == "sigmoid":
+                sigmoid = (1 / (1 + ca.exp(-t.steepness * (qd[j] + t.shift)))
+                           - 1 / (1 + np.exp(-t.steepness * t.shift)))
+            signal = {"viscous": qd[j], "coulomb": coulomb, "sigmoid": sigmoid,
                       "armature": qdd[j], "offset": 1.0, "spring": q[j]}[t.effect]
             unit = ca.DM.zeros(self.dof, 1)
             unit[j] = 1.0

@@ -105,8 +105,11 @@ class KinematicLibrary:
         return self.function(q, qd, qdd)
 
     @classmethod
-    def generate(cls, chain: KinematicChain, coulomb: bool = True) -> KinematicLibrary:
-        """Base atoms of chain: zero atoms dropped, dependent ones folded (pivoted QR)."""
+    def generate(cls, chain: KinematicChain, coulomb: bool = True,
+                 joint_atoms: bool = True) -> KinematicLibrary:
+        """Base atoms of chain: zero atoms dropped, dependent ones folded (pivoted QR).
+        coulomb False: without the Coulomb atoms; joint_atoms False: the rigid body alone
+        (no armature, viscous or Coulomb atom)."""
         q, qd, qdd = (ca.SX.sym(s, chain.dof) for s in ("q", "qd", "qdd"))
         every = ca.Function("atoms", [q, qd, qdd], [_all_atoms(chain, q, qd, qdd)])
         states = random_states(chain.dof, N_STATES)
@@ -115,6 +118,8 @@ class KinematicLibrary:
         stack = stack.reshape(chain.dof, N_STATES, p).transpose(1, 0, 2)  # (N, dof, p)
         if not coulomb:
             stack[:, :, p - chain.dof:] = 0.0
+        if not joint_atoms:
+            stack[:, :, 10 * chain.dof:] = 0.0
         flat = stack.reshape(-1, p)
         norms = np.linalg.norm(flat, axis=0)
         usable = np.flatnonzero(norms > 1e-10 * norms.max())

@@ -127,6 +127,34 @@ def weighted_lstsq(design: np.ndarray, tau: np.ndarray, cols, sigma: np.ndarray)
     return sol[:-dof], sol[-dof:], resid, cov
 
 
+class _WeightedGram:
+    """Normal equations of the weighted, stacked design (every atom + per-joint offsets):
+    the t-statistic of an atom added to a support without refitting the rows. Used to rank
+    candidates only; kept supports are refitted by weighted_lstsq."""
+
+    def __init__(self, design: np.ndarray, tau: np.ndarray, sigma: np.ndarray):
+        n, dof, p = design.shape
+        x = _offset_design(design, list(range(p))) * np.tile(1.0 / sigma, n)[:, None]
+        y = tau.reshape(-1) * np.tile(1.0 / sigma, n)
+        scale = 1.0 / np.maximum(np.linalg.norm(x, axis=0), 1e-300)  # unit columns: t is
+        x = x * scale  # scale-free, and the small solves stay well conditioned
+        self.gram, self.rhs, self.yy = x.T @ x, x.T @ y, float(y @ y)
+        self.rows, self.offsets = len(y), np.arange(p, p + dof)
+
+    def added_t(self, support: np.ndarray, candidates: np.ndarray) -> np.ndarray:
+        """|t| of each candidate atom when it alone is added to support (+ offsets)."""
+        out = np.zeros(len(candidates))
+        for i, k in enumerate(candidates):
+            cols = np.concatenate([support, [k], self.offsets])
+            g = self.gram[np.ix_(cols, cols)]
+            inv = np.linalg.pinv(g)
+            coef = inv @ self.rhs[cols]
+            rss = max(self.yy - coef @ self.rhs[cols], 0.0)
+            var = rss / max(self.rows - len(cols), 1) * inv[len(support), len(support)]
+            out[i] = abs(coef[len(support)]) / max(np.sqrt(max(var, 0.0)), 1e-300)
+        return out
+
+
 class CoupledRegression(Regressor):
     """Stacked, noise-weighted Lasso + proportional filter + WLS refit over shared atoms.
 
@@ -204,19 +232,15 @@ class CoupledRegression(Regressor):
         bound = self._bound(design.shape[-1])
         support, fit = self._significant(design, tau, support)
         spread = np.linalg.norm(tau - tau.mean(axis=0))
+        gram = _WeightedGram(design, tau, self.sigma_)
         for _ in range(len(self.base_)):
             if np.linalg.norm(fit[2]) <= 1e-9 * spread:  # exact already: t is round-off
                 break
-            best, best_ratio = None, 1.0
-            for k in np.setdiff1d(self.base_, support):
-                trial = np.sort(np.append(support, k))
-                coef, _, _, cov = weighted_lstsq(design, tau, trial, self.sigma_)
-                i = int(np.searchsorted(trial, k))
-                ratio = abs(coef[i]) / max(np.sqrt(max(cov[i, i], 0.0)), 1e-300) / bound[k]
-                if ratio > best_ratio:
-                    best, best_ratio = k, ratio
-            if best is None:
+            left_out = np.setdiff1d(self.base_, support)
+            ratio = gram.added_t(support, left_out) / bound[left_out]
+            if not len(left_out) or ratio.max() <= 1.0:
                 break
+            best = left_out[int(np.argmax(ratio))]
             support, fit = self._significant(design, tau, np.sort(np.append(support, best)))
         return support, fit
 

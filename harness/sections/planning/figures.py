@@ -9,20 +9,20 @@ import numpy as np
 from harness.report.figures import plt, save_figure
 from planning.config import Scenario
 from planning.energy import power as mechanical_power
-from planning.kinematics import ArmGeometry
+from planning.kinematics import paper_arm
 
 COLORS = {"pinocchio": "tab:green", "identified": "tab:orange"}
 
 
 def path3d(free, paper: dict, path: Path) -> Path:
     """End-effector paths: unobstructed optimum, executed plans, obstacle path (Fig. 9)."""
-    geometry = ArmGeometry()
+    geometry = paper_arm()
     fig = plt.figure(figsize=(6.5, 5.5))
     ax = fig.add_subplot(projection="3d")
-    tip = geometry.points(free.q)[2]
+    tip = geometry.flange_position(free.q)
     ax.plot(*tip.T, color="tab:red", label="energy-optimal, no obstacle")
     for name, result in paper.items():
-        tip = geometry.points(result.q)[2]
+        tip = geometry.flange_position(result.q)
         ax.plot(*tip.T, color=COLORS.get(name, "tab:blue"), ls="-" if name == "pinocchio"
                 else "--", label=f"executed ({name})")
     obstacle = next(iter(paper.values())).obstacle

@@ -1,0 +1,113 @@
+"""Closing the loop on a given dataset (`closeloop --data FILE.npz --robot R`): a measured
+log (`ingest`) or any dataset of the contract, on a robot's rigid-body base atoms.
+
+The loop is identification.closeloop.measured's; here the robot's rigid-body library is
+built from its kinematics and the outcome written as closeloop.json. Errors are against the
+measured torque `tau` (and, where the file has one, also against `tau_clean`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+
+from harness.data.dataset import load_arrays
+from harness.errors import UserError
+from harness.robots.registry import DEFAULT_ROBOT, ROBOTS, load_chain
+from identification.closeloop.measured import (
+    EXPLAINED,
+    MIN_GAIN,
+    STRUCTURE,
+    VALIDATION_BLOCKS,
+    MeasuredLoop,
+    close_loop_measured,
+)
+from identification.errors import IdentificationError
+from identification.library.kinematic import KinematicLibrary
+from identification.metrics import rel_error
+
+
+@cache
+def rigid_library(robot: str) -> KinematicLibrary:
+    """The robot's rigid-body base atoms (no armature, viscous or Coulomb atom)."""
+    return KinematicLibrary.generate(load_chain(robot), joint_atoms=False)
+
+
+@dataclass(frozen=True)
+class MeasuredRun:
+    """The loop closed on a dataset, with what it was run on."""
+
+    robot: str
+    source: str
+    arrays: dict
+    meta: dict
+    holdout: float
+    loop: MeasuredLoop
+
+    def clean_errors(self) -> tuple[list[float], list[float]] | None:
+        """Held-out errors before/after against tau_clean, if the dataset has it."""
+        if "tau_clean" not in self.arrays:
+            return None
+        a, held = self.arrays, slice(self.loop.split, None)
+        states = (a["q"][held], a["qd"][held], a["qdd"][held])
+        return tuple(rel_error(m.torque(*states), a["tau_clean"][held]).tolist()
+                     for m in (self.loop.declared, self.loop.model))
+
+    def to_json(self) -> dict:
+        r = self.loop
+        out = {"effects": [t.to_json() for t in r.terms],
+               "error_before": r.error_before.tolist(), "error_after": r.error_after.tolist(),
+               "unexplained": r.unexplained, "unexplained_joints": list(r.unexplained_joints),
+               "declared": "rigid-body identification on the training part (the robot's "
+                           "rigid-body base atoms, coupled sparse regression, per-joint offset)",
+               "explained": r.explained.tolist(),
+               "structure_before": r.structure_before.tolist(),
+               "structure_after": r.structure_after.tolist(), "noise_sigma": r.noise.tolist(),
+               "validation_before": r.validation_before.tolist(),
+               "validation_after": r.validation_after.tolist(),
+               "sensor_offsets": r.model.declared.offsets.tolist(),
+               "selection": {"path": [list(p) for p in r.path],
+                             "not_named": [{"joint": j, "effect": e, "validation_gain": g,
+                                            "reason": why} for j, e, g, why in r.not_named],
+                             "rule": f"forward selection on {VALIDATION_BLOCKS} validation "
+                                     f"blocks of the training part; named if it cuts its "
+                                     f"joint's validation error power by >= {MIN_GAIN:.0%}; a "
+                                     f"joint is unexplained if its residual has structure "
+                                     f"(> {STRUCTURE} noise sigmas above the white noise) and "
+                                     f"the effects remove < {EXPLAINED:.0%} of its power"},
+               "error_definition": "held-out relative RMS ||tau_hat - tau|| / ||tau|| per joint "
+                                   f"on the last {self.holdout:.0%} of the samples (time order), "
+                                   "against the measured torque",
+               "robot": self.robot, "data": {"file": self.source, **{
+                   k: self.meta[k] for k in ("mode", "source", "samples", "derivatives")
+                   if k in self.meta}}}
+        clean = self.clean_errors()
+        if clean is not None:
+            out["error_before_clean"], out["error_after_clean"] = clean
+        return out
+
+
+def data_robot(meta: dict, given: str | None) -> str:
+    """--robot if given, else the robot the data record (registered, or a file that exists),
+    else the default."""
+    if given:
+        return given
+    plant = str(meta.get("robot") or meta.get("plant") or "")
+    return plant if plant in ROBOTS or (plant and Path(plant).is_file()) else DEFAULT_ROBOT
+
+
+def run_measured(data: str | Path, robot: str | None = None, holdout: float = 0.25) -> MeasuredRun:
+    """Close the loop on the dataset at data for robot (default: the one it records)."""
+    arrays, meta = load_arrays(data, ("q", "qd", "qdd", "tau"), optional=("tau_clean",))
+    robot = data_robot(meta, robot)
+    library = rigid_library(robot)
+    dof = arrays["q"].shape[1]
+    if dof != library.dof:
+        raise UserError(f"data have {dof} joints, robot {robot} has {library.dof}")
+    try:
+        loop = close_loop_measured(library, arrays["q"], arrays["qd"], arrays["qdd"],
+                                   arrays["tau"], holdout)
+    except IdentificationError as exc:
+        raise UserError(f"{data}: {exc}") from None
+    return MeasuredRun(robot, str(data), arrays, meta, holdout, loop)

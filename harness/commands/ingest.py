@@ -1,0 +1,39 @@
+"""`torquebench ingest`: a measured log (CSV) into the dataset contract (.npz)."""
+
+from __future__ import annotations
+
+from harness.data.ingest import ingest
+from harness.io import write_npz
+from harness.robots.registry import load_chain
+
+
+def register(sub) -> None:
+    p = sub.add_parser("ingest", help="a measured log (CSV) into a dataset .npz",
+                       description="Header 't, q1..qn, [qd1..qn], [qdd1..qn], tau1..taun' (s, rad, "
+                       "rad/s, rad/s^2, N m; irregular time stamps allowed; .csv.gz read "
+                       "compressed). Resampled to the median step; missing qd/qdd estimated by "
+                       "Savitzky-Golay differentiation with a window chosen from the data "
+                       "(written in meta).")
+    p.add_argument("--csv", required=True, help="the log (CSV, or gzipped CSV)")
+    p.add_argument("--robot", required=True, help="registered robot or URDF/MJCF path")
+    p.add_argument("--out", required=True, help="output dataset .npz")
+    p.add_argument("--rate", type=float, default=None,
+                   help="output rate in Hz (every k-th resampled sample, after the "
+                   "derivatives; default: the log's median step)")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    dof = load_chain(args.robot).dof
+    data = ingest(args.csv, dof, args.robot, args.rate)
+    write_npz(args.out, **data.npz())
+    meta, d = data.meta, data.meta["derivatives"]
+    how = ("qd, qdd as logged" if not d["estimated"] else
+           f"{', '.join(d['estimated'])} from {d['source']} by Savitzky-Golay (order "
+           f"{d['polyorder']}, window {d['window_samples']} samples = {d['window_s']:.3g} s, "
+           f"signal band up to {max(d['band_edge_hz']):.3g} Hz)")
+    print(f"wrote {args.out}: {meta['samples']} samples of {dof} joints at "
+          f"{meta['resampling']['rate_out_hz']:.6g} Hz from {meta['raw_samples']} logged "
+          f"(steps {meta['raw_step_s']['min'] * 1e3:.3g}-{meta['raw_step_s']['max'] * 1e3:.3g} ms); "
+          f"{how}")
+    return 0

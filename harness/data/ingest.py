@@ -1,0 +1,94 @@
+"""A measured log into the dataset contract: resampled, derivatives estimated, described.
+
+1. The log is read and validated (harness.data.csvlog).
+2. Resampling: every column is linearly interpolated onto a uniform grid at the median
+   time step of the log (irregular stamps, dropped samples), from its first to its last
+   stamp. The torque is interpolated, never smoothed: it is the regression target.
+3. Missing derivatives: from the highest logged one (qd if logged, else q) by
+   Savitzky-Golay differentiation of order POLYORDER on the uniform grid, with the window
+   chosen from the data (harness.data.derivatives.choose_window). Logged columns are kept
+   as logged (resampled).
+4. Optionally decimated to `rate` Hz (every k-th grid sample, after differentiation).
+
+`meta` records the source, the resampling, the derivative method with its window and the
+time-stamp statistics. There is no `tau_clean`: scores are against the measured torque.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from harness.data.csvlog import Log, read_log
+from harness.data.derivatives import choose_window, savgol_window_derivatives
+from harness.errors import UserError
+
+POLYORDER = 4
+
+
+@dataclass(frozen=True)
+class Ingested:
+    """The dataset payload of a log: arrays (t, q, qd, qdd, tau) and meta."""
+
+    arrays: dict[str, np.ndarray]
+    meta: dict
+
+    def npz(self) -> dict[str, np.ndarray]:
+        """The npz contract's keys (no tau_clean)."""
+        return {**self.arrays, "meta": np.array(json.dumps(self.meta))}
+
+
+def resample(t: np.ndarray, x: np.ndarray, grid: np.ndarray) -> np.ndarray:
+    """Columns of x (n, k) sampled at t, linearly interpolated at grid."""
+    return np.stack([np.interp(grid, t, x[:, j]) for j in range(x.shape[1])], axis=1)
+
+
+def uniform_grid(t: np.ndarray) -> tuple[np.ndarray, float]:
+    """The grid from t[0] to t[-1] at the median step, and its rate (Hz)."""
+    step = float(np.median(np.diff(t)))
+    n = int(np.floor((t[-1] - t[0]) / step + 1e-9)) + 1
+    return t[0] + step * np.arange(n), 1.0 / step
+
+
+def estimate(log: Log, grid: np.ndarray, rate: float) -> tuple[dict[str, np.ndarray], dict]:
+    """q, qd, qdd, tau on the grid (missing derivatives estimated) and their description."""
+    out = {g: resample(log.t, x, grid) for g, x in log.groups.items()}
+    missing = [g for g in ("qd", "qdd") if g not in out]
+    if not missing:
+        return out, {"method": "logged", "estimated": []}
+    source = "qd" if "qd" in out else "q"
+    orders = tuple(("q", "qd", "qdd").index(g) - ("q", "qd").index(source) for g in missing)
+    choice = choose_window(out[source], rate, POLYORDER, orders)
+    estimates = savgol_window_derivatives(out[source], rate, choice.window, POLYORDER, orders)
+    out.update(dict(zip(missing, estimates, strict=True)))
+    return out, {**choice.to_json(), "source": source, "estimated": missing}
+
+
+def ingest(path: str | Path, dof: int, robot: str, rate: float | None = None) -> Ingested:
+    """The log at path of a robot with dof joints, as a dataset at rate Hz (default: the
+    resampling rate, the log's median step)."""
+    log = read_log(path, dof)
+    grid, grid_rate = uniform_grid(log.t)
+    states, derivatives = estimate(log, grid, grid_rate)
+    every = 1
+    if rate is not None:
+        if not 0 < rate <= grid_rate * (1 + 1e-9):
+            raise UserError(f"--rate must be in (0, {grid_rate:.6g}] Hz (the log's median step), "
+                            f"got {rate:g}")
+        every = max(1, int(round(grid_rate / rate)))
+    keep = slice(None, None, every)
+    arrays = {"t": grid[keep], **{k: states[k][keep] for k in ("q", "qd", "qdd", "tau")}}
+    steps = np.diff(log.t)
+    meta = {"mode": "measured log", "source": Path(path).name, "plant": robot, "robot": robot,
+            "dof": dof, "samples": int(len(arrays["q"])), "logged": sorted(log.groups),
+            "raw_samples": int(len(log.t)), "duration_s": float(log.t[-1] - log.t[0]),
+            "raw_step_s": {"min": float(steps.min()), "median": float(np.median(steps)),
+                           "max": float(steps.max())},
+            "resampling": {"method": "linear interpolation onto a uniform grid at the median "
+                           "step", "rate_hz": grid_rate, "decimation": every,
+                           "rate_out_hz": grid_rate / every},
+            "derivatives": derivatives, "noise": None, "seed": None}
+    return Ingested(arrays, meta)

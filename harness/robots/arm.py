@@ -1,0 +1,115 @@
+"""What the planner needs of a robot, read from its model: the kinematic chain as data
+(planning.kinematics.ArmGeometry), its joint limits and its motors' torque limits.
+
+Joint placements and axes come from the Pinocchio model (identification.library.chain);
+the flange is the first of registry.FLANGES the model has (else the last joint's origin). Joint
+limits are MuJoCo's (an unlimited hinge gets [-pi, pi]); torque limits are the MJCF
+motors' ctrlrange x gear when the model has one motor per joint, else the URDF's effort
+limits.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from harness.robots.plant import load_plant
+from harness.robots.registry import (
+    ROBOTS,
+    flange_frame,
+    get_robot,
+    load_chain,
+    load_mujoco,
+    load_pinocchio,
+)
+from planning.config import PlannerConfig, Scenario
+from planning.kinematics import ArmGeometry
+
+
+def robot_label(robot: str | Path) -> str:
+    """A registered name as is, a path as given (what PLAN.json records)."""
+    return str(robot)
+
+
+@cache
+def arm_geometry(robot: str) -> ArmGeometry:
+    """The robot's chain of joint placements, axes and flange (m), for planning."""
+    chain = load_chain(robot)
+    model = load_pinocchio(robot)
+    last = model.njoints - 1
+    frame = flange_frame(model)
+    flange = np.zeros(3)
+    if frame is not None:
+        placement = model.frames[model.getFrameId(frame, pin.FrameType.BODY)]
+        if placement.parentJoint == last:
+            flange = np.asarray(placement.placement.translation)
+    bodies = []
+    for j in range(1, model.njoints):
+        names = [f.name for f in model.frames
+                 if f.parentJoint == j and f.type == pin.FrameType.BODY]
+        bodies.append(names[0] if names else model.names[j])
+    return ArmGeometry.of(chain.rotations, chain.translations, chain.axes, flange,
+                          robot_label(robot), bodies)
+
+
+def joint_limits(robot: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Lower and upper joint limits (rad) from the robot's MuJoCo model."""
+    lower, upper = load_plant(robot).limits()
+    return tuple(map(float, lower)), tuple(map(float, upper))
+
+
+def motor_torque_limit(robot: str) -> tuple[float, ...] | None:
+    """|tau_i| bound (N m) of each joint from the robot's MJCF motors (ctrlrange x gear), in
+    joint order; None if a motor is unlimited or the motors do not map 1:1 to joints."""
+    model = load_mujoco(robot)
+    joints = model.actuator_trnid[:, 0]
+    if model.nu == 0 or model.nu != model.njnt or sorted(joints) != list(range(model.njnt)) \
+            or not all(model.actuator_ctrllimited):
+        return None
+    reach = np.abs(model.actuator_ctrlrange).min(axis=1) * np.abs(model.actuator_gear[:, 0])
+    limit = np.empty(model.njnt)
+    limit[joints] = reach
+    return tuple(float(v) for v in limit)
+
+
+def torque_limit(robot: str) -> tuple[float, ...] | None:
+    """The motors' limits (MJCF), else the model's effort limits (URDF); None if unknown."""
+    motors = motor_torque_limit(robot)
+    if motors is not None or load_mujoco(robot).nu > 0:
+        return motors
+    effort = np.asarray(load_pinocchio(robot).effortLimit, float)
+    if not np.all(np.isfinite(effort) & (effort > 0)):
+        return None
+    return tuple(float(v) for v in effort)
+
+
+def planner_config(robot: str, **changes) -> PlannerConfig:
+    """The default planner configuration on robot: its links, joint and torque limits."""
+    lower, upper = joint_limits(robot)
+    base = dict(geometry=arm_geometry(robot), lower=lower, upper=upper,
+                torque_limit=torque_limit(robot))
+    return dataclasses.replace(PlannerConfig(), **{**base, **changes})
+
+
+def bench_motion(robot: str, duration: float = 2.0) -> tuple[Scenario, int]:
+    """The robot's planning motion (registry entry; else from 30 % to 70 % of every joint's
+    range) at rest, without obstacle, and the index (into the geometry's links) of the link
+    an obstacle should cross: the registered body's, else the last link."""
+    geometry = arm_geometry(robot)
+    entry = get_robot(robot) if robot in ROBOTS else None
+    if entry is not None and entry.motion is not None:
+        start, goal, body = entry.motion
+    else:
+        lower, upper = (np.maximum(np.asarray(b), -np.pi) if k == 0 else
+                        np.minimum(np.asarray(b), np.pi) for k, b in enumerate(joint_limits(robot)))
+        start, goal, body = tuple(lower + 0.3 * (upper - lower)), \
+            tuple(lower + 0.7 * (upper - lower)), ""
+    owners = [geometry.bodies[i] for i, _ in geometry.links]
+    link = owners.index(body) if body in owners else len(owners) - 1
+    dof = geometry.dof
+    return Scenario(tuple(map(float, start)), tuple(map(float, goal)), duration, None,
+                    (0.0,) * dof), link

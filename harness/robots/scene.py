@@ -1,0 +1,140 @@
+"""A MuJoCo scene built around any arm (mujoco.MjSpec), for replaying plans.
+
+The arm's model (registry.arm_spec: the URDF's arm joints without meshes, or the MJCF)
+gets what a replay needs, as the Lynxmotion's hand-written scene.xml has it: a floor, a
+light, a camera looking at the arm, the moving obstacle as a mocap body with a sphere, one
+motor per joint limited to the model's torque limits (gear 1), a site 'end_effector' at the
+flange and a capsule 'link<j>' along every link the planner checks (no contacts: they are
+for measuring distances, mj_geomDistance). The timestep and integrator are the
+Lynxmotion's (0.5 ms, implicitfast), so every arm is tracked at the same rate.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from harness.errors import UserError
+from harness.robots.arm import arm_geometry, torque_limit
+from harness.robots.registry import ROBOTS, get_robot, load_mujoco
+from harness.robots.urdf import arm_urdf, strip_geometry
+from planning.kinematics import ArmGeometry
+
+TIMESTEP = 0.0005  # s
+OBSTACLE_RADIUS = 0.02  # m, drawn only: clearance is measured to the centre
+LINK_RADIUS = 0.012  # m, the Lynxmotion's link capsules
+FLANGE_SITE = "end_effector"
+
+
+def robot_spec(robot: str) -> mujoco.MjSpec:
+    """The arm's MuJoCo spec, compiled exactly as registry.load_mujoco compiles it."""
+    if robot in ROBOTS:
+        entry = get_robot(robot)
+        if entry.mjcf is not None:
+            return mujoco.MjSpec.from_file(str(entry.mjcf))
+        return mujoco.MjSpec.from_string(strip_geometry(arm_urdf(entry.urdf.read_text(), robot)))
+    load_mujoco(robot)  # one clear error for a missing or invalid file
+    path = Path(robot)
+    if path.suffix.lower() == ".urdf":
+        return mujoco.MjSpec.from_string(strip_geometry(arm_urdf(path.read_text(), robot)))
+    return mujoco.MjSpec.from_file(str(path))
+
+
+@cache
+def replay_scene(robot: str) -> mujoco.MjModel:
+    """The robot's replay scene: its own scene MJCF when registered with one (the
+    Lynxmotion's), else one built around it (build_scene)."""
+    if robot in ROBOTS and get_robot(robot).scene is not None:
+        return load_mujoco(robot, scene=True)
+    return build_scene(robot).compile()
+
+
+def build_scene(robot: str) -> mujoco.MjSpec:
+    """The robot's spec with floor, light, camera, mocap obstacle, motors, flange site and
+    link capsules added (see the module docstring)."""
+    spec, geometry = robot_spec(robot), arm_geometry(robot)
+    hinges = [j for j in spec.joints if j.type == mujoco.mjtJoint.mjJNT_HINGE]
+    if len(hinges) != geometry.dof or len(spec.joints) != geometry.dof:
+        raise UserError(f"robot {robot}: {len(spec.joints)} MuJoCo joints, the arm has "
+                        f"{geometry.dof} revolute joints")
+    spec.compiler.discardvisual = False  # the scene's geoms have no contacts: keep them
+    spec.option.timestep = TIMESTEP
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.visual.global_.offwidth, spec.visual.global_.offheight = 640, 480
+    _add_motors(spec, hinges, robot)
+    _add_links(spec, hinges, geometry)
+    _add_surroundings(spec, geometry)
+    return spec
+
+
+def _add_motors(spec: mujoco.MjSpec, hinges, robot: str) -> None:
+    """One motor per joint, ctrlrange = +- the torque limit (unlimited if none is known)."""
+    if len(spec.actuators):
+        return  # an MJCF with its own motors keeps them
+    limit = torque_limit(robot)
+    for k, joint in enumerate(hinges):
+        motor = spec.add_actuator(name=joint.name, target=joint.name,
+                                  trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        motor.set_to_motor()
+        if limit is not None:
+            motor.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
+            motor.ctrlrange = [-limit[k], limit[k]]
+
+
+def _add_links(spec: mujoco.MjSpec, hinges, geometry: ArmGeometry) -> None:
+    """The flange site and one capsule per link, placed from the chain's points at q = 0
+    expressed in the frame of the body that carries them."""
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    home = geometry.points(np.zeros(geometry.dof))[0]
+    bodies = [model.jnt_bodyid[model.joint(j.name).id] for j in hinges]
+
+    def local(body: int, point: np.ndarray) -> np.ndarray:
+        return data.xmat[body].reshape(3, 3).T @ (point - data.xpos[body])
+
+    names = {s.name for s in spec.sites}
+    if FLANGE_SITE not in names:
+        last = spec.body(model.body(bodies[-1]).name)
+        last.add_site(name=FLANGE_SITE, pos=local(bodies[-1], home[-1]), size=[0.005, 0, 0])
+    geoms = {g.name for g in spec.geoms}
+    for i, j in geometry.links:
+        name = f"link{i + 1}"
+        if name in geoms:
+            continue
+        body = spec.body(model.body(bodies[i]).name)
+        body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_CAPSULE,
+                      fromto=np.concatenate([local(bodies[i], home[i]),
+                                             local(bodies[i], home[j])]),
+                      size=[LINK_RADIUS, 0, 0], contype=0, conaffinity=0, mass=0,
+                      rgba=[0.8, 0.3, 0.2, 0.6])
+
+
+def _add_surroundings(spec: mujoco.MjSpec, geometry: ArmGeometry) -> None:
+    """Floor, light, mocap obstacle and a camera at 2.2 reaches looking at the arm."""
+    reach = max(0.2, float(sum(geometry.link_lengths)))
+    world = spec.worldbody
+    world.add_light(pos=[0, 0, 2 * reach + 0.5], dir=[0, 0, -1], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL)
+    world.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[2 * reach, 2 * reach, 0.05],
+                   contype=0, conaffinity=0, rgba=[0.2, 0.3, 0.4, 1])
+    obstacle = world.add_body(name="obstacle", mocap=True)
+    obstacle.add_geom(name="obstacle", type=mujoco.mjtGeom.mjGEOM_SPHERE,
+                      size=[OBSTACLE_RADIUS, 0, 0], contype=0, conaffinity=0,
+                      rgba=[0.1, 0.1, 0.1, 0.8])
+    target = np.array([0.0, 0.0, 0.4 * reach])
+    eye = target + 2.2 * reach * np.array([0.6, -0.6, 0.5])
+    world.add_camera(name="overview", pos=eye, quat=_look_at(eye, target))
+
+
+def _look_at(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """Quaternion of a camera at eye looking at target, z up (MuJoCo cameras look along -z)."""
+    forward = (target - eye) / np.linalg.norm(target - eye)
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, np.column_stack([right, up, -forward]).ravel())
+    return quat

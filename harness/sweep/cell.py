@@ -1,0 +1,147 @@
+"""One cell of a sweep: generate its data, identify by its method, score on a fresh trajectory.
+
+The data are `generate(robot, samples, noise, seed)` (MuJoCo inverse dynamics along the seed's
+excitation, non-zero-mean torque noise from the seed); every sample trains. The score is the
+relative RMS error per joint of the identified torque on a fresh noise-free trajectory
+(`generate(robot, FRESH_SAMPLES, 0, FRESH_SEED)`, the same for every cell of a robot) against
+its clean torque, as in the bench's arm section.
+
+Methods, each reused from identification/ with the library `torquebench identify` picks by
+default (the paper's prior-knowledge library on the Lynxmotion, the base atoms generated from
+the kinematics on any other arm):
+- coupled: the coupled sparse regression (identify's default method);
+- per-joint: the paper's sparse regression of each joint's torque alone, on its columns;
+- stlsq, ssr: pysindy's STLSQ and SSR per joint on the same columns, tuned on the same
+  validation blocks (identification.regression.peers);
+- oracle: two-step WLS on Pinocchio's base regressor plus per-joint viscous and armature
+  columns (harness.sections.arm_identification.oracle_design).
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import cache
+
+import numpy as np
+from scipy.linalg import LinAlgWarning
+from threadpoolctl import threadpool_limits
+
+from harness.commands.identify import choose_library
+from harness.data.generate import generate
+from harness.errors import UserError
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_chain, load_pinocchio
+from harness.sections.arm_identification import oracle_design
+from harness.sweep.grid import Cell
+from identification.errors import IdentificationError, LibraryRankWarning
+from identification.identify import identify
+from identification.library.kinematic import KinematicLibrary
+from identification.metrics import rel_error
+from identification.regression.oracle import BaseParameterRegression
+from identification.regression.peers import PeerRegression
+from identification.regression.sparse import SparseRegression
+
+FRESH_SAMPLES, FRESH_SEED = 4000, 1_000_000  # the scoring trajectory; cell seeds are 0..N-1
+
+Predictor = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class CellResult:
+    """A finished cell: per-joint relative errors and its times (s)."""
+
+    cell: Cell
+    errors: tuple[float, ...]  # relative RMS error per joint on the fresh trajectory
+    seconds: float  # identification (the method's fit), wall
+    cell_seconds: float  # the whole cell (data, fit, score), wall
+    cpu_seconds: float  # the whole cell, CPU time of the process that ran it
+
+    @property
+    def median(self) -> float:
+        return float(np.median(self.errors))
+
+
+@dataclass(frozen=True)
+class CellFailure:
+    """A cell that could not run for a reason a user can fix (too few samples, ...)."""
+
+    cell: Cell
+    message: str
+
+
+@cache
+def library(robot: str):
+    """The library `torquebench identify` uses on robot by default (cached per process)."""
+    return choose_library("auto", load_chain(robot).dof, robot)
+
+
+@cache
+def _baseline(robot: str) -> PinocchioModel:
+    return PinocchioModel(load_pinocchio(robot))
+
+
+@cache
+def fresh(robot: str):
+    """The noise-free trajectory every cell of robot is scored on."""
+    return generate(robot, FRESH_SAMPLES, 0.0, FRESH_SEED, "inverse")
+
+
+def joint_columns(lib, q, qd, qdd) -> list[np.ndarray]:
+    """Per joint, the (n, p_j) columns a per-joint regression sees: the library's features
+    (every joint the same), or for base atoms the atoms acting on that joint."""
+    if isinstance(lib, KinematicLibrary):
+        design = lib.evaluate(q, qd, qdd)
+        return [design[:, j][:, lib.acts_on[j]] for j in range(lib.dof)]
+    theta = lib.evaluate(q, qd, qdd)
+    return [theta] * lib.dof
+
+
+def _coupled(robot: str, d) -> Predictor:
+    return identify(d.q, d.qd, d.qdd, d.tau, library(robot), holdout=0.0).model.torque
+
+
+def _oracle(robot: str, d) -> Predictor:
+    base = _baseline(robot)
+    fit = BaseParameterRegression().fit(oracle_design(base, d.q, d.qd, d.qdd), d.tau)
+    return lambda q, qd, qdd: fit.predict(oracle_design(base, q, qd, qdd))
+
+
+def _per_joint(make: Callable) -> Callable[[str, object], Predictor]:
+    def fit(robot: str, d) -> Predictor:
+        lib = library(robot)
+        fits = [make().fit(x, d.tau[:, j]) for j, x in enumerate(joint_columns(lib, d.q, d.qd, d.qdd))]
+
+        def predict(q, qd, qdd):
+            return np.column_stack([f.predict(x) for f, x in zip(fits, joint_columns(lib, q, qd, qdd),
+                                                                  strict=True)])
+        return predict
+    return fit
+
+
+FITS = {"coupled": _coupled, "oracle": _oracle, "per-joint": _per_joint(SparseRegression),
+        "stlsq": _per_joint(lambda: PeerRegression("STLSQ")),
+        "ssr": _per_joint(lambda: PeerRegression("SSR"))}
+
+
+def run_cell(cell: Cell) -> CellResult | CellFailure:
+    """Run one cell on one BLAS thread; a user-fixable error comes back as a CellFailure."""
+    start, cpu = time.perf_counter(), time.process_time()
+    try:
+        with threadpool_limits(limits=1, user_api="blas"), warnings.catch_warnings():
+            # few samples may leave the library rank-deficient, or STLSQ's subsets ill-conditioned:
+            # the error measured on the fresh trajectory says what it cost
+            warnings.simplefilter("ignore", LibraryRankWarning)
+            warnings.simplefilter("ignore", LinAlgWarning)
+            data = generate(cell.robot, cell.samples, cell.noise, cell.seed, "inverse")
+            tic = time.perf_counter()
+            predict = FITS[cell.method](cell.robot, data)
+            seconds = time.perf_counter() - tic
+            truth = fresh(cell.robot)
+            errors = rel_error(predict(truth.q, truth.qd, truth.qdd), truth.tau_clean)
+    except (IdentificationError, UserError) as exc:
+        return CellFailure(cell, str(exc))
+    return CellResult(cell, tuple(float(e) for e in errors), seconds, time.perf_counter() - start,
+                      time.process_time() - cpu)
