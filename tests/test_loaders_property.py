@@ -303,13 +303,20 @@ FRAME_MJCF = ('<mujoco><worldbody><frame pos="0 0 0.1"><body name="a"><joint nam
 
 
 @pytest.mark.parametrize("case", ["empty npz", "NaN coefficient", "Infinity coefficient",
-                                  "MJCF Pinocchio cannot read", "URDF with a NaN mass"])
+                                  "MJCF Pinocchio cannot read", "URDF with a NaN mass",
+                                  "corrupted .npy header"])
 def test_issue_cases_exit_2_one_line(valid, capfd, tmp_path, case):
     out = tmp_path / "out" / "result.npz"
     if case == "empty npz":
         (tmp_path / "empty.npz").write_bytes(b"")
         argv = ["identify", "--data", str(tmp_path / "empty.npz")]
         out = out.with_suffix(".json")
+    elif case == "corrupted .npy header":  # found by hypothesis: numpy's header tokenizer fails
+        data = valid["data"].read_bytes().replace(b"'fortran_order': False, 'shape': (300, 3)",
+                                                  b"'fortran_order'[ False, 'shape': (300, 3)", 1)
+        assert data != valid["data"].read_bytes()
+        (tmp_path / "header.npz").write_bytes(data)
+        argv = ["predict", "--model", "pinocchio", "--data", str(tmp_path / "header.npz")]
     elif case.endswith("coefficient"):
         text = json.dumps(dict(valid["models"][0]))
         value = "NaN" if case.startswith("NaN") else "Infinity"

@@ -9,6 +9,7 @@ read the same file: keys `t, q, qd, qdd, tau` (what a user measures), `tau_clean
 from __future__ import annotations
 
 import json
+import tokenize
 import zipfile
 import zlib
 from dataclasses import dataclass, field
@@ -63,7 +64,7 @@ def _read_npz(path: Path, keys, optional) -> tuple[dict[str, np.ndarray], object
         raise
     # what a truncated or corrupted archive raises: the zip layer, the .npy header, short reads
     except (zipfile.BadZipFile, zlib.error, ValueError, EOFError, OSError, KeyError,
-            UnicodeDecodeError, SyntaxError) as exc:
+            UnicodeDecodeError, SyntaxError, tokenize.TokenError) as exc:  # .npy header parse
         detail = " ".join(str(exc).split()) or type(exc).__name__
         raise UserError(f"{path}: not a readable .npz ({detail})") from None
     return raw, meta
