@@ -1,5 +1,5 @@
 """Hypothesis profiles: `TORQUEBENCH_HYPOTHESIS=full` (make test, CI) generates over 1000
-cases across the loader properties (5 x 250) (tests/test_loaders_property.py); the default stays fast."""
+cases across the loader properties (6 x 250) (tests/test_loaders_property.py); the default stays fast."""
 
 import os
 

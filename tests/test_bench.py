@@ -9,7 +9,10 @@ sections added later do not change what they run.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
+import os
 import re
 import signal
 import subprocess
@@ -35,15 +38,9 @@ TIMING_KEY = re.compile(r"(seconds|timing|elapsed|started|(^|[_ ])m?s\b|_ms\b|_m
 def reduced(tmp_path_factory):
     """One reduced real bench, in process: (exit status, output folder, stderr)."""
     out = tmp_path_factory.mktemp("bench") / "out"
-    capture = pytest.MonkeyPatch()
-    import io
-
     err = io.StringIO()
-    capture.setattr(sys, "stderr", err)
-    try:
+    with contextlib.redirect_stderr(err):
         code = main([*ARGS, "--out", str(out)])
-    finally:
-        capture.undo()
     return code, out, err.getvalue()
 
 
@@ -113,17 +110,11 @@ def test_two_runs_write_the_same_report_apart_from_timings(reduced, tmp_path):
     second = tmp_path / "second"
     env_path = str(Path(__file__).resolve().parents[1])
     subprocess.run([sys.executable, "-m", "harness", *ARGS, "--out", str(second)], check=True,
-                   capture_output=True, env={**_environ(), "PYTHONPATH": env_path})
+                   capture_output=True, env={**dict(os.environ), "PYTHONPATH": env_path})
     a, b = (json.loads((d / "report.json").read_text()) for d in (first, second))
     assert _without_timings(a) == _without_timings(b)
     timings = [k for k in _keys(a) if TIMING_KEY.search(k)]
     assert "seconds" in timings and "elapsed_s" in timings  # the timings exist, under their names
-
-
-def _environ() -> dict:
-    import os
-
-    return dict(os.environ)
 
 
 def _keys(tree):
@@ -163,7 +154,7 @@ def test_atomic_write_killed_mid_write_leaves_target_absent(tmp_path):
     code = ("import harness.io as io\n"
             f"io.write_json({str(target)!r}, {{'x': [i * 0.5 for i in range(3_000_000)]}})\n")
     proc = subprocess.Popen([sys.executable, "-c", code], env={
-        **_environ(), "PYTHONPATH": str(Path(__file__).resolve().parents[1])})
+        **dict(os.environ), "PYTHONPATH": str(Path(__file__).resolve().parents[1])})
     for _ in range(400):  # wait for the temporary to appear, then kill mid-write
         if any(p.name.startswith(".big.json.") for p in tmp_path.iterdir()):
             break

@@ -4,8 +4,8 @@ shapes, absurd magnitudes - the answer is a result (exit 0, complete file) or on
 and exit 2 with no output file; never a traceback.
 
 Each property starts from a real, valid input (a generated dataset, identified models, a
-plan, the robot's MJCF and URDF) and mutates it. `TORQUEBENCH_HYPOTHESIS=full` (make test,
-CI) runs 250 cases per property (1250 in all), the default 30.
+plan, the robot's MJCF and URDF, a CSV log) and mutates it. `TORQUEBENCH_HYPOTHESIS=full` (make test,
+CI) runs 250 cases per property (1500 in all), the default 30.
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from harness.cli import main
+from harness.data.dataset import load_arrays
 from harness.data.generate import generate
 from harness.errors import UserError
 from harness.io import write_npz
@@ -303,13 +304,20 @@ FRAME_MJCF = ('<mujoco><worldbody><frame pos="0 0 0.1"><body name="a"><joint nam
 
 
 @pytest.mark.parametrize("case", ["empty npz", "NaN coefficient", "Infinity coefficient",
-                                  "MJCF Pinocchio cannot read", "URDF with a NaN mass"])
+                                  "MJCF Pinocchio cannot read", "URDF with a NaN mass",
+                                  "corrupted .npy header"])
 def test_issue_cases_exit_2_one_line(valid, capfd, tmp_path, case):
     out = tmp_path / "out" / "result.npz"
     if case == "empty npz":
         (tmp_path / "empty.npz").write_bytes(b"")
         argv = ["identify", "--data", str(tmp_path / "empty.npz")]
         out = out.with_suffix(".json")
+    elif case == "corrupted .npy header":  # found by hypothesis: numpy's header tokenizer fails
+        data = valid["data"].read_bytes().replace(b"'fortran_order': False, 'shape': (300, 3)",
+                                                  b"'fortran_order'[ False, 'shape': (300, 3)", 1)
+        assert data != valid["data"].read_bytes()
+        (tmp_path / "header.npz").write_bytes(data)
+        argv = ["predict", "--model", "pinocchio", "--data", str(tmp_path / "header.npz")]
     elif case.endswith("coefficient"):
         text = json.dumps(dict(valid["models"][0]))
         value = "NaN" if case.startswith("NaN") else "Infinity"
@@ -326,3 +334,49 @@ def test_issue_cases_exit_2_one_line(valid, capfd, tmp_path, case):
         argv = ["predict", "--model", "pinocchio", "--robot", str(tmp_path / "nan.urdf"),
                 "--data", str(valid["data"])]
     assert check_cli([*argv, "--out", str(out)], out, capfd) == 2
+
+
+@st.composite
+def mutated_csv(draw, text: str) -> str:
+    """CSV log text with a cell set to junk, NaN, inf or an absurd number, a header name
+    renamed, a row dropped or repeated, or the text truncated or garbled."""
+    lines = text.splitlines()
+    how = draw(st.sampled_from(["cell", "cell", "header", "row", "truncate", "garble"]))
+    if how in ("truncate", "garble"):
+        return _damage(text, how, draw)
+    if how == "header":
+        names = lines[0].split(",")
+        k = draw(st.integers(0, len(names) - 1))
+        names[k] = draw(st.sampled_from(["", "q9", "tau", "x", names[k].upper(), names[k] + "_"]))
+        lines[0] = ",".join(names)
+    elif how == "row":
+        k = draw(st.integers(1, len(lines) - 1))
+        lines = lines[:k] + lines[k + 1:] if draw(st.booleans()) else lines[:k] + [lines[k]] + lines[k:]
+    else:
+        k = draw(st.integers(1, len(lines) - 1))
+        cells = lines[k].split(",")
+        j = draw(st.integers(0, len(cells) - 1))
+        cells[j] = draw(st.sampled_from(["nan", "inf", "-inf", "1e300", "", "x", "1,2", "-1e9"])
+                        | st.text(alphabet="0123456789.-e ", max_size=8))
+        lines[k] = ",".join(cells)
+    return "\n".join(lines) + "\n"
+
+
+@pytest.fixture(scope="module")
+def csv_log(valid) -> Named:
+    """The valid dataset as a measured CSV log: t, q1..q3, tau1..tau3."""
+    a = valid["arrays"]
+    header = ["t", "q1", "q2", "q3", "tau1", "tau2", "tau3"]
+    rows = np.column_stack([a["t"], a["q"], a["tau"]])
+    return Named("CSV log", {"text": "\n".join([",".join(header), *(",".join(f"{x:.17g}" for x in r)
+                                                                     for r in rows)]) + "\n"})
+
+
+@given(data=st.data())
+def test_csv_log_mutated(csv_log, capfd, data):
+    path, out = _fresh(".csv")
+    path.write_text(data.draw(mutated_csv(csv_log["text"])))
+    out = out.with_suffix(".npz")
+    argv = ["ingest", "--csv", str(path), "--robot", "lynxmotion", "--out", str(out)]
+    if check_cli(argv, out, capfd) == 0:  # what ingest wrote passes the dataset loader
+        load_arrays(out, ("q", "qd", "qdd", "tau"))

@@ -71,10 +71,12 @@ def _rendering_works() -> bool:
     """Can this process make an offscreen OpenGL context (MUJOCO_GL, egl under make test)?"""
     import mujoco
 
+    from harness.replay.video import RENDER_ERRORS
+
     model = mujoco.MjModel.from_xml_string("<mujoco><worldbody><geom size='1'/></worldbody></mujoco>")
     try:
         mujoco.Renderer(model, 32, 32).close()
-    except Exception:  # noqa: BLE001 - any backend failure means "no rendering here"
+    except RENDER_ERRORS:
         return False
     return True
 

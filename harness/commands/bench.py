@@ -171,6 +171,7 @@ def run_pipeline(out_dir: Path, quick: bool, video: bool, progress: Progress,
 def run(args) -> int:
     out_dir = Path(args.out)
     started = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else None  # other processes' share
     if args.robot not in ROBOTS:
         raise UserError(f"unknown robot '{args.robot}' (known: {', '.join(sorted(ROBOTS))})")
     if out_dir.exists() and not out_dir.is_dir():
@@ -184,7 +185,8 @@ def run(args) -> int:
     numbers = headline({o.name: o.results for o in outcomes if o.status == "ok"}, plans)
     meta = {"robot": args.robot, "quick": bool(args.quick), "sections": list(sections),
             "command": command_line(args), "machine": machine(),
-            "timing": {"elapsed_s": progress.elapsed, "started_utc": started}}
+            "timing": {"elapsed_s": progress.elapsed, "started_utc": started,
+                       "load_average_at_start": load}}
     write_report(out_dir, outcomes, numbers, meta)
     return verdict(outcomes, numbers, progress, out_dir)
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from harness.data.dataset import check_arrays
 from harness.data.ingest import ingest
 from harness.io import write_npz
 from harness.robots.registry import load_chain
@@ -29,6 +30,8 @@ def register(sub) -> None:
 def run(args) -> int:
     dof = load_chain(args.robot).dof
     data = ingest(args.csv, dof, args.robot, args.rate, args.window)
+    # what the estimated derivatives reach must pass the dataset loader (a jump in q: a spike)
+    check_arrays(f"{args.csv} (estimated derivatives)", data.arrays)
     write_npz(args.out, **data.npz())
     meta, d = data.meta, data.meta["derivatives"]
     how = ("qd, qdd as logged" if not d["estimated"] else

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.data.dataset import MAGNITUDE
 from harness.errors import UserError
 
 GROUPS = ("q", "qd", "qdd", "tau")  # joint columns <group><joint>, joints 1..n
@@ -156,6 +157,13 @@ def read_log(path: str | Path, dof: int) -> Log:
     if not finite.all():
         row, col = (int(x[0]) for x in np.nonzero(~finite))
         raise UserError(f"{path}: column '{names[col]}' is NaN or infinite at line {row + 2}")
+    for group, cols in layout.items():  # the dataset contract's bounds (harness.data.dataset)
+        bound, unit = MAGNITUDE[group]
+        worst = np.abs(values[:, cols]).max()
+        if worst > bound:
+            row, col = np.unravel_index(np.argmax(np.abs(values[:, cols])), values[:, cols].shape)
+            raise UserError(f"{path}: column '{names[cols[col]]}' reaches {worst:.3g} {unit} at "
+                            f"line {row + 2}, beyond any arm's ({bound:g} {unit})")
     t = values[:, layout["t"][0]]
     _check_time(path, t)
     return Log(path, t, {g: values[:, cols] for g, cols in layout.items() if g != "t"})

@@ -9,6 +9,7 @@ read the same file: keys `t, q, qd, qdd, tau` (what a user measures), `tau_clean
 from __future__ import annotations
 
 import json
+import tokenize
 import zipfile
 import zlib
 from dataclasses import dataclass, field
@@ -63,7 +64,7 @@ def _read_npz(path: Path, keys, optional) -> tuple[dict[str, np.ndarray], object
         raise
     # what a truncated or corrupted archive raises: the zip layer, the .npy header, short reads
     except (zipfile.BadZipFile, zlib.error, ValueError, EOFError, OSError, KeyError,
-            UnicodeDecodeError, SyntaxError) as exc:
+            UnicodeDecodeError, SyntaxError, tokenize.TokenError) as exc:  # .npy header parse
         detail = " ".join(str(exc).split()) or type(exc).__name__
         raise UserError(f"{path}: not a readable .npz ({detail})") from None
     return raw, meta
@@ -98,6 +99,15 @@ def load_arrays(path: str | Path, keys=STATE_KEYS, optional=()) -> tuple[dict[st
     path = Path(path)
     raw, raw_meta = _read_npz(path, keys, optional)
     arrays = {k: _as_real(path, k, x) for k, x in raw.items()}
+    check_arrays(path, arrays)
+    return arrays, _meta(path, raw_meta)
+
+
+def check_arrays(source, arrays: dict[str, np.ndarray]) -> None:
+    """UserError (naming source) unless every array is (n, dof) with n >= 1 and
+    1 <= dof <= MAX_DOF, finite, within MAGNITUDE, all of one shape; `t` may be (n,)."""
+    path = source
+    arrays = {k: (x[:, None] if k == "t" and x.ndim == 1 else x) for k, x in arrays.items()}
     for k, x in arrays.items():
         if x.ndim != 2:
             raise UserError(f"{path}: '{k}' must be 2-D (samples, dof), got shape {x.shape}")
@@ -110,7 +120,6 @@ def load_arrays(path: str | Path, keys=STATE_KEYS, optional=()) -> tuple[dict[st
         if bound is not None and np.abs(x).max() > bound[0]:
             raise UserError(f"{path}: '{k}' reaches {np.abs(x).max():.3g} {bound[1]}, beyond "
                             f"any arm's ({bound[0]:g} {bound[1]})")
-    if len({x.shape for x in arrays.values()}) > 1:
+    if len({x.shape for k, x in arrays.items() if k != "t"}) > 1:
         shapes = ", ".join(f"{k} {x.shape}" for k, x in arrays.items())
         raise UserError(f"{path}: shape mismatch between arrays: {shapes}")
-    return arrays, _meta(path, raw_meta)

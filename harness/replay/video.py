@@ -18,6 +18,9 @@ from harness.io import atomic_write
 from harness.replay.simulate import ReplayTrace
 
 CAMERA = "overview"
+# What making a GL context raises where rendering does not work: MuJoCo's own error (no
+# display for GLFW), PyOpenGL's (a platform library missing or half-loaded).
+RENDER_ERRORS = (mujoco.FatalError, RuntimeError, ImportError, AttributeError, OSError)
 FPS = 30  # frames per second of simulated time
 
 
@@ -26,7 +29,7 @@ def _renderer(model: mujoco.MjModel) -> mujoco.Renderer | None:
     height = min(480, model.vis.global_.offheight)
     try:
         return mujoco.Renderer(model, height=height - height % 2, width=width - width % 2)
-    except Exception as exc:  # no display, no EGL/OSMesa: any backend failure means "skip"
+    except RENDER_ERRORS as exc:  # no display, no EGL/OSMesa: the video is skipped, said so
         warn(f"video skipped, no OpenGL rendering available ({type(exc).__name__}: {exc})")
         return None
 

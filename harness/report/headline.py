@@ -94,8 +94,8 @@ def replay_rows(results: dict) -> list[dict]:
     ident, closed = plans[side["identified"]], plans[side["closed_form"]]
     clear = [float(ident["min_clearance"]), float(closed["min_clearance"])]
     return [
-        _row("Same two plans replayed in MuJoCo (motors, tracking controller): energy spent, "
-             "identified vs closed-form",
+        _row("The identified and the closed-form plan replayed in MuJoCo (motors, tracking "
+             "controller): energy spent",
              f"{ident['energy']:.4f} J vs {closed['energy']:.4f} J (ratio "
              f"{side['energy_ratio_replayed']:.5f})", identified_J=ident["energy"],
              closed_form_J=closed["energy"], ratio=side["energy_ratio_replayed"]),
@@ -130,6 +130,7 @@ def own_rows(section: str, results: dict) -> list[dict]:
 
 ROWS = {"identification": identification_rows, "planning": planning_rows,
         "replay": replay_rows, "closeloop": closeloop_rows}
+ARM_ROWS = {"arm_replay": replay_rows}  # another arm's sections with the same results
 
 
 def headline(section_results: dict[str, dict], plans: dict | None = None) -> dict:
@@ -142,6 +143,8 @@ def headline(section_results: dict[str, dict], plans: dict | None = None) -> dic
             continue
         if name in ROWS:
             rows += ROWS[name](results)
+        elif not default_robot and name in ARM_ROWS:
+            rows += ARM_ROWS[name](results)
         elif not default_robot and name.startswith("arm_"):
             rows += own_rows(name, results)
     summary = acceptance_summary(section_results)

@@ -88,9 +88,11 @@ def timings(report: dict) -> str:
     rows.append(("Whole run", f"{timing.get('elapsed_s', 0.0):.0f} s"))
     where = (f"{machine.get('cpu', 'unknown CPU')}, {machine.get('cores', '?')} cores, "
              f"{machine.get('platform', '?')}, Python {machine.get('python', '?')}")
+    load = timing.get("load_average_at_start")
+    load = f", load average {load:.1f} at the start" if load is not None else ""
     return "\n".join([f"Wall-clock times of that run (`{report.get('command', 'torquebench bench')}`"
-                      f", started {timing.get('started_utc', '?')}) on {where}; they depend on "
-                      "the machine and its load, the numbers above do not.", "",
+                      f", started {timing.get('started_utc', '?')}) on {where}{load}; they depend "
+                      "on the machine and its load, the numbers above do not.", "",
                       "| timing | measured |", "|---|---|", *(f"| {a} | {b} |" for a, b in rows)])
 
 

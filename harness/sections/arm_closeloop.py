@@ -30,6 +30,9 @@ from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import DEFAULT_ROBOT, load_pinocchio
 from identification.closeloop.effects import effect_torque
 
+SAMPLES = 4000  # measured samples per plant
+NOISE = 0.05  # torque noise std / torque std
+
 COEFFICIENT_TOL = 0.10  # relative
 PLANTS = (Variant((("viscous", 2, 0.8), ("coulomb", 3, 1.5), ("armature", 1, 0.1),
                    ("spring", 4, 3.0)), payload=1.0, name="effects"),
@@ -95,7 +98,7 @@ def run(out_dir: Path, quick: bool = False, robot: str = DEFAULT_ROBOT) -> dict:
     results: dict = {"robot": robot, "plants": {}}
     for variant in PLANTS:
         path = write_arm_variant(robot, variant, plant_dir)
-        loop = run_closeloop(path, robot=robot)
+        loop = run_closeloop(path, SAMPLES, NOISE, robot=robot)
         results["plants"][variant.name] = _score(loop)
         spread = {(c["effect"], c["joint"]): c for c in coefficient_spread(loop, robot)}
         for e in results["plants"][variant.name]["effects"]:
@@ -103,7 +106,7 @@ def run(out_dir: Path, quick: bool = False, robot: str = DEFAULT_ROBOT) -> dict:
             e.update(stderr=c["stderr"], refit_clean=c["refit_clean"],
                      z=None if e["named"] is None else (e["named"] - e["true"]) / c["stderr"])
     md = [f"Closing the loop on `{robot}` (declared model: Pinocchio on its URDF; measured data "
-          "at 5 % noise, 4000 samples; coefficient bar "
+          f"at {100 * NOISE:g} % noise, {SAMPLES} samples; coefficient bar "
           f"{COEFFICIENT_TOL:.0%}).", "",
           "| plant | effect | joint | true | named | error | standard error (noise) | "
           "(named - true) / s.e. | refit on the clean torque |", "|---|---|---|---|---|---|---|---|---|"]

@@ -91,12 +91,13 @@ def verdict_line(verdicts: dict[str, dict[str, bool]]) -> str:
 
 
 def markdown(results: dict[str, ReplayResult], verdicts: dict, side: dict | None) -> str:
+    step = ", ".join(sorted({f"{1e3 * r.timestep:g}" for r in results.values()}))
     lines = [
         verdict_line(verdicts), "",
-        "Each plan is executed by MuJoCo forward simulation (0.5 ms steps) through the motor "
+        f"Each plan is executed by MuJoCo forward simulation ({step} ms steps) through the motor "
         "actuators, tracked by Pinocchio feedforward + PD; the obstacle moves as a mocap body. "
         "'energy planned' is the planner's own figure; 'energy of plan, dense' integrates "
-        "|Σ τ q̇| of the closed-form torques along the planned trajectory every 0.5 ms.",
+        f"|Σ τ q̇| of the closed-form torques along the planned trajectory every {step} ms.",
         "",
         "| plan | energy planned [J] | energy of plan, dense [J] | energy replayed [J] "
         "| deviation from planned | min clearance "
@@ -108,8 +109,9 @@ def markdown(results: dict[str, ReplayResult], verdicts: dict, side: dict | None
     if side:
         lines += ["", f"Identified vs closed-form, replayed energy ratio "
                   f"**{side['energy_ratio_replayed']:.4f}** (planned "
-                  f"{side['energy_ratio_planned']:.4f}); the paper's Fig. 11 found slightly "
-                  "more energy for the identified model."]
+                  f"{side['energy_ratio_planned']:.4f}): the identified model's plan spends "
+                  f"{'more' if side['energy_ratio_replayed'] > 1 else 'no more'} energy here; "
+                  "the paper's Fig. 11 found slightly more for the identified model."]
     return "\n".join(lines)
 
 

@@ -87,9 +87,9 @@ def _table4_markdown(fits) -> list[str]:
            + ". The printed double pendulum is not a Lagrangian system (eq. 1 has "
            "theta1-dot^2 sin where physics has theta2-dot^2, and its coupling coefficient 2 "
            "disagrees with eq. 2's 1); it is kept as printed and fitted *jointwise*: each "
-           "equation is F-tested for a Lagrangian form on its own; eq. 2 passes and is fitted by "
-           "its atoms (its two coupling terms share one coefficient), eq. 1 fails and is fitted "
-           "on the library features, the paper's method. Eq. 2 "
+           "equation is F-tested for a Lagrangian form on its own; one that passes is fitted by "
+           "its atoms (coupling terms share one coefficient), one that fails on the library "
+           "features, the paper's method. Eq. 2 "
            "is the pendulum m1 = 2.5, m2 = 0.5 kg, l1 = 1, l2 = 2 m; the consistent pair "
            "(eq. 1 = 3 th1'' + th2'' cos + th2'^2 sin + 29.4 sin th1) is fitted by the "
            "coupled regression, which shares m2 l1 l2 across its four terms."]
