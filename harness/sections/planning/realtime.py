@@ -20,7 +20,7 @@ import numpy as np
 
 from harness.replay.reference import plan_reference
 from harness.replay.simulate import replay
-from planning.config import PlannerConfig, Scenario
+from planning.config import PlannerConfig, Scenario, true_energy_config
 from planning.replanning import DEADLINE, Execution, execute
 from planning.result import evaluate, to_json
 from planning.scenarios import random_scenarios
@@ -99,10 +99,11 @@ def optimality(baseline, plant, config: PlannerConfig, cases: list[Scenario], ru
                setup: Setup) -> dict:
     """Replayed energies per scenario: default, paper quadrature, single starts, fine
     quadrature; the default's excess over the best of the global check."""
-    check = dataclasses.replace(config, compile_code=False, replan_deadline_ms=None)
-    single = Planner(baseline, check)
+    check = dataclasses.replace(config, replan_deadline_ms=None)
+    single = Planner(baseline, check)  # the default's NLP: its compiled code is reused
     fine = Planner(baseline, dataclasses.replace(check, energy_quadrature="gauss",
-                                                 energy_samples=setup.fine_samples))
+                                                 energy_samples=setup.fine_samples,
+                                                 compile_code=False))
     paper = Planner(baseline, dataclasses.replace(check, energy_quadrature="paper",
                                                   energy_samples=10))
     rows = []
@@ -148,18 +149,20 @@ def ways_in(config: PlannerConfig, quick: bool) -> dict[str, PlannerConfig]:
     """The configurations compared side by side: the previous default (IPOPT in CasADi's
     virtual machine), each change alone, and the default."""
     vm = dataclasses.replace(config, compile_code=False)
-    rows = {"ipopt, virtual machine (previous default)": dataclasses.replace(vm, solver="ipopt"),
-            "ipopt, virtual machine, primal-only warm start":
+    previous = dataclasses.replace(vm, solver="ipopt", energy_quadrature="paper",
+                                   energy_samples=10, starts=1)
+    rows = {"ipopt, virtual machine, paper quadrature, 1 start (previous default)": previous}
+    if quick:
+        return {**rows, "default: " + describe(config): config}
+    rows |= {"ipopt, virtual machine, primal-only warm start":
                 dataclasses.replace(vm, solver="ipopt", dual_warm_start=False),
             "ipopt, virtual machine, limited-memory Hessian":
                 dataclasses.replace(vm, solver="ipopt", hessian="limited-memory"),
-            "fatrop, virtual machine": dataclasses.replace(vm, solver="fatrop")}
-    if not quick:
-        rows.update({
+            "fatrop, virtual machine": dataclasses.replace(vm, solver="fatrop"),
             "ipopt, compiled": dataclasses.replace(config, solver="ipopt"),
             "sqpmethod (qpOASES), compiled": dataclasses.replace(config, solver="sqpmethod"),
             "fatrop, compiled, 8 penalty samples": dataclasses.replace(config, obstacle_slots=8),
-        })
+            "fatrop, compiled, 1 start": dataclasses.replace(config, starts=1)}
     rows["default: " + describe(config)] = config
     return rows
 
@@ -171,13 +174,16 @@ def describe(config: PlannerConfig) -> str:
             f"{config.starts} start(s), {config.obstacle_slots} penalty samples")
 
 
-def run(baseline, plant, quick: bool) -> dict:
-    """The whole study; quick: 3 scenarios, 2 global-check starts, nothing compiled."""
-    setup = Setup(scenarios=3, global_starts=2) if quick else Setup()
-    config = dataclasses.replace(PlannerConfig(), compile_code=not quick)
+def run(baseline, plant, quick: bool, setup: Setup | None = None,
+        ways: dict[str, PlannerConfig] | None = None) -> dict:
+    """The whole study; quick: 2 scenarios, 2 global-check starts, Gauss N = 20 as the fine
+    quadrature, the previous default and the default only, nothing compiled."""
+    setup = setup or (Setup(scenarios=2, global_starts=2, fine_samples=20) if quick
+                      else Setup())
+    config = true_energy_config(compile_code=not quick)
     cases = scenarios(baseline, config, setup)
-    rows = {name: timing(baseline, variant, cases)[0]
-            for name, variant in ways_in(config, quick).items()}
+    ways = ways_in(config, quick) if ways is None else ways
+    rows = {name: timing(baseline, variant, cases)[0] for name, variant in ways.items()}
     live = dataclasses.replace(config, replan_deadline_ms=setup.deadline_ms)
     default, runs = timing(baseline, live, cases)
     return {"setup": dataclasses.asdict(setup), "config": describe(config),
