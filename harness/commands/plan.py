@@ -19,7 +19,7 @@ from harness.robots.arm import planner_config, torque_limit
 from harness.robots.registry import DEFAULT_ROBOT
 from harness.robots.torque_models import load_torque_model
 from planning.backends import SOLVERS
-from planning.config import PlannerConfig, Scenario
+from planning.config import PlannerConfig, Scenario, true_energy_config
 from planning.errors import PlanningError
 from planning.obstacle import LinearObstacle, SwayingObstacle
 from planning.quadrature import RULES
@@ -28,6 +28,8 @@ from planning.result import closest_link, evaluate, to_json
 from planning.solver import Planner
 
 DEFAULT = Scenario()
+PLANNER = true_energy_config()
+SAMPLES = {"paper": 10, "gauss": PLANNER.energy_samples, "simpson": 21}  # default N per rule
 
 
 def _vector(text: str, name: str, length: int = 3) -> tuple[float, ...]:
@@ -67,11 +69,12 @@ def register(sub) -> None:
                    help="clearance threshold lambda (m)")
     p.add_argument("--penalty", type=float, default=PlannerConfig.penalty_weight,
                    help="penalty weight alpha (J/m^2 per obstacle sample)")
-    p.add_argument("--energy-samples", type=int, default=PlannerConfig.energy_samples,
-                   help="power samples N of the energy objective")
-    p.add_argument("--energy-quadrature", choices=RULES, default=PlannerConfig.energy_quadrature,
-                   help="where the power is sampled: paper (eq. 18, s_i = i/N), gauss "
-                        "(Gauss-Legendre, plans with the true energy at N ~ 20), simpson")
+    p.add_argument("--energy-samples", type=int, default=None,
+                   help="power samples N of the energy objective (default: 20 for gauss, the "
+                        "paper's 10 for paper, 21 for simpson)")
+    p.add_argument("--energy-quadrature", choices=RULES, default=PLANNER.energy_quadrature,
+                   help="where the power is sampled: gauss (Gauss-Legendre, the default: plans "
+                        "with the true energy at N = 20), paper (eq. 18, s_i = i/N), simpson")
     p.add_argument("--degree", type=int, default=PlannerConfig.degree,
                    help="degree of the joint polynomials (paper: 4; 4..9)")
     p.add_argument("--power-smoothing", type=float, default=PlannerConfig.power_smoothing,
@@ -85,7 +88,7 @@ def register(sub) -> None:
                         "robot MJCF's motor ctrlrange times gear, else the URDF effort limits")
     p.add_argument("--solver", choices=SOLVERS, default=PlannerConfig.solver,
                    help="NLP solver (CasADi plugin); ipopt is the paper's")
-    p.add_argument("--starts", type=int, default=PlannerConfig.starts,
+    p.add_argument("--starts", type=int, default=PLANNER.starts,
                    help="start points of the cold plan (the best is kept)")
     p.add_argument("--deadline-ms", type=float, default=0.0,
                    help="CPU ms a re-plan may take; a later one is dropped and the last plan "
@@ -125,6 +128,8 @@ def _angles(args, name: str, dof: int) -> tuple[float, ...]:
 
 
 def _setup(args) -> tuple[PlannerConfig, Scenario]:
+    if args.energy_samples is None:
+        args.energy_samples = SAMPLES[args.energy_quadrature]
     if not args.duration > 0 or not math.isfinite(args.duration):
         raise PlanningError(f"--duration must be > 0 s, got {args.duration}")
     if not (args.threshold > 0 and args.penalty >= 0) or args.samples < 2 \

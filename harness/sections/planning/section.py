@@ -17,7 +17,7 @@ from harness.sections.planning.studies import (
     speed_study,
     swaying_study,
 )
-from planning.config import PlannerConfig
+from planning.config import true_energy_config
 from planning.energy import absolute_energy
 from planning.result import PlanResult, to_json
 from planning.scenarios import crossing_scenario, paper_scenario
@@ -65,9 +65,10 @@ def run(out_dir: Path, quick: bool = False, identified_model=None) -> dict:
         paper[name] = plan_scenario(model, scenario, config)
         summaries[name] = _summary(paper[name], free, baseline, config.threshold)
         plans[f"paper_{name}"] = to_json(paper[name], scenario, config, name)
-    paper["default"] = plan_scenario(baseline, scenario, PlannerConfig())
+    paper["default"] = plan_scenario(baseline, scenario, true_energy_config())
     summaries["default"] = _summary(paper["default"], free, baseline, config.threshold)
-    plans["paper_default"] = to_json(paper["default"], scenario, PlannerConfig(), "pinocchio")
+    plans["paper_default"] = to_json(paper["default"], scenario, true_energy_config(),
+                                     "pinocchio")
     crossing = crossing_scenario(free.execution.segments[0].trajectory, config.geometry)
     crossing_free = plan_scenario(baseline, crossing, config, avoid=False)
     crossing_avoid = plan_scenario(baseline, crossing, config)

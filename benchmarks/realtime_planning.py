@@ -1,0 +1,48 @@
+"""Real time and true optimum over random scenarios: the planning bench's study, alone.
+
+    .venv/bin/python -m benchmarks.realtime_planning [--scenarios 20] [--seed 2026]
+        [--ways all|fast] [--out study.json]
+
+`--ways fast` compares only the previous default, the default with one start and the
+default (no other compiled variants: each costs one C compilation on first use). Prints
+the study's markdown (as in the bench report) and the load average.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+
+from harness.io import write_json
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
+from harness.sections.planning import realtime
+from planning.config import true_energy_config
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scenarios", type=int, default=20)
+    parser.add_argument("--seed", type=int, default=realtime.Setup.seed)
+    parser.add_argument("--ways", choices=("all", "fast"), default="all")
+    parser.add_argument("--out", default=None)
+    args = parser.parse_args()
+    baseline = PinocchioModel(load_pinocchio(DEFAULT_ROBOT))
+    setup = realtime.Setup(scenarios=args.scenarios, seed=args.seed)
+    ways = None
+    if args.ways == "fast":
+        config = true_energy_config(compile_code=True)
+        every = realtime.ways_in(config, quick=False)
+        ways = {k: v for k, v in every.items() if "previous" in k or "1 start" in k
+                or k.startswith("default")}
+    study = realtime.run(baseline, load_mujoco(DEFAULT_ROBOT, scene=True), False, setup, ways)
+    print("\n".join(realtime.markdown_lines(study)))
+    print(json.dumps(realtime.acceptance(study)))
+    print("load average", os.getloadavg())
+    if args.out:
+        write_json(args.out, study)
+
+
+if __name__ == "__main__":
+    main()
