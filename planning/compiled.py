@@ -25,6 +25,9 @@ COMPILER = os.environ.get("CC", "gcc")
 # -O1: measured on the planning NLP, a warm fatrop solve 2.0 ms against 5.0 ms at -O0;
 # -O2 compiles ~3x longer than -O1 for no measured gain at this size
 FLAGS = ("-O1", "-fPIC", "-shared")
+# Larger sources stay in CasADi's virtual machine: the UR5 planning NLP is 19.5 MB of C, which
+# gcc -O1 took 6 min and 3.4 GB to build (the Lynxmotion's: 4.0 MB).
+MAX_SOURCE_BYTES = 8_000_000
 
 
 class CompilerMissing(RuntimeError):
@@ -47,8 +50,9 @@ def available() -> bool:
     return shutil.which(COMPILER) is not None
 
 
-def library(solver: ca.Function) -> Path:
-    """The compiled shared library of `solver`'s NLP functions (built on first need)."""
+def library(solver: ca.Function) -> Path | None:
+    """The compiled shared library of `solver`'s NLP functions (built on first need); None if
+    their C source is over MAX_SOURCE_BYTES (too long to build: they stay interpreted)."""
     if not available():
         raise CompilerMissing(f"C compiler '{COMPILER}' not found")
     folder = cache_dir()
@@ -61,6 +65,8 @@ def library(solver: ca.Function) -> Path:
         finally:
             os.chdir(cwd)
         text = source.read_bytes()
+        if len(text) > MAX_SOURCE_BYTES:
+            return None
         key = hashlib.sha256(text + " ".join((COMPILER, *FLAGS, ca.__version__)).encode())
         target = folder / f"{key.hexdigest()[:20]}.so"
         if not target.exists():
@@ -72,6 +78,10 @@ def library(solver: ca.Function) -> Path:
 
 
 def nlpsol(name: str, plugin: str, problem: dict, options: dict) -> ca.Function:
-    """ca.nlpsol on `problem` (x, p, f, g) with its functions compiled (cached)."""
+    """ca.nlpsol on `problem` (x, p, f, g) with its functions compiled (cached), or evaluated
+    in CasADi's virtual machine where they are too large to compile (see library)."""
     generator = ca.nlpsol(f"{name}_source", plugin, problem, options)
-    return ca.nlpsol(name, plugin, str(library(generator)), options)
+    built = library(generator)
+    if built is None:
+        return ca.nlpsol(name, plugin, problem, options)
+    return ca.nlpsol(name, plugin, str(built), options)
