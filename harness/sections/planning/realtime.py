@@ -121,14 +121,30 @@ def optimality(baseline, plant, config: PlannerConfig, cases: list[Scenario], ru
                                             paper.config)
         feasible = [e for e, ok in starts if ok] + ([fine_e] if fine_ok else [])
         best = min(feasible) if feasible else np.nan
+
         rows.append({"default_J": default, "default_feasible": default_ok,
                      "single_start_J": starts[0][0], "starts_J": [e for e, _ in starts],
-                     "fine_J": fine_e, "paper_quadrature_J": paper_e,
+                     "starts_feasible": [ok for _, ok in starts],
+                     "fine_J": fine_e, "fine_feasible": fine_ok, "paper_quadrature_J": paper_e,
                      "paper_quadrature_feasible": paper_ok, "global_best_J": best,
-                     "default_excess_pct": 100 * (default - best) / best,
-                     "single_start_excess_pct": 100 * (starts[0][0] - best) / best,
-                     "paper_quadrature_excess_pct": 100 * (paper_e - best) / best})
-    return _optimality_summary(rows)
+                     "default_excess_pct": _excess(default, default_ok, best),
+                     "single_start_excess_pct": _excess(*starts[0], best),
+                     "paper_quadrature_excess_pct": _excess(paper_e, paper_ok, best)})
+    summary = _optimality_summary(rows)
+    summary["scenarios"] = [{k: _json(v) for k, v in row.items()} for row in rows]
+    return summary
+
+
+def _excess(energy: float, feasible: bool, best: float) -> float:
+    """% above the best; NaN for an infeasible plan (it has no place in the comparison)."""
+    return 100 * (energy - best) / best if feasible else np.nan
+
+
+def _json(value):
+    """NaN (an infeasible or refused plan) as None: report.json holds no NaN."""
+    if isinstance(value, list):
+        return [_json(v) for v in value]
+    return None if isinstance(value, float) and not np.isfinite(value) else value
 
 
 def _optimality_summary(rows: list[dict]) -> dict:
@@ -193,12 +209,17 @@ def run(baseline, plant, quick: bool, setup: Setup | None = None,
     config = true_energy_config(compile_code=not quick)
     cases = scenarios(baseline, config, setup)
     ways = ways_in(config, quick) if ways is None else ways
-    rows = {name: timing(baseline, variant, cases)[0] for name, variant in ways.items()}
+    rows, runs = {}, None
+    for name, variant in ways.items():
+        rows[name], executed = timing(baseline, variant, cases)
+        if variant == config:
+            runs = executed  # `plan`'s default (no deadline): the one checked for optimality
     live = dataclasses.replace(config, replan_deadline_ms=setup.deadline_ms)
-    default, runs = timing(baseline, live, cases)
+    default, _ = timing(baseline, live, cases)
+    runs = runs or timing(baseline, config, cases)[1]
     return {"setup": dataclasses.asdict(setup), "config": describe(config),
             "ways_in": rows, "default": default,
-            "optimality": optimality(baseline, plant, live, cases, runs, setup),
+            "optimality": optimality(baseline, plant, config, cases, runs, setup),
             "scenarios": [_scenario_json(case) for case in cases]}
 
 
@@ -212,6 +233,13 @@ def _ms(d: dict) -> str:
     if not d["count"]:
         return "none"
     return f"{d['median']:.2f} / {d['p95']:.2f} / {d['max']:.2f}"
+
+
+def _joule(value, feasible) -> str:
+    """Energy (J), marked when the plan is infeasible (its replay hit the obstacle or a limit)."""
+    if value is None:
+        return "n/a"
+    return f"{value:.5f}" + ("" if feasible is None or feasible else " (infeasible)")
 
 
 def _pct(value) -> str:
@@ -257,9 +285,13 @@ def markdown_lines(study: dict) -> list[str]:
         "| scenario | default (J) | paper quadrature (J) | single start (J) | fine quadrature "
         "(J) | best of global check (J) | default vs best |", "|---|---|---|---|---|---|---|"]
     for i, r in enumerate(opt["scenarios"]):
-        lines.append(f"| {i} | {r['default_J']:.5f} | {r['paper_quadrature_J']:.5f} | "
-                     f"{r['single_start_J']:.5f} | {r['fine_J']:.5f} | {r['global_best_J']:.5f}"
-                     f" | {_pct(r['default_excess_pct'])} |")
+        energies = [_joule(r[k], r[f] if f else None) for k, f in
+                    (("default_J", "default_feasible"),
+                     ("paper_quadrature_J", "paper_quadrature_feasible"),
+                     ("single_start_J", None), ("fine_J", "fine_feasible"),
+                     ("global_best_J", None))]
+        lines.append(f"| {i} | " + " | ".join(energies)
+                     + f" | {_pct(r['default_excess_pct'])} |")
     return lines
 
 
