@@ -28,7 +28,9 @@ from planning.starts import rank, start_points
 TRIGGER_TOLERANCE = 1e-3  # m: predicted dips smaller than this do not trigger a re-plan
 PREDICTION_TOLERANCE = 1e-3  # m: a forecast this close to the last one brings nothing new
 LIMIT_SETTLED = 1e-8  # rad: a plan this close to its limits (dense grid) needs no re-solve
+UNCHANGED = 1e-9  # rad: a re-solve that moves no coefficient further has settled
 DEADLINE = "deadline exceeded"  # status of a re-plan abandoned at its deadline
+LATE = " (converged late)"  # ... whose last solve converged: the next re-plan starts from it
 
 
 @dataclass(frozen=True)
@@ -71,7 +73,8 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
                                      warm, first, alpha, rounds, budget - cpu)
         total, cpu = total + ms, cpu + cpu_ms
         if cpu > budget:
-            return dataclasses.replace(plan, success=False, status=DEADLINE), total, cpu
+            status = DEADLINE + (LATE if plan.success else "")
+            return dataclasses.replace(plan, success=False, status=status), total, cpu
         if forecast is None or alpha >= config.max_penalty_weight or not plan.success or \
                 _predicted_clearance(planner, plan, forecast) >= config.threshold \
                 - config.penalty_tolerance:
@@ -119,7 +122,11 @@ def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan
             attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin,
                                     reference=reference, alpha=alpha)
             total, cpu = total + attempt.solve_ms, cpu + attempt.solve_cpu_ms
+        unchanged = attempt.success and plan.success and np.allclose(
+            attempt.trajectory.coefficients, reference.coefficients, rtol=0.0, atol=UNCHANGED)
         plan, reference = attempt, attempt.trajectory
+        if unchanged and times <= chosen:
+            break  # the same problem again: another round would return the same plan
     return plan, total, cpu
 
 
@@ -159,7 +166,7 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
     if obstacle is None or not replan:
         return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures),
                          (), tuple(solve_cpu))
-    planned_with = forecast
+    planned_with, latest = forecast, plan  # latest: the newest converged solution
     for t in obstacle.sample_times[:-1]:
         forecast = forecast_at(obstacle, t)
         if _predicted_clearance(planner, plan, forecast) >= planner.config.threshold \
@@ -167,14 +174,16 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
             continue  # safe, or nothing new to plan with: the last plan already saw this
         planned_with = forecast
         q, qd, _ = plan.trajectory.state(t)
-        new, ms, cpu = plan_segment(planner, q[0], qd[0], t, T - t, goal, forecast, warm=plan,
-                                    deadline_ms=planner.config.replan_deadline_ms)
+        new, ms, cpu = plan_segment(planner, q[0], qd[0], t, T - t, goal, forecast,
+                                    warm=latest, deadline_ms=planner.config.replan_deadline_ms)
         solve_ms.append(ms)
         solve_cpu.append(cpu)
         if not new.success:
             replan_failures.append(new.status)
+            if new.status.endswith(LATE):  # too late to follow, yet the best start point
+                latest = new
             continue  # keep following the last good plan; evaluate() checks what it does
-        plan = new
+        plan = latest = new
         segments.append(plan)
         times.append(float(t))
     return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures),

@@ -84,7 +84,7 @@ class Planner:
         self.nlp = PlanningNLP(model, dataclasses.replace(self.config, torque_limit=None))
         self._relaxed = _build(self.nlp, self.config, "plan")
         self._limited: _Solvers | None = None
-        self._rescue: dict[int, ca.Function] = {}
+        self._rescue: dict[int, _Solvers] = {}
 
     def _torque_limited(self) -> _Solvers:
         if self._limited is None:
@@ -200,19 +200,23 @@ class Planner:
             args.update(self._warm_start(warm, t_begin, duration, len(lbg)))
         start, cpu = time.perf_counter(), time.thread_time()
         result, stats = solver(**args), backends.stats(solver)
-        if not stats.success and warm is None and self.config.solver != "ipopt":
-            solver = self._rescuer(solvers)  # a cold solve the fast solver could not finish
+        if not stats.success and self.config.solver != "ipopt":
+            # a solve the fast solver could not finish: IPOPT from the same start point
+            rescue = self._rescuer(solvers)
+            solver = rescue.cold if warm is None else rescue.warm
             result, stats = solver(**args), backends.stats(solver)
         elapsed = (1e3 * (time.perf_counter() - start), 1e3 * (time.thread_time() - cpu))
         return self._segment(solvers, result, stats, elapsed, segment)
 
-    def _rescuer(self, solvers: _Solvers) -> ca.Function:
-        """IPOPT (CasADi's virtual machine, built on first need) on the same NLP: measured, a
-        cold fatrop solve at a raised penalty weight can stop short of convergence."""
+    def _rescuer(self, solvers: _Solvers) -> _Solvers:
+        """IPOPT (built on first need, compiled like the fast solver) on the same NLP:
+        measured, fatrop at a raised penalty weight can stop short of convergence, cold
+        (paper scenario) and warm (random scenarios: 60 iterations, then a cold restart)."""
         key = id(solvers)
         if key not in self._rescue:
-            rescue = dataclasses.replace(self.config, solver="ipopt", compile_code=False)
-            self._rescue[key] = _build(solvers.nlp, rescue, "plan_rescue").cold
+            rescue = dataclasses.replace(self.config, solver="ipopt",  # the last resort:
+                                         warm_max_iterations=self.config.max_iterations)
+            self._rescue[key] = _build(solvers.nlp, rescue, "plan_rescue")
         return self._rescue[key]
 
     def _warm_start(self, warm: SegmentPlan, t_begin: float, duration: float,
