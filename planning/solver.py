@@ -43,6 +43,9 @@ class SegmentPlan:
     multipliers: tuple[np.ndarray, np.ndarray]  # (lam_g, lam_x)
 
 
+# measured on random scenarios: a warm IPOPT rescue still unconverged after 60 iterations ran
+# on to 300 (390 ms) or declared the problem infeasible; a cold restart is cheaper
+RESCUE_WARM_ITERATIONS = 60
 TORQUE_GRID = 65  # points of normalized time where a segment's torque is checked
 
 
@@ -85,6 +88,10 @@ class Planner:
         self._relaxed = _build(self.nlp, self.config, "plan")
         self._limited: _Solvers | None = None
         self._rescue: dict[int, _Solvers] = {}
+        if self.config.compile_code and self.config.solver != "ipopt":
+            # built now: generating its code takes seconds (measured 2.9 s on the Lynxmotion),
+            # which must not land inside the first re-plan that needs it
+            self._rescuer(self._relaxed)
 
     def _torque_limited(self) -> _Solvers:
         if self._limited is None:
@@ -200,8 +207,10 @@ class Planner:
             args.update(self._warm_start(warm, t_begin, duration, len(lbg)))
         start, cpu = time.perf_counter(), time.thread_time()
         result, stats = solver(**args), backends.stats(solver)
-        if not stats.success and self.config.solver != "ipopt":
-            # a solve the fast solver could not finish: IPOPT from the same start point
+        late_anyway = warm is not None and self.config.replan_deadline_ms is not None
+        if not stats.success and self.config.solver != "ipopt" and not late_anyway:
+            # a solve the fast solver could not finish: IPOPT from the same start point (not
+            # for a re-plan under a deadline: it would come too late, measured up to 7 s)
             rescue = self._rescuer(solvers)
             solver = rescue.cold if warm is None else rescue.warm
             result, stats = solver(**args), backends.stats(solver)
@@ -214,8 +223,8 @@ class Planner:
         (paper scenario) and warm (random scenarios: 60 iterations, then a cold restart)."""
         key = id(solvers)
         if key not in self._rescue:
-            rescue = dataclasses.replace(self.config, solver="ipopt",  # the last resort:
-                                         warm_max_iterations=self.config.max_iterations)
+            rescue = dataclasses.replace(self.config, solver="ipopt", warm_max_iterations=max(
+                self.config.warm_max_iterations, RESCUE_WARM_ITERATIONS))
             self._rescue[key] = _build(solvers.nlp, rescue, "plan_rescue")
         return self._rescue[key]
 
