@@ -82,6 +82,14 @@ class ArmGeometry:
                      if np.linalg.norm(home[i + 1] - home[i]) > AXIS_TOLERANCE
                      and not (fixed[i] and fixed[i + 1]))
 
+    @cached_property
+    def fixed_points(self) -> tuple[int, ...]:
+        """Indices into `points` of the link ends no joint moves (on the axes of every joint
+        before them): an obstacle within the threshold of one cannot be avoided."""
+        home = self.points(np.zeros(self.dof))[0]
+        ends = sorted({i for link in self.links for i in link})
+        return tuple(i for i in ends if self._fixed(i, home))
+
     def _fixed(self, i: int, home: np.ndarray) -> bool:
         """Point i stays put iff it lies on the axes of all joints before it (at q = 0)."""
         rotation = np.eye(3)

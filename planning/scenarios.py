@@ -63,7 +63,9 @@ def random_scenario(rng: np.random.Generator, free_motion, geometry: ArmGeometry
     about 1.5 cm from the outer part of a moving link of the unobstructed optimum
     (`free_motion(start, goal, duration)` -> PolynomialTrajectory) at a random time in
     [0.3, 0.7] duration, moving at 0.1-0.4 m per motion in a random direction, and swaying
-    0-4 cm at 0.5-2 periods per motion; redrawn until start and goal are clear of it."""
+    0-4 cm at 0.5-2 periods per motion; redrawn until start and goal are clear of it and it
+    stays clear of the points of the arm no joint moves (geometry.fixed_points: the
+    Lynxmotion's shoulder; an obstacle that passes there leaves no feasible plan)."""
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
     while True:
         start, goal = (lower + (upper - lower) * rng.uniform(0.1, 0.9, len(lower))
@@ -83,8 +85,19 @@ def random_scenario(rng: np.random.Generator, free_motion, geometry: ArmGeometry
                                    periods=float(rng.uniform(0.5, 2.0)))
         ends = np.asarray([start, goal])
         centres = obstacle.position(np.array([0.0, duration]))
-        if link_clearances(geometry, ends, centres).min() > threshold + 0.02:
+        if link_clearances(geometry, ends, centres).min() > threshold + 0.02 and \
+                _fixed_clearance(geometry, obstacle) > threshold + 0.02:
             return Scenario(_floats(start), _floats(goal), duration, obstacle)
+
+
+def _fixed_clearance(geometry: ArmGeometry, obstacle) -> float:
+    """Closest approach (m) of the obstacle's centre, at its sample times and t = 0, to the
+    arm's fixed link ends (inf if none)."""
+    if not geometry.fixed_points:
+        return np.inf
+    fixed = geometry.points(np.zeros(geometry.dof))[0][list(geometry.fixed_points)]
+    centres = obstacle.position(np.concatenate([[0.0], obstacle.sample_times]))
+    return float(np.linalg.norm(centres[:, None, :] - fixed[None], axis=2).min())
 
 
 def random_scenarios(count: int, seed: int, free_motion, geometry, lower, upper,

@@ -101,6 +101,17 @@ def test_links_are_the_segments_that_move(robot):
         assert ((i, i + 1) in geometry.links) == (length > 1e-9 and moves), (robot, i)
 
 
+@pytest.mark.parametrize("robot", ARMS)
+def test_fixed_points_are_the_link_ends_no_motion_moves(robot):
+    """fixed_points (the axis test) are exactly the link ends that stay put on random
+    motions."""
+    geometry = arm_geometry(robot)
+    points = geometry.points(_random_q(robot, 30))
+    ends = sorted({i for link in geometry.links for i in link})
+    still = tuple(i for i in ends if np.ptp(points[:, i], axis=0).max() < 1e-9)
+    assert geometry.fixed_points == still and still, robot
+
+
 @pytest.mark.parametrize("robot", ("ur5", "panda"))
 def test_symbolic_points_derivatives_match_finite_differences(robot):
     geometry = arm_geometry(robot)

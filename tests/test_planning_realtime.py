@@ -137,6 +137,9 @@ def test_random_scenarios_are_seeded_and_put_the_obstacle_in_the_way(baseline):
         ends = link_clearances(config.geometry, np.array([case.start, case.goal]),
                                case.obstacle.position(np.array([0.0, case.duration])))
         assert ends.min() > config.threshold
+        shoulder = config.geometry.points(np.zeros(3))[0][1]  # on joint 1's axis: never moves
+        assert np.linalg.norm(case.obstacle.position(t) - shoulder, axis=1).min() \
+            > config.threshold
         assert np.all(np.asarray(case.start) >= config.lower) and \
             np.all(np.asarray(case.goal) <= config.upper)
 
