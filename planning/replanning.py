@@ -24,7 +24,6 @@ from planning.obstacle import predict_linear
 from planning.screening import screen
 from planning.solver import ObstacleForecast, Planner, SegmentPlan
 from planning.starts import rank, start_points
-from planning.trajectory import PolynomialTrajectory
 
 TRIGGER_TOLERANCE = 1e-3  # m: predicted dips smaller than this do not trigger a re-plan
 PREDICTION_TOLERANCE = 1e-3  # m: a forecast this close to the last one brings nothing new
@@ -67,8 +66,7 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
         # a start point of its own: the obstacle problem solved from it directly (solving the
         # unobstructed problem first would bring every start to the same optimum, measured:
         # 8 start points, one plan on most random scenarios)
-        free = x0[: planner.model.dof * (config.degree - 1)].reshape(planner.model.dof, -1)
-        reference = PolynomialTrajectory.from_free(t_begin, duration, q0, qd0, free)
+        reference = planner.trajectory(x0, q0, qd0, t_begin, duration)
         subset = screen(forecast, reference, config.geometry, config.threshold,
                         config.obstacle_slots)
         warm = planner.solve(q0, qd0, duration, goal, subset, t_begin, reference=reference,

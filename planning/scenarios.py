@@ -93,11 +93,9 @@ def random_scenario(rng: np.random.Generator, free_motion, geometry: ArmGeometry
 def _fixed_clearance(geometry: ArmGeometry, obstacle) -> float:
     """Closest approach (m) of the obstacle's centre, at its sample times and t = 0, to the
     arm's fixed link ends (inf if none)."""
-    if not geometry.fixed_points:
-        return np.inf
     fixed = geometry.points(np.zeros(geometry.dof))[0][list(geometry.fixed_points)]
     centres = obstacle.position(np.concatenate([[0.0], obstacle.sample_times]))
-    return float(np.linalg.norm(centres[:, None, :] - fixed[None], axis=2).min())
+    return float(np.linalg.norm(centres[:, None, :] - fixed[None], axis=2).min(initial=np.inf))
 
 
 def random_scenarios(count: int, seed: int, free_motion, geometry, lower, upper,

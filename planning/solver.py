@@ -166,6 +166,13 @@ class Planner:
             free[:, 1:] -= bumps
         return np.concatenate([free.ravel(), np.zeros(self._slacks)])
 
+    def trajectory(self, x: np.ndarray, q0, qd0, t_begin: float,
+                   duration: float) -> PolynomialTrajectory:
+        """The segment a point x of the NLP (a solution or a start point) stands for."""
+        width = self.config.degree - 1
+        free = np.asarray(x)[: width * self.model.dof].reshape(self.model.dof, width)
+        return PolynomialTrajectory.from_free(t_begin, duration, q0, qd0, free)
+
     @property
     def _slacks(self) -> int:
         """Number of power slack variables (0 with a smoothed |P|)."""
@@ -249,9 +256,7 @@ class Planner:
     def _segment(self, solvers: _Solvers, result, stats, elapsed, segment) -> SegmentPlan:
         q0, qd0, duration, t_begin, p, alpha, _ = segment
         x = np.asarray(result["x"]).ravel()
-        width = self.config.degree - 1
-        free = x[: width * self.model.dof].reshape(self.model.dof, width)
-        trajectory = PolynomialTrajectory.from_free(t_begin, duration, q0, qd0, free)
+        trajectory = self.trajectory(x, q0, qd0, t_begin, duration)
         energy, penalty = (float(v) for v in solvers.parts(x, p))
         return SegmentPlan(
             trajectory=trajectory, energy=energy, penalty=penalty,
