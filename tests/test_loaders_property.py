@@ -291,6 +291,7 @@ def test_robot_file_mutated(valid, capfd, data):
             load(str(path))
         except UserError as exc:
             assert "\n" not in " ".join(str(exc).split())
+    capfd.readouterr()  # what the loads above printed is not the command's output
     out = out.with_suffix(".npz")
     check_cli(["predict", "--model", "pinocchio", "--robot", str(path), "--data",
                str(valid["data"]), "--out", str(out)], out, capfd)
@@ -305,7 +306,7 @@ FRAME_MJCF = ('<mujoco><worldbody><frame pos="0 0 0.1"><body name="a"><joint nam
 
 @pytest.mark.parametrize("case", ["empty npz", "NaN coefficient", "Infinity coefficient",
                                   "MJCF Pinocchio cannot read", "URDF with a NaN mass",
-                                  "corrupted .npy header"])
+                                  "MJCF with a NaN", "corrupted .npy header"])
 def test_issue_cases_exit_2_one_line(valid, capfd, tmp_path, case):
     out = tmp_path / "out" / "result.npz"
     if case == "empty npz":
@@ -324,6 +325,11 @@ def test_issue_cases_exit_2_one_line(valid, capfd, tmp_path, case):
         text = re.sub(r'("coefficients": \[)[-0-9.e]+', rf"\g<1>{value}", text, count=1)
         (tmp_path / "model.json").write_text(text)
         argv = ["predict", "--model", str(tmp_path / "model.json"), "--data", str(valid["data"])]
+    elif case == "MJCF with a NaN":  # found by hypothesis: MuJoCo warns, then builds a model
+        mjcf = re.sub(r'(<key name="home" qpos=")[^"]*', r"\g<1>nan", ROBOT_FILES[".xml"])
+        assert 'qpos="nan"' in mjcf
+        (tmp_path / "nan.xml").write_text(mjcf)
+        argv = ["generate", "--plant", str(tmp_path / "nan.xml"), "--samples", "50"]
     elif case.startswith("MJCF"):
         (tmp_path / "frame.xml").write_text(FRAME_MJCF)
         argv = ["generate", "--plant", str(tmp_path / "frame.xml"), "--samples", "50"]

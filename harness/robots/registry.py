@@ -128,8 +128,11 @@ def _parse(build, path: Path, problem: str):
     except (mujoco.FatalError, *PINOCCHIO_ERRORS) as exc:
         detail = " ".join(str(exc).split()) or "; ".join(printed[:2]) or "parse error"
         raise UserError(f"{problem}: {detail}") from None
-    errors = [line for line in printed if line.lower().startswith("error")]
-    if errors:  # urdfdom reports an element it could not parse, and goes on without it
+    # urdfdom reports an element it could not parse, and goes on without it; MuJoCo warns of a
+    # NaN in the file and builds a model with it
+    errors = [line for line in printed
+              if line.lower().startswith("error") or "contains a 'nan'" in line.lower()]
+    if errors:
         raise UserError(f"{problem}: {'; '.join(' '.join(e.split()) for e in errors[:2])}")
     if printed:
         print(f"torquebench: warning: {path}: {'; '.join(printed[:3])}", file=sys.stderr)
