@@ -12,6 +12,7 @@ concatenation of the segments actually followed.
 from __future__ import annotations
 
 import dataclasses
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -39,7 +40,7 @@ class Execution:
 
     segments: tuple[SegmentPlan, ...]
     replan_times: tuple[float, ...]
-    solve_ms: tuple[float, ...]  # wall time of every solve (incl. re-screening rounds)
+    solve_ms: tuple[float, ...]  # wall time of every plan and re-plan, end to end (plan_segment)
     failures: tuple[str, ...]  # IPOPT status of a failed first plan (the result is unusable)
     replan_failures: tuple[str, ...] = ()  # failed re-plans: the arm kept its last plan
     solve_cpu_ms: tuple[float, ...] = ()  # CPU time of the planning thread, per solve_ms entry
@@ -58,9 +59,11 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     Without a warm start: from a start point x0, the problem with the obstacle is solved
     from it directly (x0's motion is the reference); without one, the unobstructed optimum
     is solved first from the planner's initial guess and serves as the reference. Returns
-    the plan and the total wall and CPU time (ms) of its solves.
+    the plan and the wall and CPU time (ms, planning thread) of the whole call, end to end:
+    solves, screening, checks and bookkeeping.
     """
-    config, total, cpu = planner.config, 0.0, 0.0
+    clock = _Clock()
+    config = planner.config
     alpha = config.penalty_weight if warm is None else warm.penalty_weight
     if warm is None and x0 is not None and forecast is not None:
         # a start point of its own: the obstacle problem solved from it directly (solving the
@@ -71,26 +74,38 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
                         config.obstacle_slots)
         warm = planner.solve(q0, qd0, duration, goal, subset, t_begin, reference=reference,
                              alpha=alpha, x0=x0)
-        total, cpu, first = warm.solve_ms, warm.solve_cpu_ms, False
+        first = False
     elif warm is None:
         warm = planner.solve(q0, qd0, duration, goal, None, t_begin, alpha=alpha, x0=x0)
-        total, cpu, first = warm.solve_ms, warm.solve_cpu_ms, True
+        first = True
     else:
         first = False
     budget = np.inf if deadline_ms is None else deadline_ms
     while True:
-        plan, ms, cpu_ms = _screened(planner, q0, qd0, t_begin, duration, goal, forecast,
-                                     warm, first, alpha, rounds, budget - cpu)
-        total, cpu = total + ms, cpu + cpu_ms
-        if cpu > budget:
+        plan = _screened(planner, q0, qd0, t_begin, duration, goal, forecast, warm, first,
+                         alpha, rounds, lambda: clock.cpu_ms() > budget)
+        if clock.cpu_ms() > budget:
             status = DEADLINE + (LATE if plan.success else "")
-            return dataclasses.replace(plan, success=False, status=status), total, cpu
+            return dataclasses.replace(plan, success=False, status=status), *clock.read()
         if forecast is None or alpha >= config.max_penalty_weight or not plan.success or \
                 _predicted_clearance(planner, plan, forecast) >= config.threshold \
                 - config.penalty_tolerance:
-            return plan, total, cpu
+            return plan, *clock.read()
         alpha = min(alpha * config.penalty_growth, config.max_penalty_weight)
         warm, first = plan, False
+
+
+class _Clock:
+    """Wall and CPU time (ms, this thread) since it was made."""
+
+    def __init__(self):
+        self.wall, self.cpu = time.perf_counter(), time.thread_time()
+
+    def cpu_ms(self) -> float:
+        return 1e3 * (time.thread_time() - self.cpu)
+
+    def read(self) -> tuple[float, float]:
+        return 1e3 * (time.perf_counter() - self.wall), self.cpu_ms()
 
 
 def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, goal,
@@ -110,12 +125,13 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
 
 
 def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan, cold: bool,
-              alpha: float, rounds: int, budget: float = np.inf) -> tuple[SegmentPlan, float, float]:
+              alpha: float, rounds: int, late=lambda: False) -> SegmentPlan:
     """Solve with the obstacle samples screened on a reference (`plan`, re-expressed on
     this horizon) and the limits at its turning points; re-screen on the result until
     the constraints that matter are the ones imposed. cold: `plan` already solves this
-    very problem without obstacle, so an empty screen needs no further solve."""
-    config, total, cpu = planner.config, 0.0, 0.0
+    very problem without obstacle, so an empty screen needs no further solve. late(): True
+    once no further solve may start (a deadline)."""
+    config = planner.config
     reference, chosen = plan.trajectory.restrict(t_begin, duration), set()
     for round_ in range(rounds):
         subset = screen(forecast, reference, config.geometry, config.threshold,
@@ -123,22 +139,20 @@ def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan
         times = set() if subset is None else set(subset.times)
         settled = times <= chosen and limit_excess(plan.trajectory, config.lower,
                                                    config.upper) <= LIMIT_SETTLED
-        if (settled and (round_ > 0 or cold)) or cpu > budget:
+        if (settled and (round_ > 0 or cold)) or late():
             break
         chosen |= times
         attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin, warm=plan,
                                 reference=reference, alpha=alpha)
-        total, cpu = total + attempt.solve_ms, cpu + attempt.solve_cpu_ms
-        if not attempt.success and cpu <= budget:  # a warm start far from the optimum can stall
+        if not attempt.success and not late():  # a warm start far from the optimum can stall
             attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin,
                                     reference=reference, alpha=alpha)
-            total, cpu = total + attempt.solve_ms, cpu + attempt.solve_cpu_ms
         unchanged = attempt.success and plan.success and np.allclose(
             attempt.trajectory.coefficients, reference.coefficients, rtol=0.0, atol=UNCHANGED)
         plan, reference = attempt, attempt.trajectory
-        if unchanged and times <= chosen:
+        if unchanged:
             break  # the same problem again: another round would return the same plan
-    return plan, total, cpu
+    return plan
 
 
 def check_start(planner: Planner, scenario: Scenario) -> None:
