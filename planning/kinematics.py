@@ -16,7 +16,7 @@ samples) and CasADi expressions (exact derivatives for the NLP).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import casadi as ca
 import numpy as np
@@ -136,25 +136,40 @@ def _points(geometry: ArmGeometry, cos_sin, identity, origin) -> list:
 
 
 def _constant(matrix, like):
-    matrix = np.asarray(matrix, float)
-    return ca.sparsify(ca.DM(matrix)) if isinstance(like, ca.DM) else matrix
+    return ca.sparsify(ca.DM(_array(matrix))) if isinstance(like, ca.DM) else _array(matrix)
 
 
 def _apply(rotation, vector):
     """rotation @ vector for a numpy batch (n, 3, 3) or a CasADi 3 x 3."""
     if isinstance(rotation, np.ndarray):
-        return rotation @ np.asarray(vector)
-    return rotation @ ca.sparsify(ca.DM(np.asarray(vector, float)))
+        return rotation @ _array(vector)
+    return rotation @ ca.sparsify(ca.DM(_array(vector)))
 
 
 def _rodrigues(axis, c, s, identity):
     """Rotation by angle (cos c, sin s) about a constant unit axis: c I + s K + (1 - c) a a^T."""
-    a = np.asarray(axis)
-    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-    outer = np.outer(a, a)
+    k, outer = _axis_matrices(axis)
     if isinstance(identity, ca.DM):
         return c * ca.DM.eye(3) + s * ca.sparsify(ca.DM(k)) + (1 - c) * ca.sparsify(ca.DM(outer))
-    return c * np.eye(3) + s * k + (1 - c) * outer
+    return c * _EYE + s * k + (1 - c) * outer
+
+
+_EYE = np.eye(3)
+
+
+@lru_cache(maxsize=None)
+def _array(values: tuple) -> np.ndarray:
+    """A geometry constant (nested tuples) as a read-only array, converted once."""
+    array = np.asarray(values, float)
+    array.flags.writeable = False
+    return array
+
+
+@lru_cache(maxsize=None)
+def _axis_matrices(axis: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """The cross-product matrix K and the outer product a a^T of a unit axis."""
+    a = _array(axis)
+    return (np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]]), np.outer(a, a))
 
 
 def paper_arm(d1: float = 0.086, l2: float = 0.146, l3: float = 0.187) -> ArmGeometry:
