@@ -71,7 +71,7 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
         # 8 start points, one plan on most random scenarios)
         reference = planner.trajectory(x0, q0, qd0, t_begin, duration)
         subset = screen(forecast, reference, config.geometry, config.threshold,
-                        config.obstacle_slots)
+                        config.obstacle_slots).subset
         warm = planner.solve(q0, qd0, duration, goal, subset, t_begin, reference=reference,
                              alpha=alpha, x0=x0)
         first = False
@@ -128,20 +128,21 @@ def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan
               alpha: float, rounds: int, late=lambda: False) -> SegmentPlan:
     """Solve with the obstacle samples screened on a reference (`plan`, re-expressed on
     this horizon) and the limits at its turning points; re-screen on the result until
-    the constraints that matter are the ones imposed. cold: `plan` already solves this
-    very problem without obstacle, so an empty screen needs no further solve. late(): True
-    once no further solve may start (a deadline)."""
+    the samples where it dips were seen by its solves (Screen.covered) and it keeps the
+    limits. cold: `plan` already solves this very problem without obstacle, so a screen
+    without dips needs no further solve. late(): True once no further solve may start
+    (a deadline)."""
     config = planner.config
     reference, chosen = plan.trajectory.restrict(t_begin, duration), set()
     for round_ in range(rounds):
-        subset = screen(forecast, reference, config.geometry, config.threshold,
-                        config.obstacle_slots) if forecast is not None else None
-        times = set() if subset is None else set(subset.times)
-        settled = times <= chosen and limit_excess(plan.trajectory, config.lower,
-                                                   config.upper) <= LIMIT_SETTLED
+        screened = screen(forecast, reference, config.geometry, config.threshold,
+                          config.obstacle_slots) if forecast is not None else None
+        subset = None if screened is None else screened.subset
+        settled = (screened is None or screened.covered(np.fromiter(chosen, float))) and \
+            limit_excess(plan.trajectory, config.lower, config.upper) <= LIMIT_SETTLED
         if (settled and (round_ > 0 or cold)) or late():
             break
-        chosen |= times
+        chosen |= set() if subset is None else set(subset.times)
         attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin, warm=plan,
                                 reference=reference, alpha=alpha)
         if not attempt.success and not late():  # a warm start far from the optimum can stall

@@ -9,6 +9,8 @@ own solution until the chosen set stops changing.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from planning.clearance import link_clearances
@@ -17,15 +19,45 @@ from planning.solver import ObstacleForecast
 from planning.trajectory import PolynomialTrajectory
 
 
+@dataclass(frozen=True)
+class Screen:
+    """What a reference motion says about a forecast: the samples a solve must see
+    (subset), the times where the reference dips below the threshold (dips), and the
+    largest gap (s) between subset samples when the near ones were thinned to fit the
+    slots (0: not thinned, every near sample is in the subset)."""
+
+    subset: ObstacleForecast
+    dips: np.ndarray
+    gap: float
+
+    def covered(self, chosen: np.ndarray) -> bool:
+        """True if a solve that saw the samples at `chosen` times saw every dip: each one,
+        or (thinned) a chosen sample within the gap of it. A sample the solve did not see,
+        above the threshold on its result, adds a zero penalty term with a zero gradient:
+        the result is optimal with it too."""
+        if not len(self.dips):
+            return True
+        if not len(chosen):
+            return False
+        chosen = np.sort(chosen)
+        index = np.clip(np.searchsorted(chosen, self.dips), 1, len(chosen) - 1)
+        nearest = np.minimum(np.abs(chosen[index] - self.dips), np.abs(chosen[index - 1]
+                                                                       - self.dips))
+        return bool(np.all(nearest <= self.gap + 1e-9))
+
+
 def screen(forecast: ObstacleForecast, reference: PolynomialTrajectory, geometry: ArmGeometry,
-           threshold: float, slots: int, margin: float = 0.03) -> ObstacleForecast:
-    """The samples in (t_begin, t_end] whose reference clearance is below threshold + margin."""
+           threshold: float, slots: int, margin: float = 0.03) -> Screen:
+    """The samples in (t_begin, t_end] whose reference clearance is below threshold + margin
+    (evenly thinned to `slots`), and those below the threshold."""
     times = np.asarray(forecast.times)
     inside = np.flatnonzero((times > reference.t_begin + 1e-12)
                             & (times <= reference.t_end + 1e-12))
     q = reference.position(times[inside])
     clearance = link_clearances(geometry, q, forecast.centres[inside]).min(axis=1)
-    near = inside[clearance < threshold + margin]
+    near, gap = inside[clearance < threshold + margin], 0.0
     if len(near) > slots:
         near = near[np.round(np.linspace(0, len(near) - 1, slots)).astype(int)]
-    return ObstacleForecast(times[near], forecast.centres[near])
+        gap = float(np.max(np.diff(times[near])))
+    return Screen(ObstacleForecast(times[near], forecast.centres[near]),
+                  times[inside[clearance < threshold]], gap)

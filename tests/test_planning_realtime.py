@@ -157,7 +157,7 @@ def test_a_warm_solve_the_fast_solver_cannot_finish_is_rescued_by_ipopt(baseline
     q, qd, _ = first.trajectory.state(t)
     reference_path = first.trajectory.restrict(t, scenario.duration - t)
     seen = screen(forecast_at(scenario.obstacle, t), reference_path, full.config.geometry,
-                  full.config.threshold, full.config.obstacle_slots)
+                  full.config.threshold, full.config.obstacle_slots).subset
     args = (q[0], qd[0], scenario.duration - t, scenario.goal, seen, t)
     rescued = capped.solve(*args, warm=first, reference=reference_path)
     reference = full.solve(*args, warm=first, reference=reference_path)

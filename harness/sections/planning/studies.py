@@ -137,7 +137,7 @@ def speed_study(baseline, scenario, quick: bool, config: PlannerConfig | None = 
     free = planner.solve(scenario.start, scenario.start_velocity, scenario.duration,
                          scenario.goal)
     subset = screen(forecast, free.trajectory, planner.config.geometry,
-                    planner.config.threshold, planner.config.obstacle_slots)
+                    planner.config.threshold, planner.config.obstacle_slots).subset
     args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
     ipopt = planner.solve(*args, subset, 0.0, reference=free.trajectory)
     p = planner.parameters(*args, subset, 0.0, free.trajectory)

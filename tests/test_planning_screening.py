@@ -1,0 +1,78 @@
+"""Screening of obstacle samples: which ones a solve sees, and when a re-plan is settled."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
+from planning.clearance import link_clearances
+from planning.config import PlannerConfig, Scenario
+from planning.screening import Screen, screen
+from planning.solver import ObstacleForecast, Planner
+
+
+def _screen(dips, gap):
+    return Screen(ObstacleForecast(np.zeros(0), np.zeros((0, 3))), np.asarray(dips, float), gap)
+
+
+def _known_path(scenario: Scenario) -> ObstacleForecast:
+    times = scenario.obstacle.sample_times
+    return ObstacleForecast(times, scenario.obstacle.position(times))
+
+
+def test_covered_needs_every_dip_unless_thinned():
+    assert _screen([], 0.0).covered(np.zeros(0))
+    assert _screen([0.1, 0.2], 0.0).covered(np.array([0.2, 0.1, 0.5]))
+    assert not _screen([0.1, 0.2], 0.0).covered(np.array([0.1, 0.5]))
+    assert not _screen([0.1], 0.05).covered(np.zeros(0))
+    # thinned: a chosen sample within the gap stands for the dips around it
+    assert _screen([0.11, 0.13, 0.2], 0.04).covered(np.array([0.1, 0.17, 0.3]))
+    assert not _screen([0.11, 0.25], 0.04).covered(np.array([0.1, 0.17, 0.3]))
+
+
+def test_screen_thins_to_the_slots_and_reports_the_gap():
+    scenario = Scenario()
+    baseline = PinocchioModel(load_pinocchio("lynxmotion"))
+    planner = Planner(baseline)
+    free = planner.solve(scenario.start, scenario.start_velocity, scenario.duration,
+                         scenario.goal)
+    forecast = _known_path(scenario)
+    geometry, threshold = planner.config.geometry, planner.config.threshold
+    wide = screen(forecast, free.trajectory, geometry, threshold, slots=1000)
+    thin = screen(forecast, free.trajectory, geometry, threshold, slots=6)
+    clearance = link_clearances(geometry, free.trajectory.position(forecast.times),
+                                forecast.centres).min(axis=1)
+    assert wide.gap == 0.0 and len(wide.subset.times) > 6
+    assert np.array_equal(wide.subset.times, forecast.times[clearance < threshold + 0.03])
+    assert np.array_equal(wide.dips, forecast.times[clearance < threshold])
+    assert len(thin.subset.times) == 6 and set(thin.subset.times) <= set(wide.subset.times)
+    assert thin.gap == pytest.approx(np.max(np.diff(thin.subset.times)))
+    assert thin.covered(thin.subset.times) == bool(np.all(
+        [np.min(np.abs(thin.subset.times - t)) <= thin.gap for t in thin.dips]))
+
+
+def test_samples_above_the_threshold_leave_the_optimum_unchanged():
+    """Screen.covered's premise: a solve that also sees samples where its result stays above
+    the threshold returns the same result (their penalty terms and gradients are zero)."""
+    scenario = Scenario()
+    baseline = PinocchioModel(load_pinocchio("lynxmotion"))
+    planner = Planner(baseline, PlannerConfig(obstacle_slots=40))
+    args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
+    free = planner.solve(*args)
+    forecast = _known_path(scenario)
+    geometry, threshold = planner.config.geometry, planner.config.threshold
+    seen = screen(forecast, free.trajectory, geometry, threshold, slots=12, margin=0.0).subset
+    plan = planner.solve(*args, seen, reference=free.trajectory)
+    clearance = link_clearances(geometry, plan.trajectory.position(forecast.times),
+                                forecast.centres).min(axis=1)
+    clear = np.flatnonzero((clearance > threshold + 1e-3) & ~np.isin(forecast.times, seen.times))
+    added = clear[np.argsort(clearance[clear])[:20]]  # the nearest ones that stay clear
+    assert len(added) == 20 and clearance[added].min() < threshold + 0.05
+    keep = np.sort(np.concatenate([np.flatnonzero(np.isin(forecast.times, seen.times)), added]))
+    more = planner.solve(*args, ObstacleForecast(forecast.times[keep], forecast.centres[keep]),
+                         reference=free.trajectory)
+    assert plan.success and more.success and plan.penalty > 0
+    assert np.allclose(more.trajectory.coefficients, plan.trajectory.coefficients, atol=1e-5)
+    assert more.energy + more.penalty == pytest.approx(plan.energy + plan.penalty, rel=1e-6)
