@@ -16,7 +16,7 @@ samples) and CasADi expressions (exact derivatives for the NLP).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property, lru_cache
+from functools import cache, cached_property
 
 import casadi as ca
 import numpy as np
@@ -157,7 +157,7 @@ def _rodrigues(axis, c, s, identity):
 _EYE = np.eye(3)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _array(values: tuple) -> np.ndarray:
     """A geometry constant (nested tuples) as a read-only array, converted once."""
     array = np.asarray(values, float)
@@ -165,7 +165,7 @@ def _array(values: tuple) -> np.ndarray:
     return array
 
 
-@lru_cache(maxsize=None)
+@cache
 def _axis_matrices(axis: tuple) -> tuple[np.ndarray, np.ndarray]:
     """The cross-product matrix K and the outer product a a^T of a unit axis."""
     a = _array(axis)

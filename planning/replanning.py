@@ -82,14 +82,16 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
         first = False
     budget = np.inf if deadline_ms is None else deadline_ms
     while True:
-        plan = _screened(planner, q0, qd0, t_begin, duration, goal, forecast, warm, first,
-                         alpha, rounds, lambda: clock.cpu_ms() > budget)
+        plan, lowest = _screened(planner, q0, qd0, t_begin, duration, goal, forecast, warm,
+                                 first, alpha, rounds, lambda: clock.cpu_ms() > budget)
         if clock.cpu_ms() > budget:
             status = DEADLINE + (LATE if plan.success else "")
             return dataclasses.replace(plan, success=False, status=status), *clock.read()
-        if forecast is None or alpha >= config.max_penalty_weight or not plan.success or \
-                _predicted_clearance(planner, plan, forecast) >= config.threshold \
-                - config.penalty_tolerance:
+        if forecast is None or alpha >= config.max_penalty_weight or not plan.success:
+            return plan, *clock.read()
+        if lowest is None:
+            lowest = _predicted_clearance(planner, plan, forecast)
+        if lowest >= config.threshold - config.penalty_tolerance:
             return plan, *clock.read()
         alpha = min(alpha * config.penalty_growth, config.max_penalty_weight)
         warm, first = plan, False
@@ -125,13 +127,14 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
 
 
 def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan, cold: bool,
-              alpha: float, rounds: int, late=lambda: False) -> SegmentPlan:
+              alpha: float, rounds: int, late=lambda: False) -> tuple[SegmentPlan, float | None]:
     """Solve with the obstacle samples screened on a reference (`plan`, re-expressed on
     this horizon) and the limits at its turning points; re-screen on the result until
     the samples where it dips were seen by its solves (Screen.covered) and it keeps the
     limits. cold: `plan` already solves this very problem without obstacle, so a screen
     without dips needs no further solve. late(): True once no further solve may start
-    (a deadline)."""
+    (a deadline). Returns the plan and its smallest clearance over the forecast when the
+    last screen was of it (None: not known)."""
     config = planner.config
     reference, chosen = plan.trajectory.restrict(t_begin, duration), set()
     for round_ in range(rounds):
@@ -141,7 +144,7 @@ def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan
         settled = (screened is None or screened.covered(np.fromiter(chosen, float))) and \
             limit_excess(plan.trajectory, config.lower, config.upper) <= LIMIT_SETTLED
         if (settled and (round_ > 0 or cold)) or late():
-            break
+            return plan, None if screened is None else screened.lowest
         chosen |= set() if subset is None else set(subset.times)
         attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin, warm=plan,
                                 reference=reference, alpha=alpha)
@@ -153,7 +156,7 @@ def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan
         plan, reference = attempt, attempt.trajectory
         if unchanged:
             break  # the same problem again: another round would return the same plan
-    return plan
+    return plan, None
 
 
 def check_start(planner: Planner, scenario: Scenario) -> None:

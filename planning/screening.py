@@ -29,6 +29,7 @@ class Screen:
     subset: ObstacleForecast
     dips: np.ndarray
     gap: float
+    lowest: float  # the reference's smallest clearance over the samples (m; inf: none)
 
     def covered(self, chosen: np.ndarray) -> bool:
         """True if a solve that saw the samples at `chosen` times saw every dip: each one,
@@ -60,4 +61,5 @@ def screen(forecast: ObstacleForecast, reference: PolynomialTrajectory, geometry
         near = near[np.round(np.linspace(0, len(near) - 1, slots)).astype(int)]
         gap = float(np.max(np.diff(times[near])))
     return Screen(ObstacleForecast(times[near], forecast.centres[near]),
-                  times[inside[clearance < threshold]], gap)
+                  times[inside[clearance < threshold]], gap,
+                  float(np.min(clearance, initial=np.inf)))

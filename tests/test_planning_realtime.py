@@ -12,8 +12,7 @@ from harness.robots.registry import load_pinocchio
 from planning import compiled, replanning
 from planning.clearance import link_clearances
 from planning.config import PlannerConfig, Scenario
-from planning.replanning import (DEADLINE, LATE, execute, forecast_at, plan_multistart,
-                                 plan_segment)
+from planning.replanning import DEADLINE, LATE, execute, forecast_at, plan_multistart, plan_segment
 from planning.scenarios import random_scenarios, swaying_scenario
 from planning.screening import screen
 from planning.solver import ObstacleForecast, Planner

@@ -14,7 +14,7 @@ from planning.solver import ObstacleForecast, Planner
 
 
 def _screen(dips, gap):
-    return Screen(ObstacleForecast(np.zeros(0), np.zeros((0, 3))), np.asarray(dips, float), gap)
+    return Screen(ObstacleForecast(np.zeros(0), np.zeros((0, 3))), np.asarray(dips, float), gap, np.inf)
 
 
 def _known_path(scenario: Scenario) -> ObstacleForecast:
@@ -47,6 +47,7 @@ def test_screen_thins_to_the_slots_and_reports_the_gap():
     assert wide.gap == 0.0 and len(wide.subset.times) > 6
     assert np.array_equal(wide.subset.times, forecast.times[clearance < threshold + 0.03])
     assert np.array_equal(wide.dips, forecast.times[clearance < threshold])
+    assert wide.lowest == thin.lowest == clearance.min()
     assert len(thin.subset.times) == 6 and set(thin.subset.times) <= set(wide.subset.times)
     assert thin.gap == pytest.approx(np.max(np.diff(thin.subset.times)))
     assert thin.covered(thin.subset.times) == bool(np.all(
