@@ -114,9 +114,9 @@ def swaying_study(baseline, free_trajectory, quick: bool,
 
 
 def scenario_replans(solve_ms) -> dict:
-    """Timings (ms, wall) of a scenario's actual solves: the first plan, the first re-plan
-    (the forecast switches from 'standing still' to 'moving' there, so it is the largest
-    change) and all re-plans, each incl. re-screening and penalty escalation."""
+    """Timings (ms, wall, end to end) of a scenario's actual plans: the first plan, the first
+    re-plan (the forecast switches from 'standing still' to 'moving' there, so it is the
+    largest change) and all re-plans, each incl. re-screening and penalty escalation."""
     ms = np.asarray(solve_ms, float)
     replans = ms[1:]
     return {"first_plan_ms": float(ms[0]), "replans_timed": len(replans),
