@@ -74,16 +74,16 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
                         config.obstacle_slots).subset
         warm = planner.solve(q0, qd0, duration, goal, subset, t_begin, reference=reference,
                              alpha=alpha, x0=x0)
-        first = False
+        seen = set(subset.times) if warm.success else None
     elif warm is None:
         warm = planner.solve(q0, qd0, duration, goal, None, t_begin, alpha=alpha, x0=x0)
-        first = True
+        seen = set()  # a failed unobstructed solve is reported as it is
     else:
-        first = False
+        seen = None
     budget = np.inf if deadline_ms is None else deadline_ms
     while True:
         plan, lowest = _screened(planner, q0, qd0, t_begin, duration, goal, forecast, warm,
-                                 first, alpha, rounds, lambda: clock.cpu_ms() > budget)
+                                 seen, alpha, rounds, lambda: clock.cpu_ms() > budget)
         if clock.cpu_ms() > budget:
             status = DEADLINE + (LATE if plan.success else "")
             return dataclasses.replace(plan, success=False, status=status), *clock.read()
@@ -94,7 +94,7 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
         if lowest >= config.threshold - config.penalty_tolerance:
             return plan, *clock.read()
         alpha = min(alpha * config.penalty_growth, config.max_penalty_weight)
-        warm, first = plan, False
+        warm, seen = plan, None
 
 
 class _Clock:
@@ -126,24 +126,26 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
     return min(plans, key=rank), wall, cpu, plans
 
 
-def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan, cold: bool,
-              alpha: float, rounds: int, late=lambda: False) -> tuple[SegmentPlan, float | None]:
+def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan,
+              seen: set | None, alpha: float, rounds: int,
+              late=lambda: False) -> tuple[SegmentPlan, float | None]:
     """Solve with the obstacle samples screened on a reference (`plan`, re-expressed on
     this horizon) and the limits at its turning points; re-screen on the result until
     the samples where it dips were seen by its solves (Screen.covered) and it keeps the
-    limits. cold: `plan` already solves this very problem without obstacle, so a screen
-    without dips needs no further solve. late(): True once no further solve may start
-    (a deadline). Returns the plan and its smallest clearance over the forecast when the
-    last screen was of it (None: not known)."""
+    limits. seen: the obstacle sample times `plan` was solved with, if it solves this very
+    problem (same horizon and alpha: then it may be settled without a further solve); None
+    if not. late(): True once no further solve may start (a deadline). Returns the plan and
+    its smallest clearance over the forecast when the last screen was of it (None: not
+    known)."""
     config = planner.config
-    reference, chosen = plan.trajectory.restrict(t_begin, duration), set()
+    reference, chosen = plan.trajectory.restrict(t_begin, duration), set(seen or ())
     for round_ in range(rounds):
         screened = screen(forecast, reference, config.geometry, config.threshold,
                           config.obstacle_slots) if forecast is not None else None
         subset = None if screened is None else screened.subset
         settled = (screened is None or screened.covered(np.fromiter(chosen, float))) and \
             limit_excess(plan.trajectory, config.lower, config.upper) <= LIMIT_SETTLED
-        if (settled and (round_ > 0 or cold)) or late():
+        if (settled and (round_ > 0 or seen is not None)) or late():
             return plan, None if screened is None else screened.lowest
         chosen |= set() if subset is None else set(subset.times)
         attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin, warm=plan,
