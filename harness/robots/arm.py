@@ -19,7 +19,6 @@ import pinocchio as pin
 
 from harness.robots.plant import load_plant
 from harness.robots.registry import (
-    DEFAULT_ROBOT,
     ROBOTS,
     flange_frame,
     get_robot,
@@ -89,16 +88,10 @@ def torque_limit(robot: str) -> tuple[float, ...] | None:
 
 
 def planner_config(robot: str, **changes) -> PlannerConfig:
-    """The default planner configuration on robot: its links, joint and torque limits, and
-    its solver: fatrop on the default robot, whose NLP is compiled; IPOPT on other arms,
-    whose NLPs stay interpreted (too large to compile, planning.compiled), so an iteration
-    costs mostly function evaluations and fewer of them win: measured on the UR5
-    (`python -m benchmarks.arm_solvers`), IPOPT's cold plan 880 vs 4564 ms CPU, warm
-    re-plans 38 vs 270 ms median (primal-dual warm start: 3-4 iterations)."""
+    """The default planner configuration on robot: its links, joint and torque limits."""
     lower, upper = joint_limits(robot)
     base = dict(geometry=arm_geometry(robot), lower=lower, upper=upper,
-                torque_limit=torque_limit(robot),
-                solver=PlannerConfig.solver if robot == DEFAULT_ROBOT else "ipopt")
+                torque_limit=torque_limit(robot))
     return dataclasses.replace(PlannerConfig(), **{**base, **changes})
 
 
