@@ -88,6 +88,7 @@ class Planner:
         self._relaxed = _build(self.nlp, self.config, "plan")
         self._limited: _Solvers | None = None
         self._rescue: dict[int, _Solvers] = {}
+        self.solver_ms = 0.0  # wall time (ms) of all its solver calls so far: timing breakdowns
         if self.config.compile_code and self.config.solver != "ipopt":
             # built now: generating its code takes seconds (measured 2.9 s on the Lynxmotion),
             # which must not land inside the first re-plan that needs it
@@ -222,6 +223,7 @@ class Planner:
             solver = rescue.cold if warm is None else rescue.warm
             result, stats = solver(**args), backends.stats(solver)
         elapsed = (1e3 * (time.perf_counter() - start), 1e3 * (time.thread_time() - cpu))
+        self.solver_ms += elapsed[0]
         return self._segment(solvers, result, stats, elapsed, segment)
 
     def _rescuer(self, solvers: _Solvers) -> _Solvers:

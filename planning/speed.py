@@ -6,7 +6,6 @@ bookkeeping around it), wall clock and CPU time of the planning thread, in ms.
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,7 +24,7 @@ class Timings:
     replan_failures: int
     cold_cpu_ms: tuple[float, ...]
     replan_cpu_ms: tuple[float, ...]
-    replan_solver_ms: tuple[float, ...]  # the IPOPT calls alone
+    replan_solver_ms: tuple[float, ...]  # the solver calls alone (wall)
 
     def summary(self) -> dict:
         replan = np.asarray(self.replan_ms)
@@ -41,12 +40,6 @@ class Timings:
                 "replan_solver_median_ms": float(np.median(self.replan_solver_ms))}
 
 
-def _timed(function, *args, **kwargs):
-    wall, cpu = time.perf_counter(), time.thread_time()
-    result = function(*args, **kwargs)
-    return result, 1e3 * (time.perf_counter() - wall), 1e3 * (time.thread_time() - cpu)
-
-
 def measure(planner: Planner, scenario: Scenario, cold_repeats: int = 5,
             stride: int = 1) -> tuple[Timings, SegmentPlan]:
     """Cold plans of the whole motion, then a re-plan at every `stride`-th obstacle sample,
@@ -54,19 +47,19 @@ def measure(planner: Planner, scenario: Scenario, cold_repeats: int = 5,
     obstacle, goal, T = scenario.obstacle, scenario.goal, scenario.duration
     cold, cold_cpu, plan = [], [], None
     for _ in range(cold_repeats):
-        (plan, _, _), wall, cpu = _timed(plan_segment, planner, scenario.start,
-                                         scenario.start_velocity, 0.0, T, goal,
-                                         forecast_at(obstacle, obstacle.sample_times[0]))
+        plan, wall, cpu = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0, T,
+                                       goal, forecast_at(obstacle, obstacle.sample_times[0]))
         cold.append(wall)
         cold_cpu.append(cpu)
     walls, cpus, solver, failures = [], [], [], 0
     for t in obstacle.sample_times[:-1:stride]:
         q, qd, _ = plan.trajectory.state(t)
-        (new, solver_ms, _), wall, cpu = _timed(plan_segment, planner, q[0], qd[0], t, T - t,
-                                                goal, forecast_at(obstacle, t), warm=plan)
+        before = planner.solver_ms
+        new, wall, cpu = plan_segment(planner, q[0], qd[0], t, T - t, goal, forecast_at(obstacle, t),
+                                      warm=plan)
         walls.append(wall)
         cpus.append(cpu)
-        solver.append(solver_ms)
+        solver.append(planner.solver_ms - before)
         if new.success:
             plan = new
         else:

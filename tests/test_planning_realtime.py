@@ -16,6 +16,7 @@ from planning.replanning import DEADLINE, LATE, execute, forecast_at, plan_multi
 from planning.scenarios import random_scenarios, swaying_scenario
 from planning.screening import screen
 from planning.solver import ObstacleForecast, Planner
+from planning.speed import measure
 from planning.starts import start_points
 from planning.trajectory import PolynomialTrajectory
 
@@ -189,3 +190,11 @@ def test_each_start_point_reaches_a_plan_of_its_own(baseline):
     for plan in (free_first, best):
         clearance = link_clearances(config.geometry, plan.trajectory.position(t), forecast.centres)
         assert clearance.min() >= config.threshold - config.penalty_tolerance
+
+
+def test_replan_timing_breaks_down_into_the_solver_and_the_rest(baseline):
+    """Re-plan times are end to end; the solver calls (Planner.solver_ms) are part of them."""
+    timings, _ = measure(Planner(baseline), Scenario(), cold_repeats=1, stride=40)
+    replans, solver = np.asarray(timings.replan_ms), np.asarray(timings.replan_solver_ms)
+    assert len(replans) == len(solver) > 0
+    assert np.all(solver > 0) and np.all(solver <= replans)
