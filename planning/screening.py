@@ -36,15 +36,8 @@ class Screen:
         or (thinned) a chosen sample within the gap of it. A sample the solve did not see,
         above the threshold on its result, adds a zero penalty term with a zero gradient:
         the result is optimal with it too."""
-        if not len(self.dips):
-            return True
-        if not len(chosen):
-            return False
-        chosen = np.sort(chosen)
-        index = np.clip(np.searchsorted(chosen, self.dips), 1, len(chosen) - 1)
-        nearest = np.minimum(np.abs(chosen[index] - self.dips), np.abs(chosen[index - 1]
-                                                                       - self.dips))
-        return bool(np.all(nearest <= self.gap + 1e-9))
+        distance = np.abs(np.asarray(self.dips)[:, None] - np.asarray(chosen)[None, :])
+        return bool(np.all(distance.min(axis=1, initial=np.inf) <= self.gap + 1e-9))
 
 
 def screen(forecast: ObstacleForecast, reference: PolynomialTrajectory, geometry: ArmGeometry,
