@@ -1,6 +1,6 @@
 """Re-plan latency: cold plans and warm re-plans one obstacle sample apart.
 
-Times are end to end (screening, parameter packing, every IPOPT solve and the
+Times are end to end (screening, parameter packing, every solver call and the
 bookkeeping around it), wall clock and CPU time of the planning thread, in ms.
 """
 
