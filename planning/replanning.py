@@ -200,8 +200,7 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
     planned_with, latest = forecast, plan  # latest: the newest converged solution
     for t in obstacle.sample_times[:-1]:
         forecast = forecast_at(obstacle, t)
-        if _predicted_clearance(planner, plan, forecast) >= planner.config.threshold \
-                - TRIGGER_TOLERANCE or _same_prediction(planned_with, forecast):
+        if not _stale(planner, plan, forecast) or _same_prediction(planned_with, forecast):
             continue  # safe, or nothing new to plan with: the last plan already saw this
         planned_with = forecast
         q, qd, _ = plan.trajectory.state(t)
@@ -236,6 +235,18 @@ def _same_prediction(old: ObstacleForecast, new: ObstacleForecast) -> bool:
         return False
     return bool(np.max(np.abs(old.centres[index] - new.centres), initial=0.0)
                 <= PREDICTION_TOLERANCE)
+
+
+def _stale(planner: Planner, plan: SegmentPlan, forecast: ObstacleForecast) -> bool:
+    """True if the plan must be re-planned for this forecast: it comes within the threshold
+    (Algorithm 2), or it was bent round the obstacle (a positive penalty) and now keeps more
+    than the threshold everywhere: the obstacle has moved off its detour, whose energy a
+    re-plan can save (measured: a first plan made against the obstacle standing still, never
+    re-planned because it stayed clear, spent 5.06 J where a re-planned motion spent 0.23 J)."""
+    clearance = _predicted_clearance(planner, plan, forecast)
+    threshold = planner.config.threshold
+    return clearance < threshold - TRIGGER_TOLERANCE or \
+        (plan.penalty > 0.0 and clearance > threshold + TRIGGER_TOLERANCE)
 
 
 def _predicted_clearance(planner: Planner, plan: SegmentPlan, forecast: ObstacleForecast):
