@@ -4,10 +4,9 @@ solves from several start points and keeps the best.
 
 Start 0 is the planner's initial guess (a cubic to the goal); start i > 0 adds to it bumps
 that vanish at both ends, drawn from a fixed seed (the same problem always gets the same
-starts), with amplitudes of half each joint's range. From start 0 the unobstructed optimum is
-solved first and leads into the obstacle problem; every other start solves the obstacle
-problem from itself (planning.replanning.plan_segment): the unobstructed optimum is nearly
-always unique, so passing through it would bring every start to the same detour.
+starts), with amplitudes of half each joint's range. Every start solves the obstacle problem
+from itself (planning.replanning.plan_segment): the unobstructed optimum is nearly always
+unique, so passing through it would bring every start to the same detour.
 """
 
 from __future__ import annotations

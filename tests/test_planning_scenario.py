@@ -85,7 +85,8 @@ def test_start_inside_threshold_is_an_error(paper):
 
 
 def test_solver_failure_is_flagged(baseline):
-    config = PlannerConfig(max_iterations=2)
+    # no solve may finish: cold and warm capped, no IPOPT rescue (it has its own warm cap)
+    config = PlannerConfig(max_iterations=2, warm_max_iterations=2, solver="ipopt")
     scenario = Scenario()
     result = evaluate(execute(Planner(baseline, config), scenario), scenario, baseline, config)
     assert not result.feasible

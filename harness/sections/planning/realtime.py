@@ -82,7 +82,7 @@ def timing(baseline, config: PlannerConfig, cases: list[Scenario]) -> tuple[dict
 
 def _single_start(planner: Planner, case: Scenario, index: int) -> Execution:
     """Algorithm 2 with the first plan solved from start point `index` only (index 0: the
-    default's first start, the unobstructed optimum first)."""
+    default's first start, the planner's initial guess)."""
     if index == 0:
         return execute(planner, case, starts=1)
     point = start_points(planner, case.start, case.start_velocity, case.duration, case.goal,
