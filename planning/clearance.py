@@ -19,12 +19,12 @@ from planning.kinematics import ArmGeometry
 
 
 def segment_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Distance (n,) from points (n, 3) to segments a-b (n, 3 each); a zero-length segment
-    is its point."""
-    ab = b - a
-    t = np.einsum("ij,ij->i", point - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
-    closest = a + np.clip(t, 0.0, 1.0)[:, None] * ab
-    return np.linalg.norm(point - closest, axis=1)
+    """Distance (...) from points (..., 3) to segments a-b (..., 3 each, broadcast); a
+    zero-length segment is its point."""
+    ab, ap = b - a, point - a
+    t = np.einsum("...i,...i->...", ap, ab) / np.maximum(np.einsum("...i,...i->...", ab, ab),
+                                                          1e-300)
+    return np.linalg.norm(ap - np.clip(t, 0.0, 1.0)[..., None] * ab, axis=-1)
 
 
 def symbolic_segment_distance(point, a, b, length: float):
@@ -38,9 +38,9 @@ def link_clearances(geometry: ArmGeometry, q: np.ndarray, obstacle: np.ndarray) 
     """Distances (n, links) of obstacle centres (n, 3) or (3,) to each link of the arm
     (geometry.links) at joint angles q (n, dof)."""
     points = geometry.points(q)
-    obstacle = np.broadcast_to(obstacle, points[:, 0].shape)
-    return np.stack([segment_distance(obstacle, points[:, i], points[:, j])
-                     for i, j in geometry.links], axis=1)
+    first, second = (np.asarray(index) for index in zip(*geometry.links, strict=True))
+    centres = np.reshape(obstacle, (-1, 1, 3))  # (n or 1, 1, 3): one centre per row of q
+    return segment_distance(centres, points[:, first], points[:, second])
 
 
 def symbolic_link_clearances(geometry: ArmGeometry, q, obstacle) -> list:

@@ -86,8 +86,9 @@ def register(sub) -> None:
     p.add_argument("--torque-limit", default=None,
                    help="per-joint torque limits (N m, one per joint), or 'none'; default: the "
                         "robot MJCF's motor ctrlrange times gear, else the URDF effort limits")
-    p.add_argument("--solver", choices=SOLVERS, default=PlannerConfig.solver,
-                   help="NLP solver (CasADi plugin); ipopt is the paper's")
+    p.add_argument("--solver", choices=SOLVERS, default=None,
+                   help="NLP solver (CasADi plugin); ipopt is the paper's (default: fatrop on "
+                        "the Lynxmotion, ipopt on other arms)")
     p.add_argument("--starts", type=int, default=PLANNER.starts,
                    help="start points of the cold plan (the best is kept)")
     p.add_argument("--deadline-ms", type=float, default=0.0,
@@ -154,7 +155,7 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  torque_limit=None)
     dof = config.geometry.dof
     config = dataclasses.replace(config, torque_limit=_torque_limit(args, dof))
-    config = dataclasses.replace(config, solver=args.solver, starts=args.starts,
+    config = dataclasses.replace(config, solver=args.solver or config.solver, starts=args.starts,
                                  compile_code=not args.no_compile,
                                  replan_deadline_ms=args.deadline_ms or None)
     path = (_vector(args.obstacle_from, "obstacle-from"),
