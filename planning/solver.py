@@ -85,20 +85,37 @@ class Planner:
         self.config = config or PlannerConfig()
         self.model = model
         self.nlp = PlanningNLP(model, dataclasses.replace(self.config, torque_limit=None))
-        self._relaxed = _build(self.nlp, self.config, "plan")
-        self._limited: _Solvers | None = None
+        self._relaxed: dict[tuple[int, ...], _Solvers] = {}
+        self._limited: dict[tuple[int, ...], _Solvers] = {}
         self._rescue: dict[int, _Solvers] = {}
         self.solver_ms = 0.0  # wall time (ms) of all its solver calls so far: timing breakdowns
-        if self.config.compile_code and self.config.solver != "ipopt":
-            # built now: generating its code takes seconds (measured 2.9 s on the Lynxmotion),
-            # which must not land inside the first re-plan that needs it
-            self._rescuer(self._relaxed)
 
-    def _torque_limited(self) -> _Solvers:
-        if self._limited is None:
-            self._limited = _build(PlanningNLP(self.model, self.config), self.config,
-                                   "plan_torque")
-        return self._limited
+    def _relaxed_for(self, goal) -> _Solvers:
+        """The NLP without torque rows, with goal-limit rows for the joints whose goal is on
+        a limit (PlanningNLP's goal_limits), built on first need with its IPOPT rescuer:
+        generating the rescuer's code takes seconds (measured 2.9 s on the Lynxmotion),
+        which must not land inside the first re-plan that needs it (a new goal's first
+        solve is a cold plan)."""
+        key = self._goal_limits(goal)
+        if key not in self._relaxed:
+            relaxed = dataclasses.replace(self.config, torque_limit=None)
+            self._relaxed[key] = _build(PlanningNLP(self.model, relaxed, key), self.config,
+                                        "plan")
+            if self.config.compile_code and self.config.solver != "ipopt":
+                self._rescuer(self._relaxed[key])
+        return self._relaxed[key]
+
+    def _torque_limited(self, goal) -> _Solvers:
+        key = self._goal_limits(goal)
+        if key not in self._limited:
+            self._limited[key] = _build(PlanningNLP(self.model, self.config, key), self.config,
+                                        "plan_torque")
+        return self._limited[key]
+
+    def _goal_limits(self, goal) -> tuple[int, ...]:
+        """The joints whose goal is on a limit."""
+        signs = goal_limit_signs(goal, self.config.lower, self.config.upper)
+        return tuple(int(j) for j in np.flatnonzero(signs))
 
     def torque_excess(self, trajectory: PolynomialTrajectory) -> float:
         """Largest |tau_i| - torque_limit_i (N m) on a dense grid of the segment (< 0: inside;
@@ -151,7 +168,7 @@ class Planner:
         lbg, ubg = nlp.lbg.copy(), nlp.ubg.copy()
         signs = goal_limit_signs(goal, self.config.lower, self.config.upper)
         for j in np.flatnonzero(signs):
-            lbg[nlp.quotient_rows[j]] = 0.0
+            lbg[nlp.quotient_rows[int(j)]] = 0.0
         return lbg, ubg
 
     def initial_guess(self, q0, qd0, duration: float, goal, bumps=None) -> np.ndarray:
@@ -195,11 +212,11 @@ class Planner:
         if x0 is None:
             x0 = self.initial_guess(q0, qd0, duration, goal)
         segment = (q0, qd0, duration, t_begin, p, alpha, x0)
-        plan = self._solve(self._relaxed, goal, warm, segment)
+        plan = self._solve(self._relaxed_for(goal), goal, warm, segment)
         if not plan.success or self.torque_excess(plan.trajectory) <= 0:
             return plan
         # the relaxed optimum overdrives a motor: solve again with the torque rows
-        limited = self._solve(self._torque_limited(), goal, warm, segment)
+        limited = self._solve(self._torque_limited(goal), goal, warm, segment)
         return dataclasses.replace(limited, solve_ms=plan.solve_ms + limited.solve_ms,
                                    solve_cpu_ms=plan.solve_cpu_ms + limited.solve_cpu_ms)
 

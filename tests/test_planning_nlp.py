@@ -39,3 +39,30 @@ def test_called_torque_model_is_the_inlined_one(monkeypatch):
         for a, b in zip(_derivatives(inlined)(x, p, lam), _derivatives(called)(x, p, lam),
                         strict=True):
             assert np.allclose(np.asarray(a), np.asarray(b), rtol=1e-10, atol=1e-10)
+
+
+def test_goal_limit_rows_are_built_only_where_the_goal_is_on_a_limit():
+    """A goal inside the limits is solved without the (free) goal-limit rows: the same
+    optimum as the NLP with every row; a goal on a limit gets that joint's rows."""
+    from planning.config import PlannerConfig
+    from planning.solver import Planner
+
+    model = PinocchioModel(load_pinocchio("lynxmotion"))
+    planner = Planner(model, PlannerConfig(solver="ipopt"))
+    start, goal = (1.0, 0.6, -0.8), (-0.5, 1.2, -1.4)
+    plan = planner.solve(start, (0.0, 0.0, 0.0), 2.0, goal)
+    pruned = planner._relaxed_for(goal).nlp
+    assert pruned.quotient_rows == {} and pruned.g.numel() < planner.nlp.g.numel()
+    full = ca.nlpsol("full", "ipopt", {"x": planner.nlp.x, "p": planner.nlp.p,
+                                       "f": planner.nlp.f, "g": planner.nlp.g},
+                     {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
+                      "ipopt.tol": 1e-10})
+    lbg, ubg = planner.bounds(goal)
+    reference = full(x0=planner.initial_guess(start, (0.0,) * 3, 2.0, goal), lbg=lbg, ubg=ubg,
+                     p=planner.parameters(start, (0.0,) * 3, 2.0, goal, None))
+    assert plan.success  # same optimum (the energy is flat along some directions: to 1e-3)
+    assert np.isclose(plan.energy + plan.penalty, float(reference["f"]), rtol=1e-7)
+    motion = planner.trajectory(np.asarray(reference["x"]).ravel(), start, (0.0,) * 3, 0.0, 2.0)
+    assert np.allclose(plan.trajectory.coefficients, motion.coefficients, rtol=1e-3, atol=1e-6)
+    on_limit = (-np.pi / 2, 1.2, -1.4)  # joint 1 on its lower limit
+    assert set(planner._relaxed_for(on_limit).nlp.quotient_rows) == {0}
