@@ -49,7 +49,7 @@ def _summary(result, baseline, config) -> dict:
 
 def run(out_dir: Path, quick: bool = False, robot: str = "ur5") -> dict:
     baseline = PinocchioModel(load_pinocchio(robot))
-    config = planner_config(robot, compile_code=True)  # as `plan` does (cached C libraries)
+    config = planner_config(robot, compile_code=True, starts=4)  # as `plan` plans
     base, link = bench_motion(robot)
     planner = Planner(baseline, config)
     free = evaluate(execute(planner, base, avoid=False), base, baseline, config)
