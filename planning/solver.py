@@ -90,12 +90,16 @@ class Planner:
         self._rescue: dict[int, _Solvers] = {}
         self.solver_ms = 0.0  # wall time (ms) of all its solver calls so far: timing breakdowns
 
+    def prepare(self, goal) -> None:
+        """Build the solvers for this goal ahead of the solves (planning.replanning does so
+        before its clock starts): generating an NLP's code and its IPOPT rescuer's takes
+        seconds (measured 2.9 s for the rescuer on the Lynxmotion, 6 s for both), which
+        must not land inside a plan's or a re-plan's time."""
+        self._relaxed_for(goal)
+
     def _relaxed_for(self, goal) -> _Solvers:
         """The NLP without torque rows, with goal-limit rows for the joints whose goal is on
-        a limit (PlanningNLP's goal_limits), built on first need with its IPOPT rescuer:
-        generating the rescuer's code takes seconds (measured 2.9 s on the Lynxmotion),
-        which must not land inside the first re-plan that needs it (a new goal's first
-        solve is a cold plan)."""
+        a limit (PlanningNLP's goal_limits), built on first need with its IPOPT rescuer."""
         key = self._goal_limits(goal)
         if key not in self._relaxed:
             relaxed = dataclasses.replace(self.config, torque_limit=None)
