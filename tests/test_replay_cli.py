@@ -32,6 +32,7 @@ def _bad_plans():
     nan = dict(good, qd=[[float("nan")] * 3] + good["qd"][1:])
     short = dict(good, qdd=good["qdd"][:-1])
     backwards = dict(good, t=good["t"][::-1])
+    squeezed = dict(good, t=[0.0, 1.78e-196, *good["t"][2:]])  # found by hypothesis
     return {
         "missing": ({k: v for k, v in good.items() if k not in ("qd", "obstacle")},
                     "missing field(s): qd, obstacle"),
@@ -39,6 +40,7 @@ def _bad_plans():
         "nan": (nan, "'qd' contains NaN"),
         "short": (short, "'qdd' has 199 samples"),
         "backwards": (backwards, "must be increasing"),
+        "squeezed": (squeezed, "1.78e-196 s apart"),
         "not-object": ([1, 2, 3], "JSON object"),
     }
 

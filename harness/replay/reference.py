@@ -16,6 +16,7 @@ from harness.errors import UserError
 
 REQUIRED = ("t", "q", "qd", "qdd", "obstacle", "threshold")
 LIMIT_TOLERANCE = 1e-3  # rad: a plan ending on a limit may overshoot it between its samples
+MIN_STEP = 1e-9  # s: the closest distinct samples of a plan (PLAN.json's are 2 ms apart)
 MAX_DURATION = 600.0  # s of simulated motion; a longer plan is a corrupt file, not a motion
 MAX_SAMPLES = 1_000_000
 # Magnitudes no arm's plan reaches (a file beyond them is corrupt or in other units)
@@ -107,6 +108,10 @@ def plan_reference(plan: dict) -> PlanReference:
         raise UserError(f"plan field 't' must hold at least 2 distinct times, got {t.shape}")
     if np.any(np.diff(t) < 0):
         raise UserError("plan field 't' must be increasing")
+    step = np.diff(t)[np.diff(t) > 0].min()
+    if step < MIN_STEP:  # the interpolation divides by step^2: a tiny step makes inf or NaN
+        raise UserError(f"plan field 't' has samples {step:.3g} s apart, fewer than "
+                        f"{MIN_STEP:g} s")
     if t[-1] - t[0] > MAX_DURATION:
         raise UserError(f"plan lasts {t[-1] - t[0]:.3g} s, more than {MAX_DURATION:g} s")
     q = _array(plan, "q")
