@@ -29,9 +29,12 @@ from planning.quadrature import energy_nodes
 from planning.trajectory import power_basis
 
 
-def extrema(degree: int) -> int:
-    """How often a polynomial of this degree can turn."""
-    return degree - 1
+def turning_slots(config: PlannerConfig) -> tuple[int, int, int]:
+    """How often a joint polynomial can turn (degree - 1), the order of the goal's zero of
+    q - goal at s = 1 (2 when arriving at rest) and the turning-point slots of the goal-limit
+    quotient (planning.limits)."""
+    extrema, order = config.degree - 1, 2 if config.rest_at_goal else 1
+    return extrema, order, extrema - order
 
 
 class PlanningNLP:
@@ -47,7 +50,6 @@ class PlanningNLP:
         dof, n, k = model.dof, config.energy_samples, config.obstacle_slots
         if config.degree < 3:
             raise ValueError(f"polynomial degree must be >= 3, got {config.degree}")
-        self.extrema = extrema(config.degree)
         self.nodes, self.weights = energy_nodes(config.energy_quadrature, n)
         free = ca.SX.sym("free", dof, config.degree - 1)
         self.slack = ca.SX.sym("e", 0 if config.power_smoothing > 0 else n)
@@ -55,10 +57,9 @@ class PlanningNLP:
         q0, qd0, self.sigma, goal = (ca.SX.sym(s, d) for s, d in
                                      (("q0", dof), ("qd0", dof), ("sigma", 1), ("goal", dof)))
         obstacle, s_obs, weight = ca.SX.sym("obs", 3, k), ca.SX.sym("s_obs", k), ca.SX.sym("w", k)
+        self.extrema, self.order, self.quotient_slots = turning_slots(config)
         extremum = ca.SX.sym("s_lim", dof, self.extrema)
         newton = ca.SX.sym("newton", dof, self.extrema)
-        self.order = 2 if config.rest_at_goal else 1  # zeros of q - goal at s = 1
-        self.quotient_slots = self.extrema - self.order
         sign = ca.SX.sym("limit_sign", dof)
         v_turn = ca.SX.sym("v_turn", dof, self.quotient_slots)
         v_newton = ca.SX.sym("v_newton", dof, self.quotient_slots)

@@ -4,6 +4,7 @@ solves (cold or warm-started)."""
 from __future__ import annotations
 
 import dataclasses
+import functools
 import time
 from dataclasses import dataclass
 
@@ -14,7 +15,7 @@ from identification.torque_model import TorqueModel
 from planning import backends
 from planning.config import PlannerConfig
 from planning.limits import END_MARGIN, goal_limit_signs, quotient_turning_points
-from planning.nlp import PlanningNLP
+from planning.nlp import PlanningNLP, turning_slots
 from planning.trajectory import PolynomialTrajectory
 
 
@@ -84,11 +85,17 @@ class Planner:
     def __init__(self, model: TorqueModel, config: PlannerConfig | None = None):
         self.config = config or PlannerConfig()
         self.model = model
-        self.nlp = PlanningNLP(model, dataclasses.replace(self.config, torque_limit=None))
         self._relaxed: dict[tuple[int, ...], _Solvers] = {}
         self._limited: dict[tuple[int, ...], _Solvers] = {}
         self._rescue: dict[int, _Solvers] = {}
         self.solver_ms = 0.0  # wall time (ms) of all its solver calls so far: timing breakdowns
+
+    @functools.cached_property
+    def nlp(self) -> PlanningNLP:
+        """The NLP with every goal-limit row and no torque rows, for callers that evaluate its
+        functions with `parameters` and `bounds` (planning.baselines); the solves use
+        the NLP for their goal (_relaxed_for)."""
+        return PlanningNLP(self.model, dataclasses.replace(self.config, torque_limit=None))
 
     def prepare(self, goal) -> None:
         """Build the solvers for this goal ahead of the solves (planning.replanning does so
@@ -155,15 +162,14 @@ class Planner:
         """Where the limits are enforced beyond the fixed samples: q's turning points (dof, degree - 1)
         and those of the goal-limit quotient (planning.limits), NaN for none; and the
         per-joint goal-limit signs."""
-        dof = self.model.dof
+        dof, (extrema, order, slots) = self.model.dof, turning_slots(self.config)
         signs = goal_limit_signs(goal, self.config.lower, self.config.upper)
         if reference is None:
-            return (np.full((dof, self.nlp.extrema), np.nan),
-                    np.full((dof, self.nlp.quotient_slots), np.nan), signs)
+            return (np.full((dof, extrema), np.nan), np.full((dof, slots), np.nan), signs)
         turning = reference.turning_points()
         turning[(signs != 0)[:, None] & (turning > 1 - END_MARGIN)] = np.nan
         v_turning = quotient_turning_points(reference, np.asarray(goal, float), signs,
-                                            self.nlp.order, self.nlp.quotient_slots)
+                                            order, slots)
         return turning, v_turning, signs
 
     def bounds(self, goal, nlp: PlanningNLP | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -233,7 +239,7 @@ class Planner:
             solver, args["x0"] = solvers.cold, x0
         else:
             solver = solvers.warm
-            args.update(self._warm_start(warm, t_begin, duration, len(lbg)))
+            args.update(self._warm_start(warm, t_begin, duration, solvers.nlp))
         start, cpu = time.perf_counter(), time.thread_time()
         result, stats = solver(**args), backends.stats(solver)
         late_anyway = warm is not None and self.config.replan_deadline_ms is not None
@@ -259,7 +265,7 @@ class Planner:
         return self._rescue[key]
 
     def _warm_start(self, warm: SegmentPlan, t_begin: float, duration: float,
-                    rows: int) -> dict:
+                    nlp: PlanningNLP) -> dict:
         """Primal-dual start: the previous plan's remaining motion re-expressed on the new
         horizon, the power slacks it implies, and the previous multipliers (torque rows,
         the last ones, zero-padded or dropped when the previous solve had none / this has
@@ -267,8 +273,9 @@ class Planner:
         rest = warm.trajectory.restrict(t_begin, duration)
         x = rest.coefficients[:, 2:].ravel()
         if self._slacks:
-            q, qd, qdd = rest.state(t_begin + duration * self.nlp.nodes)
+            q, qd, qdd = rest.state(t_begin + duration * nlp.nodes)
             x = np.concatenate([x, np.abs(np.sum(self.model.torque(q, qd, qdd) * qd, axis=1))])
+        rows = len(nlp.lbg)
         lam_g = np.zeros(rows)
         kept = min(rows, len(warm.multipliers[0]))
         lam_g[:kept] = warm.multipliers[0][:kept]
