@@ -1,0 +1,150 @@
+"""Where a warm re-plan's time goes (issue #15's speed bars), on the random scenarios.
+
+    .venv/bin/python -m benchmarks.replan_anatomy [--scenarios 20] [--seed 2026]
+
+1. Algorithm 2 with the default planner (compiled) on the planning bench's random
+   scenarios; for every warm re-plan: its solver calls, their iterations and CPU time, the
+   share of the re-plan spent in them, the calls that ran to the warm iteration cap and
+   the penalty weight each call solved with.
+2. Fixed and per-iteration cost of one warm solve on the paper scenario (re-plan at
+   t = 0.71 s): the same start solved with fatrop and with IPOPT (primal-dual warm start)
+   capped at 0, 1 and 5 iterations and run to convergence, CPU median of 20 calls each.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import dataclasses
+import json
+import os
+import time
+
+import numpy as np
+
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import DEFAULT_ROBOT, load_pinocchio
+from harness.sections.planning import realtime
+from planning import backends
+from planning.config import true_energy_config
+from planning.replanning import execute, forecast_at, plan_segment
+from planning.scenarios import paper_scenario
+from planning.screening import screen
+from planning.solver import Planner
+
+
+class RecordingPlanner(Planner):
+    """A Planner that keeps (warm, iterations, CPU ms, success, alpha) of every solver call,
+    grouped by plan_segment call (each begins with Planner.prepare)."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.groups: list[list[tuple[bool, int, float, bool, float]]] = []
+
+    def prepare(self, goal) -> None:
+        super().prepare(goal)
+        self.groups.append([])
+
+    def _solve(self, solvers, goal, warm, segment):
+        start = time.thread_time()
+        plan = super()._solve(solvers, goal, warm, segment)
+        self.groups[-1].append((warm is not None, plan.iterations,
+                                1e3 * (time.thread_time() - start), plan.success, segment[5]))
+        return plan
+
+
+def replans(baseline, config, setup: realtime.Setup) -> dict:
+    """Section 1: every warm re-plan of Algorithm 2 on the random scenarios, call by call."""
+    planner, per_replan = RecordingPlanner(baseline, config), []
+    for case in realtime.scenarios(baseline, config, setup):
+        planner.groups.clear()
+        run = execute(planner, case)
+        warm_groups = planner.groups[config.starts:]  # the cold plan's come first
+        assert len(warm_groups) == len(run.solve_cpu_ms) - 1
+        per_replan += [{"cpu_ms": ms, "calls": calls}
+                       for ms, calls in zip(run.solve_cpu_ms[1:], warm_groups)]
+    cpu = np.array([r["cpu_ms"] for r in per_replan])
+    solver = np.array([sum(c[2] for c in r["calls"]) for r in per_replan])
+    calls = [c for r in per_replan for c in r["calls"]]
+    capped = [c for c in calls if c[0] and c[1] >= config.warm_max_iterations]
+    return {
+        "replans": len(per_replan),
+        "replan_cpu_ms": realtime.distribution(cpu),
+        "solver_share_of_cpu": float(solver.sum() / cpu.sum()),
+        "solver_calls_per_replan": dict(sorted(collections.Counter(
+            len(r["calls"]) for r in per_replan).items())),
+        "iterations_per_replan": realtime.distribution(
+            [sum(c[1] for c in r["calls"]) for r in per_replan]),
+        "first_call_iterations": realtime.distribution(
+            [r["calls"][0][1] for r in per_replan if r["calls"]]),
+        "warm_calls_at_cap": len(capped),
+        "calls_at_cap_by_alpha": _by_alpha(capped),
+        "calls_by_alpha": _by_alpha(calls),
+    }
+
+
+def _by_alpha(calls) -> dict:
+    return {f"{alpha:g}": n for alpha, n in sorted(collections.Counter(c[4] for c in calls).items())}
+
+
+def call_costs(baseline, config) -> dict:
+    """Section 2: CPU of one warm solve capped at 0, 1, 5 iterations and converged."""
+    planner = Planner(baseline, config)
+    scenario, t = paper_scenario(), 0.71
+    forecast0 = forecast_at(scenario.obstacle, 0.0)
+    plan, _, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0,
+                              scenario.duration, scenario.goal, forecast0)
+    for time_ in scenario.obstacle.sample_times[:-1:5]:
+        if time_ >= t - 1e-9:
+            break
+        q, qd, _ = plan.trajectory.state(time_)
+        new, _, _ = plan_segment(planner, q[0], qd[0], time_, scenario.duration - time_,
+                                 scenario.goal, forecast_at(scenario.obstacle, time_), warm=plan)
+        plan = new if new.success else plan
+    duration = scenario.duration - t
+    q, qd, _ = plan.trajectory.state(t)
+    reference = plan.trajectory.restrict(t, duration)
+    forecast = forecast_at(scenario.obstacle, t)
+    subset = screen(forecast, reference, config.geometry, config.threshold,
+                    config.obstacle_slots).subset
+    solvers = planner._relaxed_for(scenario.goal)
+    nlp = solvers.nlp
+    args = {"p": planner.parameters(q[0], qd[0], duration, scenario.goal, subset, t,
+                                    reference, plan.penalty_weight)}
+    args["lbg"], args["ubg"] = planner.bounds(scenario.goal, nlp)
+    start = planner._warm_start(plan, t, duration, nlp)
+    problem = {"x": nlp.x, "p": nlp.p, "f": nlp.f, "g": nlp.g}
+    out = {}
+    for plugin in ("fatrop", "ipopt"):
+        for cap in (0, 1, 5, config.warm_max_iterations):
+            solver = backends.solver(f"anatomy_{plugin}_{cap}", plugin, problem,
+                                     nlp.lbg == nlp.ubg, warm=True, max_iter=cap,
+                                     hessian="exact", compile_code=True)
+            given = start if plugin == "ipopt" else {"x0": start["x0"]}
+            times = []
+            for _ in range(20):
+                begin = time.thread_time()
+                solver(**args, **given)
+                times.append(1e3 * (time.thread_time() - begin))
+            stats = backends.stats(solver)
+            out[f"{plugin}, cap {cap}"] = {"iterations": stats.iterations,
+                                           "success": stats.success,
+                                           "cpu_ms_median": float(np.median(times))}
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scenarios", type=int, default=20)
+    parser.add_argument("--seed", type=int, default=realtime.Setup.seed)
+    args = parser.parse_args()
+    baseline = PinocchioModel(load_pinocchio(DEFAULT_ROBOT))
+    config = true_energy_config(compile_code=True)
+    setup = dataclasses.replace(realtime.Setup(), scenarios=args.scenarios, seed=args.seed)
+    print(json.dumps({"call_costs": call_costs(baseline, config)}, indent=1))
+    print(json.dumps({"replans": replans(baseline, config, setup)}, indent=1))
+    print("load average", os.getloadavg())
+
+
+if __name__ == "__main__":
+    main()
