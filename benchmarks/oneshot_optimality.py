@@ -12,11 +12,11 @@ starts at Gauss N = 40. Printed per scenario, then how many are within 0.5 % of 
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 
 import numpy as np
 
+from benchmarks import random_scenarios
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
 from harness.sections.planning import realtime
@@ -35,15 +35,11 @@ def _execution(plan) -> Execution:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scenarios", type=int, default=20)
-    parser.add_argument("--seed", type=int, default=realtime.Setup.seed)
-    args = parser.parse_args()
+    args = random_scenarios.parser(__doc__).parse_args()
     baseline = PinocchioModel(load_pinocchio(DEFAULT_ROBOT))
     plant = load_mujoco(DEFAULT_ROBOT, scene=True)
     config = true_energy_config(compile_code=True)
-    cases = realtime.scenarios(baseline, config,
-                               realtime.Setup(scenarios=args.scenarios, seed=args.seed))
+    cases = realtime.scenarios(baseline, config, random_scenarios.setup(args))
     default = Planner(baseline, config)
     fine = Planner(baseline, dataclasses.replace(config, energy_samples=FINE_SAMPLES,
                                                  compile_code=False))

@@ -10,10 +10,10 @@ the study's markdown (as in the bench report) and the load average.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 
+from benchmarks import random_scenarios
 from harness.io import write_json
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
@@ -22,14 +22,12 @@ from planning.config import true_energy_config
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scenarios", type=int, default=20)
-    parser.add_argument("--seed", type=int, default=realtime.Setup.seed)
+    parser = random_scenarios.parser(__doc__)
     parser.add_argument("--ways", choices=("all", "fast"), default="all")
     parser.add_argument("--out", default=None)
     args = parser.parse_args()
     baseline = PinocchioModel(load_pinocchio(DEFAULT_ROBOT))
-    setup = realtime.Setup(scenarios=args.scenarios, seed=args.seed)
+    setup = random_scenarios.setup(args)
     ways = None
     if args.ways == "fast":
         config = true_energy_config(compile_code=True)

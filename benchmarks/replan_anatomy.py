@@ -13,15 +13,14 @@
 
 from __future__ import annotations
 
-import argparse
 import collections
-import dataclasses
 import json
 import os
 import time
 
 import numpy as np
 
+from benchmarks import random_scenarios
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import DEFAULT_ROBOT, load_pinocchio
 from harness.sections.planning import realtime
@@ -60,9 +59,8 @@ def replans(baseline, config, setup: realtime.Setup) -> dict:
         planner.groups.clear()
         run = execute(planner, case)
         warm_groups = planner.groups[config.starts:]  # the cold plan's come first
-        assert len(warm_groups) == len(run.solve_cpu_ms) - 1
         per_replan += [{"cpu_ms": ms, "calls": calls}
-                       for ms, calls in zip(run.solve_cpu_ms[1:], warm_groups)]
+                       for ms, calls in zip(run.solve_cpu_ms[1:], warm_groups, strict=True)]
     cpu = np.array([r["cpu_ms"] for r in per_replan])
     solver = np.array([sum(c[2] for c in r["calls"]) for r in per_replan])
     calls = [c for r in per_replan for c in r["calls"]]
@@ -134,13 +132,10 @@ def call_costs(baseline, config) -> dict:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scenarios", type=int, default=20)
-    parser.add_argument("--seed", type=int, default=realtime.Setup.seed)
-    args = parser.parse_args()
+    args = random_scenarios.parser(__doc__).parse_args()
     baseline = PinocchioModel(load_pinocchio(DEFAULT_ROBOT))
     config = true_energy_config(compile_code=True)
-    setup = dataclasses.replace(realtime.Setup(), scenarios=args.scenarios, seed=args.seed)
+    setup = random_scenarios.setup(args)
     print(json.dumps({"call_costs": call_costs(baseline, config)}, indent=1))
     print(json.dumps({"replans": replans(baseline, config, setup)}, indent=1))
     print("load average", os.getloadavg())

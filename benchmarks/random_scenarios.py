@@ -1,0 +1,21 @@
+"""Command-line options shared by the benchmarks that run the planning bench's random
+scenarios (realtime_planning, oneshot_optimality, replan_anatomy)."""
+
+from __future__ import annotations
+
+import argparse
+
+from harness.sections.planning import realtime
+
+
+def parser(doc: str) -> argparse.ArgumentParser:
+    """An argument parser described by the first line of `doc`, with --scenarios and --seed."""
+    options = argparse.ArgumentParser(description=doc.splitlines()[0])
+    options.add_argument("--scenarios", type=int, default=realtime.Setup.scenarios)
+    options.add_argument("--seed", type=int, default=realtime.Setup.seed)
+    return options
+
+
+def setup(args: argparse.Namespace) -> realtime.Setup:
+    """The study's setup with the scenario count and seed given."""
+    return realtime.Setup(scenarios=args.scenarios, seed=args.seed)
