@@ -110,7 +110,7 @@ def call_costs(baseline, config) -> dict:
     args = {"p": planner.parameters(q[0], qd[0], duration, scenario.goal, subset, t,
                                     reference, plan.penalty_weight)}
     args["lbg"], args["ubg"] = planner.bounds(scenario.goal, nlp)
-    start = planner._warm_start(plan, t, duration, nlp)
+    start = planner._warm_start(plan, t, duration, nlp, args["p"])
     problem = {"x": nlp.x, "p": nlp.p, "f": nlp.f, "g": nlp.g}
     out = {}
     for plugin in ("fatrop", "ipopt"):

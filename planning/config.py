@@ -38,7 +38,8 @@ class PlannerConfig:
     max_penalty_weight: float = 2e5
     # the paper's (eq. 18, N = 10); `plan` and the bench default to true_energy_config()
     energy_samples: int = 10
-    energy_quadrature: str = "paper"  # planning.quadrature: "paper" (eq. 18), "gauss", "simpson"
+    energy_quadrature: str = "paper"  # planning.quadrature: "paper" (eq. 18), "gauss", "simpson", "split"
+    power_breaks: int = 7  # "split": intervals of the quadrature = power_breaks + 1
     degree: int = 4  # of the joint polynomials (paper: 4); degree - 1 free coefficients per joint
     obstacle_slots: int = 24
     rest_at_goal: bool = False

@@ -8,8 +8,8 @@ is smooth enough for exact derivatives. Parameters p = [q0, qd0, sigma, q_end,
 obstacle centres (3 K), their normalized times s_k (K), weights w_k (K), the
 normalized times of each joint's turning points (dof x (degree - 1)) and 0/1 flags
 saying which of them are real, the goal-limit signs and quotient turning points
-(planning.limits), and alpha], so a re-plan changes only numbers: the solver is
-built once and warm-started.
+(planning.limits), alpha, and the split quadrature's breaks (planning.breaks)], so
+a re-plan changes only numbers: the solver is built once and warm-started.
 
 Joint limits hold at fixed interior samples and, exactly, at the turning points
 of a reference motion (where a polynomial peaks); the solver re-solves until the
@@ -50,7 +50,10 @@ class PlanningNLP:
         dof, n, k = model.dof, config.energy_samples, config.obstacle_slots
         if config.degree < 3:
             raise ValueError(f"polynomial degree must be >= 3, got {config.degree}")
-        self.nodes, self.weights = energy_nodes(config.energy_quadrature, n)
+        # the split rule's breaks (planning.breaks) are parameters, its nodes expressions
+        self.breaks = ca.SX.sym("breaks", config.power_breaks
+                                if config.energy_quadrature == "split" else 0)
+        self.nodes, self.weights = energy_nodes(config.energy_quadrature, n, self.breaks)
         free = ca.SX.sym("free", dof, config.degree - 1)
         self.slack = ca.SX.sym("e", 0 if config.power_smoothing > 0 else n)
         self.x = ca.vertcat(ca.vec(free.T), self.slack)
@@ -66,7 +69,7 @@ class PlanningNLP:
         alpha = ca.SX.sym("alpha")  # penalty weight: a parameter, raised by the solver loop
         self.p = ca.vertcat(q0, qd0, self.sigma, goal, ca.vec(obstacle), s_obs, weight,
                             ca.vec(extremum), ca.vec(newton), sign, ca.vec(v_turn),
-                            ca.vec(v_newton), alpha)
+                            ca.vec(v_newton), alpha, self.breaks)
         self.coefficients = ca.horzcat(q0, qd0 * self.sigma, free)  # column p -> s**p
         self._torque, self.inline = _torque_function(model)
         power = self._power(model)
@@ -104,7 +107,7 @@ class PlanningNLP:
         for the torque limits."""
         power, self._node_torques = [], []
         for s in self.nodes:
-            q, qd, qdd = self.state(float(s))
+            q, qd, qdd = self.state(s if isinstance(s, ca.SX) else float(s))
             tau = self._torque(q, qd, qdd)
             self._node_torques.append(tau)
             power.append(ca.dot(tau, qd))
@@ -127,7 +130,7 @@ class PlanningNLP:
     def _energy(self, power):
         """sigma sum w_i |P(s_i)| (eq. 18 with the paper's rule): epigraph slacks, or a
         smoothed |P| if configured."""
-        eps, w = self.config.power_smoothing, ca.DM(self.weights)
+        eps, w = self.config.power_smoothing, ca.vertcat(*self.weights)
         if eps > 0:
             return self.sigma * ca.dot(w, ca.sqrt(power**2 + eps**2) - eps)
         self._add(power - self.slack, -np.inf, 0.0)

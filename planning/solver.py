@@ -13,9 +13,11 @@ import numpy as np
 
 from identification.torque_model import TorqueModel
 from planning import backends
+from planning.breaks import even_breaks, power_breaks
 from planning.config import PlannerConfig
 from planning.limits import END_MARGIN, goal_limit_signs, quotient_turning_points
 from planning.nlp import PlanningNLP, turning_slots
+from planning.quadrature import split_nodes
 from planning.trajectory import PolynomialTrajectory
 
 
@@ -42,6 +44,7 @@ class SegmentPlan:
     penalty_weight: float  # alpha this solve used, J/m^2 per obstacle sample
     x: np.ndarray  # primal solution, for warm starts
     multipliers: tuple[np.ndarray, np.ndarray]  # (lam_g, lam_x)
+    breaks: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))  # "split" rule's
 
 
 # measured on random scenarios: a warm IPOPT rescue still unconverged after 60 iterations ran
@@ -142,7 +145,8 @@ class Planner:
                    alpha: float | None = None) -> np.ndarray:
         """Pack the parameter vector p; obstacle samples outside (t_begin, t_end] weigh 0;
         the joint limits are constrained at the turning points of `reference` (a motion
-        on the same horizon, e.g. the previous solution)."""
+        on the same horizon, e.g. the previous solution), the split quadrature's breaks
+        put at its power's sign changes (evenly without a reference)."""
         k = self.config.obstacle_slots
         centres, s_obs, weight = np.zeros((k, 3)), np.zeros(k), np.zeros(k)
         if forecast is not None:
@@ -156,7 +160,14 @@ class Planner:
         alpha = self.config.penalty_weight if alpha is None else alpha
         return np.concatenate([q0, qd0, [duration], goal, centres.ravel(), s_obs, weight,
                                *_slots(turning), signs + (signs == 0), *_slots(v_turning),
-                               [alpha]])
+                               [alpha], self.breaks(reference)])
+
+    def breaks(self, reference: PolynomialTrajectory | None) -> np.ndarray:
+        """The split quadrature's breaks for a reference motion (none for other rules)."""
+        count = self.config.power_breaks if self.config.energy_quadrature == "split" else 0
+        if not count or reference is None:
+            return even_breaks(count)
+        return power_breaks(self.model, reference, count)
 
     def turning_points(self, goal, reference: PolynomialTrajectory | None):
         """Where the limits are enforced beyond the fixed samples: q's turning points (dof, degree - 1)
@@ -239,7 +250,7 @@ class Planner:
             solver, args["x0"] = solvers.cold, x0
         else:
             solver = solvers.warm
-            args.update(self._warm_start(warm, t_begin, duration, solvers.nlp))
+            args.update(self._warm_start(warm, t_begin, duration, solvers.nlp, p))
         start, cpu = time.perf_counter(), time.thread_time()
         result, stats = solver(**args), backends.stats(solver)
         late_anyway = warm is not None and self.config.replan_deadline_ms is not None
@@ -265,7 +276,7 @@ class Planner:
         return self._rescue[key]
 
     def _warm_start(self, warm: SegmentPlan, t_begin: float, duration: float,
-                    nlp: PlanningNLP) -> dict:
+                    nlp: PlanningNLP, p: np.ndarray) -> dict:
         """Primal-dual start: the previous plan's remaining motion re-expressed on the new
         horizon, the power slacks it implies, and the previous multipliers (torque rows,
         the last ones, zero-padded or dropped when the previous solve had none / this has
@@ -273,7 +284,7 @@ class Planner:
         rest = warm.trajectory.restrict(t_begin, duration)
         x = rest.coefficients[:, 2:].ravel()
         if self._slacks:
-            q, qd, qdd = rest.state(t_begin + duration * nlp.nodes)
+            q, qd, qdd = rest.state(t_begin + duration * self.energy_nodes(nlp, p))
             x = np.concatenate([x, np.abs(np.sum(self.model.torque(q, qd, qdd) * qd, axis=1))])
         rows = len(nlp.lbg)
         lam_g = np.zeros(rows)
@@ -283,8 +294,17 @@ class Planner:
             return {"x0": x}
         return {"x0": x, "lam_g0": lam_g, "lam_x0": warm.multipliers[1]}
 
+    def energy_nodes(self, nlp: PlanningNLP, p: np.ndarray) -> np.ndarray:
+        """The energy quadrature's normalized times for parameters p (the split rule's move
+        with its breaks, the tail of p)."""
+        if not nlp.breaks.numel():
+            return np.asarray(nlp.nodes, float)
+        breaks = p[len(p) - nlp.breaks.numel():]
+        return np.asarray(split_nodes(breaks, self.config.energy_samples)[0], float)
+
     def _segment(self, solvers: _Solvers, result, stats, elapsed, segment) -> SegmentPlan:
         q0, qd0, duration, t_begin, p, alpha, _ = segment
+        breaks = p[len(p) - solvers.nlp.breaks.numel():]
         x = np.asarray(result["x"]).ravel()
         trajectory = self.trajectory(x, q0, qd0, t_begin, duration)
         energy, penalty = (float(v) for v in solvers.parts(x, p))
@@ -294,6 +314,7 @@ class Planner:
             iterations=stats.iterations, solve_ms=elapsed[0],
             solve_cpu_ms=elapsed[1], penalty_weight=alpha, x=x,
             multipliers=(np.asarray(result["lam_g"]).ravel(), np.asarray(result["lam_x"]).ravel()),
+            breaks=breaks,
         )
 
 

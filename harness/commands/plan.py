@@ -29,7 +29,8 @@ from planning.solver import Planner
 
 DEFAULT = Scenario()
 PLANNER = true_energy_config()
-SAMPLES = {"paper": 10, "gauss": PLANNER.energy_samples, "simpson": 21}  # default N per rule
+SAMPLES = {"paper": 10, "gauss": PLANNER.energy_samples, "simpson": 21,
+           "split": 3 * (PlannerConfig.power_breaks + 1)}  # default N per rule
 
 
 def _vector(text: str, name: str, length: int = 3) -> tuple[float, ...]:
@@ -71,10 +72,14 @@ def register(sub) -> None:
                    help="penalty weight alpha (J/m^2 per obstacle sample)")
     p.add_argument("--energy-samples", type=int, default=None,
                    help="power samples N of the energy objective (default: 20 for gauss, the "
-                        "paper's 10 for paper, 21 for simpson)")
+                        "paper's 10 for paper, 21 for simpson, 3 per interval for split)")
     p.add_argument("--energy-quadrature", choices=RULES, default=PLANNER.energy_quadrature,
                    help="where the power is sampled: gauss (Gauss-Legendre, the default: plans "
-                        "with the true energy at N = 20), paper (eq. 18, s_i = i/N), simpson")
+                        "with the true energy at N = 20), paper (eq. 18, s_i = i/N), simpson, "
+                        "split (Gauss between the power's sign changes)")
+    p.add_argument("--power-breaks", type=int, default=PlannerConfig.power_breaks,
+                   help="split: breaks between the quadrature's intervals, put where the "
+                        "power changes sign; --energy-samples must be a multiple of this + 1")
     p.add_argument("--degree", type=int, default=PlannerConfig.degree,
                    help="degree of the joint polynomials (paper: 4; 4..9)")
     p.add_argument("--power-smoothing", type=float, default=PlannerConfig.power_smoothing,
@@ -144,6 +149,10 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
     if args.energy_quadrature == "simpson" and (args.energy_samples < 3
                                                  or args.energy_samples % 2 == 0):
         raise UserError("--energy-quadrature simpson needs an odd --energy-samples >= 3")
+    if args.energy_quadrature == "split" and (args.power_breaks < 1 or
+                                              args.energy_samples % (args.power_breaks + 1)):
+        raise UserError("--energy-quadrature split needs --power-breaks >= 1 and "
+                        "--energy-samples a multiple of --power-breaks + 1")
     if not (math.isfinite(args.power_smoothing) and args.power_smoothing >= 0
             and math.isfinite(args.sway_periods)):
         raise UserError("--power-smoothing must be >= 0 and --sway-periods finite")
@@ -152,6 +161,7 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  energy_samples=args.energy_samples,
                                  energy_quadrature=args.energy_quadrature, degree=args.degree,
                                  power_smoothing=args.power_smoothing,
+                                 power_breaks=args.power_breaks,
                                  torque_limit=None)
     dof = config.geometry.dof
     config = dataclasses.replace(config, torque_limit=_torque_limit(args, dof))
