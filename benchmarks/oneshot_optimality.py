@@ -29,7 +29,6 @@ from planning.starts import start_points
 
 GLOBAL_STARTS = 8
 FINE_SAMPLES = 40
-SPLIT = {"energy_quadrature": "split", "power_breaks": 7, "energy_samples": 24}
 
 
 def _execution(plan) -> Execution:
@@ -46,7 +45,7 @@ def main() -> None:
     default = Planner(baseline, config)
     fine = Planner(baseline, dataclasses.replace(config, energy_samples=FINE_SAMPLES,
                                                  compile_code=False))
-    split = Planner(baseline, dataclasses.replace(config, **SPLIT))
+    split = Planner(baseline, dataclasses.replace(config, **random_scenarios.SPLIT))
 
     def replayed(plan, planner):
         return realtime.replayed_energy(plant, baseline, _execution(plan), case, planner.config)

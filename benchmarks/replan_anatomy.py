@@ -1,6 +1,6 @@
 """Where a warm re-plan's time goes (issue #15's speed bars), on the random scenarios.
 
-    .venv/bin/python -m benchmarks.replan_anatomy [--scenarios 20] [--seed 2026]
+    .venv/bin/python -m benchmarks.replan_anatomy [--scenarios 20] [--seed 2026] [--split]
 
 1. Algorithm 2 with the default planner (compiled) on the planning bench's random
    scenarios; for every warm re-plan: its solver calls, their iterations and CPU time, the
@@ -9,6 +9,7 @@
 2. Fixed and per-iteration cost of one warm solve on the paper scenario (re-plan at
    t = 0.71 s): the same start solved with fatrop and with IPOPT (primal-dual warm start)
    capped at 0, 1 and 5 iterations and run to convergence, CPU median of 20 calls each.
+--split: the planner with the split energy quadrature (random_scenarios.SPLIT).
 """
 
 from __future__ import annotations
@@ -132,9 +133,11 @@ def call_costs(baseline, config) -> dict:
 
 
 def main() -> None:
-    args = random_scenarios.parser(__doc__).parse_args()
+    options = random_scenarios.parser(__doc__)
+    options.add_argument("--split", action="store_true")
+    args = options.parse_args()
     baseline = PinocchioModel(load_pinocchio(DEFAULT_ROBOT))
-    config = true_energy_config(compile_code=True)
+    config = true_energy_config(compile_code=True, **(random_scenarios.SPLIT if args.split else {}))
     setup = random_scenarios.setup(args)
     print(json.dumps({"call_costs": call_costs(baseline, config)}, indent=1))
     print(json.dumps({"replans": replans(baseline, config, setup)}, indent=1))

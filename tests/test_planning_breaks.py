@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from scipy.integrate import quad
@@ -84,3 +86,16 @@ def test_split_plan_prices_its_own_energy_and_beats_gauss_on_the_paper_scenario(
     planned, dense = results["split"]
     assert abs(planned - dense) < 1e-4 * dense
     assert dense <= results["gauss"][1] * (1 + 1e-4)
+
+
+def test_plan_command_with_the_split_quadrature(tmp_path, capsys):
+    from harness.cli import main
+
+    out = tmp_path / "plan.json"
+    split = ["plan", "--no-compile", "--model", "pinocchio", "--energy-quadrature", "split"]
+    assert main([*split, "--energy-samples", "10", "--out", str(out)]) == 2
+    assert "multiple of --power-breaks + 1" in capsys.readouterr().err and not out.exists()
+    assert main([*split, "--power-breaks", "4", "--starts", "1",
+                 "--out", str(out)]) == 0
+    plan = json.loads(out.read_text())
+    assert plan["energy_quadrature"] == "split" and plan["min_clearance"] > 0

@@ -29,8 +29,7 @@ from planning.solver import Planner
 
 DEFAULT = Scenario()
 PLANNER = true_energy_config()
-SAMPLES = {"paper": 10, "gauss": PLANNER.energy_samples, "simpson": 21,
-           "split": 3 * (PlannerConfig.power_breaks + 1)}  # default N per rule
+SAMPLES = {"paper": 10, "gauss": PLANNER.energy_samples, "simpson": 21}  # split: 3 per interval
 
 
 def _vector(text: str, name: str, length: int = 3) -> tuple[float, ...]:
@@ -135,7 +134,8 @@ def _angles(args, name: str, dof: int) -> tuple[float, ...]:
 
 def _setup(args) -> tuple[PlannerConfig, Scenario]:
     if args.energy_samples is None:
-        args.energy_samples = SAMPLES[args.energy_quadrature]
+        args.energy_samples = SAMPLES[args.energy_quadrature] \
+            if args.energy_quadrature != "split" else 3 * (max(args.power_breaks, 0) + 1)
     if not args.duration > 0 or not math.isfinite(args.duration):
         raise PlanningError(f"--duration must be > 0 s, got {args.duration}")
     if not (args.threshold > 0 and args.penalty >= 0) or args.samples < 2 \
