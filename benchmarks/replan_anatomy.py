@@ -59,7 +59,8 @@ def replans(baseline, config, setup: realtime.Setup) -> dict:
     for case in realtime.scenarios(baseline, config, setup):
         planner.groups.clear()
         run = execute(planner, case)
-        warm_groups = planner.groups[config.starts:]  # the cold plan's come first
+        replanned = len(run.solve_cpu_ms) - 1  # the cold plan's groups come first
+        warm_groups = planner.groups[len(planner.groups) - replanned:]
         per_replan += [{"cpu_ms": ms, "calls": calls}
                        for ms, calls in zip(run.solve_cpu_ms[1:], warm_groups, strict=True)]
     cpu = np.array([r["cpu_ms"] for r in per_replan])
