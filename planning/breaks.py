@@ -35,11 +35,16 @@ def sign_changes(model: TorqueModel, reference: PolynomialTrajectory) -> tuple[n
     return s[i] + (s[i + 1] - s[i]) * p[i] / (p[i] - p[i + 1]), np.abs(p[i + 1] - p[i])
 
 
+def _steepest(model: TorqueModel, reference: PolynomialTrajectory, count: int) -> np.ndarray:
+    """The reference's `count` steepest power sign changes (all when there are fewer)."""
+    changes, jump = sign_changes(model, reference)
+    return changes[np.argsort(-jump, kind="stable")][:count]
+
+
 def power_breaks(model: TorqueModel, reference: PolynomialTrajectory, count: int) -> np.ndarray:
     """count ascending normalized times: the reference's power sign changes (the count
     steepest when there are more), the longest intervals halved for the breaks left over."""
-    changes, jump = sign_changes(model, reference)
-    breaks = list(changes[np.argsort(-jump, kind="stable")][:count])
+    breaks = list(_steepest(model, reference, count))
     while len(breaks) < count:
         edges = np.concatenate([[0.0], np.sort(breaks), [1.0]])
         k = int(np.argmax(np.diff(edges)))
@@ -52,7 +57,6 @@ def settled(model: TorqueModel, trajectory: PolynomialTrajectory, used: np.ndarr
     SETTLED of a break the solve used: its |P| has no kink inside an interval."""
     if not len(used):
         return True
-    changes, jump = sign_changes(model, trajectory)
-    changes = changes[np.argsort(-jump, kind="stable")][:len(used)]
+    changes = _steepest(model, trajectory, len(used))
     return bool(np.all(np.min(np.abs(changes[:, None] - used[None, :]), axis=1,
                               initial=np.inf) <= SETTLED))

@@ -299,12 +299,10 @@ class Planner:
         with its breaks, the tail of p)."""
         if not nlp.breaks.numel():
             return np.asarray(nlp.nodes, float)
-        breaks = p[len(p) - nlp.breaks.numel():]
-        return np.asarray(split_nodes(breaks, self.config.energy_samples)[0], float)
+        return np.asarray(split_nodes(_breaks(nlp, p), self.config.energy_samples)[0], float)
 
     def _segment(self, solvers: _Solvers, result, stats, elapsed, segment) -> SegmentPlan:
         q0, qd0, duration, t_begin, p, alpha, _ = segment
-        breaks = p[len(p) - solvers.nlp.breaks.numel():]
         x = np.asarray(result["x"]).ravel()
         trajectory = self.trajectory(x, q0, qd0, t_begin, duration)
         energy, penalty = (float(v) for v in solvers.parts(x, p))
@@ -314,8 +312,13 @@ class Planner:
             iterations=stats.iterations, solve_ms=elapsed[0],
             solve_cpu_ms=elapsed[1], penalty_weight=alpha, x=x,
             multipliers=(np.asarray(result["lam_g"]).ravel(), np.asarray(result["lam_x"]).ravel()),
-            breaks=breaks,
+            breaks=_breaks(solvers.nlp, p),
         )
+
+
+def _breaks(nlp: PlanningNLP, p: np.ndarray) -> np.ndarray:
+    """The split quadrature's breaks in parameters p (their tail; empty for other rules)."""
+    return p[len(p) - nlp.breaks.numel():]
 
 
 def _slots(times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
