@@ -53,6 +53,11 @@ class PlannerConfig:
     compile_code: bool = False  # NLP functions as C compiled once (planning.compiled)
     dual_warm_start: bool = True  # warm re-plans also start from the last multipliers
     starts: int = 1  # cold plans solve from this many start points (planning.starts)
+    # the best `polish` distinct cold plans are solved again, warm, with the split quadrature
+    # at polish_samples nodes (planning.breaks; the sample count a multiple of power_breaks
+    # + 1) and the plan that spends least kept: the many-start search runs on the cheap rule
+    polish: int = 0
+    polish_samples: int = 40
     # a re-plan still unfinished after this much CPU time of the planning thread (ms) is
     # abandoned and the arm keeps its last plan (Algorithm 2); None: no deadline
     replan_deadline_ms: float | None = None

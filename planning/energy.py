@@ -5,6 +5,12 @@ from __future__ import annotations
 import numpy as np
 
 from identification.torque_model import TorqueModel
+from planning.trajectory import PolynomialTrajectory
+
+# points of a segment where dense_energy reads the power: the trapezoid rule at 513 points
+# is within 1.3e-4 relative of an adaptive integral split at the kinks of |P| (measured on a
+# motion with three, tests/test_planning_breaks.py): ample to rank plans 0.5 % apart
+DENSE_POINTS = 513
 
 
 def power(model: TorqueModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
@@ -16,6 +22,15 @@ def absolute_energy(model: TorqueModel, t: np.ndarray, q, qd, qdd) -> float:
     """Integral of |P| dt (J) by the trapezoid rule on the time grid t (s)."""
     p = np.abs(power(model, q, qd, qdd))
     return float(np.sum(0.5 * (p[1:] + p[:-1]) * np.diff(t)))
+
+
+def dense_energy(model: TorqueModel, trajectory: PolynomialTrajectory,
+                 points: int = DENSE_POINTS) -> float:
+    """Integral of |P| dt (J) over a segment, read at `points` even points: what a plan
+    spends, whatever quadrature it was planned with (a planning quadrature with few nodes
+    under-counts it: the optimizer can place power between its nodes)."""
+    t = trajectory.t_begin + trajectory.duration * np.linspace(0.0, 1.0, points)
+    return absolute_energy(model, t, *trajectory.state(t))
 
 
 def net_work(model: TorqueModel, t: np.ndarray, q, qd, qdd) -> float:

@@ -15,6 +15,7 @@ import numpy as np
 
 from planning.trajectory import PolynomialTrajectory, stationary_points
 
+LIMIT_TOLERANCE = 1e-6  # rad: a plan beyond a limit by more is infeasible (planning.result)
 END_MARGIN = 0.02  # normalized time: q's turning points this close to a limit goal are
 # left to the quotient constraints
 

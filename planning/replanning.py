@@ -21,7 +21,7 @@ from planning import breaks
 from planning.clearance import link_clearances
 from planning.config import Scenario
 from planning.errors import PlanningError
-from planning.limits import limit_excess
+from planning.limits import LIMIT_TOLERANCE, limit_excess
 from planning.obstacle import predict_linear
 from planning.screening import screen
 from planning.solver import ObstacleForecast, Planner, SegmentPlan
@@ -124,10 +124,12 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
                     forecast: ObstacleForecast | None, count: int | None = None
                     ) -> tuple[SegmentPlan, float, float, list[SegmentPlan]]:
     """The best of `count` (default config.starts) cold plans of one segment (plan_segment
-    from each start point of planning.starts);
-    total wall and CPU ms; all the plans. With the split quadrature only the best start's
-    plan is re-solved until its breaks settle (measured on the random scenarios: settling
-    every start's took 2-10 times the CPU of a Gauss plan)."""
+    from each start point of planning.starts), ranked by the energy they spend
+    (planning.starts.rank); total wall and CPU ms; all the cold plans. With the split
+    quadrature only the best start's plan is re-solved until its breaks settle (measured on
+    the random scenarios: settling every start's took 2-10 times the CPU of a Gauss plan).
+    With config.polish the best distinct plans are re-solved by planner.polisher (see
+    _polished)."""
     count = planner.config.starts if count is None else count
     split = planner.config.energy_quadrature == "split"
     plans, wall, cpu = [], 0.0, 0.0
@@ -136,13 +138,44 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
                                         x0=x0, settle_breaks=not split)
         plans.append(plan)
         wall, cpu = wall + ms, cpu + cpu_ms
-    best = min(plans, key=rank)
+    ranked = sorted(plans, key=lambda plan: rank(planner.model, plan))
+    best = ranked[0]
     if split and best.success:
         settled, ms, cpu_ms = plan_segment(planner, q0, qd0, t_begin, duration, goal, forecast,
                                            warm=best)
         wall, cpu = wall + ms, cpu + cpu_ms
         best = settled if settled.success else best
+    if planner.polisher is not None:
+        planner.polisher.prepare(goal)  # its solvers' build is not part of a plan's time
+        clock = _Clock()
+        best = _polished(planner, best, ranked, (q0, qd0, t_begin, duration, goal, forecast))
+        wall, cpu = wall + clock.read()[0], cpu + clock.read()[1]
     return best, wall, cpu, plans
+
+
+DISTINCT = 1e-3  # rad: cold plans whose coefficients all agree this closely are one optimum
+
+
+def _polished(planner: Planner, best: SegmentPlan, ranked: list[SegmentPlan],
+              segment: tuple) -> SegmentPlan:
+    """The plan that spends least of `best` and the config.polish best distinct converged
+    plans of `ranked`, each solved again, warm from its motion, by planner.polisher (the
+    split quadrature at config.polish_samples nodes, breaks settled). The many starts
+    search on the planner's cheaper rule; the few that are polished spend what they plan."""
+    picked: list[SegmentPlan] = []
+    for plan in ranked:
+        if len(picked) == planner.config.polish or not plan.success:
+            break
+        if all(np.max(np.abs(plan.trajectory.coefficients - other.trajectory.coefficients))
+               > DISTINCT for other in picked):
+            picked.append(plan)
+    candidates = [best]
+    for plan in picked:
+        polished, _, _ = plan_segment(planner.polisher, *segment, warm=plan)
+        if polished.success and limit_excess(polished.trajectory, planner.config.lower,
+                                              planner.config.upper) <= LIMIT_TOLERANCE:
+            candidates.append(polished)  # (its rounds may end before its limits settle)
+    return min(candidates, key=lambda plan: rank(planner.model, plan))
 
 
 def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan,

@@ -10,11 +10,11 @@ from identification.torque_model import Motion, TorqueModel
 from planning.clearance import link_clearances
 from planning.config import PlannerConfig, Scenario
 from planning.energy import absolute_energy
+from planning.limits import LIMIT_TOLERANCE
 from planning.replanning import Execution
 
 CLEARANCE_TOLERANCE = 2e-3  # m below the threshold still counted as avoided (penalty is soft)
 END_TOLERANCE = 1e-6  # rad
-LIMIT_TOLERANCE = 1e-6  # rad
 # relative: the NLP holds the torque limit at its samples only; between them a plan may
 # exceed it by this much (the dense grid has 5 points per obstacle sample interval)
 TORQUE_TOLERANCE = 0.01
@@ -114,7 +114,8 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
         "solve_ms": result.execution.solve_ms,
         "solve_cpu_ms": result.execution.solve_cpu_ms,
         "replan_failures": result.execution.replan_failures,
-        "solver": config.solver, "starts": config.starts,
+        "solver": config.solver, "starts": config.starts, "polish": config.polish,
+        "polish_samples": config.polish_samples,
         "replan_deadline_ms": config.replan_deadline_ms,
         "end_error": result.end_error, "limit_violation": result.limit_violation,
         "peak_torque": result.peak_torque, "torque_limit": config.torque_limit,

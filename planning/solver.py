@@ -45,6 +45,7 @@ class SegmentPlan:
     x: np.ndarray  # primal solution, for warm starts
     multipliers: tuple[np.ndarray, np.ndarray]  # (lam_g, lam_x)
     breaks: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))  # "split" rule's
+    layout: tuple = ()  # the NLP's energy rule (Planner.layout): its multipliers fit only it
 
 
 # measured on random scenarios: a warm IPOPT rescue still unconverged after 60 iterations ran
@@ -92,6 +93,24 @@ class Planner:
         self._limited: dict[tuple[int, ...], _Solvers] = {}
         self._rescue: dict[int, _Solvers] = {}
         self.solver_ms = 0.0  # wall time (ms) of all its solver calls so far: timing breakdowns
+
+    @functools.cached_property
+    def polisher(self) -> Planner | None:
+        """The planner that re-solves the best cold plans with the split quadrature at
+        config.polish_samples nodes (None without config.polish)."""
+        if not self.config.polish:
+            return None
+        return Planner(self.model, dataclasses.replace(
+            self.config, energy_quadrature="split", energy_samples=self.config.polish_samples,
+            polish=0, starts=1))
+
+    @property
+    def layout(self) -> tuple:
+        """What fixes the NLP's rows and variables beyond the goal's limits and the torque
+        rows: the energy rule and its sample count (a warm start from a plan of another
+        layout takes its motion, not its multipliers)."""
+        config = self.config
+        return (config.energy_quadrature, config.energy_samples, config.power_smoothing > 0)
 
     @functools.cached_property
     def nlp(self) -> PlanningNLP:
@@ -290,7 +309,7 @@ class Planner:
         lam_g = np.zeros(rows)
         kept = min(rows, len(warm.multipliers[0]))
         lam_g[:kept] = warm.multipliers[0][:kept]
-        if not self.config.dual_warm_start:
+        if not self.config.dual_warm_start or warm.layout != self.layout:
             return {"x0": x}
         return {"x0": x, "lam_g0": lam_g, "lam_x0": warm.multipliers[1]}
 
@@ -312,7 +331,7 @@ class Planner:
             iterations=stats.iterations, solve_ms=elapsed[0],
             solve_cpu_ms=elapsed[1], penalty_weight=alpha, x=x,
             multipliers=(np.asarray(result["lam_g"]).ravel(), np.asarray(result["lam_x"]).ravel()),
-            breaks=_breaks(solvers.nlp, p),
+            breaks=_breaks(solvers.nlp, p), layout=self.layout,
         )
 
 

@@ -25,3 +25,19 @@ def heavier_model(scale: float) -> PinocchioModel:
         model.inertias[j] = pin.Inertia(inertia.mass * scale, inertia.lever,
                                         inertia.inertia * scale)
     return PinocchioModel(model)
+
+
+def random_crossing(planner, seed: int):
+    """One random scenario of planning.scenarios (the obstacle crossing the planner's
+    unobstructed optimum) and its obstacle forecast with the whole path known."""
+    from planning.scenarios import random_scenarios
+    from planning.solver import ObstacleForecast
+
+    config = planner.config
+
+    def free_motion(start, goal, duration):
+        return planner.solve(start, (0.0,) * len(start), duration, goal).trajectory
+
+    case = random_scenarios(1, seed, free_motion, config.geometry, config.lower, config.upper)[0]
+    t = case.obstacle.sample_times
+    return case, ObstacleForecast(t, case.obstacle.position(t))

@@ -95,6 +95,12 @@ def register(sub) -> None:
                         "the Lynxmotion, ipopt on other arms)")
     p.add_argument("--starts", type=int, default=PLANNER.starts,
                    help="start points of the cold plan (the best is kept)")
+    p.add_argument("--polish", type=int, default=PLANNER.polish,
+                   help="the best N distinct cold plans are solved again with the split "
+                        "quadrature (breaks at the power's sign changes) and the one that "
+                        "spends least kept (0: none)")
+    p.add_argument("--polish-samples", type=int, default=PLANNER.polish_samples,
+                   help="nodes of the polishing quadrature: a multiple of --power-breaks + 1")
     p.add_argument("--deadline-ms", type=float, default=0.0,
                    help="CPU ms a re-plan may take; a later one is dropped and the last plan "
                         "kept, as on a real-time controller (0, the default: no deadline; "
@@ -144,6 +150,10 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                         "--energy-samples >= 1")
     if args.starts < 1 or not (math.isfinite(args.deadline_ms) and args.deadline_ms >= 0):
         raise UserError("--starts must be >= 1 and --deadline-ms a finite number >= 0")
+    if args.polish < 0 or (args.polish and (args.power_breaks < 1 or args.polish_samples < 1
+                                             or args.polish_samples % (args.power_breaks + 1))):
+        raise UserError("--polish must be >= 0; with it, --power-breaks >= 1 and "
+                        "--polish-samples a positive multiple of --power-breaks + 1")
     if not 4 <= args.degree <= 9:
         raise UserError(f"--degree must be in 4..9, got {args.degree}")
     if args.energy_quadrature == "simpson" and (args.energy_samples < 3
@@ -166,6 +176,7 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
     dof = config.geometry.dof
     config = dataclasses.replace(config, torque_limit=_torque_limit(args, dof))
     config = dataclasses.replace(config, solver=args.solver or config.solver, starts=args.starts,
+                                 polish=args.polish, polish_samples=args.polish_samples,
                                  compile_code=not args.no_compile,
                                  replan_deadline_ms=args.deadline_ms or None)
     path = (_vector(args.obstacle_from, "obstacle-from"),
