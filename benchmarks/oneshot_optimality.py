@@ -31,7 +31,6 @@ from planning.starts import start_points
 
 GLOBAL_STARTS = 8
 FINE_SAMPLES = 40
-POLISHED = {"starts": 8, "polish": 2, "polish_samples": 40}
 
 
 def _execution(plan) -> Execution:
@@ -49,7 +48,7 @@ def main() -> None:
     fine = Planner(baseline, dataclasses.replace(config, energy_samples=FINE_SAMPLES,
                                                  compile_code=False))
     split = Planner(baseline, dataclasses.replace(config, **random_scenarios.SPLIT))
-    polished = Planner(baseline, dataclasses.replace(config, **POLISHED))
+    polished = Planner(baseline, dataclasses.replace(config, **random_scenarios.POLISHED))
 
     def replayed(plan, planner):
         return realtime.replayed_energy(plant, baseline, _execution(plan), case, planner.config)

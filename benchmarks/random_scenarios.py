@@ -9,6 +9,8 @@ from harness.sections.planning import realtime
 
 # the split energy quadrature as the benchmarks plan it beside the default (planning.breaks)
 SPLIT = {"energy_quadrature": "split", "power_breaks": 7, "energy_samples": 24}
+# 8 starts on the default's rule, the best 2 distinct plans polished (config.polish)
+POLISHED = {"starts": 8, "polish": 2, "polish_samples": 40}
 
 
 def parser(doc: str) -> argparse.ArgumentParser:

@@ -1,6 +1,7 @@
 """Where a warm re-plan's time goes (issue #15's speed bars), on the random scenarios.
 
-    .venv/bin/python -m benchmarks.replan_anatomy [--scenarios 20] [--seed 2026] [--split]
+    .venv/bin/python -m benchmarks.replan_anatomy [--scenarios 20] [--seed 2026]
+        [--split | --polish]
 
 1. Algorithm 2 with the default planner (compiled) on the planning bench's random
    scenarios; for every warm re-plan: its solver calls, their iterations and CPU time, the
@@ -9,7 +10,10 @@
 2. Fixed and per-iteration cost of one warm solve on the paper scenario (re-plan at
    t = 0.71 s): the same start solved with fatrop and with IPOPT (primal-dual warm start)
    capped at 0, 1 and 5 iterations and run to convergence, CPU median of 20 calls each.
---split: the planner with the split energy quadrature (random_scenarios.SPLIT).
+--split: the planner with the split energy quadrature (random_scenarios.SPLIT); --polish:
+the default's with its cold plans polished (random_scenarios.POLISHED: the re-plans start
+warm from a polished plan's motion). Section 1 also prints the replayed energy of every
+executed motion, summed.
 """
 
 from __future__ import annotations
@@ -23,7 +27,7 @@ import numpy as np
 
 from benchmarks import random_scenarios
 from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import DEFAULT_ROBOT, load_pinocchio
+from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
 from harness.sections.planning import realtime
 from planning import backends
 from planning.config import true_energy_config
@@ -56,9 +60,13 @@ class RecordingPlanner(Planner):
 def replans(baseline, config, setup: realtime.Setup) -> dict:
     """Section 1: every warm re-plan of Algorithm 2 on the random scenarios, call by call."""
     planner, per_replan = RecordingPlanner(baseline, config), []
+    plant, executed, infeasible, cold = load_mujoco(DEFAULT_ROBOT, scene=True), 0.0, 0, []
     for case in realtime.scenarios(baseline, config, setup):
         planner.groups.clear()
         run = execute(planner, case)
+        energy, feasible = realtime.replayed_energy(plant, baseline, run, case, config)
+        executed, infeasible = executed + energy, infeasible + (not feasible)
+        cold.append(run.solve_cpu_ms[0])
         replanned = len(run.solve_cpu_ms) - 1  # the cold plan's groups come first
         warm_groups = planner.groups[len(planner.groups) - replanned:]
         per_replan += [{"cpu_ms": ms, "calls": calls}
@@ -68,6 +76,8 @@ def replans(baseline, config, setup: realtime.Setup) -> dict:
     calls = [c for r in per_replan for c in r["calls"]]
     capped = [c for c in calls if c[0] and c[1] >= config.warm_max_iterations]
     return {
+        "executed_energy_J_sum": executed, "infeasible_executions": infeasible,
+        "cold_cpu_ms": realtime.distribution(cold),
         "replans": len(per_replan),
         "replan_cpu_ms": realtime.distribution(cpu),
         "solver_share_of_cpu": float(solver.sum() / cpu.sum()),
@@ -135,10 +145,14 @@ def call_costs(baseline, config) -> dict:
 
 def main() -> None:
     options = random_scenarios.parser(__doc__)
-    options.add_argument("--split", action="store_true")
+    variant = options.add_mutually_exclusive_group()
+    variant.add_argument("--split", action="store_true")
+    variant.add_argument("--polish", action="store_true")
     args = options.parse_args()
     baseline = PinocchioModel(load_pinocchio(DEFAULT_ROBOT))
-    config = true_energy_config(compile_code=True, **(random_scenarios.SPLIT if args.split else {}))
+    config = true_energy_config(compile_code=True, **(
+        random_scenarios.SPLIT if args.split else random_scenarios.POLISHED if args.polish
+        else {}))
     setup = random_scenarios.setup(args)
     print(json.dumps({"call_costs": call_costs(baseline, config)}, indent=1))
     print(json.dumps({"replans": replans(baseline, config, setup)}, indent=1))
