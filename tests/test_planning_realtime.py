@@ -12,6 +12,7 @@ from harness.robots.registry import load_pinocchio
 from planning import compiled, replanning
 from planning.clearance import link_clearances
 from planning.config import PlannerConfig, Scenario
+from planning.limits import LIMIT_TOLERANCE, limit_excess
 from planning.replanning import DEADLINE, LATE, execute, forecast_at, plan_multistart, plan_segment
 from planning.scenarios import random_scenarios, swaying_scenario
 from planning.screening import screen
@@ -197,3 +198,23 @@ def test_replan_timing_breaks_down_into_the_solver_and_the_rest(baseline):
     replans, solver = np.asarray(timings.replan_ms), np.asarray(timings.replan_solver_ms)
     assert len(replans) == len(solver) > 0
     assert np.all(solver > 0) and np.all(solver <= replans)
+
+
+def test_a_warm_plan_its_rounds_leave_beyond_a_joint_limit_is_not_successful(baseline):
+    """On this random crossing (seed 5), solved warm from the unobstructed optimum, one round
+    leaves the plan 2.9e-5 rad beyond a joint limit (its turning points not yet the
+    constrained ones): it is returned unsuccessful, so Algorithm 2 would keep its last plan.
+    With the default rounds the limits settle. A cold plan is returned as it is."""
+    planner = Planner(baseline, PlannerConfig(energy_quadrature="gauss", energy_samples=20))
+    case, forecast = random_crossing(planner, 5)
+    args = (case.start, case.start_velocity, 0.0, case.duration, case.goal, forecast)
+    limits = planner.config.lower, planner.config.upper
+    free = planner.solve(case.start, case.start_velocity, case.duration, case.goal)
+    unsettled, _, _ = plan_segment(planner, *args, warm=free, rounds=1)
+    assert limit_excess(unsettled.trajectory, *limits) > LIMIT_TOLERANCE
+    assert not unsettled.success
+    assert unsettled.status.startswith("joint limits exceeded by")
+    settled, _, _ = plan_segment(planner, *args, warm=free)
+    assert settled.success and limit_excess(settled.trajectory, *limits) <= LIMIT_TOLERANCE
+    cold, _, _ = plan_segment(planner, *args, rounds=1)
+    assert cold.success and limit_excess(cold.trajectory, *limits) > LIMIT_TOLERANCE
