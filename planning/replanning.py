@@ -147,25 +147,25 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
     _polished)."""
     count = planner.config.starts if count is None else count
     split = planner.config.energy_quadrature == "split"
+    if planner.polisher is not None:
+        planner.polisher.prepare(goal)  # its solvers' build is not part of a plan's time
     plans, wall, cpu = [], 0.0, 0.0
     for x0 in start_points(planner, q0, qd0, duration, goal, count):
         plan, ms, cpu_ms = plan_segment(planner, q0, qd0, t_begin, duration, goal, forecast,
                                         x0=x0, settle_breaks=not split)
         plans.append(plan)
         wall, cpu = wall + ms, cpu + cpu_ms
+    clock = _Clock()  # the ranking (a dense integral per plan) and polishing are plan time
     ranked = sorted(plans, key=lambda plan: rank(planner.model, plan))
     best = ranked[0]
     if split and best.success:
-        settled, ms, cpu_ms = plan_segment(planner, q0, qd0, t_begin, duration, goal, forecast,
-                                           warm=best)
-        wall, cpu = wall + ms, cpu + cpu_ms
+        settled, _, _ = plan_segment(planner, q0, qd0, t_begin, duration, goal, forecast,
+                                     warm=best)
         best = settled if settled.success else best
     if planner.polisher is not None:
-        planner.polisher.prepare(goal)  # its solvers' build is not part of a plan's time
-        clock = _Clock()
         best = _polished(planner, best, ranked, (q0, qd0, t_begin, duration, goal, forecast))
-        wall, cpu = wall + clock.read()[0], cpu + clock.read()[1]
-    return best, wall, cpu, plans
+    ms, cpu_ms = clock.read()
+    return best, wall + ms, cpu + cpu_ms, plans
 
 
 DISTINCT = 1e-3  # rad: cold plans whose coefficients all agree this closely are one optimum

@@ -98,11 +98,16 @@ class Planner:
     def polisher(self) -> Planner | None:
         """The planner that re-solves the best cold plans with the split quadrature at
         config.polish_samples nodes (None without config.polish)."""
-        if not self.config.polish:
+        config = self.config
+        if not config.polish:
             return None
+        if config.power_breaks < 1 or config.polish_samples % (config.power_breaks + 1):
+            raise ValueError(f"polish_samples ({config.polish_samples}) must be a multiple of "
+                             f"power_breaks + 1 ({config.power_breaks + 1})")
+        # polishing is part of a cold plan: no re-plan deadline keeps its IPOPT rescue away
         return Planner(self.model, dataclasses.replace(
-            self.config, energy_quadrature="split", energy_samples=self.config.polish_samples,
-            polish=0, starts=1))
+            config, energy_quadrature="split", energy_samples=config.polish_samples,
+            polish=0, starts=1, replan_deadline_ms=None))
 
     @property
     def layout(self) -> tuple:

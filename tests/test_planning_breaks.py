@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -144,7 +145,11 @@ def test_polished_cold_plan_spends_less_and_replans_warm_from_it(baseline):
     assert best.success and rank(baseline, best)[1] < rank(baseline, unpolished)[1]
     assert best.layout == ("split", 40, False) != unpolished.layout
     assert abs(best.energy - dense_energy(baseline, best.trajectory)) < 1e-3 * best.energy
+    # plans are ranked by what they spend, not by their own quadrature's figure
+    assert rank(baseline, dataclasses.replace(best, energy=1e3)) == rank(baseline, best)
     q, qd, _ = best.trajectory.state(0.5)
     replan, _, _ = plan_segment(planner, q[0], qd[0], 0.5, case.duration - 0.5, case.goal,
-                                forecast, warm=best)
-    assert replan.success and replan.layout == planner.layout
+                                forecast, warm=best)  # (its multipliers would not fit)
+    assert replan.success
+    with pytest.raises(ValueError, match="multiple of power_breaks"):
+        _ = Planner(baseline, dataclasses.replace(config, power_breaks=6)).polisher

@@ -18,7 +18,7 @@ from planning.scenarios import random_scenarios, swaying_scenario
 from planning.screening import screen
 from planning.solver import Planner
 from planning.speed import measure
-from planning.starts import rank, start_points
+from planning.starts import start_points
 from planning.trajectory import PolynomialTrajectory
 from tests.helpers import random_crossing
 
@@ -186,7 +186,6 @@ def test_each_start_point_reaches_a_plan_of_its_own(baseline):
     assert plans[0].energy == direct.energy  # the first start: the planner's initial guess
     assert all(plan.success for plan in (through_free, *plans))
     assert direct.energy + direct.penalty < 0.5 * (through_free.energy + through_free.penalty)
-    assert rank(baseline, best) <= rank(baseline, direct)  # the plan that spends least
     for plan in (through_free, direct, best):
         clearance = link_clearances(config.geometry, plan.trajectory.position(t), forecast.centres)
         assert clearance.min() >= config.threshold - config.penalty_tolerance
