@@ -47,50 +47,53 @@ def main() -> None:
     default = Planner(baseline, config)
     fine = Planner(baseline, dataclasses.replace(config, energy_samples=FINE_SAMPLES,
                                                  compile_code=False))
-    split = Planner(baseline, dataclasses.replace(config, **random_scenarios.SPLIT))
-    polished = Planner(baseline, dataclasses.replace(config, **random_scenarios.POLISHED))
+    # the planners scored against the best of all: the default, and those beside it
+    scored = {"default": default,
+              "split": Planner(baseline, dataclasses.replace(config, **random_scenarios.SPLIT)),
+              "polished": Planner(baseline,
+                                  dataclasses.replace(config, **random_scenarios.POLISHED))}
 
     def replayed(plan, planner):
         return realtime.replayed_energy(plant, baseline, _execution(plan), case, planner.config)
 
-    within = split_within = polished_within = 0
+    def mark(ok: bool) -> str:
+        return "" if ok else " (infeasible)"
+
+    within = dict.fromkeys(scored, 0)
     for i, case in enumerate(cases):
         t = case.obstacle.sample_times
         segment = (case.start, case.start_velocity, 0.0, case.duration, case.goal,
                    ObstacleForecast(t, case.obstacle.position(t)))
-        plan, _, cpu, _ = plan_multistart(default, *segment)
-        energy, feasible = replayed(plan, default)
+        runs = {}  # name: (replayed energy, feasible, cold CPU ms)
+        for name, planner in scored.items():
+            plan, _, cpu, _ = plan_multistart(planner, *segment)
+            runs[name] = (*replayed(plan, planner), cpu)
         points = start_points(default, case.start, case.start_velocity, case.duration,
                               case.goal, GLOBAL_STARTS)
         singles = [replayed(plan_segment(default, *segment, x0=x if k else None)[0], default)
                    for k, x in enumerate(points)]
         fine_energy, fine_feasible = replayed(plan_multistart(fine, *segment)[0], fine)
-        split_plan, _, split_cpu, _ = plan_multistart(split, *segment)
-        split_energy, split_feasible = replayed(split_plan, split)
-        polished_plan, _, polished_cpu, _ = plan_multistart(polished, *segment)
-        polished_energy, polished_feasible = replayed(polished_plan, polished)
         candidates = [e for e, ok in singles if ok] + ([fine_energy] if fine_feasible else [])
-        candidates += [split_energy] if split_feasible else []
-        candidates += [polished_energy] if polished_feasible else []
+        candidates += [e for e, ok, _ in runs.values() if ok]
         best = min(candidates) if candidates else np.nan
-        excess = 100 * (energy - best) / best if feasible else np.nan
-        split_excess = 100 * (split_energy - best) / best if split_feasible else np.nan
-        polished_excess = 100 * (polished_energy - best) / best if polished_feasible else np.nan
-        within += bool(excess <= 100 * realtime.OPTIMALITY_TOLERANCE)
-        split_within += bool(split_excess <= 100 * realtime.OPTIMALITY_TOLERANCE)
-        polished_within += bool(polished_excess <= 100 * realtime.OPTIMALITY_TOLERANCE)
+        excess = {name: 100 * (e - best) / best if ok else np.nan
+                  for name, (e, ok, _) in runs.items()}
+        for name in scored:
+            within[name] += bool(excess[name] <= 100 * realtime.OPTIMALITY_TOLERANCE)
         starts = " ".join(f"{e:.4f}{'' if ok else '(x)'}" for e, ok in singles)
-        print(f"{i:2d} default {energy:.5f} J{'' if feasible else ' (infeasible)'}, "
+        (energy, feasible, cpu), (split_energy, split_ok, split_cpu), \
+            (polished_energy, polished_ok, polished_cpu) = runs.values()
+        print(f"{i:2d} default {energy:.5f} J{mark(feasible)}, "
               f"cold CPU {cpu:.0f} ms | single starts {starts} | Gauss N = {FINE_SAMPLES} "
-              f"{fine_energy:.5f} J | split {split_energy:.5f} J"
-              f"{'' if split_feasible else ' (infeasible)'}, cold CPU {split_cpu:.0f} ms | "
-              f"polished {polished_energy:.5f} J{'' if polished_feasible else ' (infeasible)'}, "
-              f"cold CPU {polished_cpu:.0f} ms | vs best: default {excess:+.2f} %, split "
-              f"{split_excess:+.2f} %, polished {polished_excess:+.2f} %", flush=True)
-    print(f"within {100 * realtime.OPTIMALITY_TOLERANCE:g} % of the best on: default {within}, "
-          f"split {split_within}, polished {polished_within} of {len(cases)} scenarios ((x): "
-          "infeasible, its replay comes within the threshold)")
-
+              f"{fine_energy:.5f} J | split {split_energy:.5f} J{mark(split_ok)}, cold CPU "
+              f"{split_cpu:.0f} ms | polished {polished_energy:.5f} J{mark(polished_ok)}, "
+              f"cold CPU {polished_cpu:.0f} ms | vs best: "
+              + ", ".join(f"{name} {value:+.2f} %" for name, value in excess.items()),
+              flush=True)
+    print(f"within {100 * realtime.OPTIMALITY_TOLERANCE:g} % of the best on: "
+          + ", ".join(f"{name} {count}" for name, count in within.items())
+          + f" of {len(cases)} scenarios ((x): infeasible, its replay comes within the "
+          "threshold)")
 
 if __name__ == "__main__":
     main()

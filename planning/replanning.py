@@ -73,8 +73,7 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     clock = _Clock()
     config = planner.config
     alpha = config.penalty_weight if warm is None else warm.penalty_weight
-    # a warm plan beyond the joint limits is not followed: its caller has a plan to keep
-    checked = _within_limits if warm is not None else (lambda plan, _: plan)
+    replan = warm is not None  # a warm plan beyond the limits is refused: its caller keeps one
     if warm is None and forecast is not None:
         x0 = planner.initial_guess(q0, qd0, duration, goal) if x0 is None else x0
         # each start point of its own: the obstacle problem solved from it directly (solving
@@ -100,23 +99,25 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
             status = DEADLINE + (LATE if plan.success else "")
             return dataclasses.replace(plan, success=False, status=status), *clock.read()
         if forecast is None or alpha >= config.max_penalty_weight or not plan.success:
-            return checked(plan, config), *clock.read()
+            return _within_limits(plan, config, replan), *clock.read()
         if lowest is None:
             lowest = _predicted_clearance(planner, plan, forecast)
         if lowest >= config.threshold - config.penalty_tolerance:
-            return checked(plan, config), *clock.read()
+            return _within_limits(plan, config, replan), *clock.read()
         alpha = min(alpha * config.penalty_growth, config.max_penalty_weight)
         warm, seen = plan, None
 
 
-def _within_limits(plan: SegmentPlan, config) -> SegmentPlan:
+def _within_limits(plan: SegmentPlan, config, warm: bool) -> SegmentPlan:
     """The plan, unsuccessful if it leaves the joint limits by more than LIMIT_TOLERANCE: its
     rounds (_screened) can end before the limits at its turning points settle (measured: a
     re-plan 1.4 mrad beyond a limit followed in Algorithm 2, its executed motion infeasible).
     Applied to warm plans (re-plans, polishing, settling), whose callers keep the plan they
     started from; a cold plan is returned as it is and the result's checks report it."""
+    if not warm or not plan.success:
+        return plan
     excess = limit_excess(plan.trajectory, config.lower, config.upper)
-    if not plan.success or excess <= LIMIT_TOLERANCE:
+    if excess <= LIMIT_TOLERANCE:
         return plan
     return dataclasses.replace(plan, success=False,
                                status=f"joint limits exceeded by {excess:.2e} rad")
