@@ -157,7 +157,7 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
         plans.append(plan)
         wall, cpu = wall + ms, cpu + cpu_ms
     clock = _Clock()  # the ranking (a dense integral per plan) and polishing are plan time
-    ranked = sorted(plans, key=lambda plan: rank(planner.model, plan))
+    ranked = sorted(plans, key=lambda plan: rank(planner, plan))
     best = ranked[0]
     if split and best.success:
         settled, _, _ = plan_segment(planner, q0, qd0, t_begin, duration, goal, forecast,
@@ -190,7 +190,7 @@ def _polished(planner: Planner, best: SegmentPlan, ranked: list[SegmentPlan],
         polished, _, _ = plan_segment(planner.polisher, *segment, warm=plan)
         if polished.success:
             candidates.append(polished)
-    return min(candidates, key=lambda plan: rank(planner.model, plan))
+    return min(candidates, key=lambda plan: rank(planner, plan))
 
 
 def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan,

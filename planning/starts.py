@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from identification.torque_model import TorqueModel
 from planning.energy import dense_energy
+from planning.limits import LIMIT_TOLERANCE, limit_excess
 from planning.solver import Planner, SegmentPlan
 
 SEED = 20240515
@@ -33,9 +33,12 @@ def start_points(planner: Planner, q0, qd0, duration: float, goal, count: int,
     return points
 
 
-def rank(model: TorqueModel, plan: SegmentPlan) -> tuple[bool, float]:
-    """Sort key of candidate plans: converged first, then the lower energy actually spent
-    (planning.energy.dense_energy, not the plan's own quadrature: measured on the random
-    scenarios, split N = 24 plans' quadrature under-counted it by up to 6 %, enough to rank a
-    dearer start first) plus the clearance penalty (J)."""
-    return (not plan.success, dense_energy(model, plan.trajectory) + plan.penalty)
+def rank(planner: Planner, plan: SegmentPlan) -> tuple[bool, bool, float]:
+    """Sort key of candidate plans: converged first, then within the joint limits (a cold
+    plan is returned unchecked when its rounds end beyond one, planning.replanning), then the
+    lower energy actually spent (planning.energy.dense_energy, not the plan's own quadrature:
+    measured on the random scenarios, split N = 24 plans' quadrature under-counted it by up to
+    6 %, enough to rank a dearer start first) plus the clearance penalty (J)."""
+    config = planner.config
+    beyond = limit_excess(plan.trajectory, config.lower, config.upper) > LIMIT_TOLERANCE
+    return (not plan.success, beyond, dense_energy(planner.model, plan.trajectory) + plan.penalty)

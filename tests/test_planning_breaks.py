@@ -141,12 +141,22 @@ def test_polished_cold_plan_spends_less_and_replans_warm_from_it(baseline):
     case, forecast = random_crossing(planner, 2)
     args = (case.start, case.start_velocity, 0.0, case.duration, case.goal)
     best, _, _, plans = plan_multistart(planner, *args, forecast)
-    unpolished = min(plans, key=lambda plan: rank(baseline, plan))
-    assert best.success and rank(baseline, best)[1] < rank(baseline, unpolished)[1]
+    unpolished = min(plans, key=lambda plan: rank(planner, plan))
+    assert best.success and rank(planner, best)[2] < rank(planner, unpolished)[2]
     assert best.layout == ("split", 40, False) != unpolished.layout
     assert abs(best.energy - dense_energy(baseline, best.trajectory)) < 1e-3 * best.energy
     # plans are ranked by what they spend, not by their own quadrature's figure
-    assert rank(baseline, dataclasses.replace(best, energy=1e3)) == rank(baseline, best)
+    assert rank(planner, dataclasses.replace(best, energy=1e3)) == rank(planner, best)
+    # ... and one beyond a joint limit after every plan within them: q1 (the base's vertical
+    # axis, no gravity work) shifted 5 mrad past its upper limit spends what `best` does
+    coefficients = best.trajectory.coefficients.copy()
+    coefficients[0, 0] += config.upper[0] + 5e-3 - best.trajectory.position(
+        np.linspace(0.0, case.duration, 401))[:, 0].max()
+    beyond = dataclasses.replace(best, trajectory=dataclasses.replace(
+        best.trajectory, coefficients=coefficients))
+    assert rank(planner, beyond)[1] and not rank(planner, best)[1]
+    assert np.isclose(rank(planner, beyond)[2], rank(planner, best)[2], rtol=1e-9)
+    assert min([beyond, *plans], key=lambda plan: rank(planner, plan)) is not beyond
     q, qd, _ = best.trajectory.state(0.5)
     replan, _, _ = plan_segment(planner, q[0], qd[0], 0.5, case.duration - 0.5, case.goal,
                                 forecast, warm=best)  # (its multipliers would not fit)
