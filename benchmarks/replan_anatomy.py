@@ -9,7 +9,8 @@
    the penalty weight each call solved with.
 2. Fixed and per-iteration cost of one warm solve on the paper scenario (re-plan at
    t = 0.71 s): the same start solved with fatrop and with IPOPT (primal-dual warm start)
-   capped at 0, 1 and 5 iterations and run to convergence, CPU median of 20 calls each.
+   capped at 0, 1 and 5 iterations and run to convergence, CPU median of 20 calls each; and
+   the converged NLP solved again from its own solution (the floor of any warm start).
 --split: the planner with the split energy quadrature (random_scenarios.SPLIT); --polish:
 the default's with its cold plans polished (random_scenarios.POLISHED: the re-plans start
 warm from a polished plan's motion; section 2, one warm solve, is the default's). Section 1
@@ -128,12 +129,12 @@ def call_costs(baseline, config) -> dict:
     start = planner._warm_start(plan, t, duration, nlp, args["p"])
     problem = {"x": nlp.x, "p": nlp.p, "f": nlp.f, "g": nlp.g}
     out = {}
-    for plugin in ("fatrop", "ipopt"):
+    for plugin in ("fatrop", "ipopt", "sqpmethod"):
         for cap in (0, 1, 5, config.warm_max_iterations):
             solver = backends.solver(f"anatomy_{plugin}_{cap}", plugin, problem,
                                      nlp.lbg == nlp.ubg, warm=True, max_iter=cap,
                                      hessian="exact", compile_code=True)
-            given = start if plugin == "ipopt" else {"x0": start["x0"]}
+            given = {"x0": start["x0"]} if plugin == "fatrop" else start
             times = []
             for _ in range(20):
                 begin = time.thread_time()
@@ -143,6 +144,21 @@ def call_costs(baseline, config) -> dict:
             out[f"{plugin}, cap {cap}"] = {"iterations": stats.iterations,
                                            "success": stats.success,
                                            "cpu_ms_median": float(np.median(times))}
+        # the floor of a warm start: the same NLP solved again from its own solution (fatrop
+        # from its primal point, IPOPT and sqpmethod also from its multipliers)
+        solution = solver(**args, **given)
+        own = {"x0": solution["x"]}
+        if plugin != "fatrop":  # the others take multipliers
+            own |= {"lam_g0": solution["lam_g"], "lam_x0": solution["lam_x"]}
+        times = []
+        for _ in range(20):
+            begin = time.thread_time()
+            solver(**args, **own)
+            times.append(1e3 * (time.thread_time() - begin))
+        stats = backends.stats(solver)
+        out[f"{plugin}, from its own solution"] = {"iterations": stats.iterations,
+                                                   "success": stats.success,
+                                                   "cpu_ms_median": float(np.median(times))}
     return out
 
 

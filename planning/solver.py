@@ -276,14 +276,16 @@ class Planner:
             solver = solvers.warm
             args.update(self._warm_start(warm, t_begin, duration, solvers.nlp, p))
         start, cpu = time.perf_counter(), time.thread_time()
-        result, stats = solver(**args), backends.stats(solver)
+        result = solver(**args)
+        stats = backends.stats(solver, args, result)
         late_anyway = warm is not None and self.config.replan_deadline_ms is not None
         if not stats.success and self.config.solver != "ipopt" and not late_anyway:
             # a solve the fast solver could not finish: IPOPT from the same start point (not
             # for a re-plan under a deadline: it would come too late, measured up to 7 s)
             rescue = self._rescuer(solvers)
             solver = rescue.cold if warm is None else rescue.warm
-            result, stats = solver(**args), backends.stats(solver)
+            result = solver(**args)
+            stats = backends.stats(solver, args, result)
         elapsed = (1e3 * (time.perf_counter() - start), 1e3 * (time.thread_time() - cpu))
         self.solver_ms += elapsed[0]
         return self._segment(solvers, result, stats, elapsed, segment)

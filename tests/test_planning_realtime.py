@@ -9,7 +9,7 @@ import pytest
 
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from planning import compiled, replanning
+from planning import backends, compiled, replanning
 from planning.clearance import link_clearances
 from planning.config import PlannerConfig, Scenario
 from planning.limits import LIMIT_TOLERANCE, limit_excess
@@ -48,6 +48,29 @@ def test_compiled_nlp_matches_the_virtual_machine_and_is_cached(tmp_path, monkey
     stamp = libraries[0].stat().st_mtime_ns
     compiled.nlpsol("toy_again", "ipopt", _toy(), options)  # same problem: no rebuild
     assert [p.stat().st_mtime_ns for p in (tmp_path / "nlp").glob("*.so")] == [stamp]
+
+
+def test_sqpmethod_status_comes_from_the_kkt_conditions_of_its_point():
+    """CasADi 3.8's sqpmethod keeps no status when it converges (Function.stats raises or
+    repeats an earlier call's): backends.stats reads the KKT conditions of the returned
+    point instead. Cross-checked against IPOPT on a constrained Rosenbrock (active
+    constraint), an iteration cap, and a multiplier of the wrong sign."""
+    options = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes"}
+    args = {"x0": [-1.0, 1.0], "p": 0.5, "lbg": -np.inf, "ubg": 0.0}
+    reference = ca.nlpsol("vm", "ipopt", _toy(), options)(**args)
+    sqp = backends.solver("toy_sqp", "sqpmethod", _toy(), np.array([False]), warm=False,
+                          max_iter=100, hessian="exact", compile_code=False)
+    result = sqp(**args)
+    stats = backends.stats(sqp, args, result)
+    assert stats.success and stats.status.startswith("converged")
+    assert np.allclose(result["x"], reference["x"], atol=1e-6)
+    assert float(result["lam_g"]) > 0  # the constraint is active
+    capped = backends.solver("toy_sqp1", "sqpmethod", _toy(), np.array([False]), warm=False,
+                             max_iter=1, hessian="exact", compile_code=False)
+    early = capped(**args)
+    assert not backends.stats(capped, args, early).success
+    flipped = dict(result, lam_g=-result["lam_g"])
+    assert not backends.stats(sqp, args, flipped).success
 
 
 def test_fatrop_and_ipopt_find_the_same_optimum(baseline):
