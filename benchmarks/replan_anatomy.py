@@ -135,31 +135,26 @@ def call_costs(baseline, config) -> dict:
                                      nlp.lbg == nlp.ubg, warm=True, max_iter=cap,
                                      hessian="exact", compile_code=True)
             given = {"x0": start["x0"]} if plugin == "fatrop" else start
-            times = []
-            for _ in range(20):
-                begin = time.thread_time()
-                solver(**args, **given)
-                times.append(1e3 * (time.thread_time() - begin))
-            stats = backends.stats(solver)
-            out[f"{plugin}, cap {cap}"] = {"iterations": stats.iterations,
-                                           "success": stats.success,
-                                           "cpu_ms_median": float(np.median(times))}
+            out[f"{plugin}, cap {cap}"], solution = _timed(solver, args, given)
         # the floor of a warm start: the same NLP solved again from its own solution (fatrop
         # from its primal point, IPOPT and sqpmethod also from its multipliers)
-        solution = solver(**args, **given)
         own = {"x0": solution["x"]}
         if plugin != "fatrop":  # the others take multipliers
             own |= {"lam_g0": solution["lam_g"], "lam_x0": solution["lam_x"]}
-        times = []
-        for _ in range(20):
-            begin = time.thread_time()
-            solver(**args, **own)
-            times.append(1e3 * (time.thread_time() - begin))
-        stats = backends.stats(solver)
-        out[f"{plugin}, from its own solution"] = {"iterations": stats.iterations,
-                                                   "success": stats.success,
-                                                   "cpu_ms_median": float(np.median(times))}
+        out[f"{plugin}, from its own solution"], _ = _timed(solver, args, own)
     return out
+
+
+def _timed(solver, args: dict, start: dict) -> tuple[dict, dict]:
+    """Iterations, success and CPU median of 20 calls from one start point; the solution."""
+    times = []
+    for _ in range(20):
+        begin = time.thread_time()
+        result = solver(**args, **start)
+        times.append(1e3 * (time.thread_time() - begin))
+    stats = backends.stats(solver, args, result)
+    return {"iterations": stats.iterations, "success": stats.success, "status": stats.status,
+            "cpu_ms_median": float(np.median(times))}, result
 
 
 def main() -> None:
