@@ -83,52 +83,56 @@ def solver(name: str, plugin: str, problem: dict, equality: np.ndarray, *, warm:
     return ca.nlpsol(name, plugin, problem, options)
 
 
-# a point whose returned KKT residuals are this small is converged (planning.backends.stats;
-# sqpmethod's own stopping test: tol_pr 1e-9, tol_du 1e-6 warm, 1e-8 cold)
+# a point whose returned KKT residuals are this small is converged (planning.backends.stats):
+# sqpmethod's own test is tol_pr 1e-9 and tol_du 1e-6 warm, 1e-8 cold; the check takes 1e-8
+# (room for the rounding of g) and 1e-6 for both, so a cold solve capped within 1e-6 passes
 KKT_PRIMAL, KKT_DUAL = 1e-8, 1e-6
 
 
 def stats(function: ca.Function, args: dict | None = None, result: dict | None = None) -> Stats:
-    """Success, status and iteration count of the last call of an nlpsol instance; for
+    """Success, status and iteration count of the last call of an nlpsol instance. For
     sqpmethod, whose status CasADi 3.8 does not keep (see _kkt), and any solver that leaves
-    none, the KKT conditions of the point it returned (args: the call's p, lbg, ubg; result:
-    its output) decide."""
-    trusted = function.class_name() != "Sqpmethod"
+    none, the KKT conditions of the point it returned decide (args: the call's p, lbg, ubg;
+    result: its output); its iteration count is kept where stats() gives one (-1 otherwise)."""
     try:
         info = function.stats()
     except RuntimeError:
         info = None
-    if (info is None or not trusted) and args is not None and result is not None:
-        return _kkt(function, args, result)
+    iterations = -1 if info is None else int(info.get("iter_count", -1))
+    if (info is None or function.class_name() == "Sqpmethod") and args is not None \
+            and result is not None:
+        return _kkt(function, args, result, iterations)
     if info is None:
         return Stats(False, "no status (the solver left none)", -1)
     status = info.get("return_status", info.get("unified_return_status", ""))
-    return Stats(bool(info["success"]), str(status), int(info.get("iter_count", -1)))
+    return Stats(bool(info["success"]), str(status), iterations)
 
 
-def _kkt(function: ca.Function, args: dict, result: dict) -> Stats:
-    """Converged or not by the KKT conditions at the returned point (primal feasibility,
-    stationarity of the Lagrangian, multipliers of the right sign on active rows only).
+def _kkt(function: ca.Function, args: dict, result: dict, iterations: int) -> Stats:
+    """Converged or not by the KKT conditions at the returned point: primal feasibility,
+    stationarity of the Lagrangian (the problem has no variable bounds, so lam_x is 0 at a
+    KKT point and enters the residual as it is), and complementarity (|multiplier| times the
+    distance to the bound its sign points to: > 0 for the upper one; inf on a free row).
     CasADi 3.8's sqpmethod does not set its status when it converges or a QP fails:
     Function.stats() raises, or reports an earlier call's status (measured on a warm re-plan:
     capped at 3 iterations it reports Maximum_Iterations_Exceeded; at 4 or more it raises,
     returning the same point; in Algorithm 2, "Solve_Succeeded" beside success False).
-    Reading that as a failure had sent converged solves to the IPOPT rescue. The iteration
-    count is then unknown (-1)."""
-    x, lam_g = result["x"], np.asarray(result["lam_g"]).ravel()
-    grad = function.get_function("nlp_grad")(x=x, p=args["p"], lam_f=1.0, lam_g=result["lam_g"])
+    Reading that as a failure had sent converged solves to the IPOPT rescue. The check is
+    part of the solve's time (the planner needs it to decide on the rescue)."""
+    lam_g = np.asarray(result["lam_g"]).ravel()
+    grad = function.get_function("nlp_grad")(x=result["x"], p=args["p"], lam_f=1.0,
+                                              lam_g=result["lam_g"])
     stationarity = np.max(np.abs(np.asarray(grad["grad_gamma_x"] + result["lam_x"])),
                           initial=0.0)
     g = np.asarray(result["g"]).ravel()
     lbg, ubg = np.asarray(args["lbg"], float), np.asarray(args["ubg"], float)
     primal = max(np.max(lbg - g, initial=0.0), np.max(g - ubg, initial=0.0))
-    # the distance to the bound a multiplier's sign points to (inf on a free row: wrong there)
     slack = np.where(lam_g > 0, ubg - g, g - lbg)
     weighty = np.abs(lam_g) > KKT_DUAL
     complementarity = np.max(np.abs(lam_g[weighty]) * slack[weighty], initial=0.0)
     converged = primal <= KKT_PRIMAL and stationarity <= KKT_DUAL and \
         complementarity <= KKT_DUAL
-    status = (f"no status; KKT at the returned point: primal {primal:.1e}, stationarity "
+    status = (f"KKT at the returned point: primal {primal:.1e}, stationarity "
               f"{stationarity:.1e}, complementarity {complementarity:.1e}")
     return Stats(bool(converged), ("converged" if converged else "not converged") + " (" +
-                 status + ")", -1)
+                 status + ")", iterations)

@@ -140,8 +140,8 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
                     forecast: ObstacleForecast | None, count: int | None = None
                     ) -> tuple[SegmentPlan, float, float, list[SegmentPlan]]:
     """The best of `count` (default config.starts) cold plans of one segment (plan_segment
-    from each start point of planning.starts), ranked by the energy they spend
-    (planning.starts.rank); total wall and CPU ms; all the cold plans. With the split
+    from each start point of planning.starts), ranked converged first, then within the joint
+    limits, then by the energy they spend (planning.starts.rank); total wall and CPU ms; all the cold plans. With the split
     quadrature only the best start's plan is re-solved until its breaks settle (measured on
     the random scenarios: settling every start's took 2-10 times the CPU of a Gauss plan).
     With config.polish the best distinct plans are re-solved by planner.polisher (see
