@@ -53,9 +53,9 @@ class RecordingPlanner(Planner):
         super().prepare(goal)
         self.groups.append([])
 
-    def _solve(self, solvers, goal, warm, segment):
+    def _solve(self, solvers, goal, warm, segment, rescue=True):
         start = time.thread_time()
-        plan = super()._solve(solvers, goal, warm, segment)
+        plan = super()._solve(solvers, goal, warm, segment, rescue)
         self.groups[-1].append((warm is not None, plan.iterations,
                                 1e3 * (time.thread_time() - start), plan.success, segment[5]))
         return plan

@@ -57,6 +57,8 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
 
     deadline_ms: CPU time (ms) after which no further solve starts; a plan that took longer
     is returned unsuccessful with status DEADLINE (it would arrive too late to be followed).
+    Under a deadline no solve goes on with IPOPT when the fast solver cannot finish it
+    (measured at 78ac607: with that rescue, one re-plan under a 10 ms deadline took 6.8 s).
     settle_breaks: re-solve until the split quadrature's breaks are the plan's own power sign
     changes (False: solved once with those of the start; plan_multistart settles the best).
 
@@ -94,7 +96,7 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     while True:
         plan, lowest = _screened(planner, q0, qd0, t_begin, duration, goal, forecast, warm,
                                  seen, alpha, rounds, lambda: clock.cpu_ms() > budget,
-                                 settle_breaks)
+                                 settle_breaks, rescue=deadline_ms is None)
         if clock.cpu_ms() > budget:
             status = DEADLINE + (LATE if plan.success else "")
             return dataclasses.replace(plan, success=False, status=status), *clock.read()
@@ -141,9 +143,10 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
                     ) -> tuple[SegmentPlan, float, float, list[SegmentPlan]]:
     """The best of `count` (default config.starts) cold plans of one segment (plan_segment
     from each start point of planning.starts), ranked converged first, then within the joint
-    limits, then by the energy they spend (planning.starts.rank); total wall and CPU ms; all the cold plans. With the split
-    quadrature only the best start's plan is re-solved until its breaks settle (measured on
-    the random scenarios: settling every start's took 2-10 times the CPU of a Gauss plan).
+    limits, then by the energy they spend (planning.starts.rank); total wall and CPU ms; all
+    the cold plans. With the split quadrature only the best start's plan is re-solved until
+    its breaks settle (measured on the random scenarios: settling every start's took 2-10
+    times the CPU of a Gauss plan).
     With config.polish the best distinct plans are re-solved by planner.polisher (see
     _polished)."""
     count = planner.config.starts if count is None else count
@@ -195,14 +198,16 @@ def _polished(planner: Planner, best: SegmentPlan, ranked: list[SegmentPlan],
 
 def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan,
               seen: set | None, alpha: float, rounds: int,
-              late=lambda: False, settle_breaks: bool = True) -> tuple[SegmentPlan, float | None]:
+              late=lambda: False, settle_breaks: bool = True,
+              rescue: bool = True) -> tuple[SegmentPlan, float | None]:
     """Solve with the obstacle samples screened on a reference (`plan`, re-expressed on
     this horizon) and the limits at its turning points; re-screen on the result until
     the samples where it dips were seen by its solves (Screen.covered), it keeps the
     limits and (settle_breaks) the split quadrature's breaks are its own (planning.breaks).
     seen: the obstacle sample times `plan` was solved with, if it solves this very problem
     (same horizon and alpha: then it may be settled without a further solve); None if not.
-    late(): True once no further solve may start (a deadline). Returns the plan and
+    late(): True once no further solve may start (a deadline); rescue: whether a solve the
+    fast solver cannot finish goes on with IPOPT (not under a deadline). Returns the plan and
     its smallest clearance over the forecast when the last screen was of it (None: not
     known)."""
     config = planner.config
@@ -218,10 +223,10 @@ def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan
             return plan, None if screened is None else screened.lowest
         chosen |= set() if subset is None else set(subset.times)
         attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin, warm=plan,
-                                reference=reference, alpha=alpha)
+                                reference=reference, alpha=alpha, rescue=rescue)
         if not attempt.success and not late():  # a warm start far from the optimum can stall
             attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin,
-                                    reference=reference, alpha=alpha)
+                                    reference=reference, alpha=alpha, rescue=rescue)
         unchanged = attempt.success and plan.success and np.allclose(
             attempt.trajectory.coefficients, reference.coefficients, rtol=0.0, atol=UNCHANGED)
         plan, reference = attempt, attempt.trajectory

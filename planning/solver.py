@@ -244,29 +244,32 @@ class Planner:
     def solve(self, q0, qd0, duration: float, goal, forecast: ObstacleForecast | None = None,
               t_begin: float = 0.0, warm: SegmentPlan | None = None,
               reference: PolynomialTrajectory | None = None,
-              alpha: float | None = None, x0: np.ndarray | None = None) -> SegmentPlan:
+              alpha: float | None = None, x0: np.ndarray | None = None,
+              rescue: bool = True) -> SegmentPlan:
         """Plan from (q0, qd0) at t_begin to goal at t_begin + duration.
 
         reference: a motion on the same horizon whose turning points get limit constraints
         in addition to the fixed samples (see PlanningNLP, planning.limits).
         alpha: penalty weight (J/m^2 per sample), default config.penalty_weight.
         x0: start point of a cold solve (default: initial_guess).
+        rescue: a solve the fast solver cannot finish goes on with IPOPT (see _solve); False
+        for a re-plan under a deadline, whose answer would come too late.
         """
         alpha = self.config.penalty_weight if alpha is None else float(alpha)
         p = self.parameters(q0, qd0, duration, goal, forecast, t_begin, reference, alpha)
         if x0 is None:
             x0 = self.initial_guess(q0, qd0, duration, goal)
         segment = (q0, qd0, duration, t_begin, p, alpha, x0)
-        plan = self._solve(self._relaxed_for(goal), goal, warm, segment)
+        plan = self._solve(self._relaxed_for(goal), goal, warm, segment, rescue)
         if not plan.success or self.torque_excess(plan.trajectory) <= 0:
             return plan
         # the relaxed optimum overdrives a motor: solve again with the torque rows
-        limited = self._solve(self._torque_limited(goal), goal, warm, segment)
+        limited = self._solve(self._torque_limited(goal), goal, warm, segment, rescue)
         return dataclasses.replace(limited, solve_ms=plan.solve_ms + limited.solve_ms,
                                    solve_cpu_ms=plan.solve_cpu_ms + limited.solve_cpu_ms)
 
     def _solve(self, solvers: _Solvers, goal, warm: SegmentPlan | None,
-               segment: tuple) -> SegmentPlan:
+               segment: tuple, rescue: bool = True) -> SegmentPlan:
         q0, qd0, duration, t_begin, p, alpha, x0 = segment
         lbg, ubg = self.bounds(goal, solvers.nlp)
         args = {"p": p, "lbg": lbg, "ubg": ubg}
@@ -278,10 +281,10 @@ class Planner:
         start, cpu = time.perf_counter(), time.thread_time()
         result = solver(**args)
         stats = backends.stats(solver, args, result)
-        late_anyway = warm is not None and self.config.replan_deadline_ms is not None
-        if not stats.success and self.config.solver != "ipopt" and not late_anyway:
+        if not stats.success and self.config.solver != "ipopt" and rescue:
             # a solve the fast solver could not finish: IPOPT from the same start point (not
-            # for a re-plan under a deadline: it would come too late, measured up to 7 s)
+            # for a re-plan under a deadline: it would come too late, measured up to 7 s,
+            # warm or cold, and a torque-limited NLP's rescuer is compiled on first need)
             rescue = self._rescuer(solvers)
             solver = rescue.cold if warm is None else rescue.warm
             result = solver(**args)

@@ -199,6 +199,13 @@ def test_a_warm_solve_the_fast_solver_cannot_finish_is_rescued_by_ipopt(baseline
     assert reference.success and reference.status != "Solve_Succeeded"  # fatrop's
     assert abs(rescued.energy + rescued.penalty - reference.energy - reference.penalty) \
         <= 1e-5 * (reference.energy + reference.penalty)
+    # ... but not a re-plan under a deadline (rescue=False), warm or from a cold start: its
+    # answer would come too late; fatrop's unfinished solve is returned unsuccessful
+    late = Planner(baseline, PlannerConfig(warm_max_iterations=1, max_iterations=1))
+    for warm in (first, None):
+        dropped = late.solve(*args, warm=warm, reference=reference_path, rescue=False)
+        assert not dropped.success and dropped.status != "Solve_Succeeded"
+    assert not late._rescue  # no IPOPT built, none run
 
 
 def test_each_start_point_reaches_a_plan_of_its_own(baseline):
