@@ -57,8 +57,8 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
 
     deadline_ms: CPU time (ms) after which no further solve starts; a plan that took longer
     is returned unsuccessful with status DEADLINE (it would arrive too late to be followed).
-    Under a deadline no solve goes on with IPOPT when the fast solver cannot finish it
-    (measured at 78ac607: with that rescue, one re-plan under a 10 ms deadline took 6.8 s).
+    Under a deadline no solve goes on with IPOPT when the fast solver cannot finish it (its
+    answer would come too late: planning.solver.Planner._solve).
     settle_breaks: re-solve until the split quadrature's breaks are the plan's own power sign
     changes (False: solved once with those of the start; plan_multistart settles the best).
 
