@@ -41,6 +41,12 @@ def energy_nodes(rule: str, n: int, breaks=None) -> tuple:
     raise ValueError(f"energy quadrature must be one of {RULES}, got '{rule}'")
 
 
+def splits_evenly(samples: int, breaks: int) -> bool:
+    """True if the split rule can put `samples` nodes, the same number on each interval,
+    between `breaks` (>= 1) breaks."""
+    return breaks >= 1 and samples >= 1 and samples % (breaks + 1) == 0
+
+
 def split_nodes(breaks, n: int) -> tuple[list, list]:
     """Gauss-Legendre with n / (len(breaks) + 1) nodes on each interval between 0, the
     breaks (ascending) and 1: normalized times and weights as expressions of the breaks."""

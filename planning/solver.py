@@ -17,7 +17,7 @@ from planning.breaks import even_breaks, power_breaks
 from planning.config import PlannerConfig
 from planning.limits import END_MARGIN, goal_limit_signs, quotient_turning_points
 from planning.nlp import PlanningNLP, turning_slots
-from planning.quadrature import split_nodes
+from planning.quadrature import split_nodes, splits_evenly
 from planning.trajectory import PolynomialTrajectory
 
 
@@ -101,7 +101,7 @@ class Planner:
         config = self.config
         if not config.polish:
             return None
-        if config.power_breaks < 1 or config.polish_samples % (config.power_breaks + 1):
+        if not splits_evenly(config.polish_samples, config.power_breaks):
             raise ValueError(f"polish_samples ({config.polish_samples}) must be a multiple of "
                              f"power_breaks + 1 ({config.power_breaks + 1})")
         # polishing is part of a cold plan: no re-plan deadline keeps its IPOPT rescue away

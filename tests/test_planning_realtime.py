@@ -30,6 +30,11 @@ def baseline():
     return PinocchioModel(load_pinocchio("lynxmotion"))
 
 
+# IPOPT quiet, and the toy's call: the constraint x0^2 + x1^2 <= 0.5 is active at its optimum
+QUIET_IPOPT = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes"}
+TOY_ARGS = {"x0": [-1.0, 1.0], "p": 0.5, "lbg": -np.inf, "ubg": 0.0}
+
+
 def _toy():
     x, p = ca.SX.sym("x", 2), ca.SX.sym("p")
     return {"x": x, "p": p, "f": (1 - x[0]) ** 2 + 100 * (x[1] - x[0] ** 2) ** 2,
@@ -39,8 +44,7 @@ def _toy():
 @pytest.mark.skipif(not compiled.available(), reason="no C compiler")
 def test_compiled_nlp_matches_the_virtual_machine_and_is_cached(tmp_path, monkeypatch):
     monkeypatch.setenv("TORQUEBENCH_CACHE", str(tmp_path))
-    options = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes"}
-    args = {"x0": [-1.0, 1.0], "p": 0.5, "lbg": -np.inf, "ubg": 0.0}
+    options, args = QUIET_IPOPT, TOY_ARGS
     reference = ca.nlpsol("vm", "ipopt", _toy(), options)(**args)
     solver = compiled.nlpsol("toy", "ipopt", _toy(), options)
     result = solver(**args)
@@ -59,9 +63,8 @@ def test_sqpmethod_status_comes_from_the_kkt_conditions_of_its_point():
     constraint); an iteration cap fails it; so does each condition broken alone: the same
     point with its constraint loosened (the multiplier now on a row 1 away from its bound:
     complementarity) and with the multiplier halved (stationarity)."""
-    options = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes"}
-    args = {"x0": [-1.0, 1.0], "p": 0.5, "lbg": -np.inf, "ubg": 0.0}
-    reference = ca.nlpsol("vm", "ipopt", _toy(), options)(**args)
+    args = TOY_ARGS
+    reference = ca.nlpsol("vm", "ipopt", _toy(), QUIET_IPOPT)(**args)
     sqp = backends.solver("toy_sqp", "sqpmethod", _toy(), np.array([False]), warm=False,
                           max_iter=100, hessian="exact", compile_code=False)
     result = sqp(**args)

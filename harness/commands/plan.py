@@ -22,7 +22,7 @@ from planning.backends import SOLVERS
 from planning.config import PlannerConfig, Scenario, true_energy_config
 from planning.errors import PlanningError
 from planning.obstacle import LinearObstacle, SwayingObstacle
-from planning.quadrature import RULES
+from planning.quadrature import RULES, splits_evenly
 from planning.replanning import execute
 from planning.result import closest_link, evaluate, to_json
 from planning.solver import Planner
@@ -138,11 +138,6 @@ def _angles(args, name: str, dof: int) -> tuple[float, ...]:
     return _vector(text, name, dof)
 
 
-def _splits(samples: int, breaks: int) -> bool:
-    """True if the split rule can put `samples` nodes evenly between `breaks` breaks."""
-    return breaks >= 1 and samples >= 1 and samples % (breaks + 1) == 0
-
-
 def _setup(args) -> tuple[PlannerConfig, Scenario]:
     if args.energy_samples is None:
         args.energy_samples = SAMPLES[args.energy_quadrature] \
@@ -155,7 +150,7 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                         "--energy-samples >= 1")
     if args.starts < 1 or not (math.isfinite(args.deadline_ms) and args.deadline_ms >= 0):
         raise UserError("--starts must be >= 1 and --deadline-ms a finite number >= 0")
-    if args.polish < 0 or (args.polish and not _splits(args.polish_samples, args.power_breaks)):
+    if args.polish < 0 or (args.polish and not splits_evenly(args.polish_samples, args.power_breaks)):
         raise UserError("--polish must be >= 0; with it, --power-breaks >= 1 and "
                         "--polish-samples a positive multiple of --power-breaks + 1")
     if not 4 <= args.degree <= 9:
@@ -163,7 +158,7 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
     if args.energy_quadrature == "simpson" and (args.energy_samples < 3
                                                  or args.energy_samples % 2 == 0):
         raise UserError("--energy-quadrature simpson needs an odd --energy-samples >= 3")
-    if args.energy_quadrature == "split" and not _splits(args.energy_samples, args.power_breaks):
+    if args.energy_quadrature == "split" and not splits_evenly(args.energy_samples, args.power_breaks):
         raise UserError("--energy-quadrature split needs --power-breaks >= 1 and "
                         "--energy-samples a multiple of --power-breaks + 1")
     if not (math.isfinite(args.power_smoothing) and args.power_smoothing >= 0
