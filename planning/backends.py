@@ -8,6 +8,10 @@
   convex) and qpOASES on the dense QPs; warm-started in primal and dual variables.
 - "ipopt": the paper's interior point (MUMPS); warm-started in primal and dual
   variables with a tiny barrier.
+- "feasiblesqp": CasADi's feasible SQP (feasiblesqpmethod: a trust-region SQP whose every
+  iterate satisfies the constraints, given a start that does), qpOASES on the QPs. It
+  needs a feasible start, so it only serves warm solves: the planner's real-time
+  iterations (PlannerConfig.replan_iterations), whose capped iterate the arm can follow.
 Measured per iteration on the paper scenario's re-plan NLP (compiled functions, CPU
 time): fatrop and sqpmethod ~0.2-0.3 ms, IPOPT ~0.9 ms, of which the NLP functions
 ~0.1 ms; the rest is the solver's own work.
@@ -15,6 +19,8 @@ time): fatrop and sqpmethod ~0.2-0.3 ms, IPOPT ~0.9 ms, of which the NLP functio
 
 from __future__ import annotations
 
+import contextlib
+import io
 from dataclasses import dataclass
 
 import casadi as ca
@@ -22,7 +28,7 @@ import numpy as np
 
 from planning import compiled
 
-SOLVERS = ("fatrop", "sqpmethod", "ipopt")
+SOLVERS = ("fatrop", "sqpmethod", "ipopt")  # cold and warm solves; feasiblesqp: warm only
 _QUIET = {"print_time": False}
 
 
@@ -68,7 +74,26 @@ def _sqpmethod(max_iter: int, warm: bool, hessian: str, equality) -> dict:
             "error_on_fail": False}
 
 
-_OPTIONS = {"ipopt": _ipopt, "fatrop": _fatrop, "sqpmethod": _sqpmethod}
+# feasiblesqp's feasibility tolerance, and the one its capped iterate is followed within: the
+# start must be feasible within the first, and a capped iterate may leave the constraints by a
+# little more than it (measured on the random scenarios: 1.4e-6 at 1e-6), so an iterate
+# followed, the next start, is held to the second. Warm starts from fatrop's converged plans
+# leave the Newton-corrected limit rows by up to ~1e-7 (measured): a tolerance of 1e-7 or
+# less refused them as starts ("No_Feasible_Initialization").
+FEASIBLE_START, FEASIBLE_ITERATE = 1e-6, 5e-7
+
+
+def _feasiblesqp(max_iter: int, warm: bool, hessian: str, equality) -> dict:
+    return {"max_iter": max_iter, "hessian_approximation": hessian, "feas_tol": FEASIBLE_START,
+            "print_header": False, "print_iteration": False, "print_status": False,
+            "qpsol": "qpoases", "qpsol_options": {"printLevel": "none", "sparse": False,
+                                                  "error_on_fail": False},
+            "error_on_fail": False}
+
+
+_OPTIONS = {"ipopt": _ipopt, "fatrop": _fatrop, "sqpmethod": _sqpmethod,
+            "feasiblesqp": _feasiblesqp}
+_PLUGINS = {"feasiblesqp": "feasiblesqpmethod"}  # CasADi's name of the plugin
 
 
 def solver(name: str, plugin: str, problem: dict, equality: np.ndarray, *, warm: bool,
@@ -78,9 +103,36 @@ def solver(name: str, plugin: str, problem: dict, equality: np.ndarray, *, warm:
     if plugin not in _OPTIONS:
         raise ValueError(f"solver must be one of {SOLVERS}, got '{plugin}'")
     options = dict(_QUIET, **_OPTIONS[plugin](max_iter, warm, hessian, equality))
-    if compile_code and compiled.available():
-        return compiled.nlpsol(name, plugin, problem, options)
-    return ca.nlpsol(name, plugin, problem, options)
+    with _silenced(plugin):
+        plugin = _PLUGINS.get(plugin, plugin)
+        if compile_code and compiled.available():
+            function = compiled.nlpsol(name, plugin, problem, options)
+        else:
+            function = ca.nlpsol(name, plugin, problem, options)
+    return Silenced(function) if plugin == "feasiblesqpmethod" else function
+
+
+def _silenced(plugin: str):
+    """Standard output swallowed while a feasiblesqp instance is built or called: CasADi 3.8's
+    feasiblesqpmethod prints its set-up and trust-region trace whatever its print options."""
+    if plugin in ("feasiblesqp", "feasiblesqpmethod"):
+        return contextlib.redirect_stdout(io.StringIO())
+    return contextlib.nullcontext()
+
+
+class Silenced:
+    """A feasiblesqp instance (a ca.Function in every other respect) whose calls print
+    nothing."""
+
+    def __init__(self, function: ca.Function):
+        self.function = function
+
+    def __call__(self, **kwargs):
+        with _silenced("feasiblesqpmethod"):
+            return self.function(**kwargs)
+
+    def __getattr__(self, name):
+        return getattr(self.function, name)
 
 
 # a point whose returned KKT residuals are this small is converged (planning.backends.stats):

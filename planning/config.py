@@ -61,6 +61,13 @@ class PlannerConfig:
     # a re-plan still unfinished after this much CPU time of the planning thread (ms) is
     # abandoned and the arm keeps its last plan (Algorithm 2); None: no deadline
     replan_deadline_ms: float | None = None
+    # real-time iterations: a warm re-plan of Algorithm 2 first takes this many iterations of
+    # CasADi's feasible SQP from the last plan (planning.backends "feasiblesqp": every iterate
+    # satisfies the constraints) and the arm follows the iterate if it keeps the threshold
+    # and the limits; the next obstacle samples go on from it until it converges. An iterate
+    # that dips or leaves a limit is solved on to convergence as without them. None: every
+    # re-plan is solved to convergence.
+    replan_iterations: int | None = None
     max_iterations: int = 300
     warm_max_iterations: int = 60  # a warm solve that needs more restarts cold
     power_smoothing: float = 0.0  # W; 0: exact epigraph of |P|, > 0: sqrt(P^2 + eps^2) - eps

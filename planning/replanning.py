@@ -24,7 +24,7 @@ from planning.errors import PlanningError
 from planning.limits import LIMIT_TOLERANCE, limit_excess
 from planning.obstacle import predict_linear
 from planning.screening import screen
-from planning.solver import ObstacleForecast, Planner, SegmentPlan
+from planning.solver import ITERATE, ObstacleForecast, Planner, SegmentPlan
 from planning.starts import rank, start_points
 
 TRIGGER_TOLERANCE = 1e-3  # m: predicted dips smaller than this do not trigger a re-plan
@@ -93,21 +93,40 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     else:
         seen = None
     budget = np.inf if deadline_ms is None else deadline_ms
+    iterate = replan and config.replan_iterations is not None
     while True:
         plan, lowest = _screened(planner, q0, qd0, t_begin, duration, goal, forecast, warm,
                                  seen, alpha, rounds, lambda: clock.cpu_ms() > budget,
-                                 settle_breaks, rescue=deadline_ms is None)
+                                 settle_breaks, rescue=deadline_ms is None, iterate=iterate)
         if clock.cpu_ms() > budget:
             status = DEADLINE + (LATE if plan.success else "")
             return dataclasses.replace(plan, success=False, status=status), *clock.read()
+        if plan.status == ITERATE:
+            if _keeps_clear(planner, plan, forecast, lowest) and \
+                    _within_limits(plan, config, replan).success:
+                return plan, *clock.read()
+            # it dips below the threshold or leaves a limit: solved out from it, as without
+            # real-time iterations (measured: following such iterates, the threshold was
+            # broken by up to 6.6 cm on 3 of the 20 random scenarios)
+            iterate, warm, seen = False, plan, None
+            continue
         if forecast is None or alpha >= config.max_penalty_weight or not plan.success:
             return _within_limits(plan, config, replan), *clock.read()
-        if lowest is None:
-            lowest = _predicted_clearance(planner, plan, forecast)
-        if lowest >= config.threshold - config.penalty_tolerance:
+        if _keeps_clear(planner, plan, forecast, lowest):
             return _within_limits(plan, config, replan), *clock.read()
         alpha = min(alpha * config.penalty_growth, config.max_penalty_weight)
         warm, seen = plan, None
+
+
+def _keeps_clear(planner: Planner, plan: SegmentPlan, forecast: ObstacleForecast | None,
+                 lowest: float | None) -> bool:
+    """True if the plan keeps the threshold (within the penalty tolerance) of the forecast;
+    lowest: its smallest clearance if the screening already knows it."""
+    if forecast is None:
+        return True
+    if lowest is None:
+        lowest = _predicted_clearance(planner, plan, forecast)
+    return lowest >= planner.config.threshold - planner.config.penalty_tolerance
 
 
 def _within_limits(plan: SegmentPlan, config, warm: bool) -> SegmentPlan:
@@ -199,7 +218,7 @@ def _polished(planner: Planner, best: SegmentPlan, ranked: list[SegmentPlan],
 def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan,
               seen: set | None, alpha: float, rounds: int,
               late=lambda: False, settle_breaks: bool = True,
-              rescue: bool = True) -> tuple[SegmentPlan, float | None]:
+              rescue: bool = True, iterate: bool = False) -> tuple[SegmentPlan, float | None]:
     """Solve with the obstacle samples screened on a reference (`plan`, re-expressed on
     this horizon) and the limits at its turning points; re-screen on the result until
     the samples where it dips were seen by its solves (Screen.covered), it keeps the
@@ -207,7 +226,9 @@ def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan
     seen: the obstacle sample times `plan` was solved with, if it solves this very problem
     (same horizon and alpha: then it may be settled without a further solve); None if not.
     late(): True once no further solve may start (a deadline); rescue: whether a solve the
-    fast solver cannot finish goes on with IPOPT (not under a deadline). Returns the plan and
+    fast solver cannot finish goes on with IPOPT (not under a deadline); iterate: the warm
+    solve is a real-time iteration (Planner.solve), and an iterate that stops short of
+    convergence ends the rounds (the next sample goes on from it). Returns the plan and
     its smallest clearance over the forecast when the last screen was of it (None: not
     known)."""
     config = planner.config
@@ -223,7 +244,10 @@ def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan
             return plan, None if screened is None else screened.lowest
         chosen |= set() if subset is None else set(subset.times)
         attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin, warm=plan,
-                                reference=reference, alpha=alpha, rescue=rescue)
+                                reference=reference, alpha=alpha, rescue=rescue,
+                                iterate=iterate)
+        if attempt.status == ITERATE:
+            return attempt, None
         if not attempt.success and not late():  # a warm start far from the optimum can stall
             attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin,
                                     reference=reference, alpha=alpha, rescue=rescue)
@@ -274,7 +298,9 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
     planned_with, latest = forecast, plan  # latest: the newest converged solution
     for t in obstacle.sample_times[:-1]:
         forecast = forecast_at(obstacle, t)
-        if not _stale(planner, plan, forecast) or _same_prediction(planned_with, forecast):
+        iterating = plan.status == ITERATE  # the last re-plan stopped short: go on from it
+        if not iterating and (not _stale(planner, plan, forecast)
+                              or _same_prediction(planned_with, forecast)):
             continue  # safe, or nothing new to plan with: the last plan already saw this
         planned_with = forecast
         q, qd, _ = plan.trajectory.state(t)

@@ -54,14 +54,18 @@ RESCUE_WARM_ITERATIONS = 60
 TORQUE_GRID = 65  # points of normalized time where a segment's torque is checked
 
 
+ITERATE = "feasible iterate"  # status of a re-plan's capped real-time iterate, followed
+
+
 @dataclass(frozen=True)
 class _Solvers:
-    """One NLP and its cold and warm solver instances."""
+    """One NLP and its cold and warm solver instances, and the real-time iteration's."""
 
     nlp: PlanningNLP
     cold: ca.Function
     warm: ca.Function
     parts: ca.Function
+    iterate: ca.Function | None = None  # feasiblesqp capped at config.replan_iterations
 
 
 def _build(nlp: PlanningNLP, config: PlannerConfig, name: str) -> _Solvers:
@@ -73,7 +77,10 @@ def _build(nlp: PlanningNLP, config: PlannerConfig, name: str) -> _Solvers:
     warm = backends.solver(f"{name}_warm", config.solver, problem, warm=True,
                            max_iter=config.warm_max_iterations, **common)
     parts = ca.Function("objective_parts", [nlp.x, nlp.p], [nlp.energy, nlp.penalty])
-    return _Solvers(nlp, cold, warm, parts)
+    iterate = None if config.replan_iterations is None else backends.solver(
+        f"{name}_iterate", "feasiblesqp", problem, warm=True,
+        max_iter=config.replan_iterations, **common)
+    return _Solvers(nlp, cold, warm, parts, iterate)
 
 
 class Planner:
@@ -245,7 +252,7 @@ class Planner:
               t_begin: float = 0.0, warm: SegmentPlan | None = None,
               reference: PolynomialTrajectory | None = None,
               alpha: float | None = None, x0: np.ndarray | None = None,
-              rescue: bool = True) -> SegmentPlan:
+              rescue: bool = True, iterate: bool = False) -> SegmentPlan:
         """Plan from (q0, qd0) at t_begin to goal at t_begin + duration.
 
         reference: a motion on the same horizon whose turning points get limit constraints
@@ -254,22 +261,24 @@ class Planner:
         x0: start point of a cold solve (default: initial_guess).
         rescue: a solve the fast solver cannot finish goes on with IPOPT (see _solve); False
         for a re-plan under a deadline, whose answer would come too late.
+        iterate: a warm solve first takes config.replan_iterations feasible-SQP iterations
+        and returns their iterate, status ITERATE, if it has not converged (see _solve).
         """
         alpha = self.config.penalty_weight if alpha is None else float(alpha)
         p = self.parameters(q0, qd0, duration, goal, forecast, t_begin, reference, alpha)
         if x0 is None:
             x0 = self.initial_guess(q0, qd0, duration, goal)
         segment = (q0, qd0, duration, t_begin, p, alpha, x0)
-        plan = self._solve(self._relaxed_for(goal), goal, warm, segment, rescue)
+        plan = self._solve(self._relaxed_for(goal), goal, warm, segment, rescue, iterate)
         if not plan.success or self.torque_excess(plan.trajectory) <= 0:
             return plan
         # the relaxed optimum overdrives a motor: solve again with the torque rows
-        limited = self._solve(self._torque_limited(goal), goal, warm, segment, rescue)
+        limited = self._solve(self._torque_limited(goal), goal, warm, segment, rescue, iterate)
         return dataclasses.replace(limited, solve_ms=plan.solve_ms + limited.solve_ms,
                                    solve_cpu_ms=plan.solve_cpu_ms + limited.solve_cpu_ms)
 
     def _solve(self, solvers: _Solvers, goal, warm: SegmentPlan | None,
-               segment: tuple, rescue: bool = True) -> SegmentPlan:
+               segment: tuple, rescue: bool = True, iterate: bool = False) -> SegmentPlan:
         q0, qd0, duration, t_begin, p, alpha, x0 = segment
         lbg, ubg = self.bounds(goal, solvers.nlp)
         args = {"p": p, "lbg": lbg, "ubg": ubg}
@@ -279,8 +288,12 @@ class Planner:
             solver = solvers.warm
             args.update(self._warm_start(warm, t_begin, duration, solvers.nlp, p))
         start, cpu = time.perf_counter(), time.thread_time()
-        result = solver(**args)
-        stats = backends.stats(solver, args, result)
+        result, stats = None, None
+        if iterate and warm is not None and solvers.iterate is not None:
+            result, stats = _iterate(solvers.iterate, args)
+        if stats is None:  # not iterating, or the iterate is not one to follow: solve it out
+            result = solver(**args)
+            stats = backends.stats(solver, args, result)
         if not stats.success and self.config.solver != "ipopt" and rescue:
             # a solve the fast solver could not finish: IPOPT from the same start point (not
             # for a re-plan under a deadline: it would come too late, measured up to 7 s,
@@ -343,6 +356,23 @@ class Planner:
             multipliers=(np.asarray(result["lam_g"]).ravel(), np.asarray(result["lam_x"]).ravel()),
             breaks=_breaks(solvers.nlp, p), layout=self.layout,
         )
+
+
+def _iterate(solver, args: dict) -> tuple[dict, backends.Stats | None]:
+    """The real-time iteration: feasiblesqp capped at config.replan_iterations from the warm
+    start. Its result, with its own status if it converged, with status ITERATE if it stopped
+    at the cap within the constraints (backends.FEASIBLE_ITERATE, the next start's
+    tolerance); stats None if neither (the start refused as infeasible, or the iterate out):
+    the caller solves the NLP out from the same start."""
+    result = solver(**args)
+    stats = backends.stats(solver, args, result)
+    if stats.success:
+        return result, stats
+    g = np.asarray(result["g"]).ravel()
+    primal = max(np.max(args["lbg"] - g, initial=0.0), np.max(g - args["ubg"], initial=0.0))
+    if primal <= backends.FEASIBLE_ITERATE and stats.status != "No_Feasible_Initialization":
+        return result, backends.Stats(True, ITERATE, stats.iterations)
+    return result, None
 
 
 def _breaks(nlp: PlanningNLP, p: np.ndarray) -> np.ndarray:

@@ -105,6 +105,12 @@ def register(sub) -> None:
                    help="CPU ms a re-plan may take; a later one is dropped and the last plan "
                         "kept, as on a real-time controller (0, the default: no deadline; "
                         "the obstacle's sample period is 10 ms)")
+    p.add_argument("--replan-iterations", type=int, default=0,
+                   help="real-time iterations: each re-plan first takes this many iterations "
+                        "of CasADi's feasible SQP from the last plan and the arm follows the "
+                        "iterate if it keeps the threshold and the limits, going on from it "
+                        "at the next obstacle sample (0, the default: every re-plan solved "
+                        "to convergence)")
     p.add_argument("--no-compile", action="store_true",
                    help="evaluate the NLP in CasADi's virtual machine instead of compiled C "
                         "(compiled once per problem with the system C compiler, cached)")
@@ -150,6 +156,8 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                         "--energy-samples >= 1")
     if args.starts < 1 or not (math.isfinite(args.deadline_ms) and args.deadline_ms >= 0):
         raise UserError("--starts must be >= 1 and --deadline-ms a finite number >= 0")
+    if args.replan_iterations < 0:
+        raise UserError(f"--replan-iterations must be >= 0, got {args.replan_iterations}")
     if args.polish < 0 or (args.polish and not splits_evenly(args.polish_samples, args.power_breaks)):
         raise UserError("--polish must be >= 0; with it, --power-breaks >= 1 and "
                         "--polish-samples a positive multiple of --power-breaks + 1")
@@ -176,7 +184,8 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
     config = dataclasses.replace(config, solver=args.solver or config.solver, starts=args.starts,
                                  polish=args.polish, polish_samples=args.polish_samples,
                                  compile_code=not args.no_compile,
-                                 replan_deadline_ms=args.deadline_ms or None)
+                                 replan_deadline_ms=args.deadline_ms or None,
+                                 replan_iterations=args.replan_iterations or None)
     path = (_vector(args.obstacle_from, "obstacle-from"),
             _vector(args.obstacle_to, "obstacle-to"), args.duration, args.samples)
     sway = _vector(args.obstacle_sway, "obstacle-sway")
