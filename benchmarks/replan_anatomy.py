@@ -8,8 +8,9 @@
    share of the re-plan spent in them, the calls that ran to the warm iteration cap and
    the penalty weight each call solved with.
 2. Fixed and per-iteration cost of one warm solve on the paper scenario (re-plan at
-   t = 0.71 s): the same start solved with fatrop (primal start), IPOPT and sqpmethod
-   (primal-dual) capped at 0, 1 and 5 iterations and at the warm cap, CPU median of 20 calls
+   t = 0.71 s): the same start solved with fatrop (primal start), IPOPT, sqpmethod and
+   feasiblesqp (the real-time iterations' feasible SQP; primal-dual) capped at 0, 1 and 5
+   iterations and at the warm cap, CPU median of 20 calls
    each, with the status each ended with; and, per solver, the NLP solved again from the
    point its capped solve returned (its own solution where that converged): the floor of
    any warm start.
@@ -132,7 +133,7 @@ def call_costs(baseline, config) -> dict:
     start = planner._warm_start(plan, t, duration, nlp, args["p"])
     problem = {"x": nlp.x, "p": nlp.p, "f": nlp.f, "g": nlp.g}
     out = {}
-    for plugin in ("fatrop", "ipopt", "sqpmethod"):
+    for plugin in ("fatrop", "ipopt", "sqpmethod", "feasiblesqp"):
         for cap in (0, 1, 5, config.warm_max_iterations):
             solver = backends.solver(f"anatomy_{plugin}_{cap}", plugin, problem,
                                      nlp.lbg == nlp.ubg, warm=True, max_iter=cap,

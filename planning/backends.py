@@ -101,7 +101,8 @@ def solver(name: str, plugin: str, problem: dict, equality: np.ndarray, *, warm:
     """An nlpsol instance of `plugin` on problem (x, p, f, g); equality: which rows of g are
     equalities (fatrop needs it); compile_code: NLP functions as compiled C (cached)."""
     if plugin not in _OPTIONS:
-        raise ValueError(f"solver must be one of {SOLVERS}, got '{plugin}'")
+        raise ValueError(f"solver must be one of {SOLVERS} (or feasiblesqp, for warm solves "
+                         f"from a feasible start), got '{plugin}'")
     options = dict(_QUIET, **_OPTIONS[plugin](max_iter, warm, hessian, equality))
     with _silenced(plugin):
         plugin = _PLUGINS.get(plugin, plugin)

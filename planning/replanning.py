@@ -7,6 +7,10 @@ prediction differs from the one the current plan was made with (otherwise the
 solve would return the same plan), the arm re-plans from its current state
 (position, velocity, remaining time). The executed trajectory is the
 concatenation of the segments actually followed.
+
+With real-time iterations (PlannerConfig.replan_iterations) a re-plan is a capped
+feasible-SQP step from the last plan; while the plan followed is such an unconverged
+iterate, the arm re-plans at every sample, going on from it until it converges.
 """
 
 from __future__ import annotations
@@ -32,7 +36,8 @@ PREDICTION_TOLERANCE = 1e-3  # m: a forecast this close to the last one brings n
 LIMIT_SETTLED = 1e-8  # rad: a plan this close to its limits (dense grid) needs no re-solve
 UNCHANGED = 1e-9  # rad: a re-solve that moves no coefficient further has settled
 DEADLINE = "deadline exceeded"  # status of a re-plan abandoned at its deadline
-LATE = " (converged late)"  # ... whose last solve converged: the next re-plan starts from it
+LATE = " (converged late)"  # ... whose last solve succeeded (converged, or a real-time
+# iterate within the constraints): the next re-plan starts from it
 
 
 @dataclass(frozen=True)
@@ -50,8 +55,8 @@ class Execution:
 def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goal,
                  forecast: ObstacleForecast | None, warm: SegmentPlan | None = None,
                  rounds: int = 4, x0: np.ndarray | None = None,
-                 deadline_ms: float | None = None,
-                 settle_breaks: bool = True) -> tuple[SegmentPlan, float, float]:
+                 deadline_ms: float | None = None, settle_breaks: bool = True,
+                 iterate: bool = False) -> tuple[SegmentPlan, float, float]:
     """Plan one segment: screened solves (see _screened), with the penalty weight raised
     while the solution still dips below the threshold (exterior penalty method).
 
@@ -61,6 +66,9 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     answer would come too late: planning.solver.Planner._solve).
     settle_breaks: re-solve until the split quadrature's breaks are the plan's own power sign
     changes (False: solved once with those of the start; plan_multistart settles the best).
+    iterate: a re-plan of Algorithm 2 with real-time iterations (config.replan_iterations):
+    its warm solve is capped and its iterate (status ITERATE) returned if it keeps the
+    threshold and the limits; otherwise it is solved out from there as without them.
 
     Without a warm start, the problem with the obstacle is solved directly from a start
     point x0 (default: the planner's initial guess), whose motion is the screening
@@ -93,7 +101,7 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     else:
         seen = None
     budget = np.inf if deadline_ms is None else deadline_ms
-    iterate = replan and config.replan_iterations is not None
+    iterate = iterate and replan and config.replan_iterations is not None
     while True:
         plan, lowest = _screened(planner, q0, qd0, t_begin, duration, goal, forecast, warm,
                                  seen, alpha, rounds, lambda: clock.cpu_ms() > budget,
@@ -295,7 +303,8 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
     if obstacle is None or not replan:
         return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures),
                          (), tuple(solve_cpu))
-    planned_with, latest = forecast, plan  # latest: the newest converged solution
+    planned_with, latest = forecast, plan  # latest: the newest successful solve (converged
+    # or a real-time iterate, planning.solver.ITERATE), the next re-plan's warm start
     for t in obstacle.sample_times[:-1]:
         forecast = forecast_at(obstacle, t)
         iterating = plan.status == ITERATE  # the last re-plan stopped short: go on from it
@@ -305,7 +314,8 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
         planned_with = forecast
         q, qd, _ = plan.trajectory.state(t)
         new, ms, cpu = plan_segment(planner, q[0], qd[0], t, T - t, goal, forecast,
-                                    warm=latest, deadline_ms=planner.config.replan_deadline_ms)
+                                    warm=latest, deadline_ms=planner.config.replan_deadline_ms,
+                                    iterate=True)
         solve_ms.append(ms)
         solve_cpu.append(cpu)
         if not new.success:

@@ -1,5 +1,6 @@
 """The planning NLP's solver (planning.backends: fatrop, sqpmethod or IPOPT): one build, many
-solves (cold or warm-started)."""
+solves (cold or warm-started); with real-time iterations also CasADi's feasible SQP, capped,
+for the re-plans' warm solves."""
 
 from __future__ import annotations
 
@@ -95,6 +96,12 @@ class Planner:
 
     def __init__(self, model: TorqueModel, config: PlannerConfig | None = None):
         self.config = config or PlannerConfig()
+        if self.config.solver not in backends.SOLVERS:  # feasiblesqp cannot solve cold
+            raise ValueError(f"solver must be one of {backends.SOLVERS}, got "
+                             f"'{self.config.solver}'")
+        if self.config.replan_iterations is not None and self.config.replan_iterations < 1:
+            raise ValueError(f"replan_iterations must be >= 1 or None, got "
+                             f"{self.config.replan_iterations}")
         self.model = model
         self._relaxed: dict[tuple[int, ...], _Solvers] = {}
         self._limited: dict[tuple[int, ...], _Solvers] = {}
@@ -114,7 +121,7 @@ class Planner:
         # polishing is part of a cold plan: no re-plan deadline keeps its IPOPT rescue away
         return Planner(self.model, dataclasses.replace(
             config, energy_quadrature="split", energy_samples=config.polish_samples,
-            polish=0, starts=1, replan_deadline_ms=None))
+            polish=0, starts=1, replan_deadline_ms=None, replan_iterations=None))
 
     @property
     def layout(self) -> tuple:
@@ -312,7 +319,8 @@ class Planner:
         (paper scenario) and warm (random scenarios: 60 iterations, then a cold restart)."""
         key = id(solvers)
         if key not in self._rescue:
-            rescue = dataclasses.replace(self.config, solver="ipopt", warm_max_iterations=max(
+            rescue = dataclasses.replace(self.config, solver="ipopt", replan_iterations=None,
+                                         warm_max_iterations=max(
                 self.config.warm_max_iterations, RESCUE_WARM_ITERATIONS))
             self._rescue[key] = _build(solvers.nlp, rescue, "plan_rescue")
         return self._rescue[key]
@@ -361,17 +369,22 @@ class Planner:
 def _iterate(solver, args: dict) -> tuple[dict, backends.Stats | None]:
     """The real-time iteration: feasiblesqp capped at config.replan_iterations from the warm
     start. Its result, with its own status if it converged, with status ITERATE if it stopped
-    at the cap within the constraints (backends.FEASIBLE_ITERATE, the next start's
-    tolerance); stats None if neither (the start refused as infeasible, or the iterate out):
-    the caller solves the NLP out from the same start."""
+    at the cap after a step; stats None (the caller solves the NLP out from the same start)
+    if the point it returns leaves the constraints by more than backends.FEASIBLE_ITERATE
+    (the next start's tolerance; converged or not), or if it took no step."""
     result = solver(**args)
     stats = backends.stats(solver, args, result)
-    if stats.success:
-        return result, stats
     g = np.asarray(result["g"]).ravel()
     primal = max(np.max(args["lbg"] - g, initial=0.0), np.max(g - args["ubg"], initial=0.0))
-    if primal <= backends.FEASIBLE_ITERATE and stats.status != "No_Feasible_Initialization":
+    if primal > backends.FEASIBLE_ITERATE:  # a start or an iterate out of the constraints
+        return result, None
+    if stats.success:
+        return result, stats
+    moved = not np.array_equal(np.asarray(result["x"]).ravel(), np.asarray(args["x0"]))
+    if moved and stats.status != "No_Feasible_Initialization":
         return result, backends.Stats(True, ITERATE, stats.iterations)
+    # no step taken (its trust region refused the first one, as it can, or the QP failed):
+    # its radius starts afresh at the next call, so it would refuse again
     return result, None
 
 

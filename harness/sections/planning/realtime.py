@@ -5,7 +5,8 @@ drawn from a seed; the obstacle crosses the unobstructed optimum, so avoidance i
   re-plan timed in wall and CPU time of the planning thread, as distributions; re-plans
   dropped at the deadline (the arm keeps its last plan) and failed ones counted.
 - backends: the same scenarios with each way in (solver, compiled code, warm start,
-  Hessian, penalty samples), side by side in one run.
+  Hessian, penalty samples, real-time iterations), side by side in one run, with what each
+  way's executed motions spend, replayed.
 - optimality: every executed plan replayed in MuJoCo; the default plan against the best of a
   global check (Algorithm 2 from each of `global_starts` single start points, and a
   fine-quadrature plan), the paper's quadrature beside it, and how often one start suffices.
@@ -103,12 +104,21 @@ def replayed_energy(plant, baseline, execution: Execution, case: Scenario,
 
 
 def spent(plant, baseline, config: PlannerConfig, cases: list[Scenario], runs: list) -> dict:
-    """What the executed motions spend, replayed in MuJoCo: the sum over the feasible ones (J)
+    """What each executed motion spends, replayed in MuJoCo (J; None where it is infeasible),
     and how many were infeasible (the way a re-plan goes changes the path the arm takes)."""
     replayed = [replayed_energy(plant, baseline, run, case, config)
                 for case, run in zip(cases, runs, strict=True)]
-    return {"executed_J_feasible_sum": float(sum(e for e, ok in replayed if ok)),
+    return {"executed_J": [float(e) if ok else None for e, ok in replayed],
             "executed_infeasible": sum(not ok for _, ok in replayed)}
+
+
+def common_sums(rows: dict) -> tuple[dict, int]:
+    """Each way's executed energy summed over the scenarios every way executed feasibly (a
+    way with more infeasible executions would otherwise sum fewer terms), and their count."""
+    energies = [row["executed_J"] for row in rows.values()]
+    common = [i for i in range(len(energies[0])) if all(e[i] is not None for e in energies)]
+    return {name: float(sum(row["executed_J"][i] for i in common))
+            for name, row in rows.items()}, len(common)
 
 
 def optimality(baseline, plant, config: PlannerConfig, cases: list[Scenario], runs: list,
@@ -264,6 +274,7 @@ def _pct(value) -> str:
 def markdown_lines(study: dict) -> list[str]:
     """The study's tables: timing distributions per way in, deadline behaviour, optimality."""
     setup, default, opt = study["setup"], study["default"], study["optimality"]
+    sums, count = common_sums(study["ways_in"])
     lines = [
         f"**Real time over {setup['scenarios']} random scenarios** (seed {setup['seed']}: "
         "start, goal, obstacle path crossing the unobstructed optimum, sway; Lynxmotion, "
@@ -271,13 +282,14 @@ def markdown_lines(study: dict) -> list[str]:
         "max; CPU = CPU time of the planning thread (insensitive to other load on the "
         "machine), wall = wall clock on this run's machine.", "",
         "| way in | cold plan, CPU | cold plan, wall | warm re-plan, CPU | warm re-plan, wall "
-        "| re-plans | failed | executed (J, replayed; infeasible) |",
-        "|---|---|---|---|---|---|---|---|"]
+        f"| re-plans | failed | executed, replayed (J, sum over the {count} scenarios every "
+        "way executed feasibly) | infeasible executions |",
+        "|---|---|---|---|---|---|---|---|---|"]
     for name, row in study["ways_in"].items():
         lines.append(f"| {name} | {_ms(row['cold_cpu_ms'])} | {_ms(row['cold_wall_ms'])} | "
                      f"{_ms(row['replan_cpu_ms'])} | {_ms(row['replan_wall_ms'])} | "
                      f"{row['replans_attempted']} | {row['replan_failures']} | "
-                     f"{row['executed_J_feasible_sum']:.3f}; {row['executed_infeasible']} |")
+                     f"{sums[name]:.3f} | {row['executed_infeasible']} |")
     lines += [
         "", f"With a deadline of {setup['deadline_ms']:g} ms CPU per re-plan (one obstacle "
         f"sample period), the default planner attempted {default['replans_attempted']} "
