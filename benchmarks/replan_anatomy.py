@@ -150,7 +150,8 @@ def call_costs(baseline, config) -> dict:
 
 
 def _timed(solver, args: dict, start: dict) -> tuple[dict, dict]:
-    """Iterations, success and CPU median of 20 calls from one start point; the solution."""
+    """Iterations, success, objective and CPU median of 20 calls from one start point; the
+    solution."""
     times = []
     for _ in range(20):
         begin = time.thread_time()
@@ -158,7 +159,7 @@ def _timed(solver, args: dict, start: dict) -> tuple[dict, dict]:
         times.append(1e3 * (time.thread_time() - begin))
     stats = backends.stats(solver, args, result)
     return {"iterations": stats.iterations, "success": stats.success, "status": stats.status,
-            "cpu_ms_median": float(np.median(times))}, result
+            "objective": float(result["f"]), "cpu_ms_median": float(np.median(times))}, result
 
 
 def main() -> None:
