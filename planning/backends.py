@@ -104,7 +104,9 @@ def solver(name: str, plugin: str, problem: dict, equality: np.ndarray, *, warm:
         raise ValueError(f"solver must be one of {SOLVERS} (or feasiblesqp, for warm solves "
                          f"from a feasible start), got '{plugin}'")
     options = dict(_QUIET, **_OPTIONS[plugin](max_iter, warm, hessian, equality))
-    with _silenced(plugin):
+    with _silenced() if plugin in ("sqpmethod", "feasiblesqp") else contextlib.nullcontext():
+        # both build qpOASES, which prints its licence banner for each instance (8 times in
+        # the bench's log before)
         plugin = _PLUGINS.get(plugin, plugin)
         if compile_code and compiled.available():
             function = compiled.nlpsol(name, plugin, problem, options)
@@ -113,12 +115,11 @@ def solver(name: str, plugin: str, problem: dict, equality: np.ndarray, *, warm:
     return Silenced(function) if plugin == "feasiblesqpmethod" else function
 
 
-def _silenced(plugin: str):
-    """Standard output swallowed while a feasiblesqp instance is built or called: CasADi 3.8's
-    feasiblesqpmethod prints its set-up and trust-region trace whatever its print options."""
-    if plugin in ("feasiblesqp", "feasiblesqpmethod"):
-        return contextlib.redirect_stdout(io.StringIO())
-    return contextlib.nullcontext()
+def _silenced():
+    """Standard output swallowed (CasADi writes its plugins' output to Python's sys.stdout):
+    CasADi 3.8's feasiblesqpmethod prints its set-up and trust-region trace whatever its
+    print options."""
+    return contextlib.redirect_stdout(io.StringIO())
 
 
 class Silenced:
@@ -129,7 +130,7 @@ class Silenced:
         self.function = function
 
     def __call__(self, **kwargs):
-        with _silenced("feasiblesqpmethod"):
+        with _silenced():
             return self.function(**kwargs)
 
     def __getattr__(self, name):

@@ -57,13 +57,14 @@ def test_compiled_nlp_matches_the_virtual_machine_and_is_cached(tmp_path, monkey
     assert [p.stat().st_mtime_ns for p in (tmp_path / "nlp").glob("*.so")] == [stamp]
 
 
-def test_sqpmethod_status_comes_from_the_kkt_conditions_of_its_point():
+def test_sqpmethod_status_comes_from_the_kkt_conditions_of_its_point(capfd):
     """CasADi 3.8's sqpmethod does not always keep its status (Function.stats raises or
     repeats an earlier call's): backends.stats judges its result by the KKT conditions of
     the returned point. Cross-checked against IPOPT on a constrained Rosenbrock (active
     constraint); an iteration cap fails it; so does each condition broken alone: the same
     point with its constraint loosened (the multiplier now on a row 1 away from its bound:
-    complementarity) and with the multiplier halved (stationarity)."""
+    complementarity) and with the multiplier halved (stationarity). Building it prints
+    nothing (qpOASES's banner swallowed)."""
     args = TOY_ARGS
     reference = ca.nlpsol("vm", "ipopt", _toy(), QUIET_IPOPT)(**args)
     sqp = backends.solver("toy_sqp", "sqpmethod", _toy(), np.array([False]), warm=False,
@@ -84,6 +85,7 @@ def test_sqpmethod_status_comes_from_the_kkt_conditions_of_its_point():
     assert max(float(residuals["primal"]), float(residuals["stationarity"])) <= 1e-6
     halved = backends.stats(sqp, args, dict(result, lam_g=0.5 * result["lam_g"]))
     assert not halved.success
+    assert "qpOASES" not in capfd.readouterr().out  # its licence banner, once per instance
 
 
 def test_fatrop_and_ipopt_find_the_same_optimum(baseline):
