@@ -5,8 +5,9 @@ path is predicted (constant velocity from the last two observations); when the
 current plan would bring a link within the threshold of that prediction, and the
 prediction differs from the one the current plan was made with (otherwise the
 solve would return the same plan), the arm re-plans from its current state
-(position, velocity, remaining time). The executed trajectory is the
-concatenation of the segments actually followed.
+(position, velocity, remaining time). A re-plan that fails (other than by missing a
+deadline) leaves the arm on its last plan and is tried again at the next sample. The
+executed trajectory is the concatenation of the segments actually followed.
 
 With real-time iterations (PlannerConfig.replan_iterations) a re-plan is a capped
 feasible-SQP step from the last plan; while the plan followed is such an unconverged

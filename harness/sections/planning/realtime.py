@@ -294,8 +294,9 @@ def markdown_lines(study: dict) -> list[str]:
         "", f"With a deadline of {setup['deadline_ms']:g} ms CPU per re-plan (one obstacle "
         f"sample period), the default planner attempted {default['replans_attempted']} "
         f"re-plans: {default['deadline_misses']} missed the deadline and "
-        f"{default['replan_failures']} failed to converge (the arm kept its last plan each "
-        f"time, Algorithm 2); warm re-plan CPU {_ms(default['replan_cpu_ms'])} ms, cold plan "
+        f"{default['replan_failures']} failed (unconverged, or refused beyond a joint limit; "
+        "the arm kept its last plan each time, Algorithm 2, and tried again at the next "
+        f"sample); warm re-plan CPU {_ms(default['replan_cpu_ms'])} ms, cold plan "
         f"CPU {_ms(default['cold_cpu_ms'])} ms.", "",
         f"**True optimum.** Every executed plan replayed in MuJoCo; the global check is "
         f"Algorithm 2 from each of {setup['global_starts']} single start points and a Gauss "
