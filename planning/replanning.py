@@ -28,8 +28,9 @@ from planning.config import Scenario
 from planning.errors import PlanningError
 from planning.limits import LIMIT_TOLERANCE, limit_excess
 from planning.obstacle import predict_linear
+from planning.realtime_iteration import ITERATE
 from planning.screening import screen
-from planning.solver import ITERATE, ObstacleForecast, Planner, SegmentPlan
+from planning.solver import ObstacleForecast, Planner, SegmentPlan
 from planning.starts import rank, start_points
 
 TRIGGER_TOLERANCE = 1e-3  # m: predicted dips smaller than this do not trigger a re-plan
@@ -305,7 +306,7 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
         return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures),
                          (), tuple(solve_cpu))
     planned_with, latest = forecast, plan  # latest: the newest successful solve (converged
-    # or a real-time iterate, planning.solver.ITERATE), the next re-plan's warm start
+    # or a real-time iterate, planning.realtime_iteration.ITERATE), the next re-plan's warm start
     for t in obstacle.sample_times[:-1]:
         forecast = forecast_at(obstacle, t)
         iterating = plan.status == ITERATE  # the last re-plan stopped short: go on from it

@@ -13,7 +13,7 @@ import casadi as ca
 import numpy as np
 
 from identification.torque_model import TorqueModel
-from planning import backends
+from planning import backends, realtime_iteration
 from planning.breaks import even_breaks, power_breaks
 from planning.config import PlannerConfig
 from planning.limits import END_MARGIN, goal_limit_signs, quotient_turning_points
@@ -53,9 +53,6 @@ class SegmentPlan:
 # on to 300 (390 ms) or declared the problem infeasible; a cold restart is cheaper
 RESCUE_WARM_ITERATIONS = 60
 TORQUE_GRID = 65  # points of normalized time where a segment's torque is checked
-
-
-ITERATE = "feasible iterate"  # status of a re-plan's capped real-time iterate, followed
 
 
 @dataclass(frozen=True)
@@ -297,7 +294,7 @@ class Planner:
         start, cpu = time.perf_counter(), time.thread_time()
         result, stats = None, None
         if iterate and warm is not None and solvers.iterate is not None:
-            result, stats = _iterate(solvers.iterate, args)
+            result, stats = realtime_iteration.step(solvers.iterate, args)
         if stats is None:  # not iterating, or the iterate is not one to follow: solve it out
             result = solver(**args)
             stats = backends.stats(solver, args, result)
@@ -364,29 +361,6 @@ class Planner:
             multipliers=(np.asarray(result["lam_g"]).ravel(), np.asarray(result["lam_x"]).ravel()),
             breaks=_breaks(solvers.nlp, p), layout=self.layout,
         )
-
-
-def _iterate(solver, args: dict) -> tuple[dict, backends.Stats | None]:
-    """The real-time iteration: feasiblesqp capped at config.replan_iterations from the warm
-    start. Its result, with its own status if it converged, with status ITERATE if it stopped
-    at the cap; stats None (the caller solves the NLP out from the same start) if the start
-    was refused as infeasible or the point it returns leaves the constraints by more than
-    backends.FEASIBLE_ITERATE (the next start's tolerance; converged or not)."""
-    result = solver(**args)
-    stats = backends.stats(solver, args, result)
-    g = np.asarray(result["g"]).ravel()
-    primal = max(np.max(args["lbg"] - g, initial=0.0), np.max(g - args["ubg"], initial=0.0))
-    if primal > backends.FEASIBLE_ITERATE:  # a start or an iterate out of the constraints
-        return result, None
-    if stats.success:
-        return result, stats
-    if stats.status == "No_Feasible_Initialization":
-        return result, None
-    # an iterate, or the start itself where its trust region refused the first step (as it
-    # can: 145 of 971 calls on the bench's random scenarios): the same motion then, and the
-    # next sample tries again on its own problem (solving those out instead, measured in the
-    # same 20 scenarios: re-plan CPU p95 22 -> 236 ms)
-    return result, backends.Stats(True, ITERATE, stats.iterations)
 
 
 def _breaks(nlp: PlanningNLP, p: np.ndarray) -> np.ndarray:

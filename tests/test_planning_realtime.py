@@ -15,11 +15,12 @@ from planning import backends, compiled, replanning
 from planning.clearance import link_clearances
 from planning.config import PlannerConfig, Scenario
 from planning.limits import LIMIT_TOLERANCE, limit_excess
+from planning.realtime_iteration import ITERATE
 from planning.replanning import DEADLINE, LATE, execute, forecast_at, plan_multistart, plan_segment
 from planning.result import evaluate
 from planning.scenarios import random_scenarios, swaying_scenario
 from planning.screening import screen
-from planning.solver import ITERATE, Planner
+from planning.solver import Planner
 from planning.speed import measure
 from planning.starts import start_points
 from planning.trajectory import PolynomialTrajectory
