@@ -104,15 +104,15 @@ def solver(name: str, plugin: str, problem: dict, equality: np.ndarray, *, warm:
         raise ValueError(f"solver must be one of {SOLVERS} (or feasiblesqp, for warm solves "
                          f"from a feasible start), got '{plugin}'")
     options = dict(_QUIET, **_OPTIONS[plugin](max_iter, warm, hessian, equality))
+    casadi_name = _PLUGINS.get(plugin, plugin)
     with _silenced() if plugin in ("sqpmethod", "feasiblesqp") else contextlib.nullcontext():
         # both build qpOASES, which prints its licence banner for each instance (8 times in
         # the bench's log before)
-        plugin = _PLUGINS.get(plugin, plugin)
         if compile_code and compiled.available():
-            function = compiled.nlpsol(name, plugin, problem, options)
+            function = compiled.nlpsol(name, casadi_name, problem, options)
         else:
-            function = ca.nlpsol(name, plugin, problem, options)
-    return Silenced(function) if plugin == "feasiblesqpmethod" else function
+            function = ca.nlpsol(name, casadi_name, problem, options)
+    return Silenced(function) if plugin == "feasiblesqp" else function
 
 
 def _silenced():
@@ -162,6 +162,13 @@ def stats(function: ca.Function, args: dict | None = None, result: dict | None =
     return Stats(bool(info["success"]), str(status), iterations)
 
 
+def violation(result: dict, args: dict) -> float:
+    """How far the returned point's constraints g leave [lbg, ubg] (0 within them)."""
+    g = np.asarray(result["g"]).ravel()
+    return float(max(np.max(np.asarray(args["lbg"], float) - g, initial=0.0),
+                     np.max(g - np.asarray(args["ubg"], float), initial=0.0)))
+
+
 def _kkt(function: ca.Function, args: dict, result: dict, iterations: int) -> Stats:
     """Converged or not by the KKT conditions at the returned point: primal feasibility,
     stationarity of the Lagrangian (the problem has no variable bounds, so lam_x is 0 at a
@@ -180,7 +187,7 @@ def _kkt(function: ca.Function, args: dict, result: dict, iterations: int) -> St
                           initial=0.0)
     g = np.asarray(result["g"]).ravel()
     lbg, ubg = np.asarray(args["lbg"], float), np.asarray(args["ubg"], float)
-    primal = max(np.max(lbg - g, initial=0.0), np.max(g - ubg, initial=0.0))
+    primal = violation(result, args)
     slack = np.where(lam_g > 0, ubg - g, g - lbg)
     weighty = np.abs(lam_g) > KKT_DUAL
     complementarity = np.max(np.abs(lam_g[weighty]) * slack[weighty], initial=0.0)

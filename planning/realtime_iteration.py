@@ -4,8 +4,6 @@ may follow (planning.replanning decides), going on from it at the next obstacle 
 
 from __future__ import annotations
 
-import numpy as np
-
 from planning import backends
 
 ITERATE = "feasible iterate"  # status of a re-plan's capped real-time iterate, followed
@@ -19,9 +17,7 @@ def step(solver, args: dict) -> tuple[dict, backends.Stats | None]:
     backends.FEASIBLE_ITERATE (the next start's tolerance; converged or not)."""
     result = solver(**args)
     stats = backends.stats(solver, args, result)
-    g = np.asarray(result["g"]).ravel()
-    primal = max(np.max(args["lbg"] - g, initial=0.0), np.max(g - args["ubg"], initial=0.0))
-    if primal > backends.FEASIBLE_ITERATE:  # a start or an iterate out of the constraints
+    if backends.violation(result, args) > backends.FEASIBLE_ITERATE:  # start or iterate out
         return result, None
     if stats.success:
         return result, stats
