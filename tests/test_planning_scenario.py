@@ -113,6 +113,11 @@ def test_plan_command_bad_input_exits_2_without_file(tmp_path, capsys):
     assert main(["plan", "--no-compile", "--model", "pinocchio", "--goal", "0,4,-1", "--out", str(out)]) == 2
     assert not out.exists()
     assert "outside the joint limits" in capsys.readouterr().err
+    assert main(["plan", "--no-compile", "--model", "pinocchio", "--replan-iterations", "-1",
+                 "--out", str(out)]) == 2
+    assert not out.exists()
+    err = capsys.readouterr().err
+    assert "--replan-iterations must be >= 0" in err and len(err.strip().splitlines()) == 1
 
 
 def test_obstacle_parked_on_the_goal_is_flagged(paper, baseline):
