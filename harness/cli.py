@@ -24,7 +24,7 @@ from harness import interrupt  # noqa: E402 - after the environment set-up above
 from harness.errors import UserError  # noqa: E402
 
 COMMANDS = ["generate", "ingest", "identify", "predict", "plan", "replay", "closeloop", "bench",
-            "sweep"]
+            "study", "sweep"]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -53,7 +53,7 @@ def _user_errors() -> tuple[type[BaseException], ...]:
     return UserError, FileNotFoundError, IdentificationError, PlanningError
 
 
-DIR_OUTPUTS = ("bench", "closeloop", "sweep")  # commands whose --out is a folder
+DIR_OUTPUTS = ("bench", "study", "closeloop", "sweep")  # commands whose --out is a folder
 
 
 def _check_output(args) -> None:

@@ -42,7 +42,9 @@ class PlannerConfig:
     power_breaks: int = 7  # "split": intervals of the quadrature = power_breaks + 1
     degree: int = 4  # of the joint polynomials (paper: 4); degree - 1 free coefficients per joint
     obstacle_slots: int = 24
-    rest_at_goal: bool = False
+    # zero velocity at the goal; False: the paper's free end velocity (its optimum may arrive
+    # moving, which no real arm can execute and whose energy leaves out the braking)
+    rest_at_goal: bool = True
     lower: tuple[float, ...] = (-pi / 2, 0.0, -pi)
     upper: tuple[float, ...] = (pi / 2, pi, 0.0)
     limit_samples: int = 8

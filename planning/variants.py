@@ -22,15 +22,17 @@ class Parametrization:
     quadrature: str = "paper"
     samples: int = 10
     smoothing: float = 0.0
+    rest_at_goal: bool = True
 
     def config(self, base: PlannerConfig | None = None) -> PlannerConfig:
         """`base` (default: the paper's configuration) with this parametrization."""
         return dataclasses.replace(base or PlannerConfig(), degree=self.degree,
                                    energy_quadrature=self.quadrature,
-                                   energy_samples=self.samples, power_smoothing=self.smoothing)
+                                   energy_samples=self.samples, power_smoothing=self.smoothing,
+                                   rest_at_goal=self.rest_at_goal)
 
 
-PAPER = Parametrization("quartic, N=10 (paper)")
+PAPER = Parametrization("quartic, N=10 (paper)", rest_at_goal=False)  # free end velocity
 PARAMETRIZATIONS = (
     PAPER,
     Parametrization("quartic, Gauss N=20", 4, "gauss", 20),

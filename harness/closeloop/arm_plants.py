@@ -59,15 +59,18 @@ def arm_variant_xml(robot: str, variant: Variant) -> str:
             tendon.wrap_joint(joint.name, 1.0)
     if variant.payload > 0:
         frame = flange_frame(load_pinocchio(robot))
-        body = spec.body(frame) if frame else hinges[-1].parent
-        body.add_body(name="payload")
+        body, pos = (spec.body(frame) if frame else None), [0.0, 0.0, 0.0]
+        site = spec.site(frame) if frame and body is None else None
+        if site is not None:  # an MJCF's flange is a site on the last body
+            body, pos = site.parent, list(site.pos)
+        (body or hinges[-1].parent).add_body(name="payload", pos=pos)
     spec.compile()
     text = spec.to_xml()
     if variant.payload > 0:  # MjSpec.to_xml drops an added body's inertial: written here
         inertial = (f'<inertial pos="0 0 0" mass="{variant.payload:.10g}" '
                     'diaginertia="1e-9 1e-9 1e-9"/>')
-        text, n = re.subn(r'<body name="payload"\s*/>',
-                          f'<body name="payload">{inertial}</body>', text)
+        text, n = re.subn(r'<body name="payload"([^>]*?)\s*/>',
+                          rf'<body name="payload"\1>{inertial}</body>', text)
         if n != 1:
             raise RuntimeError("payload body not written by MjSpec.to_xml")
     return text

@@ -40,7 +40,7 @@ import numpy as np
 
 from harness.closeloop.arm_plants import arm_variant_xml
 from harness.closeloop.payload import PayloadTorque
-from harness.closeloop.plants import DECLARED_MJCF, Variant, true_effects
+from harness.closeloop.plants import Variant, true_effects
 from harness.data.dataset import Dataset
 from harness.data.generate import generate
 from harness.errors import UserError
@@ -52,6 +52,7 @@ from harness.robots.registry import (
     load_chain,
     load_mujoco,
     load_pinocchio,
+    robot_entry,
 )
 from harness.robots.torque_models import load_torque_model
 from identification.closeloop.effects import Effect, EffectTerm
@@ -130,9 +131,9 @@ def declared_model(spec: str, robot: str = DEFAULT_ROBOT) -> TorqueModel | Libra
     loop identifies its declared model with (identification.closeloop.identified; the
     Lynxmotion's prior-knowledge library)."""
     if spec == "identified":
-        if robot != DEFAULT_ROBOT:
-            raise UserError(f"--declared identified is built on the {DEFAULT_ROBOT}'s prior-"
-                            f"knowledge library; on {robot} use 'pinocchio' or a MODEL.json")
+        if "prior" not in robot_entry(robot).libraries:
+            raise UserError(f"--declared identified is built on a prior-knowledge library, which "
+                            f"{robot} does not declare; use 'pinocchio' or a MODEL.json")
         return prior_knowledge_library(3)
     return load_torque_model(spec, robot)
 
@@ -160,8 +161,6 @@ def check_plant(plant: str | Path, dof: int, robot: str = DEFAULT_ROBOT) -> Plan
 
 def declared_mujoco(robot: str) -> mujoco.MjModel:
     """The declared model of robot in MuJoCo (what a plant's effects are read against)."""
-    if robot == DEFAULT_ROBOT:
-        return mujoco.MjModel.from_xml_path(str(DECLARED_MJCF))
     return load_mujoco(robot)
 
 
@@ -169,7 +168,7 @@ def effects_reference(robot: str) -> mujoco.MjModel:
     """What a plant's true effects are read against: declared_mujoco, or for a registered arm
     the arm as its plants are written (harness.closeloop.arm_plants; MjSpec.to_xml keeps 6
     significant digits, so masses rounded alike are not read as a payload)."""
-    if robot == DEFAULT_ROBOT or robot not in ROBOTS:
+    if robot not in ROBOTS:
         return declared_mujoco(robot)
     return mujoco.MjModel.from_xml_string(arm_variant_xml(robot, Variant(name="declared")))
 
@@ -208,13 +207,12 @@ def run_closeloop(plant: str | Path, samples: int = 4000, noise: float = 0.05, s
     p = check_plant(plant, model.nv, robot)
     data = generate(str(plant), samples, noise, seed, "measured", bias)
     split = int(round(samples * (1.0 - holdout)))
-    payload = (PayloadTorque(model) if robot == DEFAULT_ROBOT
-               else PayloadTorque(model, flange_frame(model) or ""))
+    payload = PayloadTorque(model, flange_frame(model) or "")
     truth, outside = true_effects(p.model, effects_reference(robot))
     run = _loop(declared, data, split, payload, truth, outside, holdout, robot)
     if not compare:
         return run
-    specs = DECLARED_MODELS if robot == DEFAULT_ROBOT else ("pinocchio",)
+    specs = DECLARED_MODELS if "prior" in robot_entry(robot).libraries else ("pinocchio",)
     others = tuple(_loop(spec, data, split, payload, truth, outside, holdout, robot)
                    for spec in specs if spec != declared)
     return replace(run, others=others)

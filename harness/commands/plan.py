@@ -114,7 +114,12 @@ def register(sub) -> None:
     p.add_argument("--no-compile", action="store_true",
                    help="evaluate the NLP in CasADi's virtual machine instead of compiled C "
                         "(compiled once per problem with the system C compiler, cached)")
-    p.add_argument("--rest-at-goal", action="store_true", help="also require zero end velocity")
+    end = p.add_mutually_exclusive_group()
+    end.add_argument("--rest-at-goal", action="store_true",
+                     help="require zero velocity at the goal (the default)")
+    end.add_argument("--free-end", action="store_true",
+                     help="leave the end velocity free (the paper's formulation): the optimum may "
+                     "arrive moving, and its energy then leaves out the braking")
     p.add_argument("--no-replan", action="store_true", help="follow the first plan throughout")
     p.add_argument("--out", required=True, help="output PLAN.json")
     # Let "--goal -1.57,0.8,-1.0" through: argparse only takes "-1.5"-like strings as
@@ -173,7 +178,7 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
             and math.isfinite(args.sway_periods)):
         raise UserError("--power-smoothing must be >= 0 and --sway-periods finite")
     config = dataclasses.replace(planner_config(args.robot), threshold=args.threshold,
-                                 penalty_weight=args.penalty, rest_at_goal=args.rest_at_goal,
+                                 penalty_weight=args.penalty, rest_at_goal=not args.free_end,
                                  energy_samples=args.energy_samples,
                                  energy_quadrature=args.energy_quadrature, degree=args.degree,
                                  power_smoothing=args.power_smoothing,

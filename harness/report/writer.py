@@ -1,37 +1,54 @@
-"""Bench report: DIR/report.md, DIR/report.json and DIR/headline.md, each complete or absent."""
+"""Bench report: DIR/report.md, DIR/report.json and DIR/headline.md, each complete or absent.
+
+report.json: the run's meta (robot, command, machine, timing), `ok`, every failed check,
+the targets table, the headline rows, and per section its status, results, checks,
+targets, figures and warnings. Keys named `timing`, `seconds`, `*_s` or `*_ms` hold the
+figures that depend on the machine's speed and load; everything else is the same on every
+run of the same configuration (tests/test_bench.py).
+"""
 
 from __future__ import annotations
 
 import json
 import math
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from harness.io import write_json, write_text
-from harness.report.headline import headline_markdown
+from harness.sections.base import Check, Row, SectionResult, Target
 
 TITLES = {
-    "identification": "Identification (paper Figs. 2–8, Tables III/IV)",
-    "planning": "Planning (paper Figs. 9–11)",
+    "identification": "Identification",
+    "planning": "Planning around a moving obstacle",
     "replay": "Replay in MuJoCo",
     "closeloop": "Closing the loop on measured data",
-    "real_data": "Real measured data: a Franka Emika Panda (Gaz et al. 2019)",
+    "real_data": "Real measured logs",
 }
 
 
 @dataclass(frozen=True)
 class SectionOutcome:
-    """What one bench section produced. status: 'ok', 'failed' or 'not available'."""
+    """What one section or study produced. status: 'ok' or 'failed'."""
 
     name: str
     status: str
     seconds: float = 0.0
     markdown: str = ""
     results: dict = field(default_factory=dict)
+    checks: tuple[Check, ...] = ()
+    targets: tuple[Target, ...] = ()
+    headline: tuple[Row, ...] = ()
     figures: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
     error: str = ""
+
+    @classmethod
+    def of(cls, name: str, result: SectionResult, seconds: float, warnings=()) -> SectionOutcome:
+        return cls(name, "ok", seconds, result.markdown, result.results, tuple(result.checks),
+                   tuple(result.targets), tuple(result.headline),
+                   tuple(str(f) for f in result.figures), tuple(warnings))
 
 
 def _clean(x):
@@ -53,89 +70,115 @@ def _clean(x):
     return repr(x)
 
 
-def _relative_figures(outcome: SectionOutcome, out_dir: Path) -> SectionOutcome:
-    """The outcome with figure paths relative to out_dir (report.json does not depend on
-    where the run wrote)."""
+def _relative(figures, out_dir: Path) -> list[str]:
+    """Figure paths relative to out_dir (the report does not depend on where the run wrote)."""
     base = out_dir.resolve()
-    rel = tuple(Path(f).resolve().relative_to(base).as_posix()
-                if Path(f).resolve().is_relative_to(base) else f for f in outcome.figures)
-    return replace(outcome, figures=rel)
+    return [Path(f).resolve().relative_to(base).as_posix()
+            if Path(f).resolve().is_relative_to(base) else str(f) for f in figures]
 
 
-def report_json(outcomes: list[SectionOutcome], numbers: dict, meta: dict) -> dict:
-    """The machine-readable report: headline, per-section status and results."""
+def _target(section: str, t: Target) -> dict:
+    return {"section": section, **asdict(t), "met": t.met, "gap": t.gap}
+
+
+def failed_checks(outcomes) -> list[str]:
+    return [f"{o.name}: {c.name}" for o in outcomes for c in o.checks if not c.passed]
+
+
+def report_json(outcomes: list[SectionOutcome], meta: dict, out_dir: Path) -> dict:
+    """The machine-readable report."""
+    sections = {}
+    for o in outcomes:
+        sections[o.name] = {
+            "status": o.status, "error": o.error, "seconds": o.seconds, "results": o.results,
+            "checks": [asdict(c) for c in o.checks],
+            "targets": [_target(o.name, t) for t in o.targets],
+            "figures": _relative(o.figures, out_dir), "warnings": list(o.warnings)}
     return _clean({
         **meta,
-        "ok": all(o.status != "failed" for o in outcomes),
-        "acceptance_failed": (numbers.get("acceptance") or {}).get("failed", []),
-        "headline": numbers,
-        "sections": {o.name: {k: v for k, v in asdict(o).items() if k not in ("name", "markdown")}
-                     for o in outcomes},
+        "ok": all(o.status == "ok" for o in outcomes) and not failed_checks(outcomes),
+        "checks": {"total": sum(len(o.checks) for o in outcomes),
+                   "failed": failed_checks(outcomes)},
+        "targets": [_target(o.name, t) for o in outcomes for t in o.targets],
+        "headline": [{"section": o.name, **asdict(r)} for o in outcomes for r in o.headline],
+        "sections": sections,
     })
 
 
-def _figure_links(outcome: SectionOutcome, out_dir: Path) -> list[str]:
-    """Image links relative to report.md, for figures the section's text does not show yet."""
-    links, base = [], out_dir.resolve()
-    for fig in outcome.figures:
-        path = Path(fig).resolve()  # a relative figure path is relative to the working directory
-        rel = path.relative_to(base) if path.is_relative_to(base) else path
-        if f"]({rel.as_posix()})" not in outcome.markdown:
-            links.append(f"![{path.stem}]({rel.as_posix()})")
-    return links
+def _number(x: float | None, unit: str) -> str:
+    if x is None:
+        return "–"
+    return f"{x:.3g} {unit}".strip()
 
 
-def _section_markdown(outcome: SectionOutcome, out_dir: Path) -> list[str]:
-    body = outcome.markdown.strip()
-    if body.startswith("## "):  # the section brought its own title
-        title, _, body = body.partition("\n")
-        title = title[3:].strip()
-    else:
-        title = TITLES.get(outcome.name, outcome.name)
-    lines = [f"## {title}", ""]
-    if outcome.status == "not available":
-        return lines + ["_Section not available yet._", ""]
-    if outcome.status == "failed":
-        return lines + [f"**FAILED** after {outcome.seconds:.1f} s: `{outcome.error}`", ""]
-    lines += [f"_{outcome.seconds:.1f} s_", "", body.strip(), ""]
-    return lines + [link for link in _figure_links(outcome, out_dir)] + [""]
+def targets_markdown(outcomes) -> list[str]:
+    """The targets table: what is aimed at, measured against it, with the gap."""
+    rows = [(o.name, t) for o in outcomes for t in o.targets]
+    if not rows:
+        return ["_No targets._"]
+    md = ["| section | target | measured | aim | gap | met |", "|---|---|---|---|---|---|"]
+    for name, t in rows:
+        aim = f"{'<=' if t.lower_is_better else '>='} {_number(t.target, t.unit)}"
+        met = {True: "yes", False: "**no**", None: "–"}[t.met]
+        timing = " (timing)" if t.timing else ""
+        md.append(f"| {name} | {t.name}{timing} | {_number(t.measured, t.unit)} | {aim} | "
+                  f"{_number(t.gap, t.unit)} | {met} |")
+    return md
 
 
-def report_markdown(outcomes: list[SectionOutcome], numbers: dict, meta: dict,
-                    out_dir: Path) -> str:
+def headline_markdown(outcomes) -> list[str]:
+    rows = [r for o in outcomes for r in o.headline]
+    if not rows:
+        return ["_No headline numbers (no section ran)._"]
+    return ["| question | measured |", "|---|---|",
+            *(f"| {r.question} | {r.measured} |" for r in rows)]
+
+
+def _section_markdown(o: SectionOutcome, out_dir: Path) -> list[str]:
+    lines = [f"## {TITLES.get(o.name, o.name)}", ""]
+    if o.status == "failed":
+        return lines + [f"**FAILED** after {o.seconds:.1f} s: `{o.error}`", ""]
+    failed = [c for c in o.checks if not c.passed]
+    verdict = (f"all {len(o.checks)} checks hold" if not failed else
+               f"**{len(failed)} of {len(o.checks)} checks failed**: "
+               + "; ".join(f"{c.name} ({c.detail})" for c in failed))
+    lines += [f"_{o.seconds:.1f} s; {verdict}._", "", o.markdown.strip(), ""]
+    for w in o.warnings:
+        lines.append(f"> warning: {w}")
+    links = [f"![{Path(f).stem}]({f})" for f in _relative(o.figures, out_dir)
+             if f"]({f})" not in o.markdown]
+    return lines + links + [""]
+
+
+def report_markdown(outcomes: list[SectionOutcome], meta: dict, out_dir: Path) -> str:
     """The human-readable report."""
     failed = [o.name for o in outcomes if o.status == "failed"]
-    missing = [o.name for o in outcomes if o.status == "not available"]
-    status = f"all {len(outcomes)} sections ran" if not failed and not missing else "; ".join(
-        filter(None, [f"failed: {', '.join(failed)}" if failed else "",
-                      f"not available: {', '.join(missing)}" if missing else ""]))
-    verdict = numbers.get("acceptance") or {}
-    if not verdict:
-        status += "; no acceptance checks"
-    elif verdict["failed"]:
-        status += (f"; **{len(verdict['failed'])} of {verdict['total']} acceptance checks "
-                   f"failed** ({', '.join(verdict['failed'])})")
-    else:
-        status += f"; all {verdict['total']} acceptance checks passed"
+    checks = failed_checks(outcomes)
+    total = sum(len(o.checks) for o in outcomes)
+    status = (f"sections failed: {', '.join(failed)}" if failed else
+              f"**{len(checks)} of {total} checks failed** ({', '.join(checks)})" if checks else
+              f"all {total} checks hold")
     elapsed = (meta.get("timing") or {}).get("elapsed_s", 0.0)
-    lines = [
-        "# torquebench report", "",
-        f"Robot `{meta.get('robot')}`, {elapsed:.0f} s in total"
-        f"{' (quick mode)' if meta.get('quick') else ''}: {status}.", "",
-        "## Headline", "", headline_markdown(numbers), "",
-    ]
+    lines = ["# torquebench report", "",
+             f"Robot `{meta.get('robot')}`, {elapsed:.0f} s in total"
+             f"{' (quick mode)' if meta.get('quick') else ''}: {status}. Checks must hold (a "
+             "failure is a bug and fails the run); targets are what the project aims at, "
+             "reported with their gap.", "",
+             "## Headline", "", *headline_markdown(outcomes), "",
+             "## Targets", "", *targets_markdown(outcomes), ""]
     for outcome in outcomes:
         lines += _section_markdown(outcome, out_dir)
     return "\n".join(lines).rstrip() + "\n"
 
 
-def write_report(out_dir: Path, outcomes: list[SectionOutcome], numbers: dict,
-                 meta: dict) -> dict:
+def write_report(out_dir: Path, outcomes: list[SectionOutcome], meta: dict) -> dict:
     """Write report.json, report.md and headline.md into out_dir; returns the JSON payload."""
     out_dir = Path(out_dir)
-    payload = report_json([_relative_figures(o, out_dir) for o in outcomes], numbers, meta)
+    payload = report_json(outcomes, meta, out_dir)
     json.dumps(payload, allow_nan=False)  # fail before writing anything
-    write_text(out_dir / "headline.md", headline_markdown(payload["headline"]) + "\n")
-    write_text(out_dir / "report.md", report_markdown(outcomes, numbers, meta, out_dir))
+    write_text(out_dir / "headline.md", "\n".join(
+        ["## Headline", "", *headline_markdown(outcomes), "", "## Targets", "",
+         *targets_markdown(outcomes)]) + "\n")
+    write_text(out_dir / "report.md", report_markdown(outcomes, meta, out_dir))
     write_json(out_dir / "report.json", payload)
     return payload

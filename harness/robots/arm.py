@@ -19,13 +19,13 @@ import pinocchio as pin
 
 from harness.robots.plant import load_plant
 from harness.robots.registry import (
-    DEFAULT_ROBOT,
     ROBOTS,
     flange_frame,
     get_robot,
     load_chain,
     load_mujoco,
     load_pinocchio,
+    robot_entry,
 )
 from planning.config import PlannerConfig, Scenario
 from planning.kinematics import ArmGeometry
@@ -90,14 +90,12 @@ def torque_limit(robot: str) -> tuple[float, ...] | None:
 
 def planner_config(robot: str, **changes) -> PlannerConfig:
     """The default planner configuration on robot: its links, joint and torque limits, and
-    its solver: fatrop on the default robot, IPOPT on any other arm (measured on the UR5's
-    crossing, compiled NLP: fatrop's cold solve stopped at its 300-iteration cap and half its
-    warm re-plans at 60, each then rescued by IPOPT; IPOPT alone: 18 + 6 iterations cold,
-    4-7 per re-plan)."""
+    the solver its registry entry names (IPOPT unless said: on the UR5's crossing, compiled
+    NLP, fatrop's cold solve stopped at its 300-iteration cap and half its warm re-plans at
+    60, each then rescued by IPOPT; IPOPT alone: 18 + 6 iterations cold, 4-7 per re-plan)."""
     lower, upper = joint_limits(robot)
     base = dict(geometry=arm_geometry(robot), lower=lower, upper=upper,
-                torque_limit=torque_limit(robot),
-                solver=PlannerConfig.solver if robot == DEFAULT_ROBOT else "ipopt")
+                torque_limit=torque_limit(robot), solver=robot_entry(robot).solver)
     return dataclasses.replace(PlannerConfig(), **{**base, **changes})
 
 

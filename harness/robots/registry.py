@@ -15,6 +15,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import cache
 from importlib import metadata
+from math import pi
 from pathlib import Path
 
 import mujoco
@@ -30,14 +31,22 @@ from models import MODELS
 class Robot:
     """A robot known to the harness by name."""
 
-    name: str
-    urdf: Path
+    name: str  # a registered name, or the path of the robot's file
+    urdf: Path | None
     mjcf: Path | None = None  # robot-only MJCF; None: MuJoCo compiles the URDF
     scene: Path | None = None  # MJCF with floor, light, obstacle
     source: str = ""
     # the bench's planning motion: start and goal (rad, one per joint) and the body whose
     # link the obstacle crosses; None: derived from the joint limits
     motion: tuple[tuple[float, ...], tuple[float, ...], str] | None = None
+    # identification libraries `identify` offers for it, the first its default ("kinematic":
+    # the base atoms generated from its kinematics, for any arm)
+    libraries: tuple[str, ...] = ("kinematic",)
+    solver: str = "ipopt"  # the planner's NLP solver (planning.backends)
+    # reproductions the bench's sections run for this robot beside their common work
+    # (harness.sections.paper: "paper", the paper's Tables III-IV and planning scenario)
+    extras: tuple[str, ...] = ()
+    logs: tuple[str, ...] = ()  # measured logs of this robot shipped under data/
 
 
 @cache
@@ -50,9 +59,9 @@ def erd_robots_dir() -> Path:
     return path
 
 
-def _erd(name: str, relpath: str, motion=None) -> Robot:
+def _erd(name: str, relpath: str, motion=None, **fields) -> Robot:
     return Robot(name=name, urdf=erd_robots_dir() / relpath, source="example-robot-data",
-                 motion=motion)
+                 motion=motion, **fields)
 
 
 ROBOTS = {
@@ -62,6 +71,12 @@ ROBOTS = {
         mjcf=MODELS / "lynxmotion" / "lynxmotion.xml",
         scene=MODELS / "lynxmotion" / "scene.xml",
         source="paper (see models/lynxmotion/README.md)",
+        # the paper's 3-DOF arm: its prior-knowledge library; fatrop (measured faster than
+        # IPOPT on its compiled NLP; harness.robots.arm.planner_config)
+        # the paper scenario's start and goal; the obstacle crosses the forearm
+        motion=((pi / 2, pi / 5, -pi / 4), (-pi / 2, 2 * pi / 5, -pi / 3), "link3"),
+        libraries=("prior", "kinematic", "prior-general", "paper"), solver="fatrop",
+        extras=("paper",),
     ),
     "double_pendulum": lambda: _erd(
         "double_pendulum", "double_pendulum_description/urdf/double_pendulum.urdf"
@@ -71,7 +86,8 @@ ROBOTS = {
                          "forearm_link")),
     "panda": lambda: _erd("panda", "panda_description/urdf/panda.urdf",  # fingers held fixed
                           ((1.0, 0.5, 0.0, -2.4, 0.0, 2.8, 0.8),
-                           (-1.0, -0.3, 0.0, -1.5, 0.0, 1.6, 0.8), "panda_link4")),
+                           (-1.0, -0.3, 0.0, -1.5, 0.0, 1.6, 0.8), "panda_link4"),
+                          logs=("panda_gaz2019",)),
 }
 
 DEFAULT_ROBOT = "lynxmotion"
@@ -89,6 +105,20 @@ def get_robot(name: str) -> Robot:
     if name not in ROBOTS:
         raise UserError(f"unknown robot '{name}' (known: {', '.join(sorted(ROBOTS))})")
     return ROBOTS[name]()
+
+
+def robot_entry(name_or_path: str | Path) -> Robot:
+    """The registry entry of a registered robot, or an entry with the defaults for the URDF or
+    MJCF file at name_or_path (UserError if it is neither)."""
+    if str(name_or_path) in ROBOTS:
+        return get_robot(str(name_or_path))
+    path = Path(name_or_path)
+    if not path.is_file():
+        get_robot(str(name_or_path)) if path.suffix == "" else None  # unknown-robot error
+        raise UserError(f"robot file not found: {path}")
+    urdf = path.suffix.lower() == ".urdf"
+    return Robot(name=str(path), urdf=path if urdf else None, mjcf=None if urdf else path,
+                 source=str(path))
 
 
 # What Pinocchio's bindings raise on a description they cannot map (boost.python's

@@ -67,3 +67,24 @@ def load_torque_model(spec: str, robot: str | None = None) -> TorqueModel:
         return model_from_dict(payload)
     except IdentificationError as exc:
         raise UserError(f"model {path}: {exc}") from None
+
+
+def library_named(name: str, robot: str, dof: int | None = None):
+    """An identification library by the name `identify --library` takes, for robot:
+    'kinematic' (base atoms generated from its kinematics), 'prior' / 'prior-general' (derived
+    from simple structures: 3-DOF arms), 'paper' (the published 75 features, 3-DOF),
+    'generic' (polynomial x trig, any dof)."""
+    from identification.library.prior_knowledge import prior_knowledge_library
+    from identification.library.published import generic_library, paper_library
+
+    dof = load_chain(robot).dof if dof is None else dof
+    if name == "kinematic":
+        library = robot_library(robot)
+        if library.dof != dof:
+            raise UserError(f"data have {dof} joints, robot {robot} has {library.dof}")
+        return library
+    if name == "generic" or dof != 3:
+        return generic_library(dof)
+    if name == "paper":
+        return paper_library()
+    return prior_knowledge_library(3, symmetric_links=name != "prior-general")

@@ -14,7 +14,7 @@ the kinematics on any other arm):
 - stlsq, ssr: pysindy's STLSQ and SSR per joint on the same columns, tuned on the same
   validation blocks (identification.regression.peers);
 - oracle: two-step WLS on Pinocchio's base regressor plus per-joint viscous and armature
-  columns (harness.sections.arm_identification.oracle_design).
+  columns (harness.experiments.identification.oracle_design).
 """
 
 from __future__ import annotations
@@ -32,9 +32,9 @@ from threadpoolctl import threadpool_limits
 from harness.commands.identify import choose_library
 from harness.data.generate import generate
 from harness.errors import UserError
+from harness.experiments.identification import oracle_design
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_chain, load_pinocchio
-from harness.sections.arm_identification import oracle_design
 from harness.sweep.grid import Cell
 from identification.errors import IdentificationError, LibraryRankWarning
 from identification.identify import identify

@@ -1,12 +1,11 @@
-"""Bench section (entry point: .section.run): energy-optimal planning with moving-obstacle
-avoidance (paper III.G).
+"""Bench section "planning" (entry point: .section.run): energy-optimal planning around a
+moving obstacle with the robot's closed-form model and with the identification section's
+model, and the planner's speed on that robot.
 
-Plans the paper's scenario with the closed-form (Pinocchio) model and, when one is
-given, the identified model; evaluates every executed trajectory's energy with
-Pinocchio on a 2 ms grid; adds a scenario whose obstacle crosses the optimal path,
-a minimum-jerk comparison, an N = 10 vs N = 40 energy-sample comparison, the
-solver timings (cold plans, warm re-plans, scipy trust-constr on the same NLP), the
-paper's parametrization against dense quadrature and higher degrees (true energy
-against the net-work lower bound), and a swaying obstacle that forces repeated
-re-planning.
+The motion is the robot's registered one (harness.robots.arm.bench_motion), from rest to
+rest. Its unobstructed energy optimum (closed form) is planned first; an obstacle then
+crosses the middle of one moving link of that optimum at mid-time, sweeping 0.5 m upward
+(planning.scenarios.crossing_scenario), and the arm plans and re-plans around it
+(Algorithm 2) with each model. A robot's declared extras (harness.sections.paper) add
+their scenarios. The plans go on to the replay section.
 """

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.sections.identification.study import HOLDOUT, n_train, scores
+from harness.studies.paper_identification.study import HOLDOUT, n_train, scores
 from identification.identify import identify
 from identification.regression.coupled import weighted_lstsq
 from identification.regression.denoise import denoise

@@ -1,23 +1,22 @@
 """The identification section of the bench: runs the study, writes its tables and figures.
 
-What is measured and how: see the package docstring (harness.sections.identification)."""
+What is measured and how: see the package docstring (harness.studies.paper_identification)."""
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from pathlib import Path
 
-import numpy as np
 from threadpoolctl import threadpool_limits
 
-from harness.sections.identification.denoising import (
+from harness.sections.base import Context, SectionResult, Target
+from harness.studies.paper_identification.denoising import (
     denoise_markdown,
     denoise_regress_markdown,
     denoise_then_regress,
 )
-from harness.sections.identification.figures import section_figures
-from harness.sections.identification.robustness import (
+from harness.studies.paper_identification.figures import section_figures
+from harness.studies.paper_identification.robustness import (
     acceptance,
     default_choice,
     expected_errors,
@@ -26,7 +25,7 @@ from harness.sections.identification.robustness import (
     robustness_markdown,
     why_joint3,
 )
-from harness.sections.identification.study import (
+from harness.studies.paper_identification.study import (
     LEVELS,
     METHODS,
     NOISE_SEEDS,
@@ -36,9 +35,8 @@ from harness.sections.identification.study import (
     compare,
     context,
 )
-from identification.identify import identify
-from identification.library.published import paper_library
-from identification.table4 import CONSISTENT_DOUBLE_PENDULUM, SYSTEMS, fit_system
+
+RATIO_TARGET = 1.25  # x the oracle's held-out error, every joint at 5 %
 
 TABLE_HEAD = ["| noise (seed) | joint | paper per-joint | coupled | coupled general "
               "| oracle: dense WLS, base params (reference, not a bound) "
@@ -66,34 +64,6 @@ def table_rows(level: float, c: dict, seed: int | None = None) -> list[str]:
                     f"{peers[0]} | {peers[1]} | {rp} | {cp['fresh']:.2e} "
                     f"({cp['fresh'] / max(cp['rel'], 1e-300):.2f}) |")
     return rows
-
-
-def _table4_markdown(fits) -> list[str]:
-    md = ["", "Table IV at 5 % noise (4000 samples, 60 s multi-sine; +/- = standard error of "
-          "the refit; libraries derived from each structure's atoms where known):", "",
-          "| system | method | eq. | term | true | paper identified | ours +/- s.e. | error |",
-          "|---|---|---|---|---|---|---|---|"]
-    for f in fits:
-        for c in f.coefficients:
-            paper = "-" if c.paper is None else f"{c.paper:g}"
-            md.append(f"| {f.system} | {f.method} | {c.joint} | {c.term} | {c.true:g} | {paper} | "
-                      f"{c.ours:.4f} +/- {c.stderr:.4f} | {100 * c.error:.2f} % |")
-        extra = "; ".join(f"eq. {j + 1}: {', '.join(e) or 'none'}" for j, e in enumerate(f.extra_terms))
-        md.append(f"| {f.system} | | | extra terms | | | {extra} | |")
-    lag = {f.system: f.lagrangian_residual for f in fits if f.lagrangian_residual}
-    md += ["", "Lagrangian consistency (relative residual of the noise-free torque fitted by one "
-           "Lagrangian of the structure's atoms): " + "; ".join(
-               f"{k}: {', '.join(f'{x:.1e}' for x in v)}" for k, v in lag.items())
-           + ". The printed double pendulum is not a Lagrangian system (eq. 1 has "
-           "theta1-dot^2 sin where physics has theta2-dot^2, and its coupling coefficient 2 "
-           "disagrees with eq. 2's 1); it is kept as printed and fitted *jointwise*: each "
-           "equation is F-tested for a Lagrangian form on its own; one that passes is fitted by "
-           "its atoms (coupling terms share one coefficient), one that fails on the library "
-           "features, the paper's method. Eq. 2 "
-           "is the pendulum m1 = 2.5, m2 = 0.5 kg, l1 = 1, l2 = 2 m; the consistent pair "
-           "(eq. 1 = 3 th1'' + th2'' cos + th2'^2 sin + 29.4 sin th1) is fitted by the "
-           "coupled regression, which shares m2 l1 l2 across its four terms."]
-    return md
 
 
 def _level_result(c: dict) -> dict:
@@ -130,13 +100,13 @@ def _intro(ctx: dict, c5: dict) -> list[str]:
             "error in brackets.", "", *TABLE_HEAD]
 
 
-def run(out_dir: Path, quick: bool = False) -> dict:
-    """Report section: markdown, results, figure paths, and the 5 % coupled model."""
+def run(ctx: Context) -> SectionResult:
+    """The study's markdown, results, targets, figures, and the 5 % coupled model."""
     with threadpool_limits(limits=1, user_api="blas"):  # small dense algebra: one thread is faster
-        return _run(out_dir, quick)
+        return _run(Path(ctx.out_dir), ctx.quick)
 
 
-def _run(out_dir: Path, quick: bool) -> dict:
+def _run(out_dir: Path, quick: bool) -> SectionResult:
     fig_dir = Path(out_dir) / "figures"
     fig_dir.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
@@ -171,30 +141,15 @@ def _run(out_dir: Path, quick: bool) -> dict:
            "L = " + " + ".join(f"{c:.6g}*{a}" for a, c in
                                zip(lagr["atoms"], lagr["coefficients"], strict=True)), "```"]
     d5 = c5["data"]
-    if not quick:
-        library = paper_library()
-        paper = identify(d5.q, d5.qd, d5.qdd, d5.tau, library, 0.25, d5.tau_clean)
-        res["paper_library_5pct_rel"] = paper.heldout_rel_rmse.tolist()
-        res["paper_library_span_residual"] = span_residual(library, d5).tolist()
-        md += ["", f"Published {len(library)}-feature library at 5 % (per joint): rel err "
-               f"{paper.heldout_rel_rmse.round(5).tolist()}; noise-free least-squares residual "
-               "of the clean torque on it (~1e-12 where it spans the joint's torque): "
-               + ", ".join(f"{x:.1e}" for x in res["paper_library_span_residual"]) + "."]
     md += denoise_markdown(res, ctx, d5)
     res["denoise_then_regress"] = denoise_then_regress(ctx, comps)
     md += denoise_regress_markdown(res["denoise_then_regress"])
     figs = section_figures(fig_dir, ctx, c5)
-    systems = SYSTEMS + (CONSISTENT_DOUBLE_PENDULUM,)
-    fits = [fit_system(s) for s in (systems if not quick else systems[1:2])]
-    res["table4"] = {f.system: {"max_coef_error": f.max_error, "heldout_rel_rmse": list(f.heldout_rel_rmse),
-                                "method": f.method, "extra_terms": [list(e) for e in f.extra_terms],
-                                "coefficients": [dataclasses.asdict(c) for c in f.coefficients],
-                                "lagrangian_residual": list(f.lagrangian_residual)} for f in fits}
-    md += _table4_markdown(fits)
-    res["seconds"] = time.perf_counter() - start
-    md += ["", f"Section time: {res['seconds']:.1f} s{' (quick)' if quick else ''}."]
-    return {"markdown": "\n".join(md), "results": res, "figures": [str(p) for p in figs],
-            "model": c5["fits"]["coupled"].model}
+    res["timing"] = {"seconds": time.perf_counter() - start}
+    targets = [Target(f"coupled / oracle error at 5 %, joint {j + 1}", x, RATIO_TARGET, "x")
+               for j, x in enumerate(res["acceptance_5pct"]["ratio_to_oracle"])]
+    return SectionResult("\n".join(md), res, [], targets, figures=figs,
+                         outputs={"model": c5["fits"]["coupled"].model})
 
 
 def _below_oracle(ratios, parameters: int) -> str:
@@ -205,18 +160,6 @@ def _below_oracle(ratios, parameters: int) -> str:
     where = "every joint" if len(below) == len(ratios) else "joint(s) " + ", ".join(map(str, below))
     return (f"below 1 on {where}: the oracle fits {parameters} dense base parameters while the "
             "truth is sparse in the atoms, so the oracle is a reference, not an upper bound")
-
-
-def span_residual(library, data) -> np.ndarray:
-    """Per joint, ||tau_clean - least-squares fit on the library|| / ||tau_clean||."""
-    columns = library.evaluate(data.q, data.qd, data.qdd)
-    out = []
-    for j in range(data.tau_clean.shape[1]):
-        x = columns if columns.ndim == 2 else columns[:, j]
-        coef = np.linalg.lstsq(x, data.tau_clean[:, j], rcond=None)[0]
-        out.append(np.linalg.norm(x @ coef - data.tau_clean[:, j])
-                   / np.linalg.norm(data.tau_clean[:, j]))
-    return np.array(out)
 
 
 def _atoms_markdown(ctx: dict, c5: dict) -> list[str]:

@@ -1,0 +1,124 @@
+"""Identification of any robot, scored against the oracle on motions it was not fitted on.
+
+The oracle is two-step weighted least squares on Pinocchio's joint-torque regressor reduced
+to base parameters, plus per-joint viscous and armature columns (the joint terms MuJoCo's
+inverse dynamics adds): the best a model knowing the structure can do on the same samples.
+Models are judged on two motions never used in fitting: a fresh run of `generate`'s own
+excitation family (another seed), and a motion of another family (`sines_motion`: a few
+sines of random frequency, amplitude and phase per joint), so that no figure rests on the
+excitation the project designed alone.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from harness.data.generate import SAMPLE_RATE, generate, inverse_torques
+from harness.robots.baseline import PinocchioModel
+from harness.robots.plant import load_plant
+from identification.identify import identify
+from identification.metrics import rel_error
+from identification.regression.oracle import BaseParameterRegression
+
+SAMPLES, NOISE, HOLDOUT = 4000, 0.05, 0.25
+FILL = 0.85  # of each joint's range the sines motion may sweep
+
+
+@dataclass(frozen=True)
+class Motion:
+    """Joint states (n, dof) and the clean torque MuJoCo's inverse dynamics gives there."""
+
+    name: str
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    tau_clean: np.ndarray
+
+
+def oracle_design(baseline: PinocchioModel, q, qd, qdd) -> np.ndarray:
+    """(n, dof, 10 nb + 2 dof): Pinocchio's regressor, then viscous (qd_j) and armature
+    (qdd_j) columns acting on joint j alone."""
+    n, dof = q.shape
+    joint = np.zeros((n, dof, 2 * dof))
+    idx = np.arange(dof)
+    joint[:, idx, idx], joint[:, idx, dof + idx] = qd, qdd
+    return np.concatenate([baseline.regressor(q, qd, qdd), joint], axis=2)
+
+
+def sines_motion(robot: str, samples: int, seed: int, rate: float = SAMPLE_RATE) -> Motion:
+    """A motion of another family than generate's Fourier series: per joint 3 to 6 sines of
+    random frequencies (0.05-1 Hz), amplitudes and phases, scaled into FILL of the joint's
+    range (unlimited joints: of [-pi, pi]); torque by mj_inverse on the robot's plant."""
+    plant = load_plant(robot)
+    lower, upper = plant.limits()
+    rng = np.random.default_rng([seed, 7919])
+    t = np.arange(samples) / rate
+    q, qd, qdd = (np.zeros((samples, plant.dof)) for _ in range(3))
+    for j in range(plant.dof):
+        k = int(rng.integers(3, 7))
+        w = 2 * np.pi * rng.uniform(0.05, 1.0, k)
+        a, phi = rng.uniform(0.2, 1.0, k), rng.uniform(0, 2 * np.pi, k)
+        s = np.sin(np.outer(t, w) + phi)
+        shape = s @ a
+        lo, hi = shape.min(), shape.max()
+        scale = FILL * (upper[j] - lower[j]) / (hi - lo)
+        centre = 0.5 * (lower[j] + upper[j]) - scale * 0.5 * (lo + hi)
+        q[:, j] = centre + scale * shape
+        qd[:, j] = scale * (np.cos(np.outer(t, w) + phi) @ (a * w))
+        qdd[:, j] = -scale * (s @ (a * w**2))
+    return Motion("sines", q, qd, qdd, inverse_torques(plant.model, q, qd, qdd))
+
+
+def generated_motion(robot: str, samples: int, seed: int) -> Motion:
+    """A noise-free run of generate's own excitation family."""
+    data = generate(robot, samples, 0.0, seed, "inverse")
+    return Motion("fresh", data.q, data.qd, data.qdd, data.tau_clean)
+
+
+def oracle_fit(baseline: PinocchioModel, data, n_train: int) -> tuple[BaseParameterRegression, float]:
+    """The oracle fitted on the first n_train samples of data; its CPU seconds."""
+    cpu = time.process_time()
+    oracle = BaseParameterRegression().fit(
+        oracle_design(baseline, data.q[:n_train], data.qd[:n_train], data.qdd[:n_train]),
+        data.tau[:n_train])
+    return oracle, time.process_time() - cpu
+
+
+def score_draw(data, libraries: dict, baseline: PinocchioModel, judges: list[Motion]) -> dict:
+    """Each library's identification and the oracle on one dataset (the first 1 - HOLDOUT
+    trains), scored on every judge motion against its clean torque: relative RMS error per
+    joint; the model of each library kept under 'models'."""
+    n = int(round(len(data.q) * (1 - HOLDOUT)))
+    out: dict = {"seed": int(data.meta["seed"]), "models": {}}
+    for name, library in libraries.items():
+        cpu = time.process_time()
+        result = identify(data.q, data.qd, data.qdd, data.tau, library, HOLDOUT, data.tau_clean)
+        cpu = time.process_time() - cpu
+        out["models"][name] = result.model
+        out[name] = {m.name: rel_error(result.model.torque(m.q, m.qd, m.qdd), m.tau_clean).tolist()
+                     for m in judges}
+        out[name]["timing"] = {"cpu_s": cpu}
+    oracle, cpu = oracle_fit(baseline, data, n)
+    out["oracle"] = {m.name: rel_error(oracle.predict(oracle_design(baseline, m.q, m.qd, m.qdd)),
+                                       m.tau_clean).tolist() for m in judges}
+    out["oracle"]["timing"] = {"cpu_s": cpu}
+    out["oracle_parameters"] = len(oracle.columns_)
+    return out
+
+
+def ratios(draws: list[dict], method: str, judge: str) -> np.ndarray:
+    """(draws, dof) error ratios of method to the oracle on the judge motion."""
+    return np.array([np.array(d[method][judge]) / np.maximum(np.array(d["oracle"][judge]), 1e-300)
+                     for d in draws])
+
+
+def closed_form_gap(robot: str, motion: Motion) -> float:
+    """Largest |Pinocchio RNEA (+ damping) - MuJoCo inverse dynamics| over the motion,
+    relative to the largest torque: two independent implementations of the same model."""
+    model = PinocchioModel(load_plant(robot).pinocchio())
+    tau = model.torque(motion.q, motion.qd, motion.qdd)
+    return float(np.max(np.abs(tau - motion.tau_clean)) / max(np.max(np.abs(motion.tau_clean)),
+                                                               1e-300))

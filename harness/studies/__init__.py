@@ -1,0 +1,32 @@
+"""Long studies, run on demand: `torquebench study NAME --out DIR` (or `bench --full`).
+
+Each is a module harness.studies.<name> (for a package, its `section` module) with
+`run(context) -> SectionResult` like a bench section, and a one-line description here. A
+study reports what it measures as results, checks and targets; it is smoke-tested in
+tests/test_studies.py on its quick form.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+STUDIES = {
+    "paper_identification": "the paper's identification study on its arm: noise levels, "
+                            "robustness over noise draws, denoising, pysindy peers",
+    "paper_planning": "the paper's planning study: minimum jerk, parametrizations against dense "
+                      "quadrature, the swaying obstacle, solver timings",
+    "realtime": "Algorithm 2 on 20 random obstacle scenarios: re-plan CPU times, deadline "
+                "misses, executed energy and clearance, per planner",
+    "closeloop_plants": "closing the loop on the Lynxmotion's hand-written plants, with both "
+                        "declared models (Pinocchio and the identified one)",
+}
+
+
+def load_study(name: str):
+    """The entry module of study name (ValueError if it is not one)."""
+    if name not in STUDIES:
+        raise ValueError(f"unknown study {name!r} (known: {', '.join(STUDIES)})")
+    module = importlib.import_module(f"harness.studies.{name}")
+    if hasattr(module, "__path__"):
+        module = importlib.import_module(f"harness.studies.{name}.section")
+    return module

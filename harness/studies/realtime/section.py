@@ -1,0 +1,36 @@
+"""`torquebench study realtime`: the real-time study on the robot, as a report section.
+
+Its timing figures are targets (CPU time of the planning thread, measured side by side in
+one run); whether a re-plan missed its deadline depends on the machine's speed, so every
+result of the study is reported as timing-dependent."""
+
+from __future__ import annotations
+
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
+from harness.robots.scene import replay_scene
+from harness.sections.base import Context, SectionResult, Target
+from harness.studies.realtime import measure
+
+REPLAN_MEDIAN_MS, REPLAN_MAX_MS, COLD_MAX_MS = 2.0, 10.0, 25.0
+
+
+def run(ctx: Context) -> SectionResult:
+    robot = ctx.robot.name
+    study = measure.run(PinocchioModel(load_pinocchio(robot)), replay_scene(robot), ctx.quick)
+    default = study["default"]
+    warm, cold = default["replan_cpu_ms"], default["cold_cpu_ms"]
+    opt = study["optimality"]
+    targets = [
+        Target("default planner: warm re-plan CPU time, median", warm["median"] if warm["count"]
+               else None, REPLAN_MEDIAN_MS, "ms", timing=True),
+        Target("default planner: warm re-plan CPU time, max", warm["max"] if warm["count"]
+               else None, REPLAN_MAX_MS, "ms", timing=True),
+        Target("default planner: cold plan CPU time, max", cold["max"], COLD_MAX_MS, "ms",
+               timing=True),
+        Target("scenarios where the default is within 0.5 % of the global check",
+               opt["default_within_tolerance"], len(opt["scenarios"]), "scenarios",
+               lower_is_better=False, timing=True),
+    ]
+    return SectionResult("\n".join(measure.markdown_lines(study)), {"timing": study}, [],
+                         targets)
