@@ -4,6 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 OUT ?= bench-out
+ARGS ?=
 
 # Small matrices: single-threaded BLAS is faster than contended threads (see harness/cli.py).
 export OPENBLAS_NUM_THREADS ?= 1
@@ -24,7 +25,7 @@ test: $(STAMP)
 	MUJOCO_GL=egl TORQUEBENCH_HYPOTHESIS=full $(PY) -m pytest -q -n 2
 
 bench: $(STAMP)
-	MUJOCO_GL=egl $(VENV)/bin/torquebench bench --out $(OUT)
+	MUJOCO_GL=egl $(VENV)/bin/torquebench bench --out $(OUT) $(ARGS)
 
 # the wheel in a fresh venv, run from outside the checkout (also in CI)
 install-check:

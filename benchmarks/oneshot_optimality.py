@@ -23,7 +23,7 @@ import numpy as np
 from benchmarks import random_scenarios
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
-from harness.sections.planning import realtime
+from harness.studies.realtime import measure as realtime
 from planning.config import true_energy_config
 from planning.replanning import Execution, plan_multistart, plan_segment
 from planning.solver import ObstacleForecast, Planner

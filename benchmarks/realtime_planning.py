@@ -18,7 +18,7 @@ from benchmarks import random_scenarios
 from harness.io import write_json
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
-from harness.sections.planning import realtime
+from harness.studies.realtime import measure as realtime
 from planning.config import true_energy_config
 
 

@@ -42,9 +42,10 @@ class PlannerConfig:
     power_breaks: int = 7  # "split": intervals of the quadrature = power_breaks + 1
     degree: int = 4  # of the joint polynomials (paper: 4); degree - 1 free coefficients per joint
     obstacle_slots: int = 24
-    # zero velocity at the goal; False: the paper's free end velocity (its optimum may arrive
-    # moving, which no real arm can execute and whose energy leaves out the braking)
-    rest_at_goal: bool = True
+    # zero velocity at the goal. The paper's formulation leaves it free (the default here);
+    # its optimum may arrive moving, which no real arm can execute and whose energy leaves out
+    # the braking: `plan`, the bench and true_energy_config() arrive at rest
+    rest_at_goal: bool = False
     lower: tuple[float, ...] = (-pi / 2, 0.0, -pi)
     upper: tuple[float, ...] = (pi / 2, pi, 0.0)
     limit_samples: int = 8
@@ -78,9 +79,10 @@ class PlannerConfig:
 def true_energy_config(**changes) -> PlannerConfig:
     """What `torquebench plan` and the bench plan with by default: the true energy (Gauss-
     Legendre, N = 20; eq. 18 with N = 10 lets the optimizer hide negative power between its
-    samples) and the best of 4 cold starts (the landscape has local optima)."""
+    samples), the best of 4 cold starts (the landscape has local optima), at rest at the
+    goal."""
     return dataclasses.replace(PlannerConfig(energy_quadrature="gauss", energy_samples=20,
-                                             starts=4), **changes)
+                                             starts=4, rest_at_goal=True), **changes)
 
 
 @dataclass(frozen=True)

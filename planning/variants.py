@@ -22,7 +22,7 @@ class Parametrization:
     quadrature: str = "paper"
     samples: int = 10
     smoothing: float = 0.0
-    rest_at_goal: bool = True
+    rest_at_goal: bool = False  # the paper's free end velocity
 
     def config(self, base: PlannerConfig | None = None) -> PlannerConfig:
         """`base` (default: the paper's configuration) with this parametrization."""
@@ -32,7 +32,7 @@ class Parametrization:
                                    rest_at_goal=self.rest_at_goal)
 
 
-PAPER = Parametrization("quartic, N=10 (paper)", rest_at_goal=False)  # free end velocity
+PAPER = Parametrization("quartic, N=10 (paper)")
 PARAMETRIZATIONS = (
     PAPER,
     Parametrization("quartic, Gauss N=20", 4, "gauss", 20),

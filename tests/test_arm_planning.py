@@ -8,13 +8,15 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from harness.cli import main
 from harness.robots.arm import bench_motion, planner_config
 from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
-from harness.sections import arm_replay
+from harness.robots.registry import get_robot, load_pinocchio
+from harness.sections import replay
+from harness.sections.base import Context, SectionResult
 from planning.clearance import link_clearances
 from planning.replanning import execute
 from planning.scenarios import crossing_scenario
@@ -64,11 +66,41 @@ def test_ur5_plan_avoids_with_every_link_and_replays_as_planned(tmp_path, crossi
     assert replayed["tracking_rms"] <= 1e-3
     assert abs(replayed["energy"] / plan["energy"] - 1) <= 0.02
     assert replayed["min_clearance"] >= plan["threshold"] - 5e-3
-    # the bench's replay section on the same plan: its checks, per-link figure, headline
-    section = arm_replay.run(tmp_path, quick=True, plans={"ur5_pinocchio": plan}, robot=ROBOT)
-    assert section["results"]["acceptance"] and all(section["results"]["acceptance"].values())
-    assert any(f.endswith("ur5_pinocchio_clearance.png") for f in section["figures"])
-    assert all(Path(f).is_file() for f in section["figures"])
+    # the bench's replay section on the same plan: its checks, per-link figure
+    ctx = Context(get_robot(ROBOT), tmp_path, quick=True, video=False,
+                  earlier={"planning": SectionResult("", outputs={"plans": {"ur5_pinocchio": plan}})})
+    section = replay.run(ctx)
+    assert section.checks and all(c.passed for c in section.checks)
+    assert any(f.name == "replay_ur5_pinocchio_clearance.png" for f in section.figures)
+    assert all(Path(f).is_file() for f in section.figures)
+
+
+def _potential(model, q) -> float:
+    return pin.computePotentialEnergy(model, model.createData(), np.asarray(q, float))
+
+
+def test_ur5_plan_ends_at_rest_and_spends_what_it_descends(tmp_path):
+    """Between two poses with the obstacle far away: by default the plan arrives at rest and
+    spends at least |V(T) - V(0) + dissipated| (the kinetic energy is zero at both ends);
+    with --free-end (the paper's formulation) it may arrive moving."""
+    base, _ = bench_motion(ROBOT)
+    args = ["plan", "--robot", ROBOT, "--model", "pinocchio", "--start", _csv(base.start),
+            "--goal", _csv(base.goal), "--obstacle-from", "5,5,5", "--obstacle-to", "5,5,6"]
+    rest, free = tmp_path / "rest.json", tmp_path / "free.json"
+    assert main([*args, "--out", str(rest)]) == 0
+    assert main([*args, "--free-end", "--out", str(free)]) == 0
+    model = load_pinocchio(ROBOT)
+    for path in (rest, free):
+        plan = json.loads(path.read_text())
+        t, qd = np.asarray(plan["t"]), np.asarray(plan["qd"])
+        p = np.sum(np.asarray(model.damping) * qd**2, axis=1)
+        dissipated = float(np.sum(0.5 * (p[1:] + p[:-1]) * np.diff(t)))
+        drop = _potential(model, plan["q"][0]) - _potential(model, plan["q"][-1])
+        if path == rest:
+            assert np.max(np.abs(qd[-1])) <= 1e-6 and plan["rest_at_goal"] is True
+            assert plan["energy"] >= abs(drop - dissipated) - 1e-3, (plan["energy"], drop)
+        else:
+            assert plan["rest_at_goal"] is False
 
 
 def _bad_inputs(scenario):

@@ -1,10 +1,10 @@
-"""`torquebench bench` on a reduced real run (no stand-in sections): report files, headline,
-exit status on a failed acceptance check, determinism apart from timings, and interrupts
-(SIGINT, SIGKILL) leaving every result file complete or absent.
+"""`torquebench bench` on a reduced real run (no stand-in sections): report files, checks
+and targets, exit status on a failed check, determinism apart from timings, interrupts
+(SIGINT, SIGKILL) leaving every result file complete or absent; and the whole quick bench on
+two robots: exit 0, the same sections, the same report twice.
 
-The reduced bench is `--quick --sections REDUCED`: a real section of the default robot with
-acceptance checks, small enough to run several times here; the tests select it by name, so
-sections added later do not change what they run.
+The reduced bench is `--quick --sections REDUCED`: a real section with checks and targets,
+small enough to run several times here.
 """
 
 from __future__ import annotations
@@ -20,15 +20,16 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.commands.bench import Progress, run_section
-from harness.report.headline import MAX_ROWS, headline, headline_markdown
+from harness.commands.bench import Progress, run_one
+from harness.robots.registry import get_robot
+from harness.sections import SECTIONS
+from harness.sections.base import Context, SectionResult
 from tests.result_files import incomplete_files, interrupt
 
-REDUCED = "arm_identification"
+REDUCED = "identification"
 ARGS = ["bench", "--quick", "--no-video", "--sections", REDUCED]
 # A key holding a timing says so: seconds, *_s, *_ms, "... s", timing/elapsed/started.
 TIMING_KEY = re.compile(r"(seconds|timing|elapsed|started|(^|[_ ])m?s\b|_ms\b|_ms_|cpu_)", re.I)
@@ -49,43 +50,83 @@ def test_reduced_bench_writes_complete_report(reduced):
     report = json.loads((out / "report.json").read_text())
     assert code == 0 and report["ok"] and "report:" in err
     assert report["sections"][REDUCED]["status"] == "ok" and list(report["sections"]) == [REDUCED]
-    assert report["command"] == "torquebench bench --quick --sections arm_identification --no-video"
+    assert report["command"] == "torquebench bench --quick --sections identification --no-video"
     assert report["machine"]["cores"] >= 1 and report["timing"]["elapsed_s"] > 0
     assert incomplete_files(out) == ([], [])
-    # the acceptance count is every boolean under an 'acceptance*' dict of the results
-    results = report["sections"][REDUCED]["results"]
-    expected = sum(isinstance(v, bool) for v in results["acceptance"].values())
-    assert report["headline"]["acceptance"] == {"total": expected, "passed": expected,
-                                                "failed": []}
-    rows = report["headline"]["rows"]
-    assert 0 < len(rows) <= MAX_ROWS and rows[-1]["measured"] == f"{expected} of {expected}"
-    assert (out / "headline.md").read_text() == headline_markdown(report["headline"]) + "\n"
+    checks = report["sections"][REDUCED]["checks"]
+    assert report["checks"] == {"total": len(checks), "failed": []} and len(checks) >= 3
+    assert all(c["passed"] is True for c in checks)
+    targets = report["targets"]
+    assert targets and all({"measured", "target", "gap", "met", "timing"} <= t.keys()
+                           for t in targets)
+    for t in targets:  # the gap is the shortfall in the target's direction, 0 when met
+        if t["met"] is not None:
+            short = (t["measured"] - t["target"]) * (1 if t["lower_is_better"] else -1)
+            assert t["gap"] == pytest.approx(max(0.0, short)) and t["met"] == (short <= 0)
     md = (out / "report.md").read_text()
-    assert f"all {expected} acceptance checks passed" in md and "## Headline" in md
+    assert f"all {len(checks)} checks hold" in md and "## Targets" in md and "## Headline" in md
+    assert "| section | target | measured | aim | gap | met |" in (out / "headline.md").read_text()
 
 
-def test_failed_acceptance_check_exits_3_naming_it(tmp_path, monkeypatch, capsys):
+def test_failed_check_exits_3_naming_it(tmp_path, monkeypatch, capsys):
     """The real section under a bar it cannot meet: the report is written, the exit status
     is 3 and stderr names the failed check."""
-    import harness.sections.arm_identification as section
+    import harness.sections.identification as section
 
     monkeypatch.setattr(section, "EXACT", 0.0)  # noise-free error must be exactly zero
     out = tmp_path / "out"
     assert main([*ARGS, "--out", str(out)]) == 3
     err = capsys.readouterr().err
-    assert "bench FAILED acceptance: 1 of" in err and f"{REDUCED}: acceptance.noise_free_exact" in err
+    name = f"{REDUCED}: noise_free_exact_prior"
+    assert "bench FAILED: 1 of" in err and name in err
     report = json.loads((out / "report.json").read_text())
-    assert report["acceptance_failed"] == [f"{REDUCED}: acceptance.noise_free_exact"]
+    assert report["checks"]["failed"] == [name] and report["ok"] is False
     assert "**1 of" in (out / "report.md").read_text()  # the status line says it too
+
+
+def test_a_missed_target_does_not_change_the_exit_status(tmp_path, monkeypatch):
+    import harness.sections.identification as section
+
+    monkeypatch.setattr(section, "MEDIAN_TARGET", 0.0)  # no model beats a zero ratio
+    out = tmp_path / "out"
+    assert main([*ARGS, "--out", str(out)]) == 0
+    report = json.loads((out / "report.json").read_text())
+    missed = [t for t in report["targets"] if t["met"] is False]
+    assert missed and report["ok"] and "**no**" in (out / "report.md").read_text()
 
 
 def test_a_section_that_raises_is_recorded_as_failed(tmp_path, capsys):
     """The real replay section on a plan without time stamps: failed, with its error line."""
-    outcome, raw = run_section("replay", Progress(), tmp_path, True,
-                               plans={"broken": {"q": [[0.0, 0.0, 0.0]]}}, video=False)
-    assert outcome.status == "failed" and raw == {}
+    ctx = Context(get_robot("lynxmotion"), tmp_path, True, False, {
+        "planning": SectionResult("", outputs={"plans": {"broken": {"q": [[0.0, 0.0, 0.0]]}}})})
+    from harness.sections import load_section
+
+    outcome, result = run_one("replay", load_section, ctx, Progress())
+    assert outcome.status == "failed" and result is None
     assert outcome.error == "UserError: plan is missing field(s): t, qd, qdd, obstacle, threshold"
     assert "replay: FAILED" in capsys.readouterr().err
+
+
+def test_a_warning_raised_in_a_section_reaches_stderr_and_the_report(tmp_path, monkeypatch,
+                                                                     capsys):
+    import warnings
+
+    import harness.sections.identification as section
+
+    real = section.score_draw
+
+    def warned(*args, **kwargs):
+        warnings.warn("library nearly rank deficient", RuntimeWarning, stacklevel=1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(section, "score_draw", warned)
+    out = tmp_path / "out"
+    assert main([*ARGS, "--out", str(out)]) == 0
+    assert "identification: warning: RuntimeWarning: library nearly rank deficient" in \
+        capsys.readouterr().err
+    report = json.loads((out / "report.json").read_text())
+    assert report["sections"][REDUCED]["warnings"] == [
+        "RuntimeWarning: library nearly rank deficient"]
 
 
 def test_unknown_section_is_one_line_exit_2(tmp_path, capsys):
@@ -95,11 +136,17 @@ def test_unknown_section_is_one_line_exit_2(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
+def _timing_target(value) -> bool:
+    return isinstance(value, dict) and value.get("timing") is True
+
+
 def _without_timings(tree):
+    """The tree without timing keys and without the targets declared timing-dependent."""
     if isinstance(tree, dict):
-        return {k: _without_timings(v) for k, v in tree.items() if not TIMING_KEY.search(str(k))}
+        return {k: _without_timings(v) for k, v in tree.items()
+                if not TIMING_KEY.search(str(k)) and not _timing_target(v)}
     if isinstance(tree, list):
-        return [_without_timings(v) for v in tree]
+        return [_without_timings(v) for v in tree if not _timing_target(v)]
     return tree
 
 
@@ -125,6 +172,25 @@ def _keys(tree):
     elif isinstance(tree, list):
         for v in tree:
             yield from _keys(v)
+
+
+def _quick_bench(out: Path, *extra: str) -> tuple[int, dict]:
+    env = {**dict(os.environ), "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    proc = subprocess.run([sys.executable, "-m", "harness", "bench", "--quick", "--no-video",
+                           "--out", str(out), *extra], capture_output=True, text=True, env=env)
+    return proc.returncode, json.loads((out / "report.json").read_text())
+
+
+@pytest.mark.slow
+def test_quick_bench_is_green_and_deterministic_on_two_robots(tmp_path):
+    """The whole quick bench: exit 0 on the default robot and on the UR5, with the same
+    sections; on the default robot twice, the same report apart from declared timings."""
+    code, first = _quick_bench(tmp_path / "a")
+    code_ur5, ur5 = _quick_bench(tmp_path / "ur5", "--robot", "ur5")
+    assert code == 0 and code_ur5 == 0, (first["checks"], ur5["checks"])
+    assert list(first["sections"]) == list(ur5["sections"]) == list(SECTIONS)
+    _, second = _quick_bench(tmp_path / "b")
+    assert _without_timings(first) == _without_timings(second)
 
 
 @pytest.mark.parametrize("sig, when", [
@@ -164,43 +230,3 @@ def test_atomic_write_killed_mid_write_leaves_target_absent(tmp_path):
     bad, temporaries = incomplete_files(tmp_path)
     assert not bad and (not target.exists() or json.loads(target.read_text()))
     assert all(Path(t).name.startswith(".big.json.") for t in temporaries)
-
-
-def test_headline_rows_from_section_results():
-    """The rows are computed from the results given: ratios, percentages, the threshold."""
-    levels = {"0.05": {"joints": [{"rel": 0.004, "oracle": 0.002}, {"rel": 0.001, "oracle": 0.002}]}}
-    plans = {"p": {"energy": 0.5, "min_clearance": 0.0795, "threshold": 0.07},
-             "i": {"energy": 0.51, "min_clearance": 0.081, "threshold": 0.07}}
-    results = {
-        "identification": {"levels": levels, "acceptance_5pct": {"a": True, "b": False}},
-        "planning": {"paper": {"identified": {"energy_pinocchio_J": 0.49},
-                               "pinocchio": {"energy_pinocchio_J": 0.5}}},
-        "replay": {"plans": plans, "comparison": {"identified": "i", "closed_form": "p",
-                                                  "energy_ratio_replayed": 1.02}},
-    }
-    h = headline(results)
-    text = {r["question"].split(":")[0]: r["measured"] for r in h["rows"]}
-    assert h["rows"][1]["numbers"]["ratio"] == [2.0, 0.5]
-    assert "0.400 %, 0.100 %" in h["rows"][0]["measured"]
-    assert "(-2.000 %)" in text["Paper scenario"]
-    assert text["Replayed"] == "81.0 / 79.5 mm (threshold 70 mm)"
-    assert h["acceptance"] == {"total": 2, "passed": 1, "failed": ["identification: acceptance_5pct.b"]}
-    assert h["rows"][-1]["measured"].startswith("1 of 2") and len(h["rows"]) <= MAX_ROWS
-    assert np.isclose(h["rows"][2]["numbers"]["identified_J"], 0.49)
-
-
-def test_readme_latest_benchmark_is_labelled_and_idempotent(reduced, tmp_path):
-    from harness.report.readme import update_readme
-
-    _, out, _ = reduced
-    readme = tmp_path / "README.md"
-    readme.write_text("# T\n\n## Latest benchmark\n\nold table\n\n## Commands\n\nkeep me\n")
-    update_readme(out, readme)
-    first = readme.read_text()
-    report = json.loads((out / "report.json").read_text())
-    assert "old table" not in first and "keep me" in first
-    assert headline_markdown(report["headline"]) in first
-    assert report["machine"]["cpu"] in first and report["command"] in first
-    assert report["timing"]["started_utc"] in first
-    update_readme(out, readme)
-    assert readme.read_text() == first

@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from harness.cli import main
+from harness.replay.checks import checks
 from harness.replay.reference import plan_reference
 from harness.replay.simulate import replay
 from harness.robots.arm import motor_torque_limit
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_mujoco, load_pinocchio
-from harness.sections.replay import checks
 from planning.config import PlannerConfig, Scenario
 from planning.replanning import execute
 from planning.result import TORQUE_TOLERANCE, evaluate, to_json

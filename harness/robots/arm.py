@@ -89,13 +89,15 @@ def torque_limit(robot: str) -> tuple[float, ...] | None:
 
 
 def planner_config(robot: str, **changes) -> PlannerConfig:
-    """The default planner configuration on robot: its links, joint and torque limits, and
-    the solver its registry entry names (IPOPT unless said: on the UR5's crossing, compiled
+    """The default planner configuration on robot: its links, joint and torque limits, the
+    solver its registry entry names, at rest at the goal (planning.config's default is the
+    paper's free end) (IPOPT unless said: on the UR5's crossing, compiled
     NLP, fatrop's cold solve stopped at its 300-iteration cap and half its warm re-plans at
     60, each then rescued by IPOPT; IPOPT alone: 18 + 6 iterations cold, 4-7 per re-plan)."""
     lower, upper = joint_limits(robot)
     base = dict(geometry=arm_geometry(robot), lower=lower, upper=upper,
-                torque_limit=torque_limit(robot), solver=robot_entry(robot).solver)
+                torque_limit=torque_limit(robot), solver=robot_entry(robot).solver,
+                rest_at_goal=True)
     return dataclasses.replace(PlannerConfig(), **{**base, **changes})
 
 

@@ -1,4 +1,6 @@
-"""Bench section: close the loop on measured data from plants with undeclared effects.
+"""Study `closeloop_plants`: close the loop on measured data from the Lynxmotion's
+hand-written plants with undeclared effects (the bench's closeloop section writes its plants
+from any arm's model; these are the paper arm's own files).
 
 Plants (models/lynxmotion/): `lynxmotion_friction.xml` (the bench's closeloop plant),
 `lynxmotion_payload.xml`, `lynxmotion_coupled.xml` (an effect outside the dictionary)
@@ -25,6 +27,7 @@ from harness.closeloop.figures import error_figure, residual_figure
 from harness.closeloop.plants import DECLARED_MJCF
 from harness.closeloop.run import CloseLoopRun, run_closeloop
 from harness.data.generate import SAMPLE_RATE
+from harness.sections.base import Context, SectionResult, check
 from identification.closeloop.loop import UNEXPLAINED_SIZE
 
 NOISE = 0.05  # torque noise std / torque std of the measured data
@@ -89,9 +92,9 @@ def _results(run: CloseLoopRun) -> dict:
     return res
 
 
-def run(out_dir: Path, quick: bool = False) -> dict:
-    """Run every plant with both declared models; markdown, results and figures."""
-    out_dir = Path(out_dir)
+def run(ctx: Context) -> SectionResult:
+    """Run every plant with both declared models; markdown, results, checks and figures."""
+    out_dir, quick = Path(ctx.out_dir), ctx.quick
     figures_dir = out_dir / "figures"
     figures_dir.mkdir(parents=True, exist_ok=True)
     samples = 3000 if quick else 4000
@@ -134,4 +137,6 @@ def run(out_dir: Path, quick: bool = False) -> dict:
         f"carries structure above {UNEXPLAINED_SIZE:g} noise sigma.", "",
         *[f"![{p.stem}](figures/{p.name})" for p in figures],
     ]
-    return {"markdown": "\n".join(md), "results": results, "figures": [str(p) for p in figures]}
+    checks = [check(f"{plant}.{declared}.{k}", v) for plant, by_model in results.items()
+              for declared, r in by_model.items() for k, v in r["checks"].items()]
+    return SectionResult("\n".join(md), results, checks, figures=figures)

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-from harness.sections.paper import scenario, tables
+from harness.sections.paper.scenario import run as scenario_run
+from harness.sections.paper.tables import run as tables_run
 
 
 class Extra(NamedTuple):
@@ -18,4 +19,4 @@ class Extra(NamedTuple):
     planning: object
 
 
-EXTRAS = {"paper": Extra(tables.run, scenario.run)}
+EXTRAS = {"paper": Extra(tables_run, scenario_run)}

@@ -1,0 +1,59 @@
+"""Planning on any robot, robot in, results out: what an executed plan costs against the
+physical bound, and the checks every plan must pass (shared by the planning section and the
+robot extras that plan)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from harness.robots.baseline import PinocchioModel
+from harness.sections.base import check
+from planning.energy import absolute_energy
+from planning.result import CLEARANCE_TOLERANCE, END_TOLERANCE, closest_link
+
+REST_TOLERANCE = 1e-6  # rad/s at the goal
+ENERGY_TOLERANCE = 1e-3  # J below the physical bound still counted (quadrature)
+
+
+def energy_bound(model: pin.Model, result) -> float:
+    """What any motion from rest to rest along result's path must spend (J): |V(T) - V(0)
+    + dissipated|, the work the motors do net of the viscous damping's, since the kinetic
+    energy is zero at both ends and integral |P| >= |integral P|."""
+    data = model.createData()
+    v = [pin.computePotentialEnergy(model, data, result.q[k]) for k in (0, -1)]
+    damping = np.asarray(model.damping)
+    p = np.sum(damping * result.qd**2, axis=1)
+    dissipated = float(np.sum(0.5 * (p[1:] + p[:-1]) * np.diff(result.t)))
+    return abs(v[1] - v[0] + dissipated)
+
+
+def summary(result, baseline: PinocchioModel, config) -> dict:
+    """What one executed plan costs and how close it comes (true energy: Pinocchio)."""
+    links = closest_link(result, config)
+    return {"energy_J": result.energy,
+            "true_energy_J": absolute_energy(baseline, result.t, result.q, result.qd, result.qdd),
+            "energy_bound_J": energy_bound(baseline.model, result),
+            "end_speed_rad_s": float(np.max(np.abs(result.qd[-1]))),
+            "min_clearance_m": float(result.clearance.min()),
+            "closest_link": links["closest_link"],
+            "end_error_rad": result.end_error, "replans": len(result.execution.segments) - 1,
+            "peak_torque_Nm": result.peak_torque.tolist(), "feasible": result.feasible,
+            "problems": list(result.problems)}
+
+
+def plan_checks(name: str, s: dict, threshold: float, rest: bool) -> list:
+    out = [check(f"{name}_feasible", s["feasible"], "; ".join(s["problems"]) or "no problem"),
+           check(f"{name}_reaches_goal", s["end_error_rad"] <= END_TOLERANCE,
+                 f"end error {s['end_error_rad']:.1e} rad"),
+           check(f"{name}_clearance_held", s["min_clearance_m"] >= threshold - CLEARANCE_TOLERANCE,
+                 f"min clearance {1e3 * s['min_clearance_m']:.1f} mm, threshold "
+                 f"{1e3 * threshold:.0f} mm")]
+    if rest:
+        out += [check(f"{name}_ends_at_rest", s["end_speed_rad_s"] <= REST_TOLERANCE,
+                      f"end speed {s['end_speed_rad_s']:.1e} rad/s"),
+                check(f"{name}_spends_the_physical_bound",
+                      s["true_energy_J"] >= s["energy_bound_J"] - ENERGY_TOLERANCE,
+                      f"{s['true_energy_J']:.4f} J spent, |dV + dissipated| = "
+                      f"{s['energy_bound_J']:.4f} J")]
+    return out
