@@ -160,22 +160,22 @@ def run(args) -> int:
     return verdict(outcomes, progress, out_dir)
 
 
-def verdict(outcomes, progress: Progress, out_dir: Path) -> int:
+def verdict(outcomes, progress: Progress, out_dir: Path, what: str = "bench") -> int:
     """Exit status: 1 if a section failed, 3 if a check failed (each named on stderr), 0
     otherwise; the report is written either way. Targets are reported, never judged here."""
     progress(f"report: {out_dir / 'report.md'}")
     failed = [o.name for o in outcomes if o.status == "failed"]
     if failed:
-        progress(f"bench FAILED: {', '.join(failed)}")
+        progress(f"{what} FAILED: {', '.join(failed)}")
         return 1
     checks = [f"{o.name}: {c.name}" for o in outcomes for c in o.checks if not c.passed]
     total = sum(len(o.checks) for o in outcomes)
     missed = sum(1 for o in outcomes for t in o.targets if t.met is False)
     targets = sum(len(o.targets) for o in outcomes)
     if checks:
-        progress(f"bench FAILED: {len(checks)} of {total} checks failed: {', '.join(checks)}")
+        progress(f"{what} FAILED: {len(checks)} of {total} checks failed: {', '.join(checks)}")
         return 3
-    progress(f"bench passed: all {total} checks hold; {targets - missed} of {targets} targets "
+    progress(f"{what} passed: all {total} checks hold; {targets - missed} of {targets} targets "
              "met (see the targets table)")
     return 0
 

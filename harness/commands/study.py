@@ -52,4 +52,4 @@ def run(args) -> int:
                                                   f"torquebench study {args.name}"),
             "machine": machine(), "timing": {"elapsed_s": progress.elapsed}}
     write_report(out_dir, outcomes, meta)
-    return verdict(outcomes, progress, out_dir)
+    return verdict(outcomes, progress, out_dir, f"study {args.name}")

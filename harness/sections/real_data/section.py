@@ -144,7 +144,8 @@ def log_result(out_dir: Path) -> SectionResult:
                        "atoms_kept": int(np.count_nonzero(identification.model.coefficients)),
                        "atoms": len(identification.model.coefficients)},
         "source_window": source,
-        "closeloop": loop.to_json(),
+        "closeloop": {**loop.to_json(), "data": {**loop.to_json()["data"],
+                                                 "file": npz.relative_to(out_dir).as_posix()}},
         "cpu_s": seconds,
         "acceptance": acceptance,
     }
