@@ -6,7 +6,8 @@ leaves the joint limits (whole motion) and the torque limits (a dense grid).
   checked a chunk at a time; padding samples sit far away).
 - motion: the worst excursion beyond the joint limits (rad; < 0: inside) over a grid of
   LIMIT_GRID points, each refined by one Newton step towards the nearest turning point (a
-  polynomial's peak between grid points is then found to ~1e-10 rad), and the worst
+  polynomial's peak between grid points is then found to ~1e-8 rad, far inside
+  planning.limits.LIMIT_TOLERANCE), and the worst
   |tau_i| - torque_limit_i (N m) over TORQUE_GRID points (-inf without torque limits).
 """
 

@@ -30,7 +30,8 @@ CONVERGED, BUDGET, STALLED = "converged", "budget", "stalled"
 STEP_TOLERANCE = 1e-8  # predicted merit decrease (relative) below which a point is optimal
 QP_PRIMAL_TOLERANCE = 1e-10  # DAQP's (its default, 1e-6, let steps leave the trust region)
 PRIMAL_TOLERANCE = 1e-8  # L1 violation of the hard rows at a converged point
-PROXIMAL = 1e-6  # weight of the slacks' proximal term in each QP (vanishes at a fixed point)
+PROXIMAL = 1e-2  # weight of the slacks' proximal term in each QP (vanishes at a fixed point; e,
+# v move by less than cost / PROXIMAL >= 10 only where the rows allow nothing less)
 CURVATURE = 1e-8  # smallest eigenvalue kept in the coefficient block of the QP's Hessian
 _EQUALITY = 5  # DAQP sense flags: active + immutable
 HARD_WEIGHT = 1e6  # nu's floor: hard rows (goal, limits) weigh far above the clearance's L1
@@ -170,13 +171,17 @@ class AnytimeSQP:
             if ratio >= 1e-4:
                 point, lam_g, lam_x = trial, lam_rows, lam_vars
                 accept(point)
-                if ratio > 0.75 and step_size > 0.99 * radius:
-                    radius = min(2.0 * radius, 10.0)
-            else:
-                radius = 0.25 * step_size
+            if ratio < 0.25:
+                radius = 0.5 * step_size
                 if radius < 1e-10:
                     status = STALLED
                     break
+            elif ratio > 0.5 and step_size > 0.99 * radius:
+                # the energy is nearly flat along many motions (a conservative model's power
+                # keeps its sign): the model's decrease is then ~linear and the step rides the
+                # boundary, measured at ratios 0.6-0.8; growing only above 0.75 took 171
+                # iterations on a random crossing
+                radius = min(2.0 * radius, 10.0)
         return Solution(point.x, point.f, lam_g, lam_x, status, iterations,
                         point.violation), iterations
 
@@ -209,6 +214,9 @@ class AnytimeSQP:
         dual = self._working_set(point, lbg, rows, m, last)
         x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense, dual_start=dual,
                                       primal_tol=QP_PRIMAL_TOLERANCE)
+        if flag < 0:  # the guessed working set can mislead it (cycling): again, cold
+            x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense,
+                                          primal_tol=QP_PRIMAL_TOLERANCE)
         if flag < 0:
             return None
         lam = info["lam"]
