@@ -29,6 +29,7 @@ from planning.nlp import PlanningNLP
 from planning.realtime_iteration import ITERATE
 from planning.safety import Safety, SafetyCheck
 from planning.solver import ObstacleForecast, Planner, SegmentPlan
+from planning.starts import rank, start_points
 
 CONVERGED = "converged"
 MIN_VIOLATION = "minimum violation"
@@ -64,6 +65,7 @@ class Anytime:
         self.check = SafetyCheck(planner.model, self.config, self.config.compile_code)
         self._problems: dict[tuple, _Problem] = {}
         self._prepared: set[tuple] = set()
+        self.record: list | None = None  # when a list: (inputs, plan) of every warm plan
 
     def prepare(self, goal) -> None:
         """Build (and compile) this goal's NLPs ahead of the plans, and call each once:
@@ -150,7 +152,21 @@ class Anytime:
         elapsed = (1e3 * (time.perf_counter() - wall), 1e3 * (time.thread_time() - cpu))
         plan = dataclasses.replace(plan, iterations=iterations, solve_ms=elapsed[0],
                                    solve_cpu_ms=elapsed[1])
+        if self.record is not None and warm is not None:
+            self.record.append(((q0, qd0, t_begin, duration, goal, forecast, warm), plan))
         return plan, *elapsed
+
+    def best_of(self, q0, qd0, t_begin: float, duration: float, goal,
+                forecast: ObstacleForecast | None, warm: SegmentPlan | None, starts: int,
+                budget_ms: float) -> SegmentPlan:
+        """The best (planning.starts.rank) of the plan from `warm` and of cold plans from
+        `starts` start points (planning.starts), each with budget_ms of CPU: a multi-start
+        re-plan (PlannerConfig.replan_starts; the realtime study's references)."""
+        segment = (q0, qd0, t_begin, duration, goal, forecast)
+        plans = [] if warm is None else [self.plan(*segment, warm, budget_ms=budget_ms)[0]]
+        for x0 in start_points(self.planner, q0, qd0, duration, goal, starts):
+            plans.append(self.plan(*segment, None, x0=x0, budget_ms=budget_ms)[0])
+        return min(plans, key=lambda plan: rank(self.planner, plan))
 
     def _bounds(self, problem: _Problem, goal, used: int) -> tuple[np.ndarray, np.ndarray]:
         """The planner's bounds, the clearance rows of the slots without a sample free."""

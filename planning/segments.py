@@ -64,6 +64,11 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
             budget = min(budget, deadline_ms)
         anytime = anytime_of(planner)
         anytime.prepare(goal)  # built once: not part of a plan's time
+        if warm is not None and planner.config.replan_starts:
+            clock = _Clock()
+            plan = anytime.best_of(q0, qd0, t_begin, duration, goal, forecast, warm,
+                                   planner.config.replan_starts, budget)
+            return plan, *clock.read()
         return anytime.plan(q0, qd0, t_begin, duration, goal, forecast, warm, x0, budget)
     planner.prepare(goal)  # the solvers for this goal, built once: not part of a plan's time
     clock = _Clock()
