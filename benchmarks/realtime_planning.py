@@ -3,9 +3,9 @@
     .venv/bin/python -m benchmarks.realtime_planning [--scenarios 20] [--seed 2026]
         [--ways all|fast] [--out study.json]
 
-`--ways fast` compares only the two re-planners (the penalty loop with fatrop and the anytime
-elastic SQP; no other compiled variants: each costs one C compilation on first use). Prints the study's markdown (as in the bench report) and the
-load average.
+`--ways fast` compares only the two re-planners (the penalty loop with fatrop and the
+anytime elastic SQP; no other compiled variants: each costs one C compilation on first use).
+Prints the study's markdown (as in the bench report) and the load average.
 """
 
 from __future__ import annotations
