@@ -122,7 +122,7 @@ class Anytime:
             p = planner.parameters(q0, qd0, duration, goal,
                                    ObstacleForecast(times[slots], centres[slots]), t_begin,
                                    reference, config.elastic_weight)
-            lbg, ubg = self._bounds(problem, goal, len(slots))
+            lbg, ubg = self._bounds(problem, goal, safety.links[slots])
             start, lam_g, lam_x = self._start(problem, reference, times[slots], last)
             candidates: list[_Candidate] = []
 
@@ -143,7 +143,7 @@ class Anytime:
                     segment, status=self._status(chosen, converged),
                     success=chosen.rank[1] == 0)
             last = segment
-            more = self._needs_round(chosen, slots)
+            more = self._needs_round(chosen, slots, safety.links[slots])
             if more == "torque":
                 torque = True
             if not more or 1e3 * (time.thread_time() - cpu) > budget:
@@ -168,12 +168,15 @@ class Anytime:
             plans.append(self.plan(*segment, None, x0=x0, budget_ms=budget_ms)[0])
         return min(plans, key=lambda plan: rank(self.planner, plan))
 
-    def _bounds(self, problem: _Problem, goal, used: int) -> tuple[np.ndarray, np.ndarray]:
-        """The planner's bounds, the clearance rows of the slots without a sample free."""
+    def _bounds(self, problem: _Problem, goal, near: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The planner's bounds; the clearance rows of empty slots and of links the reference
+        keeps more than MARGIN above the threshold free (their slacks leave the QP: a step
+        that brings such a link near is caught by the check and re-screened)."""
         lbg, ubg = self.planner.bounds(goal, problem.nlp)
         rows, links = problem.nlp.clearance_rows, problem.nlp.links
-        free = np.arange(rows.start, rows.stop)[used * links:]
-        lbg[free] = -np.inf
+        used = np.zeros((self.config.obstacle_slots, links), bool)
+        used[: len(near)] = near < self.config.threshold + MARGIN
+        lbg[np.arange(rows.start, rows.stop)[~used.ravel()]] = -np.inf
         return lbg, ubg
 
     def _candidate(self, point, q0, qd0, t_begin, duration, times, centres) -> _Candidate:
@@ -190,16 +193,27 @@ class Anytime:
         return _Candidate((unsafe, hard, deficit if unsafe else 0.0, point.f), point.x,
                           safety, point)
 
-    def _needs_round(self, best: _Candidate, slots) -> str | None:
+    def _needs_round(self, best: _Candidate, slots, near) -> str | None:
         """Why another round: "torque" (a motor overdriven), "limits" (beyond a limit between
-        the turning points constrained), "screen" (a dip at a sample the solve did not see)."""
+        the turning points constrained), "screen" (a link dips at a sample where the solve
+        had no row for it)."""
         if best.safety.torque_excess > TORQUE_TOLERANCE:
             return "torque"
         if best.safety.limit_excess > LIMIT_TOLERANCE:
             return "limits"
-        dips = np.flatnonzero(best.safety.clearance < self.config.threshold
-                              - self.config.penalty_tolerance)
-        return "screen" if len(np.setdiff1d(dips, slots)) else None
+        config = self.config
+        dips = np.argwhere(best.safety.links < config.threshold - config.penalty_tolerance)
+        if not len(dips):
+            return None
+        # as planning.screening: when the near samples were thinned to the slots, a dip
+        # within the largest gap between slots of a slot that has its link's row is covered
+        gap = float(np.max(np.diff(slots), initial=0)) if len(slots) == config.obstacle_slots \
+            else 0.0
+        rows = near < config.threshold + MARGIN  # (slots, links)
+        for sample, link in dips:
+            if not np.any(rows[:, link] & (np.abs(slots - sample) <= gap)):
+                return "screen"
+        return None
 
     def _start(self, problem: _Problem, reference, slot_times, last: SegmentPlan | None):
         """The start point (the reference's free coefficients, slacks reset by the SQP) and

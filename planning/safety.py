@@ -2,8 +2,8 @@
 buffers (no Python per sample): its clearance at every forecast sample, and how far it
 leaves the joint limits (whole motion) and the torque limits (a dense grid).
 
-- clearance: the smallest link distance (m) at each of CHUNK forecast samples (more are
-  checked a chunk at a time; padding samples sit far away).
+- clearance: each link's distance (m) at each of CHUNK forecast samples (more are checked
+  a chunk at a time; padding samples sit far away).
 - motion: the worst excursion beyond the joint limits (rad; < 0: inside) over a grid of
   LIMIT_GRID points, each refined by one Newton step towards the nearest turning point (a
   polynomial's peak between grid points is then found to ~1e-8 rad, far inside
@@ -38,6 +38,7 @@ class Safety:
     clearance: np.ndarray
     limit_excess: float
     torque_excess: float
+    links: np.ndarray  # (k, links) m: each link's distance at each sample
 
     @property
     def lowest(self) -> float:
@@ -58,16 +59,16 @@ class SafetyCheck:
         """Check `trajectory` against obstacle centres (k, 3) at absolute times (k,)."""
         c = trajectory.coefficients.ravel(order="F")
         s = (np.asarray(times, float) - trajectory.t_begin) / trajectory.duration
-        k = len(s)
-        out = np.empty(k)
+        k, count = len(s), len(self.config.geometry.links)
+        out = np.empty((k, count))
         for start in range(0, k, CHUNK):
             stop = min(k, start + CHUNK)
             chunk_s, chunk_c = np.zeros(CHUNK), np.full((CHUNK, 3), FAR)
             chunk_s[: stop - start], chunk_c[: stop - start] = s[start:stop], centres[start:stop]
             (values,) = self._clearance(c, chunk_s, chunk_c.ravel())
-            out[start:stop] = values[: stop - start]
+            out[start:stop] = values.reshape(CHUNK, count)[: stop - start]
         (motion,) = self._motion(c, [trajectory.duration])
-        return Safety(out, float(motion[0]), float(motion[1]))
+        return Safety(out.min(axis=1, initial=np.inf), float(motion[0]), float(motion[1]), out)
 
     def _coefficients(self):
         return ca.SX.sym("c", self.dof, self.degree + 1)
@@ -76,10 +77,10 @@ class SafetyCheck:
         c, s, centres = self._coefficients(), ca.SX.sym("s", CHUNK), ca.SX.sym("o", 3, CHUNK)
         q, centre = ca.SX.sym("q", self.dof), ca.SX.sym("centre", 3)
         distances = symbolic_link_clearances(self.config.geometry, q, centre)
-        lowest = ca.Function("lowest", [q, centre], [ca.mmin(ca.vertcat(*distances))])
+        links = ca.Function("links", [q, centre], [ca.vertcat(*distances)])
         basis = ca.horzcat(*[s**p for p in range(self.degree + 1)])  # CHUNK x (degree + 1)
         positions = basis @ c.T
-        rows = [lowest(positions[j, :].T, centres[:, j]) for j in range(CHUNK)]
+        rows = [links(positions[j, :].T, centres[:, j]) for j in range(CHUNK)]
         return ca.Function("clearance_check", [c, s, centres], [ca.vertcat(*rows)])
 
     def _motion_function(self, model: TorqueModel) -> ca.Function:

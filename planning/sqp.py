@@ -27,7 +27,9 @@ import numpy as np
 from planning import compiled
 
 CONVERGED, BUDGET, STALLED = "converged", "budget", "stalled"
-STEP_TOLERANCE = 1e-8  # predicted merit decrease (relative) below which a point is optimal
+# predicted decrease (relative to the objective) below which a point is taken as optimal: the
+# energy is nearly flat along many motions, where steps of 1e-8 went on for 100+ iterations
+STEP_TOLERANCE = 1e-6
 QP_PRIMAL_TOLERANCE = 1e-10  # DAQP's (its default, 1e-6, let steps leave the trust region)
 PRIMAL_TOLERANCE = 1e-8  # L1 violation of the hard rows at a converged point
 PROXIMAL = 1e-2  # weight of the slacks' proximal term in each QP (vanishes at a fixed point; e,
@@ -140,17 +142,22 @@ class AnytimeSQP:
         clock = time.thread_time()
         lbg, ubg = np.asarray(lbg, float), np.asarray(ubg, float)
         rows = np.flatnonzero(np.isfinite(lbg) | np.isfinite(ubg))
+        lay = self.layout
+        free = ~np.isfinite(lbg[lay.clearance])  # a clearance slack without its row
+        cols = np.setdiff1d(np.arange(len(self.lbx)), np.arange(lay.v.start, lay.v.stop)[free])
         point = self.evaluate(x0, p, lam_g0, lbg)
         point.violation = _violation(point.g, lbg, ubg)
         accept(point)
         lam_x = np.zeros(len(point.x)) if lam_x0 is None else np.asarray(lam_x0, float)
         nu, lam_g = HARD_WEIGHT, np.asarray(lam_g0, float)
         status, iterations = BUDGET, 0
-        while iterations < max_iter:
-            if 1e3 * (time.thread_time() - clock) > budget_ms:
+        longest = 0.0  # ms of the slowest iteration so far: no iteration starts that would end
+        while iterations < max_iter:  # past the budget
+            began = 1e3 * (time.thread_time() - clock)
+            if began + longest > budget_ms:
                 break
             iterations += 1
-            step = self._qp(point, lbg, ubg, rows, radius, nu, (lam_g, lam_x))
+            step = self._qp(point, lbg, ubg, rows, cols, radius, nu, (lam_g, lam_x))
             if step is None:
                 status = STALLED
                 break
@@ -171,6 +178,7 @@ class AnytimeSQP:
             if ratio >= 1e-4:
                 point, lam_g, lam_x = trial, lam_rows, lam_vars
                 accept(point)
+            longest = max(longest, 1e3 * (time.thread_time() - clock) - began)
             if ratio < 0.25:
                 radius = 0.5 * step_size
                 if radius < 1e-10:
@@ -185,33 +193,36 @@ class AnytimeSQP:
         return Solution(point.x, point.f, lam_g, lam_x, status, iterations,
                         point.violation), iterations
 
-    def _qp(self, point: Point, lbg, ubg, rows, radius: float, nu: float, last):
+    def _qp(self, point: Point, lbg, ubg, rows, cols, radius: float, nu: float, last):
         """The step d (all variables), its multipliers (rows of g, variables) and the model's
-        decrease parts: (its value grad'd + d'Hd/2, the linearized hard violation). last: the
-        multipliers (rows, variables) of the last QP or of the warm start, DAQP's hot start."""
-        lay, n = self.layout, len(point.x)
-        g, jac = point.g[rows], point.jac[rows]
+        decrease parts: (its value grad'd + d'Hd/2, the linearized hard violation). rows,
+        cols: the rows with a bound and the variables the QP has (a clearance slack whose
+        row is free stays 0). last: the multipliers (rows, variables) of the last QP or of
+        the warm start, DAQP's hot start."""
+        nc, n, k = self.layout.nc, len(point.x), len(cols)
+        g, jac = point.g[rows], point.jac[np.ix_(rows, cols)]
         low, high = lbg[rows] - g, ubg[rows] - g
         # hard rows the point violates (beyond rounding): elastic columns of weight nu
         below, above = low > VIOLATED, high < -VIOLATED
         violated = np.flatnonzero(below | above)
         m = len(violated)
-        hess = np.zeros((n + m, n + m))
-        hess[: lay.nc, : lay.nc] = _convex(point.hess)
-        hess[np.arange(lay.nc, n + m), np.arange(lay.nc, n + m)] = PROXIMAL
-        cost = np.concatenate([point.grad, np.full(m, nu)])
+        hess = np.zeros((k + m, k + m))
+        hess[:nc, :nc] = _convex(point.hess)
+        hess[np.arange(nc, k + m), np.arange(nc, k + m)] = PROXIMAL
+        cost = np.concatenate([point.grad[cols], np.full(m, nu)])
         elastic = np.zeros((len(rows), m))
         elastic[violated, np.arange(m)] = np.where(below[violated], 1.0, -1.0)
         a = np.hstack([jac, elastic])
-        var_low = np.concatenate([np.full(lay.nc, -radius), self.lbx[lay.nc:] - point.x[lay.nc:],
+        slack = cols[nc:]
+        var_low = np.concatenate([np.full(nc, -radius),
+                                  np.maximum(self.lbx[slack] - point.x[slack], -_INF),
                                   np.zeros(m)])
-        var_high = np.concatenate([np.full(lay.nc, radius), np.full(n - lay.nc + m, _INF)])
-        var_low = np.maximum(var_low, -_INF)
+        var_high = np.concatenate([np.full(nc, radius), np.full(k - nc + m, _INF)])
         blower = np.concatenate([var_low, np.maximum(low, -_INF)])
         bupper = np.concatenate([var_high, np.minimum(high, _INF)])
         sense = np.zeros(len(blower), dtype=np.int32)
-        sense[n + m + np.flatnonzero(lbg[rows] == ubg[rows])] = _EQUALITY
-        dual = self._working_set(point, lbg, rows, m, last)
+        sense[k + m + np.flatnonzero(lbg[rows] == ubg[rows])] = _EQUALITY
+        dual = self._working_set(point, rows, cols, m, last)
         x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense, dual_start=dual,
                                       primal_tol=QP_PRIMAL_TOLERANCE)
         if flag < 0:  # the guessed working set can mislead it (cycling): again, cold
@@ -220,13 +231,12 @@ class AnytimeSQP:
         if flag < 0:
             return None
         lam = info["lam"]
-        lam_rows = np.zeros(len(point.g))
-        lam_rows[rows] = lam[n + m:]
-        d = x[:n]
-        model = float(cost[:n] @ d + 0.5 * x @ hess @ x)
-        return d, lam_rows, lam[:n].copy(), (model, float(np.sum(x[n:])))
+        lam_rows, lam_vars, d = np.zeros(len(point.g)), np.zeros(n), np.zeros(n)
+        lam_rows[rows], lam_vars[cols], d[cols] = lam[k + m:], lam[:k], x[:k]
+        model = float(cost[:k] @ x[:k] + 0.5 * x @ hess @ x)
+        return d, lam_rows, lam_vars, (model, float(np.sum(x[k:])))
 
-    def _working_set(self, point: Point, lbg, rows, m: int, last) -> np.ndarray:
+    def _working_set(self, point: Point, rows, cols, m: int, last) -> np.ndarray:
         """DAQP's starting working set (signs of multipliers: which bounds are active): the
         last multipliers, with the slacks' rows and bounds set from the point itself (the
         active side of each |P| epigraph pair, a clearance row where the point dips, else
@@ -240,7 +250,7 @@ class AnytimeSQP:
         if lay.v.stop > lay.v.start:
             dips = point.x[lay.v] > 0
             lam_rows[lay.clearance], lam_vars[lay.v] = -1.0 * dips, -1.0 * ~dips
-        return np.concatenate([lam_vars, np.full(m, -1.0), lam_rows[rows]])
+        return np.concatenate([lam_vars[cols], np.full(m, -1.0), lam_rows[rows]])
 
 
 def _convex(hessian: np.ndarray) -> np.ndarray:
