@@ -65,7 +65,9 @@ class Anytime:
         self.check = SafetyCheck(planner.model, self.config, self.config.compile_code)
         self._problems: dict[tuple, _Problem] = {}
         self._prepared: set[tuple] = set()
-        self.record: list | None = None  # when a list: (inputs, plan) of every warm plan
+        # when a list: (inputs, plan, CPU ms in the solver's evaluations and QPs) of every
+        # warm plan (the realtime study's references and overhead)
+        self.record: list | None = None
 
     def prepare(self, goal) -> None:
         """Build (and compile) this goal's NLPs ahead of the plans, and call each once:
@@ -115,6 +117,7 @@ class Anytime:
             reference = warm.trajectory.restrict(t_begin, duration)
         torque = warm is not None and warm.layout[-1:] == (True,)
         best, plan, iterations, last = None, None, 0, warm
+        spent = sum(problem.sqp.spent_ms for problem in self._problems.values())
         for _ in range(ROUNDS):
             problem = self.problem(goal, torque)
             safety = self.check(reference, times, centres)
@@ -153,7 +156,9 @@ class Anytime:
         plan = dataclasses.replace(plan, iterations=iterations, solve_ms=elapsed[0],
                                    solve_cpu_ms=elapsed[1])
         if self.record is not None and warm is not None:
-            self.record.append(((q0, qd0, t_begin, duration, goal, forecast, warm), plan))
+            solver = sum(problem.sqp.spent_ms for problem in self._problems.values()) - spent
+            self.record.append(((q0, qd0, t_begin, duration, goal, forecast, warm), plan,
+                                solver))
         return plan, *elapsed
 
     def best_of(self, q0, qd0, t_begin: float, duration: float, goal,

@@ -111,10 +111,13 @@ class AnytimeSQP:
         n = len(self.lbx)
         ends = np.cumsum([1, n, rows, rows * n, layout.nc**2])
         self._parts = (ends, n, rows)
+        self.spent_ms = 0.0  # CPU ms in the compiled evaluations and the QP solver, so far
 
     def evaluate(self, x, p, lam, lbg) -> Point:
         """The point x with its slacks reset (see the module docstring)."""
+        began = time.thread_time()
         (out,) = self.local(x, p, lam)
+        self.spent_ms += 1e3 * (time.thread_time() - began)
         ends, n, rows = self._parts
         f, grad, g = float(out[0]), out[1:ends[1]].copy(), out[ends[1]:ends[2]].copy()
         jac = out[ends[2]:ends[3]].reshape((rows, n), order="F").copy()
@@ -223,11 +226,13 @@ class AnytimeSQP:
         sense = np.zeros(len(blower), dtype=np.int32)
         sense[k + m + np.flatnonzero(lbg[rows] == ubg[rows])] = _EQUALITY
         dual = self._working_set(point, rows, cols, m, last)
+        began = time.thread_time()
         x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense, dual_start=dual,
                                       primal_tol=QP_PRIMAL_TOLERANCE)
         if flag < 0:  # the guessed working set can mislead it (cycling): again, cold
             x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense,
                                           primal_tol=QP_PRIMAL_TOLERANCE)
+        self.spent_ms += 1e3 * (time.thread_time() - began)
         if flag < 0:
             return None
         lam = info["lam"]
