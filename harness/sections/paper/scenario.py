@@ -33,7 +33,7 @@ def run(ctx: Context, models: dict) -> SectionResult:
         executed = evaluate(execute(Planner(model, config), scenario), scenario, model, config)
         results[name] = summary(executed, baseline, config)
         plans[name] = to_json(executed, scenario, config, name.split("_", 1)[1])
-        checks += plan_checks(name, results[name], config.threshold, config.rest_at_goal)
+        checks += plan_checks(name, results[name], config.threshold, config.rest_at_goal)[0]
     md = ["The paper's scenario (q0 = (pi/2, pi/5, -pi/4), goal (-pi/2, 2 pi/5, -pi/3), 2 s, "
           "the obstacle from (0.15, 0.40, 0.22) to (0.18, -0.35, 0.28) m, lambda = 0.08 m). "
           "`paper_*`: the paper's formulation (N = 10, free end velocity: `plan --free-end`); "
