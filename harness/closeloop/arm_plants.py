@@ -71,6 +71,6 @@ def arm_variant_xml(robot: str, variant: Variant) -> str:
 def write_arm_variant(robot: str, variant: Variant, directory: Path) -> Path:
     """Write the variant MJCF to directory/<robot>_<name>.xml; returns its path."""
     directory.mkdir(parents=True, exist_ok=True)
-    path = directory / f"{robot}_{variant.name}.xml"
+    path = directory / f"{Path(robot).stem}_{variant.name}.xml"  # a robot path: its file's stem
     write_text(path, arm_variant_xml(robot, variant))
     return path
