@@ -71,6 +71,13 @@ class PlannerConfig:
     # that dips or leaves a limit is solved on to convergence as without them. None: every
     # re-plan is solved to convergence.
     replan_iterations: int | None = None
+    # how Algorithm 2 plans and re-plans: "sqp" (planning.anytime: clearance as elastic rows,
+    # an anytime trust-region SQP under a CPU budget) or "fatrop" (the penalty loop of
+    # planning.replanning with config.solver, alpha raised until the plan keeps the threshold)
+    replanner: str = "fatrop"
+    replan_budget_ms: float = 10.0  # "sqp": CPU per re-plan (one obstacle sample period)
+    cold_budget_ms: float = 25.0  # "sqp": CPU for a first plan, all its starts together
+    elastic_weight: float = 1e3  # "sqp": J per m of clearance missed, per sample and link
     max_iterations: int = 300
     warm_max_iterations: int = 60  # a warm solve that needs more restarts cold
     power_smoothing: float = 0.0  # W; 0: exact epigraph of |P|, > 0: sqrt(P^2 + eps^2) - eps

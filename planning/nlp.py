@@ -41,11 +41,15 @@ class PlanningNLP:
     """Symbolic objective f(x, p) and constraints lbg <= g(x, p) <= ubg."""
 
     def __init__(self, model: TorqueModel, config: PlannerConfig,
-                 goal_limits: tuple[int, ...] | None = None):
+                 goal_limits: tuple[int, ...] | None = None, elastic: bool = False):
         """goal_limits: the joints whose goal-limit quotient rows are built (default: all);
         a planner builds them only for joints whose goal is on a limit (elsewhere they are
         free rows, which still cost the solver: measured on the UR5, warm re-plan median
-        15.2 -> 14.3 ms without them)."""
+        15.2 -> 14.3 ms without them).
+        elastic: clearance as rows D_link,k + v_link,k >= lambda with slacks v >= 0 (lbx)
+        weighing alpha w_k v_link,k in the objective (an exact L1 penalty: a fixed weight
+        above the rows' multipliers gives the constrained optimum, and where no motion
+        clears the forecast the least violation), instead of the quadratic penalty."""
         self.config, self.dof = config, model.dof
         dof, n, k = model.dof, config.energy_samples, config.obstacle_slots
         if config.degree < 3:
@@ -56,7 +60,9 @@ class PlanningNLP:
         self.nodes, self.weights = energy_nodes(config.energy_quadrature, n, self.breaks)
         free = ca.SX.sym("free", dof, config.degree - 1)
         self.slack = ca.SX.sym("e", 0 if config.power_smoothing > 0 else n)
-        self.x = ca.vertcat(ca.vec(free.T), self.slack)
+        self.links = len(config.geometry.links)
+        self.elastic = ca.SX.sym("v", k * self.links if elastic else 0)  # slot-major
+        self.x = ca.vertcat(ca.vec(free.T), self.slack, self.elastic)
         q0, qd0, self.sigma, goal = (ca.SX.sym(s, d) for s, d in
                                      (("q0", dof), ("qd0", dof), ("sigma", 1), ("goal", dof)))
         obstacle, s_obs, weight = ca.SX.sym("obs", 3, k), ca.SX.sym("s_obs", k), ca.SX.sym("w", k)
@@ -73,8 +79,14 @@ class PlanningNLP:
         self.coefficients = ca.horzcat(q0, qd0 * self.sigma, free)  # column p -> s**p
         self._torque, self.inline = _torque_function(model)
         power = self._power(model)
-        self.penalty = alpha * self._penalty(obstacle, s_obs, weight)
         self._g, self._lbg, self._ubg = [], [], []
+        self.clearance_rows = None
+        if elastic:
+            slot_weights = ca.vec(ca.repmat(weight.T, self.links, 1))  # slot-major, as v
+            self.penalty = alpha * ca.dot(slot_weights, self.elastic)
+            self.clearance_rows = self._clearance_rows(obstacle, s_obs)
+        else:
+            self.penalty = alpha * self._penalty(obstacle, s_obs, weight)
         self.energy = self._energy(power)
         self.f = self.energy + self.penalty
         self._add(self.state(1.0)[0] - goal, 0.0, 0.0)  # eq. (19)
@@ -87,6 +99,8 @@ class PlanningNLP:
         self.torque_rows = self._torque_limits(model, s_obs)
         self.g = ca.vertcat(*self._g)
         self.lbg, self.ubg = np.array(self._lbg), np.array(self._ubg)
+        self.lbx = np.concatenate([np.full(self.x.numel() - self.elastic.numel(), -np.inf),
+                                   np.zeros(self.elastic.numel())])
 
     def state(self, s):
         """q, qd (1/s), qdd (1/s^2) of the segment at normalized time s."""
@@ -131,10 +145,11 @@ class PlanningNLP:
         """sigma sum w_i |P(s_i)| (eq. 18 with the paper's rule): epigraph slacks, or a
         smoothed |P| if configured."""
         eps, w = self.config.power_smoothing, ca.vertcat(*self.weights)
+        self.epigraph = (slice(0, 0), slice(0, 0))  # rows P - e <= 0 and -P - e <= 0
         if eps > 0:
             return self.sigma * ca.dot(w, ca.sqrt(power**2 + eps**2) - eps)
-        self._add(power - self.slack, -np.inf, 0.0)
-        self._add(-power - self.slack, -np.inf, 0.0)
+        self.epigraph = (self._add(power - self.slack, -np.inf, 0.0),
+                         self._add(-power - self.slack, -np.inf, 0.0))
         return self.sigma * ca.dot(w, self.slack)
 
     def _penalty(self, obstacle, s_obs, weight):
@@ -149,6 +164,17 @@ class PlanningNLP:
         for j in range(config.obstacle_slots):
             total += weight[j] * violation(self.state(s_obs[j])[0], obstacle[:, j])
         return total
+
+    def _clearance_rows(self, obstacle, s_obs) -> slice:
+        """D_link(q(s_k), c_k) + v_link,k >= lambda for every slot k and link (slot-major);
+        a slot without a sample gets lbg = -inf per solve (Planner.bounds)."""
+        q, centre = ca.SX.sym("q", self.dof), ca.SX.sym("centre", 3)
+        distances = ca.Function("distances", [q, centre], [ca.vertcat(
+            *symbolic_link_clearances(self.config.geometry, q, centre))],
+            {"never_inline": not self.inline})
+        rows = [distances(self.state(s_obs[j])[0], obstacle[:, j])
+                for j in range(self.config.obstacle_slots)]
+        return self._add(ca.vertcat(*rows) + self.elastic, self.config.threshold, np.inf)
 
     def _joint_limits(self, extremum, newton) -> None:
         """Limits at fixed interior samples and at the (Newton-corrected) turning points."""

@@ -47,6 +47,10 @@ class SegmentPlan:
     multipliers: tuple[np.ndarray, np.ndarray]  # (lam_g, lam_x)
     breaks: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))  # "split" rule's
     layout: tuple = ()  # the NLP's energy rule (Planner.layout): its multipliers fit only it
+    # the elastic SQP's (planning.anytime): the obstacle sample times of its clearance slots
+    # (its multipliers follow them to the next re-plan) and whether a clearance row bound it
+    slot_times: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    detour: bool = False
 
 
 # measured on random scenarios: a warm IPOPT rescue still unconverged after 60 iterations ran
@@ -118,7 +122,8 @@ class Planner:
         # polishing is part of a cold plan: no re-plan deadline keeps its IPOPT rescue away
         return Planner(self.model, dataclasses.replace(
             config, energy_quadrature="split", energy_samples=config.polish_samples,
-            polish=0, starts=1, replan_deadline_ms=None, replan_iterations=None))
+            polish=0, starts=1, replan_deadline_ms=None, replan_iterations=None,
+            replanner="fatrop"))
 
     @property
     def layout(self) -> tuple:

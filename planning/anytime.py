@@ -1,0 +1,250 @@
+"""Plans and re-plans of Algorithm 2 by the anytime elastic SQP (PlannerConfig.replanner
+"sqp"): clearance as rows D >= lambda with an L1 slack of fixed weight (planning.nlp,
+elastic=True), solved by planning.sqp under a CPU budget, every accepted iterate checked on
+the whole forecast, the joint limits and the torque limits (planning.safety).
+
+A plan returns the best safe iterate (least energy among those that keep the threshold
+within the penalty tolerance, the limits and the torques), else the one that misses the
+threshold least, reported as a minimum-violation plan (its status says by how many mm).
+One that stopped at its budget unconverged has status ITERATE: Algorithm 2 re-plans at the
+next sample from it. The obstacle samples the NLP sees are screened from the check's own
+clearances (planning.screening's rule); a round re-screens when the chosen iterate dips
+where the solve did not look, or when it leaves a limit between its constrained points.
+The torque rows join (a second NLP, as planning.solver's pair) when an iterate overdrives a
+motor.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from planning import compiled, sqp
+from planning.limits import LIMIT_TOLERANCE
+from planning.nlp import PlanningNLP
+from planning.realtime_iteration import ITERATE
+from planning.safety import Safety, SafetyCheck
+from planning.solver import ObstacleForecast, Planner, SegmentPlan
+
+CONVERGED = "converged"
+MIN_VIOLATION = "minimum violation"
+MARGIN = 0.03  # m: samples this far above the threshold on the reference are screened in
+HARD_TOLERANCE = 1e-6  # L1 violation of the goal and limit rows an iterate may keep
+TORQUE_TOLERANCE = 1e-6  # N m
+ROUNDS = 4
+
+
+@dataclass
+class _Problem:
+    """One elastic NLP (goal limits, torque rows or not) with its SQP and objective parts."""
+
+    nlp: PlanningNLP
+    sqp: sqp.AnytimeSQP
+    parts: compiled.Buffered
+    layout: tuple
+
+
+@dataclass
+class _Candidate:
+    rank: tuple
+    x: np.ndarray
+    safety: Safety
+    point: sqp.Point
+
+
+class Anytime:
+    """The anytime planner of one Planner (its model and configuration)."""
+
+    def __init__(self, planner: Planner):
+        self.planner, self.config = planner, planner.config
+        self.check = SafetyCheck(planner.model, self.config, self.config.compile_code)
+        self._problems: dict[tuple, _Problem] = {}
+        self._prepared: set[tuple] = set()
+
+    def prepare(self, goal) -> None:
+        """Build (and compile) this goal's NLPs ahead of the plans, and call each once:
+        seconds, not plan time."""
+        key = self.planner._goal_limits(goal)
+        if key in self._prepared:
+            return
+        self._prepared.add(key)
+        self.problem(goal, False)
+        if self.config.torque_limit is not None:
+            self.problem(goal, True)
+        # a first plan pays for loading the code and the solvers' first calls (measured
+        # ~9 ms on the Lynxmotion): one throw-away plan, from the goal to itself
+        lower, upper = np.asarray(self.config.lower), np.asarray(self.config.upper)
+        start = np.clip(np.asarray(goal, float) + 0.1, lower, upper)
+        far = ObstacleForecast(np.array([0.5, 1.0]), np.full((2, 3), 10.0))
+        self.plan(start, np.zeros(len(start)), 0.0, 1.0, goal, far, budget_ms=5.0)
+
+    def problem(self, goal, torque: bool) -> _Problem:
+        key = (self.planner._goal_limits(goal), torque)
+        if key not in self._problems:
+            config = self.config if torque else dataclasses.replace(self.config,
+                                                                    torque_limit=None)
+            nlp = PlanningNLP(self.planner.model, config, key[0], elastic=True)
+            build = compiled.function if self.config.compile_code else (lambda f: f)
+            local = build(sqp.local_function(nlp, "elastic_local"))
+            parts = compiled.Buffered(build(ca.Function("elastic_parts", [nlp.x, nlp.p],
+                                                        [ca.vertcat(nlp.energy, nlp.penalty)])))
+            self._problems[key] = _Problem(nlp, sqp.AnytimeSQP(
+                local, sqp.layout_of(nlp), nlp.lbx, nlp.g.numel()), parts, ("elastic",) + key)
+        return self._problems[key]
+
+    def plan(self, q0, qd0, t_begin: float, duration: float, goal,
+             forecast: ObstacleForecast | None, warm: SegmentPlan | None = None,
+             x0: np.ndarray | None = None, budget_ms: float | None = None
+             ) -> tuple[SegmentPlan, float, float]:
+        """One plan (cold from x0, default the initial guess) or re-plan (warm); the plan and
+        its wall and CPU time (ms, end to end)."""
+        wall, cpu = time.perf_counter(), time.thread_time()
+        config, planner = self.config, self.planner
+        budget = config.replan_budget_ms if budget_ms is None else budget_ms
+        times, centres = _future(forecast, t_begin, duration)
+        if warm is None:
+            x0 = planner.initial_guess(q0, qd0, duration, goal) if x0 is None else x0
+            reference = planner.trajectory(x0, q0, qd0, t_begin, duration)
+        else:
+            reference = warm.trajectory.restrict(t_begin, duration)
+        torque = warm is not None and warm.layout[-1:] == (True,)
+        best, plan, iterations, last = None, None, 0, warm
+        for _ in range(ROUNDS):
+            problem = self.problem(goal, torque)
+            safety = self.check(reference, times, centres)
+            slots = _screen(times, safety.clearance, config.threshold, config.obstacle_slots)
+            p = planner.parameters(q0, qd0, duration, goal,
+                                   ObstacleForecast(times[slots], centres[slots]), t_begin,
+                                   reference, config.elastic_weight)
+            lbg, ubg = self._bounds(problem, goal, len(slots))
+            start, lam_g, lam_x = self._start(problem, reference, times[slots], last)
+            candidates: list[_Candidate] = []
+
+            def accept(point, candidates=candidates):
+                candidates.append(self._candidate(point, q0, qd0, t_begin, duration, times,
+                                                  centres))
+
+            remaining = budget - 1e3 * (time.thread_time() - cpu)
+            solution, count = problem.sqp.solve(start, p, lbg, ubg, lam_g, remaining, accept,
+                                                lam_x0=lam_x)
+            iterations += count
+            chosen = min(candidates, key=lambda c: c.rank)
+            segment = self._segment(problem, chosen, solution, p, q0, qd0, t_begin, duration,
+                                    times[slots])
+            converged = solution.status == sqp.CONVERGED and chosen.x is solution.x
+            if best is None or chosen.rank < best.rank:
+                best, plan = chosen, dataclasses.replace(
+                    segment, status=self._status(chosen, converged),
+                    success=chosen.rank[1] == 0)
+            last = segment
+            more = self._needs_round(chosen, slots)
+            if more == "torque":
+                torque = True
+            if not more or 1e3 * (time.thread_time() - cpu) > budget:
+                break
+            reference = segment.trajectory
+        elapsed = (1e3 * (time.perf_counter() - wall), 1e3 * (time.thread_time() - cpu))
+        plan = dataclasses.replace(plan, iterations=iterations, solve_ms=elapsed[0],
+                                   solve_cpu_ms=elapsed[1])
+        return plan, *elapsed
+
+    def _bounds(self, problem: _Problem, goal, used: int) -> tuple[np.ndarray, np.ndarray]:
+        """The planner's bounds, the clearance rows of the slots without a sample free."""
+        lbg, ubg = self.planner.bounds(goal, problem.nlp)
+        rows, links = problem.nlp.clearance_rows, problem.nlp.links
+        free = np.arange(rows.start, rows.stop)[used * links:]
+        lbg[free] = -np.inf
+        return lbg, ubg
+
+    def _candidate(self, point, q0, qd0, t_begin, duration, times, centres) -> _Candidate:
+        """An accepted iterate, checked, with its rank: within the hard limits first, then
+        keeping the threshold, then missing it least, then the objective."""
+        config = self.config
+        trajectory = self.planner.trajectory(point.x, q0, qd0, t_begin, duration)
+        safety = self.check(trajectory, times, centres)
+        hard = max(safety.limit_excess - LIMIT_TOLERANCE, 0.0) + \
+            max(safety.torque_excess - TORQUE_TOLERANCE, 0.0) + \
+            max(point.violation - HARD_TOLERANCE, 0.0)
+        deficit = max(config.threshold - safety.lowest, 0.0)
+        unsafe = deficit > config.penalty_tolerance
+        return _Candidate((unsafe, hard, deficit if unsafe else 0.0, point.f), point.x,
+                          safety, point)
+
+    def _needs_round(self, best: _Candidate, slots) -> str | None:
+        """Why another round: "torque" (a motor overdriven), "limits" (beyond a limit between
+        the turning points constrained), "screen" (a dip at a sample the solve did not see)."""
+        if best.safety.torque_excess > TORQUE_TOLERANCE:
+            return "torque"
+        if best.safety.limit_excess > LIMIT_TOLERANCE:
+            return "limits"
+        dips = np.flatnonzero(best.safety.clearance < self.config.threshold
+                              - self.config.penalty_tolerance)
+        return "screen" if len(np.setdiff1d(dips, slots)) else None
+
+    def _start(self, problem: _Problem, reference, slot_times, last: SegmentPlan | None):
+        """The start point (the reference's free coefficients, slacks reset by the SQP) and
+        the multipliers of `last` where they belong to this NLP, those of its clearance
+        rows moved with their sample times."""
+        nlp = problem.nlp
+        x = np.zeros(nlp.x.numel())
+        nc = sqp.layout_of(nlp).nc
+        x[:nc] = reference.coefficients[:, 2:].ravel()
+        lam_g, lam_x = np.zeros(nlp.g.numel()), np.zeros(nlp.x.numel())
+        if last is None or last.layout != problem.layout or not len(last.multipliers[0]):
+            return x, lam_g, lam_x
+        lam_g[:], lam_x[:] = last.multipliers
+        rows, links, v = nlp.clearance_rows, nlp.links, sqp.layout_of(nlp).v
+        old_g = last.multipliers[0][rows].reshape(-1, links)
+        old_x = last.multipliers[1][v].reshape(-1, links)
+        new_g, new_x = np.zeros_like(old_g), np.zeros_like(old_x)
+        index = np.searchsorted(last.slot_times, slot_times)
+        for j, i in enumerate(index):
+            if i < len(last.slot_times) and abs(last.slot_times[i] - slot_times[j]) < 1e-9:
+                new_g[j], new_x[j] = old_g[i], old_x[i]
+        lam_g[rows], lam_x[v] = new_g.ravel(), new_x.ravel()
+        return x, lam_g, lam_x
+
+    def _segment(self, problem: _Problem, chosen: _Candidate, solution, p, q0, qd0,
+                 t_begin, duration, slot_times) -> SegmentPlan:
+        (parts,) = problem.parts(chosen.x, p)
+        last = chosen.x is solution.x
+        lam_g = solution.lam_g if last else np.zeros(problem.nlp.g.numel())
+        lam_x = solution.lam_x if last else np.zeros(problem.nlp.x.numel())
+        detour = bool(np.any(np.abs(solution.lam_g[problem.nlp.clearance_rows]) > 1e-9))
+        return SegmentPlan(
+            trajectory=self.planner.trajectory(chosen.x, q0, qd0, t_begin, duration),
+            energy=float(parts[0]), penalty=float(parts[1]), success=True, status="",
+            iterations=0, solve_ms=0.0, solve_cpu_ms=0.0,
+            penalty_weight=self.config.elastic_weight, x=chosen.x,
+            multipliers=(lam_g, lam_x), layout=problem.layout, slot_times=slot_times,
+            detour=detour)
+
+    def _status(self, best: _Candidate, converged: bool) -> str:
+        unsafe, hard, deficit, _ = best.rank
+        if hard > 0:
+            return f"limits left by {hard:.2e} (joint limits in rad, torques in N m)"
+        status = CONVERGED if converged else ITERATE
+        if unsafe:
+            status += f", {MIN_VIOLATION}: {1e3 * deficit:.1f} mm below the threshold"
+        return status
+
+
+def _future(forecast: ObstacleForecast | None, t_begin: float, duration: float):
+    """The forecast's samples in (t_begin, t_begin + duration]: times (k,), centres (k, 3)."""
+    if forecast is None:
+        return np.zeros(0), np.zeros((0, 3))
+    times = np.asarray(forecast.times, float)
+    keep = (times > t_begin + 1e-12) & (times <= t_begin + duration + 1e-12)
+    return times[keep], np.asarray(forecast.centres, float)[keep]
+
+
+def _screen(times, clearance, threshold: float, slots: int) -> np.ndarray:
+    """Indices of the samples within MARGIN of the threshold, evenly thinned to `slots`."""
+    near = np.flatnonzero(clearance < threshold + MARGIN)
+    if len(near) > slots:
+        near = near[np.round(np.linspace(0, len(near) - 1, slots)).astype(int)]
+    return near

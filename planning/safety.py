@@ -1,0 +1,116 @@
+"""Whether a motion is safe to follow, in two compiled CasADi functions called through
+buffers (no Python per sample): its clearance at every forecast sample, and how far it
+leaves the joint limits (whole motion) and the torque limits (a dense grid).
+
+- clearance: the smallest link distance (m) at each of CHUNK forecast samples (more are
+  checked a chunk at a time; padding samples sit far away).
+- motion: the worst excursion beyond the joint limits (rad; < 0: inside) over a grid of
+  LIMIT_GRID points, each refined by one Newton step towards the nearest turning point (a
+  polynomial's peak between grid points is then found to ~1e-8 rad, far inside
+  planning.limits.LIMIT_TOLERANCE), and the worst
+  |tau_i| - torque_limit_i (N m) over TORQUE_GRID points (-inf without torque limits).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from identification.torque_model import TorqueModel
+from planning import compiled
+from planning.clearance import symbolic_link_clearances
+from planning.config import PlannerConfig
+from planning.trajectory import PolynomialTrajectory, power_basis
+
+CHUNK = 32  # forecast samples per call of the clearance function
+LIMIT_GRID = 65
+TORQUE_GRID = 65  # as planning.solver's torque check
+FAR = 1e3  # m: where padding samples sit
+
+
+@dataclass(frozen=True)
+class Safety:
+    """One motion's check: clearance (m) at each forecast sample, limit excess (rad) and
+    torque excess (N m); negative excesses are margins."""
+
+    clearance: np.ndarray
+    limit_excess: float
+    torque_excess: float
+
+    @property
+    def lowest(self) -> float:
+        return float(np.min(self.clearance, initial=np.inf))
+
+
+class SafetyCheck:
+    """The compiled checks of one arm, torque model and configuration."""
+
+    def __init__(self, model: TorqueModel, config: PlannerConfig, compile_code: bool = True):
+        self.config, self.dof, self.degree = config, model.dof, config.degree
+        build = compiled.function if compile_code else (lambda f: f)
+        self._clearance = compiled.Buffered(build(self._clearance_function()))
+        self._motion = compiled.Buffered(build(self._motion_function(model)))
+
+    def __call__(self, trajectory: PolynomialTrajectory, times: np.ndarray,
+                 centres: np.ndarray) -> Safety:
+        """Check `trajectory` against obstacle centres (k, 3) at absolute times (k,)."""
+        c = trajectory.coefficients.ravel(order="F")
+        s = (np.asarray(times, float) - trajectory.t_begin) / trajectory.duration
+        k = len(s)
+        out = np.empty(k)
+        for start in range(0, k, CHUNK):
+            stop = min(k, start + CHUNK)
+            chunk_s, chunk_c = np.zeros(CHUNK), np.full((CHUNK, 3), FAR)
+            chunk_s[: stop - start], chunk_c[: stop - start] = s[start:stop], centres[start:stop]
+            (values,) = self._clearance(c, chunk_s, chunk_c.ravel())
+            out[start:stop] = values[: stop - start]
+        (motion,) = self._motion(c, [trajectory.duration])
+        return Safety(out, float(motion[0]), float(motion[1]))
+
+    def _coefficients(self):
+        return ca.SX.sym("c", self.dof, self.degree + 1)
+
+    def _clearance_function(self) -> ca.Function:
+        c, s, centres = self._coefficients(), ca.SX.sym("s", CHUNK), ca.SX.sym("o", 3, CHUNK)
+        q, centre = ca.SX.sym("q", self.dof), ca.SX.sym("centre", 3)
+        distances = symbolic_link_clearances(self.config.geometry, q, centre)
+        lowest = ca.Function("lowest", [q, centre], [ca.mmin(ca.vertcat(*distances))])
+        basis = ca.horzcat(*[s**p for p in range(self.degree + 1)])  # CHUNK x (degree + 1)
+        positions = basis @ c.T
+        rows = [lowest(positions[j, :].T, centres[:, j]) for j in range(CHUNK)]
+        return ca.Function("clearance_check", [c, s, centres], [ca.vertcat(*rows)])
+
+    def _motion_function(self, model: TorqueModel) -> ca.Function:
+        config, c, sigma = self.config, self._coefficients(), ca.SX.sym("sigma")
+        grid = np.linspace(0.0, 1.0, LIMIT_GRID)
+        q, slope, curvature = (ca.DM(power_basis(grid, k, self.degree)) @ c.T for k in range(3))
+        half = 0.5 / (LIMIT_GRID - 1)
+        safe = ca.fabs(curvature) > 1e-9
+        step = ca.if_else(safe, slope / ca.if_else(safe, curvature, 1.0), 0.0)
+        s_peak = ca.fmin(ca.fmax(ca.repmat(ca.DM(grid), 1, self.dof) - step,
+                                 ca.repmat(ca.DM(grid - half), 1, self.dof)),
+                         ca.repmat(ca.DM(grid + half), 1, self.dof))
+        s_peak = ca.fmin(ca.fmax(s_peak, 0.0), 1.0)
+        peaks = ca.horzcat(*[_poly(c[j, :], s_peak[:, j]) for j in range(self.dof)])
+        lower, upper = (ca.repmat(ca.DM(b).T, LIMIT_GRID, 1) for b in (config.lower, config.upper))
+        excess = ca.mmax(ca.vertcat(ca.vec(lower - q), ca.vec(q - upper), ca.vec(lower - peaks),
+                                    ca.vec(peaks - upper)))
+        torque = -np.inf
+        if config.torque_limit is not None:
+            tgrid = np.linspace(0.0, 1.0, TORQUE_GRID)
+            states = [ca.DM(power_basis(tgrid, k, self.degree)) @ c.T / sigma**k for k in range(3)]
+            q_, qd_, qdd_ = ca.SX.sym("q", self.dof), ca.SX.sym("qd", self.dof), \
+                ca.SX.sym("qdd", self.dof)
+            tau = ca.Function("tau", [q_, qd_, qdd_], [model.symbolic_torque(q_, qd_, qdd_)],
+                              {"never_inline": True})
+            limit = ca.DM(config.torque_limit)
+            torque = ca.mmax(ca.vertcat(*[ca.fabs(tau(*(m[i, :].T for m in states))) - limit
+                                          for i in range(TORQUE_GRID)]))
+        return ca.Function("motion_check", [c, sigma], [ca.vertcat(excess, torque)])
+
+
+def _poly(row, s):
+    """A polynomial (ascending coefficients, a 1 x (degree + 1) row) at the points s."""
+    return sum(row[p] * s**p for p in range(row.numel()))

@@ -1,0 +1,255 @@
+"""An anytime trust-region SQP for the elastic planning NLP (planning.nlp, elastic=True).
+
+The NLP's slacks enter linearly: the power epigraph e (rows P - e <= 0, -P - e <= 0) and the
+clearance slacks v (rows D + v >= lambda, v >= 0). After every step they are reset to the
+least values the rows allow (e = |P|, v = max(0, lambda - D)), so the merit function is the
+exact nonsmooth objective sigma sum w |P| + alpha sum w max(0, lambda - D) plus nu times the
+L1 violation of the other (hard) rows, and each QP is the Sl1QP model of it (Fletcher). A
+QP is always feasible: the slacks absorb the clearance and power rows, and the hard rows the
+current point violates get an elastic column of weight nu.
+
+The dense QP (coefficients in a box trust region, slacks with a proximal term) is solved by
+DAQP, a dual active-set solver, hot-started from the last working set's multipliers. The
+Hessian of the Lagrangian (exact, compiled) only has a coefficient block; its eigenvalues are
+clipped to keep the QP convex. Every accepted iterate goes to a caller's check (its safety
+on the whole forecast); the solve stops at convergence or at a CPU budget (thread time).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import casadi as ca
+import daqp
+import numpy as np
+
+from planning import compiled
+
+CONVERGED, BUDGET, STALLED = "converged", "budget", "stalled"
+STEP_TOLERANCE = 1e-8  # predicted merit decrease (relative) below which a point is optimal
+QP_PRIMAL_TOLERANCE = 1e-10  # DAQP's (its default, 1e-6, let steps leave the trust region)
+PRIMAL_TOLERANCE = 1e-8  # L1 violation of the hard rows at a converged point
+PROXIMAL = 1e-2  # weight of the slacks' proximal term in each QP (vanishes at a fixed point; e,
+# v move by less than cost / PROXIMAL >= 10 only where the rows allow nothing less)
+CURVATURE = 1e-8  # smallest eigenvalue kept in the coefficient block of the QP's Hessian
+_EQUALITY = 5  # DAQP sense flags: active + immutable
+HARD_WEIGHT = 1e6  # nu's floor: hard rows (goal, limits) weigh far above the clearance's L1
+VIOLATED = 1e-9  # a hard row beyond its bound by more gets an elastic column in the QP
+_INF = 1e30
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Where the NLP's pieces sit: nc coefficient variables first, then the power slacks
+    (slice e) and the clearance slacks (slice v); the epigraph rows (slices above, below:
+    P - e, -P - e) and the clearance rows (slice clearance, D + v)."""
+
+    nc: int
+    e: slice
+    v: slice
+    above: slice
+    below: slice
+    clearance: slice
+
+
+@dataclass
+class Point:
+    """An iterate with its slacks reset: x, objective f, rows g, gradient, Jacobian, the
+    Lagrangian Hessian's coefficient block, and its hard-row violation (L1)."""
+
+    x: np.ndarray
+    f: float
+    g: np.ndarray
+    grad: np.ndarray
+    jac: np.ndarray
+    hess: np.ndarray
+    violation: float
+
+
+@dataclass(frozen=True)
+class Solution:
+    """What a solve returns: the chosen point, its multipliers (rows, variables), why it
+    stopped, its iterations and how many iterates the check saw."""
+
+    x: np.ndarray
+    f: float
+    lam_g: np.ndarray
+    lam_x: np.ndarray
+    status: str
+    iterations: int
+    violation: float  # of the hard rows at x (L1)
+
+
+def local_function(nlp, name: str) -> ca.Function:
+    """(x, p, lam_g) -> one dense column: f, grad f, g, jacobian g (column-major) and the
+    coefficient block of the Lagrangian's Hessian (the slacks enter linearly), so that one
+    call through a buffer (Function.buffer: no conversion of its outputs) gives everything."""
+    lam = ca.SX.sym("lam", nlp.g.numel())
+    coefficients = nlp.x[: layout_of(nlp).nc]
+    hessian, _ = ca.hessian(nlp.f + ca.dot(lam, nlp.g), coefficients)
+    column = ca.vertcat(nlp.f, ca.gradient(nlp.f, nlp.x), nlp.g,
+                        ca.vec(ca.jacobian(nlp.g, nlp.x)), ca.vec(hessian))
+    return ca.Function(name, [nlp.x, nlp.p, lam], [ca.densify(column)])
+
+
+def layout_of(nlp) -> Layout:
+    nc = nlp.x.numel() - nlp.slack.numel() - nlp.elastic.numel()
+    ne = nlp.slack.numel()
+    return Layout(nc, slice(nc, nc + ne), slice(nc + ne, nlp.x.numel()), *nlp.epigraph,
+                  nlp.clearance_rows)
+
+
+class AnytimeSQP:
+    """The solver for one elastic NLP: local evaluations by `local` (a compiled
+    local_function), the QPs by DAQP."""
+
+    def __init__(self, local: ca.Function, layout: Layout, lbx: np.ndarray, rows: int):
+        self.local, self.layout, self.lbx = compiled.Buffered(local), layout, np.asarray(lbx, float)
+        n = len(self.lbx)
+        ends = np.cumsum([1, n, rows, rows * n, layout.nc**2])
+        self._parts = (ends, n, rows)
+
+    def evaluate(self, x, p, lam, lbg) -> Point:
+        """The point x with its slacks reset (see the module docstring)."""
+        (out,) = self.local(x, p, lam)
+        ends, n, rows = self._parts
+        f, grad, g = float(out[0]), out[1:ends[1]].copy(), out[ends[1]:ends[2]].copy()
+        jac = out[ends[2]:ends[3]].reshape((rows, n), order="F").copy()
+        hess = out[ends[3]:ends[4]].reshape((self.layout.nc, self.layout.nc))
+        x = np.array(x, float)
+        lay = self.layout
+        if lay.e.stop > lay.e.start:
+            power = 0.5 * (g[lay.above] - g[lay.below])
+            e = np.abs(power)
+            f += grad[lay.e] @ (e - x[lay.e])
+            x[lay.e], g[lay.above], g[lay.below] = e, power - e, -power - e
+        if lay.v.stop > lay.v.start:
+            distance = g[lay.clearance] - x[lay.v]
+            v = np.maximum(0.0, lbg[lay.clearance] - distance)
+            f += grad[lay.v] @ (v - x[lay.v])
+            x[lay.v], g[lay.clearance] = v, distance + v
+        return Point(x, f, g, grad, jac, hess.copy(), 0.0)
+
+    def solve(self, x0, p, lbg, ubg, lam_g0, budget_ms: float, accept, max_iter: int = 200,
+              radius: float = 0.5, lam_x0=None) -> tuple[Solution, int]:
+        """Iterate from x0 (multipliers lam_g0 for the first Hessian) until the predicted
+        decrease vanishes or budget_ms of CPU time are spent. accept(point) is called on the
+        start and every accepted iterate (its return value is ignored: the caller keeps the
+        best one); returns the last point's solution and the iteration count."""
+        clock = time.thread_time()
+        lbg, ubg = np.asarray(lbg, float), np.asarray(ubg, float)
+        rows = np.flatnonzero(np.isfinite(lbg) | np.isfinite(ubg))
+        point = self.evaluate(x0, p, lam_g0, lbg)
+        point.violation = _violation(point.g, lbg, ubg)
+        accept(point)
+        lam_x = np.zeros(len(point.x)) if lam_x0 is None else np.asarray(lam_x0, float)
+        nu, lam_g = HARD_WEIGHT, np.asarray(lam_g0, float)
+        status, iterations = BUDGET, 0
+        while iterations < max_iter:
+            if 1e3 * (time.thread_time() - clock) > budget_ms:
+                break
+            iterations += 1
+            step = self._qp(point, lbg, ubg, rows, radius, nu, (lam_g, lam_x))
+            if step is None:
+                status = STALLED
+                break
+            d, lam_rows, lam_vars, pred_parts = step
+            nu = max(nu, 10.0 * float(np.max(np.abs(lam_rows), initial=0.0)))
+            model, linear_violation = pred_parts
+            pred = -model + nu * (point.violation - linear_violation)
+            scale = 1.0 + abs(point.f)
+            if -model <= STEP_TOLERANCE * scale and \
+                    max(point.violation, linear_violation) <= PRIMAL_TOLERANCE:
+                lam_g, lam_x, status = lam_rows, lam_vars, CONVERGED
+                break
+            trial = self.evaluate(point.x + d, p, lam_rows, lbg)
+            trial.violation = _violation(trial.g, lbg, ubg)
+            actual = point.f + nu * point.violation - trial.f - nu * trial.violation
+            ratio = actual / pred if pred > 0 else -1.0
+            step_size = float(np.max(np.abs(d[: self.layout.nc]), initial=0.0))
+            if ratio >= 1e-4:
+                point, lam_g, lam_x = trial, lam_rows, lam_vars
+                accept(point)
+            if ratio < 0.25:
+                radius = 0.5 * step_size
+                if radius < 1e-10:
+                    status = STALLED
+                    break
+            elif ratio > 0.5 and step_size > 0.99 * radius:
+                # the energy is nearly flat along many motions (a conservative model's power
+                # keeps its sign): the model's decrease is then ~linear and the step rides the
+                # boundary, measured at ratios 0.6-0.8; growing only above 0.75 took 171
+                # iterations on a random crossing
+                radius = min(2.0 * radius, 10.0)
+        return Solution(point.x, point.f, lam_g, lam_x, status, iterations,
+                        point.violation), iterations
+
+    def _qp(self, point: Point, lbg, ubg, rows, radius: float, nu: float, last):
+        """The step d (all variables), its multipliers (rows of g, variables) and the model's
+        decrease parts: (its value grad'd + d'Hd/2, the linearized hard violation). last: the
+        multipliers (rows, variables) of the last QP or of the warm start, DAQP's hot start."""
+        lay, n = self.layout, len(point.x)
+        g, jac = point.g[rows], point.jac[rows]
+        low, high = lbg[rows] - g, ubg[rows] - g
+        # hard rows the point violates (beyond rounding): elastic columns of weight nu
+        below, above = low > VIOLATED, high < -VIOLATED
+        violated = np.flatnonzero(below | above)
+        m = len(violated)
+        hess = np.zeros((n + m, n + m))
+        hess[: lay.nc, : lay.nc] = _convex(point.hess)
+        hess[np.arange(lay.nc, n + m), np.arange(lay.nc, n + m)] = PROXIMAL
+        cost = np.concatenate([point.grad, np.full(m, nu)])
+        elastic = np.zeros((len(rows), m))
+        elastic[violated, np.arange(m)] = np.where(below[violated], 1.0, -1.0)
+        a = np.hstack([jac, elastic])
+        var_low = np.concatenate([np.full(lay.nc, -radius), self.lbx[lay.nc:] - point.x[lay.nc:],
+                                  np.zeros(m)])
+        var_high = np.concatenate([np.full(lay.nc, radius), np.full(n - lay.nc + m, _INF)])
+        var_low = np.maximum(var_low, -_INF)
+        blower = np.concatenate([var_low, np.maximum(low, -_INF)])
+        bupper = np.concatenate([var_high, np.minimum(high, _INF)])
+        sense = np.zeros(len(blower), dtype=np.int32)
+        sense[n + m + np.flatnonzero(lbg[rows] == ubg[rows])] = _EQUALITY
+        dual = self._working_set(point, lbg, rows, m, last)
+        x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense, dual_start=dual,
+                                      primal_tol=QP_PRIMAL_TOLERANCE)
+        if flag < 0:  # the guessed working set can mislead it (cycling): again, cold
+            x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense,
+                                          primal_tol=QP_PRIMAL_TOLERANCE)
+        if flag < 0:
+            return None
+        lam = info["lam"]
+        lam_rows = np.zeros(len(point.g))
+        lam_rows[rows] = lam[n + m:]
+        d = x[:n]
+        model = float(cost[:n] @ d + 0.5 * x @ hess @ x)
+        return d, lam_rows, lam[:n].copy(), (model, float(np.sum(x[n:])))
+
+    def _working_set(self, point: Point, lbg, rows, m: int, last) -> np.ndarray:
+        """DAQP's starting working set (signs of multipliers: which bounds are active): the
+        last multipliers, with the slacks' rows and bounds set from the point itself (the
+        active side of each |P| epigraph pair, a clearance row where the point dips, else
+        its slack's bound), the elastic columns at zero."""
+        lay = self.layout
+        lam_rows, lam_vars = (np.array(v, float) for v in last)
+        lam_vars[: lay.nc] = np.sign(lam_vars[: lay.nc])
+        if lay.e.stop > lay.e.start:
+            power = 0.5 * (point.g[lay.above] - point.g[lay.below])
+            lam_rows[lay.above], lam_rows[lay.below] = power > 0, power < 0
+        if lay.v.stop > lay.v.start:
+            dips = point.x[lay.v] > 0
+            lam_rows[lay.clearance], lam_vars[lay.v] = -1.0 * dips, -1.0 * ~dips
+        return np.concatenate([lam_vars, np.full(m, -1.0), lam_rows[rows]])
+
+
+def _convex(hessian: np.ndarray) -> np.ndarray:
+    """The symmetric matrix with its eigenvalues clipped below at CURVATURE (relative)."""
+    w, vectors = np.linalg.eigh(0.5 * (hessian + hessian.T))
+    floor = CURVATURE * max(1.0, float(np.max(np.abs(w), initial=0.0)))
+    return (vectors * np.maximum(w, floor)) @ vectors.T
+
+
+def _violation(g: np.ndarray, lbg: np.ndarray, ubg: np.ndarray) -> float:
+    """L1 distance of the rows g from [lbg, ubg]."""
+    return float(np.sum(np.maximum(lbg - g, 0.0)) + np.sum(np.maximum(g - ubg, 0.0)))

@@ -1,0 +1,161 @@
+"""The anytime elastic SQP (planning.sqp, planning.anytime) against IPOPT on the very same NLP,
+its compiled safety checks against the numpy ones, its minimum-violation answer, its budget,
+and Algorithm 2 planned with it (speed is measured by the realtime study, never here)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
+from planning import sqp
+from planning.anytime import MIN_VIOLATION
+from planning.clearance import link_clearances
+from planning.config import Scenario, true_energy_config
+from planning.limits import limit_excess
+from planning.nlp import PlanningNLP
+from planning.obstacle import LinearObstacle
+from planning.realtime_iteration import ITERATE
+from planning.replanning import execute
+from planning.result import evaluate
+from planning.safety import SafetyCheck
+from planning.segments import anytime_of
+from planning.solver import ObstacleForecast, Planner
+from planning.trajectory import PolynomialTrajectory
+from tests.helpers import random_crossing
+
+IPOPT = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "ipopt.tol": 1e-10,
+         "ipopt.constr_viol_tol": 1e-10}
+
+
+@pytest.fixture(scope="module")
+def baseline():
+    return PinocchioModel(load_pinocchio("lynxmotion"))
+
+
+@pytest.fixture(scope="module")
+def planner(baseline):
+    return Planner(baseline, true_energy_config(replanner="sqp", compile_code=False,
+                                                torque_limit=None))
+
+
+def _elastic_problem(planner, case, forecast):
+    """The elastic NLP of a cold plan of `case` with every near obstacle sample in a slot:
+    the NLP, its parameters, bounds and the start point (the initial guess)."""
+    config, goal = planner.config, case.goal
+    nlp = PlanningNLP(planner.model, config, planner._goal_limits(goal), elastic=True)
+    x0 = planner.initial_guess(case.start, case.start_velocity, case.duration, goal)
+    reference = planner.trajectory(x0, case.start, case.start_velocity, 0.0, case.duration)
+    clearance = link_clearances(config.geometry, reference.position(forecast.times),
+                                forecast.centres).min(axis=1)
+    near = np.flatnonzero(clearance < config.threshold + 0.1)
+    near = near[np.round(np.linspace(0, len(near) - 1, config.obstacle_slots)).astype(int)]
+    subset = ObstacleForecast(forecast.times[near], forecast.centres[near])
+    p = planner.parameters(case.start, case.start_velocity, case.duration, goal, subset, 0.0,
+                           reference, config.elastic_weight)
+    lbg, ubg = planner.bounds(goal, nlp)
+    start = np.concatenate([x0[: sqp.layout_of(nlp).nc], np.zeros(nlp.x.numel()
+                                                                    - sqp.layout_of(nlp).nc)])
+    return nlp, p, lbg, ubg, start
+
+
+def test_the_anytime_sqp_reaches_ipopts_optimum_of_the_same_nlp(planner):
+    """A cold plan of a random crossing (clearance rows active): the SQP, run to convergence,
+    and IPOPT from the same start reach the same objective (slacks reset to their least
+    values: IPOPT's interior point leaves them a hair off); IPOPT started at the SQP's point
+    finds nothing better (an independent KKT check); the clearance rows bind there."""
+    case, forecast = random_crossing(planner, seed=7)
+    nlp, p, lbg, ubg, start = _elastic_problem(planner, case, forecast)
+    solver = sqp.AnytimeSQP(sqp.local_function(nlp, "local"), sqp.layout_of(nlp), nlp.lbx,
+                            nlp.g.numel())
+    solution, _ = solver.solve(start, p, lbg, ubg, np.zeros(nlp.g.numel()), 1e6,
+                               lambda point: None)
+    assert solution.status == sqp.CONVERGED and solution.violation < 1e-8
+    ipopt = ca.nlpsol("ipopt", "ipopt", {"x": nlp.x, "p": nlp.p, "f": nlp.f, "g": nlp.g}, IPOPT)
+
+    def objective(x):
+        return solver.evaluate(np.asarray(x).ravel(), p, np.zeros(nlp.g.numel()), lbg).f
+
+    same_start = ipopt(x0=start, p=p, lbg=lbg, ubg=ubg, lbx=nlp.lbx)
+    assert ipopt.stats()["success"]
+    assert objective(same_start["x"]) == pytest.approx(solution.f, rel=1e-6)
+    from_sqp = ipopt(x0=solution.x, p=p, lbg=lbg, ubg=ubg, lbx=nlp.lbx)
+    assert objective(from_sqp["x"]) >= solution.f * (1 - 1e-7)
+    assert np.max(np.abs(solution.lam_g[nlp.clearance_rows])) > 1e-3  # the obstacle binds
+
+
+def test_compiled_safety_checks_match_the_numpy_ones(baseline):
+    """Clearance at each sample (planning.clearance), the limit excess with its turning
+    points (planning.limits) and the torque excess (Planner.torque_excess) on random motions."""
+    config = true_energy_config()
+    check, planner = SafetyCheck(baseline, config, compile_code=False), Planner(baseline, config)
+    rng = np.random.default_rng(4)
+    for _ in range(3):
+        motion = PolynomialTrajectory(0.3, 1.7, rng.normal(size=(3, 5)))
+        times = np.linspace(0.31, 2.0, 70)  # three chunks of the clearance function
+        centres = rng.normal(size=(70, 3)) * 0.2
+        safety = check(motion, times, centres)
+        expected = link_clearances(config.geometry, motion.position(times), centres).min(axis=1)
+        assert np.allclose(safety.clearance, expected, atol=1e-12)
+        assert safety.limit_excess == pytest.approx(
+            limit_excess(motion, config.lower, config.upper), abs=1e-7)
+        assert safety.torque_excess == pytest.approx(planner.torque_excess(motion), abs=1e-9)
+
+
+def test_a_forecast_no_motion_can_clear_gets_the_minimum_violation_plan(planner):
+    """An obstacle standing on the goal's forearm: every motion ends within the threshold.
+    The plan is returned (followed), reported as the minimum violation in mm, and misses the
+    threshold by no more than its start point did."""
+    goal = Scenario().goal
+    end = planner.config.geometry.points(np.asarray([goal]))[0]
+    centre = tuple(0.5 * (end[-1] + end[-2]))
+    case = dataclasses.replace(Scenario(), obstacle=LinearObstacle(centre, centre, 2.0))
+    times = case.obstacle.sample_times
+    forecast = ObstacleForecast(times, case.obstacle.position(times))
+    anytime = anytime_of(planner)
+    anytime.prepare(goal)
+    plan, _, _ = anytime.plan(case.start, case.start_velocity, 0.0, 2.0, goal, forecast,
+                              budget_ms=1e5)
+    assert plan.success and MIN_VIOLATION in plan.status
+    lowest = link_clearances(planner.config.geometry, plan.trajectory.position(times),
+                             forecast.centres).min()
+    reported = float(plan.status.split(": ")[-1].split(" mm")[0])
+    assert reported == pytest.approx(1e3 * (planner.config.threshold - lowest), abs=0.05)
+    x0 = planner.initial_guess(case.start, case.start_velocity, 2.0, goal)
+    start = planner.trajectory(x0, case.start, case.start_velocity, 0.0, 2.0)
+    assert lowest >= link_clearances(planner.config.geometry, start.position(times),
+                                     forecast.centres).min() - 1e-9
+
+
+def test_a_plan_out_of_budget_returns_its_best_iterate(planner):
+    """With no CPU to spend the plan is its start (the best, and only, iterate checked),
+    status ITERATE (Algorithm 2 goes on from it at the next sample)."""
+    case, forecast = random_crossing(planner, seed=5)
+    anytime = anytime_of(planner)
+    anytime.prepare(case.goal)
+    x0 = planner.initial_guess(case.start, case.start_velocity, case.duration, case.goal)
+    plan, _, _ = anytime.plan(case.start, case.start_velocity, 0.0, case.duration, case.goal,
+                              forecast, x0=x0, budget_ms=0.0)
+    assert plan.status.startswith(ITERATE) and plan.iterations == 0
+    start = planner.trajectory(x0, case.start, case.start_velocity, 0.0, case.duration)
+    assert np.allclose(plan.trajectory.coefficients, start.coefficients)
+
+
+@pytest.mark.slow
+def test_algorithm_2_with_the_anytime_sqp_keeps_the_threshold(baseline):
+    """A random crossing planned and re-planned by the anytime SQP: the executed motion is
+    feasible (threshold, limits, goal at rest) and spends no more than 2 % above the penalty
+    loop's (fatrop) execution of the same scenario."""
+    config = true_energy_config(compile_code=False)
+    planners = {name: Planner(baseline, dataclasses.replace(config, replanner=name))
+                for name in ("sqp", "fatrop")}
+    case, _ = random_crossing(planners["fatrop"], seed=3)
+    results = {name: evaluate(execute(planner, case), case, baseline, planner.config)
+               for name, planner in planners.items()}
+    assert results["sqp"].feasible, results["sqp"].problems
+    assert len(results["sqp"].execution.segments) > 1  # it re-planned
+    assert results["sqp"].energy <= 1.02 * results["fatrop"].energy
