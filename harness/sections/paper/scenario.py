@@ -9,7 +9,6 @@ from harness.experiments.planning import plan_checks, summary
 from harness.robots.arm import planner_config
 from harness.robots.baseline import PinocchioModel
 from harness.sections.base import Context, Row, SectionResult, Target
-from planning.config import true_energy_config
 from planning.replanning import execute
 from planning.result import evaluate, to_json
 from planning.scenarios import paper_scenario
@@ -22,9 +21,7 @@ IDENTIFIED_TARGET = 0.02  # identified plan's true energy within 2 % of the clos
 def run(ctx: Context, models: dict) -> SectionResult:
     baseline = next(m for m in models.values() if isinstance(m, PinocchioModel))
     paper = PAPER.config(planner_config(ctx.robot.name, rest_at_goal=False))
-    true = true_energy_config()
-    default = planner_config(ctx.robot.name, energy_quadrature=true.energy_quadrature,
-                             energy_samples=true.energy_samples, starts=true.starts)
+    default = planner_config(ctx.robot.name)
     scenario = paper_scenario()
     runs = {f"paper_{name}": (model, paper) for name, model in models.items()}
     runs["default_pinocchio"] = (baseline, default)

@@ -26,7 +26,7 @@ SWAY_REPLANS = 5  # a swaying obstacle's forecast changes at every sample
 def run(ctx: Context) -> SectionResult:
     robot = ctx.robot.name
     baseline = PinocchioModel(load_pinocchio(robot))
-    config = planner_config(robot, compile_code=True, starts=4)  # as `plan` plans
+    config = planner_config(robot, compile_code=True)  # as `plan` plans
     base, link = bench_motion(robot)
     planner = Planner(baseline, config)
     free = evaluate(execute(planner, base, avoid=False), base, baseline, config)
