@@ -34,14 +34,8 @@ def build_parser() -> argparse.ArgumentParser:
         "against Pinocchio and replayed in MuJoCo.",
     )
     sub = parser.add_subparsers(dest="command", required=True)
-    for name in COMMANDS:
-        try:
-            module = importlib.import_module(f"harness.commands.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name != f"harness.commands.{name}":
-                raise
-            continue
-        module.register(sub)
+    for name in COMMANDS:  # every command module exists: a missing one is a broken install
+        importlib.import_module(f"harness.commands.{name}").register(sub)
     return parser
 
 

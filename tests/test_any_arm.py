@@ -80,14 +80,15 @@ def test_identification_section_scores_the_generated_library_against_the_oracle(
     out = section.run(Context(get_robot("ur5"), tmp_path, quick=True))
     r = out.results
     assert all(c.passed for c in out.checks) and max(r["noise_free_heldout"]) <= 1e-6
-    assert r["closed_form_gap"] <= 1e-9 and len(r["draws"]) == len(section.QUICK_SEEDS)
-    for draw in r["draws"]:
+    draws = r["draws"]["0.05"]
+    assert r["closed_form_gap"] <= 1e-9 and len(draws) == len(section.QUICK_LEVELS[0.05])
+    for draw in draws:
         for judge in ("fresh", "sines"):
             assert len(draw["kinematic"][judge]) == len(draw["oracle"][judge]) == 6
             assert all(0 < e < 0.05 for e in draw["kinematic"][judge] + draw["oracle"][judge])
     ratios = np.array([np.array(d["kinematic"]["sines"]) / np.array(d["oracle"]["sines"])
-                       for d in r["draws"]])
-    summary = r["summary"]["kinematic"]["sines"]
+                       for d in draws])
+    summary = r["summary"]["0.05"]["kinematic"]["sines"]
     assert np.isclose(summary["worst_joint"], ratios.max())
     assert np.isclose(summary["worst_median"], np.median(ratios, axis=1).max())
     assert out.targets[0].measured == summary["worst_median"] and "ur5" in out.markdown

@@ -230,3 +230,34 @@ def test_atomic_write_killed_mid_write_leaves_target_absent(tmp_path):
     bad, temporaries = incomplete_files(tmp_path)
     assert not bad and (not target.exists() or json.loads(target.read_text()))
     assert all(Path(t).name.startswith(".big.json.") for t in temporaries)
+
+
+def test_a_robot_given_by_its_file_gets_the_same_sections(tmp_path):
+    """A robot given as an MJCF path (no registry entry: no motion, no extras) goes through
+    the identification and closeloop sections like a registered one."""
+    out = tmp_path / "out"
+    mjcf = Path(__file__).resolve().parents[1] / "models" / "lynxmotion" / "lynxmotion.xml"
+    assert main(["bench", "--quick", "--no-video", "--robot", str(mjcf), "--sections",
+                 "identification,closeloop", "--out", str(out)]) == 0
+    report = json.loads((out / "report.json").read_text())
+    assert list(report["sections"]) == ["identification", "closeloop"] and report["ok"]
+    assert "paper" not in report["sections"]["identification"]["results"]  # no extras
+    assert sorted(p.name for p in (out / "plants").iterdir()) == [
+        "lynxmotion_control.xml", "lynxmotion_coupled.xml", "lynxmotion_effects.xml"]
+
+
+def test_clearance_is_a_target_where_no_path_was_designed():
+    """plan_checks: on a registered motion (designed to be clearable) a plan that dips is a
+    failed check; on a user's robot it is a target with its gap, and the plan's saying so is
+    not a failure."""
+    from harness.experiments.planning import plan_checks
+
+    s = {"problems": ["clearance 0.0459 m < threshold 0.08 m - 0.002 m"], "end_error_rad": 0.0,
+         "min_clearance_m": 0.0459, "end_speed_rad_s": 0.0, "true_energy_J": 1.0,
+         "energy_bound_J": 0.5}
+    checks, targets = plan_checks("p", s, 0.08, True, clearable=True)
+    assert {c.name for c in checks if not c.passed} == {"p_feasible", "p_clearance_held"}
+    assert targets == []
+    checks, targets = plan_checks("p", s, 0.08, True, clearable=False)
+    assert all(c.passed for c in checks) and len(targets) == 1
+    assert targets[0].met is False and targets[0].gap == pytest.approx(78.0 - 45.9)

@@ -20,25 +20,17 @@ import mujoco
 from harness.closeloop.plants import Variant
 from harness.errors import UserError
 from harness.io import write_text
-from harness.robots.registry import flange_frame, get_robot, load_pinocchio
-from harness.robots.urdf import arm_urdf, strip_geometry
+from harness.robots.registry import flange_frame, load_pinocchio
+from harness.robots.scene import robot_spec
 
 VECTOR_ATTRIBUTES = ("damping", "stiffness")  # polynomial coefficients in MuJoCo >= 3.3
-
-
-def arm_spec(robot: str) -> mujoco.MjSpec:
-    """The registered arm's MuJoCo spec (as registry.load_mujoco compiles it)."""
-    entry = get_robot(robot)
-    if entry.mjcf is not None:
-        return mujoco.MjSpec.from_file(str(entry.mjcf))
-    return mujoco.MjSpec.from_string(strip_geometry(arm_urdf(entry.urdf.read_text(), robot)))
 
 
 def arm_variant_xml(robot: str, variant: Variant) -> str:
     """MJCF text of the arm plus the variant's joint effects and flange payload."""
     from harness.closeloop.plants import JOINT_ATTRIBUTES
 
-    spec = arm_spec(robot)
+    spec = robot_spec(robot)
     hinges = [j for j in spec.joints if j.type == mujoco.mjtJoint.mjJNT_HINGE]
     for effect, joint, value in variant.joint_effects:
         if not 1 <= joint <= len(hinges):
@@ -79,6 +71,6 @@ def arm_variant_xml(robot: str, variant: Variant) -> str:
 def write_arm_variant(robot: str, variant: Variant, directory: Path) -> Path:
     """Write the variant MJCF to directory/<robot>_<name>.xml; returns its path."""
     directory.mkdir(parents=True, exist_ok=True)
-    path = directory / f"{robot}_{variant.name}.xml"
+    path = directory / f"{Path(robot).stem}_{variant.name}.xml"  # a robot path: its file's stem
     write_text(path, arm_variant_xml(robot, variant))
     return path

@@ -47,7 +47,6 @@ from harness.errors import UserError
 from harness.robots.plant import Plant, load_plant
 from harness.robots.registry import (
     DEFAULT_ROBOT,
-    ROBOTS,
     flange_frame,
     load_chain,
     load_mujoco,
@@ -165,11 +164,9 @@ def declared_mujoco(robot: str) -> mujoco.MjModel:
 
 
 def effects_reference(robot: str) -> mujoco.MjModel:
-    """What a plant's true effects are read against: declared_mujoco, or for a registered arm
-    the arm as its plants are written (harness.closeloop.arm_plants; MjSpec.to_xml keeps 6
-    significant digits, so masses rounded alike are not read as a payload)."""
-    if robot not in ROBOTS:
-        return declared_mujoco(robot)
+    """What a plant's true effects are read against: the arm as its plants are written
+    (harness.closeloop.arm_plants; MjSpec.to_xml keeps 6 significant digits, so masses rounded
+    alike are not read as a payload)."""
     return mujoco.MjModel.from_xml_string(arm_variant_xml(robot, Variant(name="declared")))
 
 

@@ -16,7 +16,7 @@ import numpy as np
 from harness.errors import UserError
 from harness.io import write_json
 from harness.robots.arm import planner_config, torque_limit
-from harness.robots.registry import DEFAULT_ROBOT
+from harness.robots.registry import DEFAULT_ROBOT, robot_entry
 from harness.robots.torque_models import load_torque_model
 from planning.backends import SOLVERS
 from planning.config import PlannerConfig, Scenario, true_energy_config
@@ -53,11 +53,11 @@ def register(sub) -> None:
                    help="registered robot or URDF/MJCF path: its links, joint and torque limits "
                         "and its pinocchio baseline")
     p.add_argument("--start", default=None,
-                   help="start angles, one per joint (rad); default on the Lynxmotion: "
-                        + _csv(DEFAULT.start))
+                   help="start angles, one per joint (rad); default: the robot's registered "
+                        "motion (on the Lynxmotion the paper's, " + _csv(DEFAULT.start) + ")")
     p.add_argument("--goal", default=None,
-                   help="goal angles, one per joint (rad); default on the Lynxmotion: "
-                        + _csv(DEFAULT.goal))
+                   help="goal angles, one per joint (rad); default: the robot's registered "
+                        "motion (on the Lynxmotion the paper's, " + _csv(DEFAULT.goal) + ")")
     p.add_argument("--duration", type=float, default=DEFAULT.duration, help="motion time (s)")
     p.add_argument("--obstacle-from", default=_csv(DEFAULT.obstacle.start),
                    help="obstacle centre at t = 0 (m)")
@@ -148,12 +148,14 @@ def _torque_limit(args, dof: int) -> tuple[float, ...] | None:
 
 
 def _angles(args, name: str, dof: int) -> tuple[float, ...]:
+    """--start or --goal, else the robot's registered motion (the Lynxmotion's: the paper's)."""
     text = getattr(args, name)
     if text is None:
-        if args.robot != DEFAULT_ROBOT:
+        motion = robot_entry(args.robot).motion
+        if motion is None:
             raise UserError(f"--{name} is needed on robot {args.robot}: {dof} comma-separated "
                             "joint angles (rad)")
-        return getattr(DEFAULT, name)
+        return tuple(motion[0 if name == "start" else 1])
     return _vector(text, name, dof)
 
 

@@ -10,7 +10,6 @@ motor per joint, else the URDF's effort limits.
 
 from __future__ import annotations
 
-import dataclasses
 from functools import cache
 from pathlib import Path
 
@@ -27,7 +26,7 @@ from harness.robots.registry import (
     load_pinocchio,
     robot_entry,
 )
-from planning.config import PlannerConfig, Scenario
+from planning.config import PlannerConfig, Scenario, true_energy_config
 from planning.kinematics import ArmGeometry
 
 
@@ -89,16 +88,17 @@ def torque_limit(robot: str) -> tuple[float, ...] | None:
 
 
 def planner_config(robot: str, **changes) -> PlannerConfig:
-    """The default planner configuration on robot: its links, joint and torque limits, the
-    solver its registry entry names, at rest at the goal (planning.config's default is the
-    paper's free end) (IPOPT unless said: on the UR5's crossing, compiled
-    NLP, fatrop's cold solve stopped at its 300-iteration cap and half its warm re-plans at
-    60, each then rescued by IPOPT; IPOPT alone: 18 + 6 iterations cold, 4-7 per re-plan)."""
+    """The default planner configuration on robot, what `plan` and the bench plan with: the
+    true energy, several starts and the arrival at rest of planning.config.true_energy_config
+    (planning.config's own defaults are the paper's), the robot's links, joint and torque
+    limits, and the solver its registry entry names (IPOPT unless said: on the UR5's
+    crossing, compiled NLP, fatrop's cold solve stopped at its 300-iteration cap and half its
+    warm re-plans at 60, each then rescued by IPOPT; IPOPT alone: 18 + 6 iterations cold, 4-7
+    per re-plan)."""
     lower, upper = joint_limits(robot)
     base = dict(geometry=arm_geometry(robot), lower=lower, upper=upper,
-                torque_limit=torque_limit(robot), solver=robot_entry(robot).solver,
-                rest_at_goal=True)
-    return dataclasses.replace(PlannerConfig(), **{**base, **changes})
+                torque_limit=torque_limit(robot), solver=robot_entry(robot).solver)
+    return true_energy_config(**{**base, **changes})
 
 
 def bench_motion(robot: str, duration: float = 2.0) -> tuple[Scenario, int]:

@@ -1,6 +1,6 @@
 """A MuJoCo scene built around any arm (mujoco.MjSpec), for replaying plans.
 
-The arm's model (registry.arm_spec: the URDF's arm joints without meshes, or the MJCF)
+The arm's model (robot_spec: the URDF's arm joints without meshes, or the MJCF)
 gets what a replay needs, as the Lynxmotion's hand-written scene.xml has it: a floor, a
 light, a camera looking at the arm, the moving obstacle as a mocap body with a sphere, one
 motor per joint limited to the model's torque limits (gear 1), a site 'end_effector' at the

@@ -13,11 +13,18 @@ import importlib
 SECTIONS = ("identification", "planning", "replay", "closeloop", "real_data")
 
 
-def load_section(name: str):
-    """The entry module of section name (ValueError if it is not one)."""
-    if name not in SECTIONS:
-        raise ValueError(f"unknown section {name!r} (known: {', '.join(SECTIONS)})")
-    module = importlib.import_module(f"harness.sections.{name}")
+def entry_module(package: str, name: str, known):
+    """The module package.<name> with run(context), or for a sub-package its `section`
+    module (ValueError if name is not one of known)."""
+    if name not in known:
+        raise ValueError(f"unknown {package.rsplit('.', 1)[-1]} {name!r} (known: "
+                         f"{', '.join(known)})")
+    module = importlib.import_module(f"{package}.{name}")
     if hasattr(module, "__path__"):
-        module = importlib.import_module(f"harness.sections.{name}.section")
+        module = importlib.import_module(f"{package}.{name}.section")
     return module
+
+
+def load_section(name: str):
+    """The entry module of section name."""
+    return entry_module("harness.sections", name, SECTIONS)

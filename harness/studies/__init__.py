@@ -8,7 +8,7 @@ tests/test_studies.py on its quick form.
 
 from __future__ import annotations
 
-import importlib
+from harness.sections import entry_module
 
 STUDIES = {
     "paper_identification": "the paper's identification study on its arm: noise levels, "
@@ -23,10 +23,5 @@ STUDIES = {
 
 
 def load_study(name: str):
-    """The entry module of study name (ValueError if it is not one)."""
-    if name not in STUDIES:
-        raise ValueError(f"unknown study {name!r} (known: {', '.join(STUDIES)})")
-    module = importlib.import_module(f"harness.studies.{name}")
-    if hasattr(module, "__path__"):
-        module = importlib.import_module(f"harness.studies.{name}.section")
-    return module
+    """The entry module of study name."""
+    return entry_module("harness.studies", name, STUDIES)

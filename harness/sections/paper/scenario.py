@@ -9,7 +9,6 @@ from harness.experiments.planning import plan_checks, summary
 from harness.robots.arm import planner_config
 from harness.robots.baseline import PinocchioModel
 from harness.sections.base import Context, Row, SectionResult, Target
-from planning.config import true_energy_config
 from planning.replanning import execute
 from planning.result import evaluate, to_json
 from planning.scenarios import paper_scenario
@@ -22,9 +21,7 @@ IDENTIFIED_TARGET = 0.02  # identified plan's true energy within 2 % of the clos
 def run(ctx: Context, models: dict) -> SectionResult:
     baseline = next(m for m in models.values() if isinstance(m, PinocchioModel))
     paper = PAPER.config(planner_config(ctx.robot.name, rest_at_goal=False))
-    true = true_energy_config()
-    default = planner_config(ctx.robot.name, energy_quadrature=true.energy_quadrature,
-                             energy_samples=true.energy_samples, starts=true.starts)
+    default = planner_config(ctx.robot.name)
     scenario = paper_scenario()
     runs = {f"paper_{name}": (model, paper) for name, model in models.items()}
     runs["default_pinocchio"] = (baseline, default)
@@ -33,7 +30,7 @@ def run(ctx: Context, models: dict) -> SectionResult:
         executed = evaluate(execute(Planner(model, config), scenario), scenario, model, config)
         results[name] = summary(executed, baseline, config)
         plans[name] = to_json(executed, scenario, config, name.split("_", 1)[1])
-        checks += plan_checks(name, results[name], config.threshold, config.rest_at_goal)
+        checks += plan_checks(name, results[name], config.threshold, config.rest_at_goal)[0]
     md = ["The paper's scenario (q0 = (pi/2, pi/5, -pi/4), goal (-pi/2, 2 pi/5, -pi/3), 2 s, "
           "the obstacle from (0.15, 0.40, 0.22) to (0.18, -0.35, 0.28) m, lambda = 0.08 m). "
           "`paper_*`: the paper's formulation (N = 10, free end velocity: `plan --free-end`); "

