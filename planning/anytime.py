@@ -116,11 +116,12 @@ class Anytime:
         else:
             reference = warm.trajectory.restrict(t_begin, duration)
         torque = warm is not None and warm.layout[-1:] == (True,)
+        check = self.check.against(times, centres, t_begin, duration)
         best, plan, iterations, last = None, None, 0, warm
         spent = sum(problem.sqp.spent_ms for problem in self._problems.values())
         for _ in range(ROUNDS):
             problem = self.problem(goal, torque)
-            safety = self.check(reference, times, centres)
+            safety = check(reference.coefficients)
             slots = _screen(times, safety.clearance, config.threshold, config.obstacle_slots)
             p = planner.parameters(q0, qd0, duration, goal,
                                    ObstacleForecast(times[slots], centres[slots]), t_begin,
@@ -130,8 +131,7 @@ class Anytime:
             candidates: list[_Candidate] = []
 
             def accept(point, candidates=candidates):
-                candidates.append(self._candidate(point, q0, qd0, t_begin, duration, times,
-                                                  centres))
+                candidates.append(self._candidate(point, q0, qd0, t_begin, duration, check))
 
             remaining = budget - 1e3 * (time.thread_time() - cpu)
             solution, count = problem.sqp.solve(start, p, lbg, ubg, lam_g, remaining, accept,
@@ -184,19 +184,18 @@ class Anytime:
         lbg[np.arange(rows.start, rows.stop)[~used.ravel()]] = -np.inf
         return lbg, ubg
 
-    def _candidate(self, point, q0, qd0, t_begin, duration, times, centres) -> _Candidate:
+    def _candidate(self, point, q0, qd0, t_begin, duration, check) -> _Candidate:
         """An accepted iterate, checked, with its rank: within the hard limits first, then
-        keeping the threshold, then missing it least, then the objective."""
+        keeping the threshold, then the objective (for one that misses the threshold: its
+        L1 violation weighed by elastic_weight, which the SQP minimizes, plus the energy)."""
         config = self.config
         trajectory = self.planner.trajectory(point.x, q0, qd0, t_begin, duration)
-        safety = self.check(trajectory, times, centres)
+        safety = check(trajectory.coefficients)
         hard = max(safety.limit_excess - LIMIT_TOLERANCE, 0.0) + \
             max(safety.torque_excess - TORQUE_TOLERANCE, 0.0) + \
             max(point.violation - HARD_TOLERANCE, 0.0)
-        deficit = max(config.threshold - safety.lowest, 0.0)
-        unsafe = deficit > config.penalty_tolerance
-        return _Candidate((unsafe, hard, deficit if unsafe else 0.0, point.f), point.x,
-                          safety, point)
+        unsafe = config.threshold - safety.lowest > config.penalty_tolerance
+        return _Candidate((unsafe, hard, point.f), point.x, safety, point)
 
     def _needs_round(self, best: _Candidate, slots, near) -> str | None:
         """Why another round: "torque" (a motor overdriven), "limits" (beyond a limit between
@@ -259,7 +258,8 @@ class Anytime:
             detour=detour)
 
     def _status(self, best: _Candidate, converged: bool) -> str:
-        unsafe, hard, deficit, _ = best.rank
+        unsafe, hard, _ = best.rank
+        deficit = self.config.threshold - best.safety.lowest
         if hard > 0:
             return f"limits left by {hard:.2e} (joint limits in rad, torques in N m)"
         status = CONVERGED if converged else ITERATE

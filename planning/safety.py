@@ -57,18 +57,34 @@ class SafetyCheck:
     def __call__(self, trajectory: PolynomialTrajectory, times: np.ndarray,
                  centres: np.ndarray) -> Safety:
         """Check `trajectory` against obstacle centres (k, 3) at absolute times (k,)."""
-        c = trajectory.coefficients.ravel(order="F")
-        s = (np.asarray(times, float) - trajectory.t_begin) / trajectory.duration
+        bound = self.against(times, centres, trajectory.t_begin, trajectory.duration)
+        return bound(trajectory.coefficients)
+
+    def against(self, times: np.ndarray, centres: np.ndarray, t_begin: float,
+                duration: float):
+        """The check of motions on [t_begin, t_begin + duration] against one forecast, its
+        samples packed once: a function of the coefficients (dof, degree + 1) -> Safety."""
+        s = (np.asarray(times, float) - t_begin) / duration
         k, count = len(s), len(self.config.geometry.links)
-        out = np.empty((k, count))
+        chunks = []
         for start in range(0, k, CHUNK):
             stop = min(k, start + CHUNK)
             chunk_s, chunk_c = np.zeros(CHUNK), np.full((CHUNK, 3), FAR)
             chunk_s[: stop - start], chunk_c[: stop - start] = s[start:stop], centres[start:stop]
-            (values,) = self._clearance(c, chunk_s, chunk_c.ravel())
-            out[start:stop] = values.reshape(CHUNK, count)[: stop - start]
-        (motion,) = self._motion(c, [trajectory.duration])
-        return Safety(out.min(axis=1, initial=np.inf), float(motion[0]), float(motion[1]), out)
+            chunks.append((start, stop, chunk_s, chunk_c.ravel()))
+        sigma = np.array([duration])
+
+        def check(coefficients: np.ndarray) -> Safety:
+            c = coefficients.ravel(order="F")
+            out = np.empty((k, count))
+            for start, stop, chunk_s, chunk_c in chunks:
+                (values,) = self._clearance(c, chunk_s, chunk_c)
+                out[start:stop] = values.reshape(CHUNK, count)[: stop - start]
+            (motion,) = self._motion(c, sigma)
+            return Safety(out.min(axis=1, initial=np.inf), float(motion[0]), float(motion[1]),
+                          out)
+
+        return check
 
     def _coefficients(self):
         return ca.SX.sym("c", self.dof, self.degree + 1)
