@@ -29,7 +29,7 @@ from planning.nlp import PlanningNLP
 from planning.realtime_iteration import ITERATE
 from planning.safety import Safety, SafetyCheck
 from planning.solver import ObstacleForecast, Planner, SegmentPlan
-from planning.starts import rank, start_points
+from planning.starts import start_points
 
 CONVERGED = "converged"
 MIN_VIOLATION = "minimum violation"
@@ -161,6 +161,11 @@ class Anytime:
                                 solver))
         return plan, *elapsed
 
+    def rank(self, plan: SegmentPlan) -> tuple[bool, float]:
+        """Sort key of candidate plans (as planning.starts.rank, compiled): usable first,
+        then the energy actually spent (dense integral) plus the clearance penalty (J)."""
+        return (not plan.success, self.check.energy(plan.trajectory) + plan.penalty)
+
     def best_of(self, q0, qd0, t_begin: float, duration: float, goal,
                 forecast: ObstacleForecast | None, warm: SegmentPlan | None, starts: int,
                 budget_ms: float) -> SegmentPlan:
@@ -171,7 +176,7 @@ class Anytime:
         plans = [] if warm is None else [self.plan(*segment, warm, budget_ms=budget_ms)[0]]
         for x0 in start_points(self.planner, q0, qd0, duration, goal, starts):
             plans.append(self.plan(*segment, None, x0=x0, budget_ms=budget_ms)[0])
-        return min(plans, key=lambda plan: rank(self.planner, plan))
+        return min(plans, key=self.rank)
 
     def _bounds(self, problem: _Problem, goal, near: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The planner's bounds; the clearance rows of empty slots and of links the reference
@@ -214,10 +219,9 @@ class Anytime:
         gap = float(np.max(np.diff(slots), initial=0)) if len(slots) == config.obstacle_slots \
             else 0.0
         rows = near < config.threshold + MARGIN  # (slots, links)
-        for sample, link in dips:
-            if not np.any(rows[:, link] & (np.abs(slots - sample) <= gap)):
-                return "screen"
-        return None
+        close = np.abs(slots[None, :] - dips[:, :1]) <= gap  # (dips, slots)
+        covered = np.any(close & rows.T[dips[:, 1]], axis=1)
+        return None if np.all(covered) else "screen"
 
     def _start(self, problem: _Problem, reference, slot_times, last: SegmentPlan | None):
         """The start point (the reference's free coefficients, slacks reset by the SQP) and

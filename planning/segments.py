@@ -179,7 +179,9 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
         plans.append(plan)
         wall, cpu = wall + ms, cpu + cpu_ms
     clock = _Clock()  # the ranking (a dense integral per plan) and polishing are plan time
-    ranked = sorted(plans, key=lambda plan: rank(planner, plan))
+    sqp = planner.config.replanner == "sqp"
+    ranked = sorted(plans, key=anytime_of(planner).rank if sqp else
+                    (lambda plan: rank(planner, plan)))
     best = ranked[0]
     if split and best.success:
         settled, _, _ = plan_segment(planner, q0, qd0, t_begin, duration, goal, forecast,
