@@ -91,7 +91,7 @@ def local_function(nlp, name: str) -> ca.Function:
     coefficients = nlp.x[: layout_of(nlp).nc]
     hessian, _ = ca.hessian(nlp.f + ca.dot(lam, nlp.g), coefficients)
     column = ca.vertcat(nlp.f, ca.gradient(nlp.f, nlp.x), nlp.g,
-                        ca.vec(ca.jacobian(nlp.g, nlp.x)), ca.vec(hessian))
+                        ca.vec(ca.jacobian(nlp.g, nlp.x).T), ca.vec(hessian))  # J row-major
     return ca.Function(name, [nlp.x, nlp.p, lam], [ca.densify(column)])
 
 
@@ -100,6 +100,20 @@ def layout_of(nlp) -> Layout:
     ne = nlp.slack.numel()
     return Layout(nc, slice(nc, nc + ne), slice(nc + ne, nlp.x.numel()), *nlp.epigraph,
                   nlp.clearance_rows)
+
+
+class _Frame:
+    """What every QP of one solve shares: its rows and variables, the Hessian buffer (the
+    slacks' proximal diagonal set once), the variable bounds and DAQP's constraint types."""
+
+    def __init__(self, rows, cols, nc: int, equality, lbx_slacks):
+        k = len(cols)
+        self.rows, self.cols, self.nc, self.lbx = rows, cols, nc, lbx_slacks
+        self.hess = np.zeros((k, k))
+        self.hess[np.arange(nc, k), np.arange(nc, k)] = PROXIMAL
+        self.low, self.high = np.zeros(k), np.full(k, _INF)
+        self.sense = np.zeros(k + len(rows), dtype=np.int32)
+        self.sense[k + np.flatnonzero(equality)] = _EQUALITY
 
 
 class AnytimeSQP:
@@ -120,7 +134,7 @@ class AnytimeSQP:
         self.spent_ms += 1e3 * (time.thread_time() - began)
         ends, n, rows = self._parts
         f, grad, g = float(out[0]), out[1:ends[1]].copy(), out[ends[1]:ends[2]].copy()
-        jac = out[ends[2]:ends[3]].reshape((rows, n), order="F").copy()
+        jac = out[ends[2]:ends[3]].reshape((rows, n)).copy()
         hess = out[ends[3]:ends[4]].reshape((self.layout.nc, self.layout.nc))
         x = np.array(x, float)
         lay = self.layout
@@ -148,6 +162,7 @@ class AnytimeSQP:
         lay = self.layout
         free = ~np.isfinite(lbg[lay.clearance])  # a clearance slack without its row
         cols = np.setdiff1d(np.arange(len(self.lbx)), np.arange(lay.v.start, lay.v.stop)[free])
+        frame = _Frame(rows, cols, lay.nc, lbg[rows] == ubg[rows], self.lbx[cols[lay.nc:]])
         point = self.evaluate(x0, p, lam_g0, lbg)
         point.violation = _violation(point.g, lbg, ubg)
         accept(point)
@@ -160,7 +175,7 @@ class AnytimeSQP:
             if began + longest > budget_ms:
                 break
             iterations += 1
-            step = self._qp(point, lbg, ubg, rows, cols, radius, nu, (lam_g, lam_x))
+            step = self._qp(point, lbg, ubg, frame, radius, nu, (lam_g, lam_x))
             if step is None:
                 status = STALLED
                 break
@@ -178,6 +193,15 @@ class AnytimeSQP:
             actual = point.f + nu * point.violation - trial.f - nu * trial.violation
             ratio = actual / pred if pred > 0 else -1.0
             step_size = float(np.max(np.abs(d[: self.layout.nc]), initial=0.0))
+            if ratio < 1e-4:  # the rows' curvature spoiled the step (Maratos): correct it
+                corrected = self._corrected(point, trial, p, lbg, ubg, frame, radius, nu,
+                                            (lam_rows, lam_vars))
+                if corrected is not None:
+                    better = point.f + nu * point.violation - corrected[0].f \
+                        - nu * corrected[0].violation
+                    if better / pred >= 1e-4:
+                        trial, (lam_rows, lam_vars), ratio = corrected[0], corrected[1], \
+                            better / pred
             if ratio >= 1e-4:
                 point, lam_g, lam_x = trial, lam_rows, lam_vars
                 accept(point)
@@ -196,35 +220,53 @@ class AnytimeSQP:
         return Solution(point.x, point.f, lam_g, lam_x, status, iterations,
                         point.violation), iterations
 
-    def _qp(self, point: Point, lbg, ubg, rows, cols, radius: float, nu: float, last):
+    def _corrected(self, point: Point, trial: Point, p, lbg, ubg, frame, radius, nu, last):
+        """A second-order correction (Fletcher): the QP again with the rows' values at the
+        trial point less their linear change, c = g(trial) - J (trial - x), so the step
+        lands on the rows' curved surfaces; the corrected trial point and its multipliers,
+        or None. Measured: near a minimum-violation plan's kinks the plain steps were
+        refused and accepted in turn, halving the progress each time."""
+        shifted = Point(point.x, point.f, trial.g - point.jac @ (trial.x - point.x),
+                        point.grad, point.jac, point.hess, point.violation)
+        step = self._qp(shifted, lbg, ubg, frame, radius, nu, last)
+        if step is None:
+            return None
+        corrected = self.evaluate(point.x + step[0], p, step[1], lbg)
+        corrected.violation = _violation(corrected.g, lbg, ubg)
+        return corrected, (step[1], step[2])
+
+    def _qp(self, point: Point, lbg, ubg, frame: _Frame, radius: float, nu: float, last):
         """The step d (all variables), its multipliers (rows of g, variables) and the model's
-        decrease parts: (its value grad'd + d'Hd/2, the linearized hard violation). rows,
-        cols: the rows with a bound and the variables the QP has (a clearance slack whose
-        row is free stays 0). last: the multipliers (rows, variables) of the last QP or of
-        the warm start, DAQP's hot start."""
-        nc, n, k = self.layout.nc, len(point.x), len(cols)
-        g, jac = point.g[rows], point.jac[np.ix_(rows, cols)]
+        decrease parts: (its value grad'd + d'Hd/2, the linearized hard violation). frame:
+        the rows with a bound and the variables the QP has (a clearance slack whose row is
+        free stays 0), with the arrays every QP of the solve shares. last: the multipliers
+        (rows, variables) of the last QP or of the warm start, DAQP's hot start."""
+        rows, cols, nc, n, k = frame.rows, frame.cols, frame.nc, len(point.x), len(frame.cols)
+        g = point.g[rows]
         low, high = lbg[rows] - g, ubg[rows] - g
         # hard rows the point violates (beyond rounding): elastic columns of weight nu
         below, above = low > VIOLATED, high < -VIOLATED
         violated = np.flatnonzero(below | above)
         m = len(violated)
-        hess = np.zeros((k + m, k + m))
+        a = point.jac[rows][:, cols]
+        hess, cost = frame.hess, point.grad[cols]
         hess[:nc, :nc] = _convex(point.hess)
-        hess[np.arange(nc, k + m), np.arange(nc, k + m)] = PROXIMAL
-        cost = np.concatenate([point.grad[cols], np.full(m, nu)])
-        elastic = np.zeros((len(rows), m))
-        elastic[violated, np.arange(m)] = np.where(below[violated], 1.0, -1.0)
-        a = np.hstack([jac, elastic])
-        slack = cols[nc:]
-        var_low = np.concatenate([np.full(nc, -radius),
-                                  np.maximum(self.lbx[slack] - point.x[slack], -_INF),
-                                  np.zeros(m)])
-        var_high = np.concatenate([np.full(nc, radius), np.full(k - nc + m, _INF)])
+        var_low, var_high = frame.low, frame.high
+        var_low[:nc], var_high[:nc] = -radius, radius
+        var_low[nc:] = np.maximum(frame.lbx - point.x[cols[nc:]], -_INF)
+        sense = frame.sense
+        if m:  # elastic columns: the QP grows for this step
+            elastic = np.zeros((len(rows), m))
+            elastic[violated, np.arange(m)] = np.where(below[violated], 1.0, -1.0)
+            a = np.hstack([a, elastic])
+            grown = np.zeros((k + m, k + m))
+            grown[:k, :k], grown[np.arange(k, k + m), np.arange(k, k + m)] = hess, PROXIMAL
+            hess, cost = grown, np.concatenate([cost, np.full(m, nu)])
+            var_low = np.concatenate([var_low, np.zeros(m)])
+            var_high = np.concatenate([var_high, np.full(m, _INF)])
+            sense = np.concatenate([sense[:k], np.zeros(m, np.int32), sense[k:]])
         blower = np.concatenate([var_low, np.maximum(low, -_INF)])
         bupper = np.concatenate([var_high, np.minimum(high, _INF)])
-        sense = np.zeros(len(blower), dtype=np.int32)
-        sense[k + m + np.flatnonzero(lbg[rows] == ubg[rows])] = _EQUALITY
         dual = self._working_set(point, rows, cols, m, last)
         began = time.thread_time()
         x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense, dual_start=dual,
