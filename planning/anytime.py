@@ -149,7 +149,8 @@ class Anytime:
             more = self._needs_round(chosen, slots, safety.links[slots])
             if more == "torque":
                 torque = True
-            if not more or 1e3 * (time.thread_time() - cpu) > budget:
+            spare = budget - 1e3 * (time.thread_time() - cpu)
+            if not more or spare < 2.0 * problem.sqp.iteration_ms:
                 break
             reference = segment.trajectory
         elapsed = (1e3 * (time.perf_counter() - wall), 1e3 * (time.thread_time() - cpu))
