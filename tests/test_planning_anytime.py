@@ -26,6 +26,7 @@ from planning.result import evaluate
 from planning.safety import SafetyCheck
 from planning.segments import anytime_of
 from planning.solver import ObstacleForecast, Planner
+from planning.starts import start_points
 from planning.trajectory import PolynomialTrajectory
 from tests.helpers import random_crossing
 
@@ -147,6 +148,23 @@ def test_a_plan_out_of_budget_returns_its_best_iterate(planner):
     assert plan.status.startswith(ITERATE) and plan.iterations == 0
     start = planner.trajectory(x0, case.start, case.start_velocity, 0.0, case.duration)
     assert np.allclose(plan.trajectory.coefficients, start.coefficients)
+
+
+def test_a_cold_start_off_the_rest_rows_is_restored(planner):
+    """A start point with bumps reaches the goal but not at rest (the bumps vanish there, their
+    slopes do not): the SQP restores its equality rows before its first iteration, so even a
+    plan with no CPU to iterate arrives at rest."""
+    case, forecast = random_crossing(planner, seed=7)
+    x0 = start_points(planner, case.start, case.start_velocity, case.duration, case.goal, 2)[1]
+    bumped = planner.trajectory(x0, case.start, case.start_velocity, 0.0, case.duration)
+    assert np.abs(bumped.state(case.duration)[1]).max() > 1e-2
+    anytime = anytime_of(planner)
+    anytime.prepare(case.goal)
+    plan, _, _ = anytime.plan(case.start, case.start_velocity, 0.0, case.duration, case.goal,
+                              forecast, x0=x0, budget_ms=0.0)
+    assert plan.success and plan.iterations == 0
+    q, qd, _ = plan.trajectory.state(case.duration)
+    assert np.allclose(q[0], case.goal, atol=1e-8) and np.allclose(qd[0], 0.0, atol=1e-8)
 
 
 @pytest.mark.slow
