@@ -120,3 +120,27 @@ def test_library_holdout_zero_reports_no_heldout_error(arrays):
     json.dumps(metrics, allow_nan=False)
     with pytest.raises(IdentificationError, match="no held-out sample"):
         identify(*args, 1e-5, arrays["tau_clean"])
+
+
+def test_every_warning_of_the_identification_reaches_the_user(tmp_path, arrays, capsys,
+                                                               monkeypatch):
+    """A warning raised while identifying (here a RuntimeWarning, as numpy or scikit-learn
+    raise them) is printed on stderr, once; only the library's rank warning reached the user
+    before."""
+    import warnings
+
+    import harness.commands.identify as command
+
+    real = command.identify
+
+    def noisy(*args, **kwargs):
+        for _ in range(3):
+            warnings.warn("objective did not converge", RuntimeWarning, stacklevel=1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(command, "identify", noisy)
+    data = _write(tmp_path, arrays)
+    assert main(["identify", "--data", str(data), "--out", str(tmp_path / "m.json")]) == 0
+    err = capsys.readouterr().err
+    assert err.count("torquebench identify: warning: RuntimeWarning: objective did not "
+                     "converge") == 1

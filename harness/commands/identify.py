@@ -6,14 +6,11 @@ import sys
 import warnings
 
 from harness.data.dataset import load_arrays
-from harness.errors import UserError
 from harness.io import write_json
-from harness.robots.registry import DEFAULT_ROBOT, ROBOTS
-from harness.robots.torque_models import robot_library, robot_record
-from identification.errors import IdentificationError, LibraryRankWarning
+from harness.robots.registry import DEFAULT_ROBOT, ROBOTS, robot_entry
+from harness.robots.torque_models import library_named, robot_record
+from identification.errors import IdentificationError
 from identification.identify import identify
-from identification.library.prior_knowledge import prior_knowledge_library
-from identification.library.published import generic_library, paper_library
 
 LIBRARIES = ("auto", "kinematic", "prior", "prior-general", "paper", "generic")
 METHODS = ("auto", "coupled", "per-joint", "jointwise")
@@ -32,8 +29,9 @@ def register(sub) -> None:
                    help="kinematic: base atoms generated from the robot's kinematics (any arm); "
                    "prior: derived from simple structures (3-DOF arm, symmetric links); "
                    "prior-general: the same without the symmetric-link assumption; paper: the published "
-                   "75 features; generic: polynomial x trig (any dof); auto: prior on the "
-                   f"{DEFAULT_ROBOT} (the paper's reproduction), kinematic on any other robot")
+                   "75 features; generic: polynomial x trig (any dof); auto: the first library "
+                   "the robot's registry entry offers (prior on the paper's Lynxmotion, kinematic "
+                   "on any other robot)")
     p.add_argument("--method", choices=METHODS, default="auto",
                    help="coupled: one Lagrangian, atoms shared by all joints (needs the prior "
                    "library); per-joint: the paper's regression of each joint alone; jointwise: "
@@ -52,18 +50,10 @@ def data_robot(meta: dict, given: str | None) -> str:
 
 
 def choose_library(name: str, dof: int, robot: str = DEFAULT_ROBOT):
+    """The library called name ('auto': the first the robot's registry entry offers)."""
     if name == "auto":
-        name = "prior" if robot == DEFAULT_ROBOT else "kinematic"
-    if name == "kinematic":
-        library = robot_library(robot)
-        if library.dof != dof:
-            raise UserError(f"data have {dof} joints, robot {robot} has {library.dof}")
-        return library
-    if name == "generic" or dof != 3:
-        return generic_library(dof)
-    if name == "paper":
-        return paper_library()
-    return prior_knowledge_library(3, symmetric_links=name != "prior-general")
+        name = robot_entry(robot).libraries[0]
+    return library_named(name, robot, dof)
 
 
 def run(args) -> int:
@@ -74,13 +64,14 @@ def run(args) -> int:
     robot = data_robot(meta, args.robot)
     library = choose_library(args.library, dof, robot)
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", LibraryRankWarning)
+        warnings.simplefilter("always")
         result = identify(data["q"], data["qd"], data["qdd"], data["tau"], library,
                           args.holdout, data.get("tau_clean"),
                           method=None if args.method == "auto" else args.method)
-    for w in caught:
-        if issubclass(w.category, LibraryRankWarning):
-            print(f"torquebench identify: warning: {w.message}", file=sys.stderr)
+    # every warning reaches the user, once each (a library's rank, a solver's convergence,
+    # a numerical library's complaint alike)
+    for line in dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught):
+        print(f"torquebench identify: warning: {' '.join(line.split())}", file=sys.stderr)
     payload = {"robot": robot_record(robot), **result.model.to_dict(), "metrics": result.metrics()}
     if result.lagrangian():
         payload["lagrangian"] = result.lagrangian()
