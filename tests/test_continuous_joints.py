@@ -56,3 +56,14 @@ def test_generate_identify_predict_plan_replay_closeloop(tmp_path):
                  str(tmp_path / "cl")]) == 0
     loop = json.loads((tmp_path / "cl" / "closeloop.json").read_text())
     assert loop["effects"] == [] and not loop["unexplained"]  # the plant is the model
+
+
+@pytest.mark.slow
+def test_closeloop_section_on_an_arm_with_massless_frames(tmp_path):
+    """The bench's closeloop plants written from this URDF (its end_effector_link has no mass:
+    the plants give it an explicit zero inertial, which Pinocchio's MJCF reader needs)."""
+    out = tmp_path / "out"
+    assert main(["bench", "--quick", "--no-video", "--robot", URDF, "--sections", "closeloop",
+                 "--out", str(out)]) == 0
+    report = json.loads((out / "report.json").read_text())
+    assert report["ok"] and report["checks"]["total"] >= 3
