@@ -29,6 +29,7 @@ from planning.nlp import PlanningNLP
 from planning.realtime_iteration import ITERATE
 from planning.safety import Safety, SafetyCheck
 from planning.solver import ObstacleForecast, Planner, SegmentPlan
+from planning.starts import start_points
 
 CONVERGED = "converged"
 MIN_VIOLATION = "minimum violation"
@@ -64,6 +65,9 @@ class Anytime:
         self.check = SafetyCheck(planner.model, self.config, self.config.compile_code)
         self._problems: dict[tuple, _Problem] = {}
         self._prepared: set[tuple] = set()
+        # when a list: (inputs, plan, CPU ms in the solver's evaluations and QPs) of every
+        # warm plan (the realtime study's references and overhead)
+        self.record: list | None = None
 
     def prepare(self, goal) -> None:
         """Build (and compile) this goal's NLPs ahead of the plans, and call each once:
@@ -112,21 +116,22 @@ class Anytime:
         else:
             reference = warm.trajectory.restrict(t_begin, duration)
         torque = warm is not None and warm.layout[-1:] == (True,)
+        check = self.check.against(times, centres, t_begin, duration)
         best, plan, iterations, last = None, None, 0, warm
+        spent = sum(problem.sqp.spent_ms for problem in self._problems.values())
         for _ in range(ROUNDS):
             problem = self.problem(goal, torque)
-            safety = self.check(reference, times, centres)
+            safety = check(reference.coefficients)
             slots = _screen(times, safety.clearance, config.threshold, config.obstacle_slots)
             p = planner.parameters(q0, qd0, duration, goal,
                                    ObstacleForecast(times[slots], centres[slots]), t_begin,
                                    reference, config.elastic_weight)
-            lbg, ubg = self._bounds(problem, goal, len(slots))
+            lbg, ubg = self._bounds(problem, goal, safety.links[slots])
             start, lam_g, lam_x = self._start(problem, reference, times[slots], last)
             candidates: list[_Candidate] = []
 
             def accept(point, candidates=candidates):
-                candidates.append(self._candidate(point, q0, qd0, t_begin, duration, times,
-                                                  centres))
+                candidates.append(self._candidate(point, q0, qd0, t_begin, duration, check))
 
             remaining = budget - 1e3 * (time.thread_time() - cpu)
             solution, count = problem.sqp.solve(start, p, lbg, ubg, lam_g, remaining, accept,
@@ -141,49 +146,83 @@ class Anytime:
                     segment, status=self._status(chosen, converged),
                     success=chosen.rank[1] == 0)
             last = segment
-            more = self._needs_round(chosen, slots)
+            more = self._needs_round(chosen, slots, safety.links[slots])
             if more == "torque":
                 torque = True
-            if not more or 1e3 * (time.thread_time() - cpu) > budget:
+            spare = budget - 1e3 * (time.thread_time() - cpu)
+            if not more or spare < 2.0 * problem.sqp.iteration_ms:
                 break
             reference = segment.trajectory
         elapsed = (1e3 * (time.perf_counter() - wall), 1e3 * (time.thread_time() - cpu))
         plan = dataclasses.replace(plan, iterations=iterations, solve_ms=elapsed[0],
                                    solve_cpu_ms=elapsed[1])
+        if self.record is not None and warm is not None:
+            solver = sum(problem.sqp.spent_ms for problem in self._problems.values()) - spent
+            self.record.append(((q0, qd0, t_begin, duration, goal, forecast, warm), plan,
+                                solver))
         return plan, *elapsed
 
-    def _bounds(self, problem: _Problem, goal, used: int) -> tuple[np.ndarray, np.ndarray]:
-        """The planner's bounds, the clearance rows of the slots without a sample free."""
+    def rank(self, plan: SegmentPlan) -> tuple[bool, float]:
+        """Sort key of candidate plans (as planning.starts.rank, compiled): usable first,
+        then the energy actually spent (dense integral) plus the clearance penalty (J)."""
+        return (not plan.success, self.check.energy(plan.trajectory) + plan.penalty)
+
+    def best_of(self, q0, qd0, t_begin: float, duration: float, goal,
+                forecast: ObstacleForecast | None, warm: SegmentPlan | None, starts: int,
+                budget_ms: float) -> SegmentPlan:
+        """The best (planning.starts.rank) of the plan from `warm` and of cold plans from
+        `starts` start points (planning.starts), each with budget_ms of CPU: a multi-start
+        re-plan (PlannerConfig.replan_starts; the realtime study's references)."""
+        segment = (q0, qd0, t_begin, duration, goal, forecast)
+        plans = [] if warm is None else [self.plan(*segment, warm, budget_ms=budget_ms)[0]]
+        for x0 in start_points(self.planner, q0, qd0, duration, goal, starts):
+            plans.append(self.plan(*segment, None, x0=x0, budget_ms=budget_ms)[0])
+        return min(plans, key=self.rank)
+
+    def _bounds(self, problem: _Problem, goal, near: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The planner's bounds; the clearance rows of empty slots and of links the reference
+        keeps more than MARGIN above the threshold free (their slacks leave the QP: a step
+        that brings such a link near is caught by the check and re-screened)."""
         lbg, ubg = self.planner.bounds(goal, problem.nlp)
         rows, links = problem.nlp.clearance_rows, problem.nlp.links
-        free = np.arange(rows.start, rows.stop)[used * links:]
-        lbg[free] = -np.inf
+        used = np.zeros((self.config.obstacle_slots, links), bool)
+        used[: len(near)] = near < self.config.threshold + MARGIN
+        lbg[np.arange(rows.start, rows.stop)[~used.ravel()]] = -np.inf
         return lbg, ubg
 
-    def _candidate(self, point, q0, qd0, t_begin, duration, times, centres) -> _Candidate:
+    def _candidate(self, point, q0, qd0, t_begin, duration, check) -> _Candidate:
         """An accepted iterate, checked, with its rank: within the hard limits first, then
-        keeping the threshold, then missing it least, then the objective."""
+        keeping the threshold, then the objective (for one that misses the threshold: its
+        L1 violation weighed by elastic_weight, which the SQP minimizes, plus the energy)."""
         config = self.config
         trajectory = self.planner.trajectory(point.x, q0, qd0, t_begin, duration)
-        safety = self.check(trajectory, times, centres)
+        safety = check(trajectory.coefficients)
         hard = max(safety.limit_excess - LIMIT_TOLERANCE, 0.0) + \
             max(safety.torque_excess - TORQUE_TOLERANCE, 0.0) + \
             max(point.violation - HARD_TOLERANCE, 0.0)
-        deficit = max(config.threshold - safety.lowest, 0.0)
-        unsafe = deficit > config.penalty_tolerance
-        return _Candidate((unsafe, hard, deficit if unsafe else 0.0, point.f), point.x,
-                          safety, point)
+        unsafe = config.threshold - safety.lowest > config.penalty_tolerance
+        return _Candidate((unsafe, hard, point.f), point.x, safety, point)
 
-    def _needs_round(self, best: _Candidate, slots) -> str | None:
+    def _needs_round(self, best: _Candidate, slots, near) -> str | None:
         """Why another round: "torque" (a motor overdriven), "limits" (beyond a limit between
-        the turning points constrained), "screen" (a dip at a sample the solve did not see)."""
+        the turning points constrained), "screen" (a link dips at a sample where the solve
+        had no row for it)."""
         if best.safety.torque_excess > TORQUE_TOLERANCE:
             return "torque"
         if best.safety.limit_excess > LIMIT_TOLERANCE:
             return "limits"
-        dips = np.flatnonzero(best.safety.clearance < self.config.threshold
-                              - self.config.penalty_tolerance)
-        return "screen" if len(np.setdiff1d(dips, slots)) else None
+        config = self.config
+        dips = np.argwhere(best.safety.links < config.threshold - config.penalty_tolerance)
+        if not len(dips):
+            return None
+        # as planning.screening: when the near samples were thinned to the slots, a dip
+        # within the largest gap between slots of a slot that has its link's row is covered
+        gap = float(np.max(np.diff(slots), initial=0)) if len(slots) == config.obstacle_slots \
+            else 0.0
+        rows = near < config.threshold + MARGIN  # (slots, links)
+        close = np.abs(slots[None, :] - dips[:, :1]) <= gap  # (dips, slots)
+        covered = np.any(close & rows.T[dips[:, 1]], axis=1)
+        return None if np.all(covered) else "screen"
 
     def _start(self, problem: _Problem, reference, slot_times, last: SegmentPlan | None):
         """The start point (the reference's free coefficients, slacks reset by the SQP) and
@@ -224,7 +263,8 @@ class Anytime:
             detour=detour)
 
     def _status(self, best: _Candidate, converged: bool) -> str:
-        unsafe, hard, deficit, _ = best.rank
+        unsafe, hard, _ = best.rank
+        deficit = self.config.threshold - best.safety.lowest
         if hard > 0:
             return f"limits left by {hard:.2e} (joint limits in rad, torques in N m)"
         status = CONVERGED if converged else ITERATE

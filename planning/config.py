@@ -78,6 +78,7 @@ class PlannerConfig:
     replan_budget_ms: float = 10.0  # "sqp": CPU per re-plan (one obstacle sample period)
     cold_budget_ms: float = 25.0  # "sqp": CPU for a first plan, all its starts together
     elastic_weight: float = 1e3  # "sqp": J per m of clearance missed, per sample and link
+    replan_starts: int = 0  # "sqp": a re-plan also solves from this many cold start points
     max_iterations: int = 300
     warm_max_iterations: int = 60  # a warm solve that needs more restarts cold
     power_smoothing: float = 0.0  # W; 0: exact epigraph of |P|, > 0: sqrt(P^2 + eps^2) - eps

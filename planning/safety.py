@@ -2,8 +2,8 @@
 buffers (no Python per sample): its clearance at every forecast sample, and how far it
 leaves the joint limits (whole motion) and the torque limits (a dense grid).
 
-- clearance: the smallest link distance (m) at each of CHUNK forecast samples (more are
-  checked a chunk at a time; padding samples sit far away).
+- clearance: each link's distance (m) at each of CHUNK forecast samples (more are checked
+  a chunk at a time; padding samples sit far away).
 - motion: the worst excursion beyond the joint limits (rad; < 0: inside) over a grid of
   LIMIT_GRID points, each refined by one Newton step towards the nearest turning point (a
   polynomial's peak between grid points is then found to ~1e-8 rad, far inside
@@ -28,6 +28,7 @@ CHUNK = 32  # forecast samples per call of the clearance function
 LIMIT_GRID = 65
 TORQUE_GRID = 65  # as planning.solver's torque check
 FAR = 1e3  # m: where padding samples sit
+ENERGY_POINTS = 257  # trapezoid points of the compiled dense energy
 
 
 @dataclass(frozen=True)
@@ -38,6 +39,7 @@ class Safety:
     clearance: np.ndarray
     limit_excess: float
     torque_excess: float
+    links: np.ndarray  # (k, links) m: each link's distance at each sample
 
     @property
     def lowest(self) -> float:
@@ -52,22 +54,57 @@ class SafetyCheck:
         build = compiled.function if compile_code else (lambda f: f)
         self._clearance = compiled.Buffered(build(self._clearance_function()))
         self._motion = compiled.Buffered(build(self._motion_function(model)))
+        self._energy = compiled.Buffered(build(self._energy_function(model)))
+
+    def energy(self, trajectory: PolynomialTrajectory) -> float:
+        """The integral of |P| dt (J) by the trapezoid rule at ENERGY_POINTS even points
+        (planning.energy.dense_energy's rule, compiled: what ranks the starts of a cold
+        plan without ~0.7 ms of numpy torques per start)."""
+        (out,) = self._energy(trajectory.coefficients.ravel(order="F"), [trajectory.duration])
+        return float(out[0])
+
+    def _energy_function(self, model: TorqueModel) -> ca.Function:
+        c, sigma = self._coefficients(), ca.SX.sym("sigma")
+        grid = np.linspace(0.0, 1.0, ENERGY_POINTS)
+        states = [ca.DM(power_basis(grid, k, self.degree)) @ c.T / sigma**k for k in range(3)]
+        tau = _torque(model)
+        power = ca.vertcat(*[ca.dot(tau(*(m[i, :].T for m in states)), states[1][i, :].T)
+                             for i in range(ENERGY_POINTS)])
+        magnitude = ca.fabs(power)
+        integral = sigma * ca.sum1(magnitude[1:] + magnitude[:-1]) / (2 * (ENERGY_POINTS - 1))
+        return ca.Function("dense_energy", [c, sigma], [integral])
 
     def __call__(self, trajectory: PolynomialTrajectory, times: np.ndarray,
                  centres: np.ndarray) -> Safety:
         """Check `trajectory` against obstacle centres (k, 3) at absolute times (k,)."""
-        c = trajectory.coefficients.ravel(order="F")
-        s = (np.asarray(times, float) - trajectory.t_begin) / trajectory.duration
-        k = len(s)
-        out = np.empty(k)
+        bound = self.against(times, centres, trajectory.t_begin, trajectory.duration)
+        return bound(trajectory.coefficients)
+
+    def against(self, times: np.ndarray, centres: np.ndarray, t_begin: float,
+                duration: float):
+        """The check of motions on [t_begin, t_begin + duration] against one forecast, its
+        samples packed once: a function of the coefficients (dof, degree + 1) -> Safety."""
+        s = (np.asarray(times, float) - t_begin) / duration
+        k, count = len(s), len(self.config.geometry.links)
+        chunks = []
         for start in range(0, k, CHUNK):
             stop = min(k, start + CHUNK)
             chunk_s, chunk_c = np.zeros(CHUNK), np.full((CHUNK, 3), FAR)
             chunk_s[: stop - start], chunk_c[: stop - start] = s[start:stop], centres[start:stop]
-            (values,) = self._clearance(c, chunk_s, chunk_c.ravel())
-            out[start:stop] = values[: stop - start]
-        (motion,) = self._motion(c, [trajectory.duration])
-        return Safety(out, float(motion[0]), float(motion[1]))
+            chunks.append((start, stop, chunk_s, chunk_c.ravel()))
+        sigma = np.array([duration])
+
+        def check(coefficients: np.ndarray) -> Safety:
+            c = coefficients.ravel(order="F")
+            out = np.empty((k, count))
+            for start, stop, chunk_s, chunk_c in chunks:
+                (values,) = self._clearance(c, chunk_s, chunk_c)
+                out[start:stop] = values.reshape(CHUNK, count)[: stop - start]
+            (motion,) = self._motion(c, sigma)
+            return Safety(out.min(axis=1, initial=np.inf), float(motion[0]), float(motion[1]),
+                          out)
+
+        return check
 
     def _coefficients(self):
         return ca.SX.sym("c", self.dof, self.degree + 1)
@@ -76,10 +113,10 @@ class SafetyCheck:
         c, s, centres = self._coefficients(), ca.SX.sym("s", CHUNK), ca.SX.sym("o", 3, CHUNK)
         q, centre = ca.SX.sym("q", self.dof), ca.SX.sym("centre", 3)
         distances = symbolic_link_clearances(self.config.geometry, q, centre)
-        lowest = ca.Function("lowest", [q, centre], [ca.mmin(ca.vertcat(*distances))])
+        links = ca.Function("links", [q, centre], [ca.vertcat(*distances)])
         basis = ca.horzcat(*[s**p for p in range(self.degree + 1)])  # CHUNK x (degree + 1)
         positions = basis @ c.T
-        rows = [lowest(positions[j, :].T, centres[:, j]) for j in range(CHUNK)]
+        rows = [links(positions[j, :].T, centres[:, j]) for j in range(CHUNK)]
         return ca.Function("clearance_check", [c, s, centres], [ca.vertcat(*rows)])
 
     def _motion_function(self, model: TorqueModel) -> ca.Function:
@@ -101,10 +138,7 @@ class SafetyCheck:
         if config.torque_limit is not None:
             tgrid = np.linspace(0.0, 1.0, TORQUE_GRID)
             states = [ca.DM(power_basis(tgrid, k, self.degree)) @ c.T / sigma**k for k in range(3)]
-            q_, qd_, qdd_ = ca.SX.sym("q", self.dof), ca.SX.sym("qd", self.dof), \
-                ca.SX.sym("qdd", self.dof)
-            tau = ca.Function("tau", [q_, qd_, qdd_], [model.symbolic_torque(q_, qd_, qdd_)],
-                              {"never_inline": True})
+            tau = _torque(model)
             limit = ca.DM(config.torque_limit)
             torque = ca.mmax(ca.vertcat(*[ca.fabs(tau(*(m[i, :].T for m in states))) - limit
                                           for i in range(TORQUE_GRID)]))
@@ -114,3 +148,10 @@ class SafetyCheck:
 def _poly(row, s):
     """A polynomial (ascending coefficients, a 1 x (degree + 1) row) at the points s."""
     return sum(row[p] * s**p for p in range(row.numel()))
+
+
+def _torque(model: TorqueModel) -> ca.Function:
+    """The model's torque as a called (not copied) SX function of q, qd, qdd."""
+    q, qd, qdd = (ca.SX.sym(name, model.dof) for name in ("q", "qd", "qdd"))
+    return ca.Function("tau", [q, qd, qdd], [model.symbolic_torque(q, qd, qdd)],
+                       {"never_inline": True})

@@ -57,13 +57,18 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     the plan and the wall and CPU time (ms, planning thread) of the whole call, end to end:
     solves, screening, checks and bookkeeping.
     """
-    if planner.config.replanner == "sqp":
+    if uses_anytime(planner.config):
         budget = planner.config.replan_budget_ms if warm is not None else budget_ms
         budget = planner.config.cold_budget_ms if budget is None else budget
         if deadline_ms is not None:
             budget = min(budget, deadline_ms)
         anytime = anytime_of(planner)
         anytime.prepare(goal)  # built once: not part of a plan's time
+        if warm is not None and planner.config.replan_starts:
+            clock = _Clock()
+            plan = anytime.best_of(q0, qd0, t_begin, duration, goal, forecast, warm,
+                                   planner.config.replan_starts, budget)
+            return plan, *clock.read()
         return anytime.plan(q0, qd0, t_begin, duration, goal, forecast, warm, x0, budget)
     planner.prepare(goal)  # the solvers for this goal, built once: not part of a plan's time
     clock = _Clock()
@@ -174,7 +179,9 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
         plans.append(plan)
         wall, cpu = wall + ms, cpu + cpu_ms
     clock = _Clock()  # the ranking (a dense integral per plan) and polishing are plan time
-    ranked = sorted(plans, key=lambda plan: rank(planner, plan))
+    sqp = uses_anytime(planner.config)
+    ranked = sorted(plans, key=anytime_of(planner).rank if sqp else
+                    (lambda plan: rank(planner, plan)))
     best = ranked[0]
     if split and best.success:
         settled, _, _ = plan_segment(planner, q0, qd0, t_begin, duration, goal, forecast,
@@ -266,3 +273,12 @@ def anytime_of(planner: Planner) -> Anytime:
     if found is None:
         found = planner.__dict__["_anytime"] = Anytime(planner)
     return found
+
+
+def uses_anytime(config) -> bool:
+    """Whether segments are planned by the anytime SQP: config.replanner "sqp", except with
+    the split quadrature (its breaks settle over re-solves, the penalty loop's rounds) and
+    with real-time iterations (a feasible-SQP step of the penalty NLP), which keep the
+    penalty loop."""
+    return config.replanner == "sqp" and config.energy_quadrature != "split" and \
+        config.replan_iterations is None

@@ -16,6 +16,7 @@ from planning import sqp
 from planning.anytime import MIN_VIOLATION
 from planning.clearance import link_clearances
 from planning.config import Scenario, true_energy_config
+from planning.energy import dense_energy
 from planning.limits import limit_excess
 from planning.nlp import PlanningNLP
 from planning.obstacle import LinearObstacle
@@ -90,7 +91,8 @@ def test_the_anytime_sqp_reaches_ipopts_optimum_of_the_same_nlp(planner):
 
 def test_compiled_safety_checks_match_the_numpy_ones(baseline):
     """Clearance at each sample (planning.clearance), the limit excess with its turning
-    points (planning.limits) and the torque excess (Planner.torque_excess) on random motions."""
+    points (planning.limits), the torque excess (Planner.torque_excess) and the dense energy
+    (planning.energy, same trapezoid points) on random motions."""
     config = true_energy_config()
     check, planner = SafetyCheck(baseline, config, compile_code=False), Planner(baseline, config)
     rng = np.random.default_rng(4)
@@ -104,6 +106,8 @@ def test_compiled_safety_checks_match_the_numpy_ones(baseline):
         assert safety.limit_excess == pytest.approx(
             limit_excess(motion, config.lower, config.upper), abs=1e-7)
         assert safety.torque_excess == pytest.approx(planner.torque_excess(motion), abs=1e-9)
+        assert check.energy(motion) == pytest.approx(dense_energy(baseline, motion, 257),
+                                                     rel=1e-12)
 
 
 def test_a_forecast_no_motion_can_clear_gets_the_minimum_violation_plan(planner):

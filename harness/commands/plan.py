@@ -105,6 +105,14 @@ def register(sub) -> None:
                    help="CPU ms a re-plan may take; a later one is dropped and the last plan "
                         "kept, as on a real-time controller (0, the default: no deadline; "
                         "the obstacle's sample period is 10 ms)")
+    p.add_argument("--replanner", choices=("sqp", "fatrop"), default=PLANNER.replanner,
+                   help="how plans and re-plans are solved: sqp (clearance as elastic rows, an "
+                        "anytime SQP under a CPU budget per re-plan; a re-plan that cannot "
+                        "clear the forecast returns the plan that misses the threshold least) "
+                        "or fatrop (the penalty loop: alpha raised until the plan keeps the "
+                        f"threshold); default {PLANNER.replanner}")
+    p.add_argument("--replan-budget-ms", type=float, default=PLANNER.replan_budget_ms,
+                   help="sqp: CPU ms a re-plan may take (it returns its best iterate then)")
     p.add_argument("--replan-iterations", type=int, default=0,
                    help="real-time iterations: each re-plan first takes this many iterations "
                         "of CasADi's feasible SQP from the last plan and the arm follows the "
@@ -163,6 +171,9 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                         "--energy-samples >= 1")
     if args.starts < 1 or not (math.isfinite(args.deadline_ms) and args.deadline_ms >= 0):
         raise UserError("--starts must be >= 1 and --deadline-ms a finite number >= 0")
+    if not (math.isfinite(args.replan_budget_ms) and args.replan_budget_ms > 0):
+        raise UserError(f"--replan-budget-ms must be a finite number > 0, got "
+                        f"{args.replan_budget_ms}")
     if args.replan_iterations < 0:
         raise UserError(f"--replan-iterations must be >= 0, got {args.replan_iterations}")
     if args.polish < 0 or (args.polish and not splits_evenly(args.polish_samples, args.power_breaks)):
@@ -192,7 +203,9 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  polish=args.polish, polish_samples=args.polish_samples,
                                  compile_code=not args.no_compile,
                                  replan_deadline_ms=args.deadline_ms or None,
-                                 replan_iterations=args.replan_iterations or None)
+                                 replan_iterations=args.replan_iterations or None,
+                                 replanner=args.replanner,
+                                 replan_budget_ms=args.replan_budget_ms)
     path = (_vector(args.obstacle_from, "obstacle-from"),
             _vector(args.obstacle_to, "obstacle-to"), args.duration, args.samples)
     sway = _vector(args.obstacle_sway, "obstacle-sway")
