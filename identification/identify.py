@@ -162,11 +162,14 @@ def _split(q, qd, qdd, tau, dof: int, name: str, holdout: float, n_features: int
     return q, qd, qdd, tau, n_train
 
 
-def _offsets(model) -> np.ndarray:
-    """The fitted per-joint intercepts (sensor offsets, N m) of an identified model."""
+def sensor_offsets(model) -> np.ndarray:
+    """The fitted per-joint intercepts (sensor offsets, N m) of an identified model; zeros
+    for a model that fits none (the closed form)."""
     if isinstance(model, KinematicModel):
         return model.offsets
-    return np.array([j.offset for j in model.joints])
+    if isinstance(model, IdentifiedModel):
+        return np.array([j.offset for j in model.joints])
+    return np.zeros(model.dof)
 
 
 def _heldout(model, q, qd, qdd, tau, tau_clean, n_train: int):
@@ -174,7 +177,7 @@ def _heldout(model, q, qd, qdd, tau, tau_clean, n_train: int):
     the measured torque, which carries the sensor offsets: the model's torque plus its
     fitted offsets is then what predicts the measurement."""
     truth = tau if tau_clean is None else check_data(q, qd, qdd, tau_clean, 0)[3]
-    offsets = _offsets(model) if tau_clean is None else 0.0
+    offsets = sensor_offsets(model) if tau_clean is None else 0.0
     if n_train < len(q):
         return _score(model, q[n_train:], qd[n_train:], qdd[n_train:], truth[n_train:], offsets)
     nan = np.full(q.shape[1], np.nan)  # holdout 0 (a final fit on all data): no held-out error

@@ -17,13 +17,19 @@ def central_difference(fun, x, h=1e-6):
     return np.stack(columns, axis=-1)
 
 
-def heavier_model(scale: float) -> PinocchioModel:
-    """A stand-in 'identified' model: the Lynxmotion arm with every link's inertia scaled."""
+def perturbed_model(seed: int = 0, spread: float = 0.05, shift: float = 0.005) -> PinocchioModel:
+    """A stand-in 'identified' model that differs from the Lynxmotion in structure: every
+    body's mass scaled by its own factor in 1 +/- spread, its centre of mass moved up to
+    `shift` m, its rotational inertia scaled per principal axis (a common scale of every
+    inertia would scale the torque, and the optimal plan would be the same plan)."""
+    rng = np.random.default_rng(seed)
     model = load_pinocchio("lynxmotion")
     for j in range(1, model.njoints):
         inertia = model.inertias[j]
-        model.inertias[j] = pin.Inertia(inertia.mass * scale, inertia.lever,
-                                        inertia.inertia * scale)
+        axes = np.diag(1 + rng.uniform(-spread, spread, 3))
+        model.inertias[j] = pin.Inertia(inertia.mass * (1 + rng.uniform(-spread, spread)),
+                                        inertia.lever + rng.uniform(-shift, shift, 3),
+                                        axes @ inertia.inertia @ axes)
     return PinocchioModel(model)
 
 

@@ -221,15 +221,20 @@ def test_atomic_write_killed_mid_write_leaves_target_absent(tmp_path):
             f"io.write_json({str(target)!r}, {{'x': [i * 0.5 for i in range(3_000_000)]}})\n")
     proc = subprocess.Popen([sys.executable, "-c", code], env={
         **dict(os.environ), "PYTHONPATH": str(Path(__file__).resolve().parents[1])})
-    for _ in range(400):  # wait for the temporary to appear, then kill mid-write
-        if any(p.name.startswith(".big.json.") for p in tmp_path.iterdir()):
+    seen = False
+    for _ in range(1500):  # wait for the temporary to appear, then kill mid-write
+        seen = any(p.name.startswith(".big.json.") for p in tmp_path.iterdir())
+        if seen or proc.poll() is not None:
             break
-        time.sleep(0.02)
+        time.sleep(0.01)
+    running = proc.poll() is None
     proc.kill()
     proc.wait()
+    # the kill landed while the temporary existed and the writer still ran: mid-write
+    assert seen and running, "the writer finished (or never wrote) before the kill"
     bad, temporaries = incomplete_files(tmp_path)
-    assert not bad and (not target.exists() or json.loads(target.read_text()))
-    assert all(Path(t).name.startswith(".big.json.") for t in temporaries)
+    assert not bad and not target.exists()
+    assert len(temporaries) == 1 and Path(temporaries[0]).name.startswith(".big.json.")
 
 
 def test_a_robot_given_by_its_file_gets_the_same_sections(tmp_path):

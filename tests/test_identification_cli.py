@@ -120,3 +120,91 @@ def test_library_holdout_zero_reports_no_heldout_error(arrays):
     json.dumps(metrics, allow_nan=False)
     with pytest.raises(IdentificationError, match="no held-out sample"):
         identify(*args, 1e-5, arrays["tau_clean"])
+
+
+def test_every_warning_of_the_identification_reaches_the_user(tmp_path, arrays, capsys,
+                                                               monkeypatch):
+    """A warning raised while identifying (here a RuntimeWarning, as numpy or scikit-learn
+    raise them) is printed on stderr, once; only the library's rank warning reached the user
+    before."""
+    import warnings
+
+    import harness.commands.identify as command
+
+    real = command.identify
+
+    def noisy(*args, **kwargs):
+        for _ in range(3):
+            warnings.warn("objective did not converge", RuntimeWarning, stacklevel=1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(command, "identify", noisy)
+    data = _write(tmp_path, arrays)
+    assert main(["identify", "--data", str(data), "--out", str(tmp_path / "m.json")]) == 0
+    err = capsys.readouterr().err
+    assert err.count("torquebench identify: warning: RuntimeWarning: objective did not "
+                     "converge") == 1
+
+
+def _generated(tmp_path, name, seed, noise=0.05, clean=True):
+    from harness.data.generate import generate
+    from harness.io import write_npz
+
+    d = generate("ur5", 1500, noise, seed, "inverse")
+    arrays = d.arrays()
+    if not clean:  # as a measured log: no clean torque
+        arrays.pop("tau_clean")
+    path = tmp_path / name
+    write_npz(path, **arrays)
+    return path
+
+
+def test_several_runs_in_another_out(tmp_path):
+    """identify --data A,B --validate C: fitted on A and B only, scored on C, and MODEL.json
+    names what was held out; the score is the model's own error on C, recomputed here."""
+    from harness.robots.torque_models import load_torque_model
+    from identification.metrics import rel_error
+
+    a, b, c = (_generated(tmp_path, f"{k}.npz", s) for k, s in (("a", 1), ("b", 2), ("c", 3)))
+    out = tmp_path / "m.json"
+    assert main(["identify", "--data", f"{a},{b}", "--validate", str(c), "--out", str(out)]) == 0
+    metrics = json.loads(out.read_text())["metrics"]
+    assert metrics["heldout"] == {"kind": "logs", "logs": [str(c)], "fitted_on": [str(a), str(b)],
+                                  "samples": 1500}
+    assert metrics["scored_against"] == "tau_clean"
+    model, judge = load_torque_model(str(out), "ur5"), np.load(c)
+    mine = rel_error(model.torque(judge["q"], judge["qd"], judge["qdd"]), judge["tau_clean"])
+    np.testing.assert_allclose(metrics["heldout_rel_rmse"], mine, rtol=1e-9)
+    # the same model fitted on A alone differs: B was used in fitting
+    alone = tmp_path / "alone.json"
+    assert main(["identify", "--data", str(a), "--validate", str(c), "--out", str(alone)]) == 0
+    assert json.loads(alone.read_text())["metrics"]["heldout_rel_rmse"] != metrics["heldout_rel_rmse"]
+
+
+def test_runs_of_different_robots_are_one_line_exit_2(tmp_path, arrays, capsys):
+    a = _generated(tmp_path, "a.npz", 1)
+    b = _write(tmp_path, arrays)
+    out = tmp_path / "m.json"
+    assert main(["identify", "--data", f"{a},{b}", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and not out.exists()
+
+
+def test_predict_on_a_measured_log_reads_like_its_sensor(tmp_path):
+    """A log without tau_clean (biased sensor noise): predict adds the model's fitted offset,
+    also stored apart, and so reads the measured torque better than without it."""
+    log = _generated(tmp_path, "log.npz", 4, clean=False)
+    model, pred = tmp_path / "m.json", tmp_path / "p.npz"
+    assert main(["identify", "--data", str(log), "--out", str(model)]) == 0
+    assert main(["predict", "--model", str(model), "--data", str(log), "--out", str(pred)]) == 0
+    p, d = np.load(pred), np.load(log)
+    offset = p["offset"][0]
+    assert np.all(p["offset"] == offset) and np.any(np.abs(offset) > 1e-3)
+    with_offset = np.abs(np.mean(p["tau"] - d["tau"], axis=0))
+    without = np.abs(np.mean(p["tau"] - offset - d["tau"], axis=0))
+    assert np.all(with_offset < without)
+    # on simulated data (tau_clean present) the clean torque, no offset added
+    clean = _generated(tmp_path, "clean.npz", 4)
+    assert main(["predict", "--model", str(model), "--data", str(clean), "--out",
+                 str(tmp_path / "q.npz")]) == 0
+    np.testing.assert_allclose(np.load(tmp_path / "q.npz")["tau"], p["tau"] - offset)

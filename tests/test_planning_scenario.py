@@ -17,7 +17,7 @@ from planning.errors import PlanningError
 from planning.replanning import execute
 from planning.result import evaluate
 from planning.solver import Planner
-from tests.helpers import heavier_model as _heavier
+from tests.helpers import perturbed_model
 
 
 @pytest.fixture(scope="module")
@@ -57,10 +57,14 @@ def test_executed_trajectory_is_continuous_at_replans(paper):
 
 
 def test_stand_in_model_energy_close_to_baseline(paper, baseline):
+    """A model perturbed body by body (masses, centres of mass, inertias: 5 %, 5 mm) plans
+    another motion; under the true model it spends within 2 % of the true optimum and
+    keeps the clearance."""
     planner, scenario, _, reference = paper
-    model = _heavier(1.01)
+    model = perturbed_model()
     result = evaluate(execute(Planner(model), scenario), scenario, model, planner.config)
     assert result.feasible, result.problems
+    assert np.max(np.abs(result.q - reference.q)) > 1e-3  # another plan, not the same one
     energy = absolute_energy(baseline, result.t, result.q, result.qd, result.qdd)
     assert abs(energy - reference.energy) / reference.energy < 0.02
 

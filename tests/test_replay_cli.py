@@ -85,7 +85,7 @@ def _rendering_works() -> bool:
 
 def test_video_is_written_where_rendering_works(tmp_path, capsys):
     """Where OpenGL rendering works the replay writes a complete mp4 with one frame per 1/FPS s
-    of the plan (decoded back by ffmpeg); elsewhere it says the video was skipped."""
+    of the plan (decoded back by ffmpeg); elsewhere the video asked for is an error."""
     import imageio_ffmpeg
 
     from harness.replay.video import FPS
@@ -95,16 +95,36 @@ def test_video_is_written_where_rendering_works(tmp_path, capsys):
     plan = _write(tmp_path / "plan.json", quintic_plan(samples=50, duration=duration))
     video = tmp_path / "replay.mp4"
     args = ["replay", "--plan", str(plan), "--out", str(tmp_path / "r.json"), "--video", str(video)]
-    assert main(args) == 0
     if not _rendering_works():
-        assert not video.exists() and "video skipped" in capsys.readouterr().err
+        assert main(args) == 2 and not video.exists()
         return
+    assert main(args) == 0
     assert video.exists(), capsys.readouterr().err
     CHECKS[".mp4"](video)  # boxes tile the file, moov and mdat present
     reader = imageio_ffmpeg.read_frames(str(video))
     meta = next(reader)
     frames = sum(1 for _ in reader)
     assert meta["size"][0] > 100 and frames == int(duration * FPS) + 1
+
+
+@pytest.mark.parametrize("error", [RuntimeError("gladLoadGL error"), OSError("libEGL.so.1")])
+def test_a_video_that_cannot_be_rendered_is_one_line_exit_2_nothing_written(
+        tmp_path, capsys, monkeypatch, error):
+    """The renderer fails (no GL context): `replay --video` says so in one line and exits 2
+    before writing REPLAY.json (it exited 0 without the video before)."""
+    import mujoco
+
+    def broken(*args, **kwargs):
+        raise error
+
+    monkeypatch.setattr(mujoco, "Renderer", broken)
+    plan = _write(tmp_path / "plan.json", quintic_plan(samples=50, duration=0.5))
+    out, video = tmp_path / "r.json", tmp_path / "replay.mp4"
+    assert main(["replay", "--plan", str(plan), "--out", str(out), "--video", str(video)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "cannot render the video" in err and str(error) in err
+    assert not out.exists() and not video.exists()
+    assert list(tmp_path.iterdir()) == [plan]
 
 
 def test_pinocchio_planned_paper_scenario_meets_replay_acceptance(tmp_path):

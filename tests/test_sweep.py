@@ -19,6 +19,7 @@ import pytest
 from matplotlib.image import imread
 
 from harness.cli import main
+from harness.errors import UserError
 from harness.sweep.cell import CellFailure, CellResult, run_cell
 from harness.sweep.figures import write_figures
 from harness.sweep.grid import Cell, parse_grid
@@ -63,7 +64,12 @@ def test_one_row_per_cell_with_its_errors(swept):
     assert len(rows) == len(want) and {_key(r) for r in rows} == want
     for r in rows:
         dof = DOF[r["robot"]]
-        assert int(r["dof"]) == dof and r.get("error_j3", "") == ("" if dof == 2 else r["error_j3"])
+        assert int(r["dof"]) == dof
+        # a 2-joint robot's row leaves joint 3 empty; a 3-joint robot's holds a number
+        if dof == 2:
+            assert r.get("error_j3", "") == ""
+        else:
+            assert np.isfinite(float(r["error_j3"]))
         errors = [float(r[f"error_j{j + 1}"]) for j in range(dof)]
         assert float(r["median"]) == np.median(errors)
         assert 0 < float(r["seconds"]) <= float(r["cell_seconds"])
@@ -89,8 +95,8 @@ def test_rerun_reuses_and_a_torn_sweep_resumes(swept, capsys):
     # a sweep killed while writing: the last cell missing, the one before torn mid-line
     path.write_text("".join(lines[:-2]) + lines[-2][: len(lines[-2]) // 2])
     assert main(["sweep", *ARGS, "--out", str(swept)]) == 0
-    printed = capsys.readouterr().out
-    assert "2 cells computed" in printed and "1 torn or unreadable line" in printed
+    printed = capsys.readouterr()
+    assert "2 cells computed" in printed.out and "1 torn last line" in printed.err
     after = path.read_text().splitlines(keepends=True)
     assert after[: len(lines) - 2] == lines[:-2]  # the finished cells untouched
     old = {_key(r): r for r in csv.DictReader(lines)}
@@ -154,6 +160,14 @@ def test_store_drops_a_torn_line_and_widens_for_more_joints(tmp_path):
     assert joints == 3 and dropped == 0 and len(rows) == 3
     assert rows[_result("double_pendulum", 1, 2).cell.key] == _result("double_pendulum", 1, 2)
     assert rows[_result("lynxmotion", 0, 3).cell.key].errors == (0.001, 0.002, 0.003)
+    # a complete line damaged in the middle of the file is not a torn write: an error, the
+    # file left as it is (it was dropped silently before)
+    text = path.read_text().splitlines(keepends=True)
+    damaged = "".join([text[0], text[1].replace(",", ";", 2), *text[2:]])
+    path.write_text(damaged)
+    with pytest.raises(UserError, match="line 2 is unreadable"):
+        ResultsStore(path, 3)
+    assert path.read_text() == damaged
     (tmp_path / "other.csv").write_text("a,b\n1,2\n")
     with pytest.raises(ValueError, match="not a sweep's results file"):
         ResultsStore(tmp_path / "other.csv", 2)

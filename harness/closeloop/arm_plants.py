@@ -56,14 +56,21 @@ def arm_variant_xml(robot: str, variant: Variant) -> str:
         if site is not None:  # an MJCF's flange is a site on the last body
             body, pos = site.parent, list(site.pos)
         (body or hinges[-1].parent).add_body(name="payload", pos=pos)
+    # a massless frame body (a flange, a tool frame) gets an explicit zero inertial, which
+    # Pinocchio's MJCF reader needs on every body; MjSpec.to_xml drops an inertial it did not
+    # read (the payload's too): both are written into the text here
+    frames = [b.name for b in spec.bodies[1:] if not b.explicitinertial and not b.geoms
+              and b.name != "payload"]
     spec.compile()
     text = spec.to_xml()
-    if variant.payload > 0:  # MjSpec.to_xml drops an added body's inertial: written here
-        inertial = (f'<inertial pos="0 0 0" mass="{variant.payload:.10g}" '
-                    'diaginertia="1e-9 1e-9 1e-9"/>')
-        text, n = re.subn(r'<body name="payload"([^>]*?)\s*/>',
-                          rf'<body name="payload"\1>{inertial}</body>', text)
-        if n != 1:
+    inertials = {name: '<inertial pos="0 0 0" mass="0" diaginertia="0 0 0"/>' for name in frames}
+    if variant.payload > 0:
+        inertials["payload"] = (f'<inertial pos="0 0 0" mass="{variant.payload:.10g}" '
+                                'diaginertia="1e-9 1e-9 1e-9"/>')
+    for name, inertial in inertials.items():
+        text, n = re.subn(rf'<body name="{re.escape(name)}"([^>]*?)\s*/>',
+                          rf'<body name="{name}"\1>{inertial}</body>', text)
+        if n != 1 and name == "payload":
             raise RuntimeError("payload body not written by MjSpec.to_xml")
     return text
 

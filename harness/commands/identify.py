@@ -5,15 +5,12 @@ from __future__ import annotations
 import sys
 import warnings
 
-from harness.data.dataset import load_arrays
-from harness.errors import UserError
+from harness.data.runs import join, load_runs, split_files
 from harness.io import write_json
-from harness.robots.registry import DEFAULT_ROBOT, ROBOTS
-from harness.robots.torque_models import robot_library, robot_record
-from identification.errors import IdentificationError, LibraryRankWarning
+from harness.robots.registry import DEFAULT_ROBOT, ROBOTS, robot_entry
+from harness.robots.torque_models import library_named, robot_record
+from identification.errors import IdentificationError
 from identification.identify import identify
-from identification.library.prior_knowledge import prior_knowledge_library
-from identification.library.published import generic_library, paper_library
 
 LIBRARIES = ("auto", "kinematic", "prior", "prior-general", "paper", "generic")
 METHODS = ("auto", "coupled", "per-joint", "jointwise")
@@ -21,10 +18,16 @@ METHODS = ("auto", "coupled", "per-joint", "jointwise")
 
 def register(sub) -> None:
     p = sub.add_parser("identify", help="identify a sparse torque model from data")
-    p.add_argument("--data", required=True, help="dataset .npz with q, qd, qdd, tau [, tau_clean]")
+    p.add_argument("--data", required=True,
+                   help="dataset .npz with q, qd, qdd, tau [, tau_clean], or several runs of the "
+                   "same robot: A.npz,B.npz (each with its own derivative estimate)")
+    p.add_argument("--validate", default=None,
+                   help="FILE.npz[,...]: score on these logs, never used in fitting (then "
+                   "--data is fitted whole and --holdout is not used)")
     p.add_argument("--out", required=True, help="output MODEL.json")
     p.add_argument("--holdout", type=float, default=0.25,
-                   help="last fraction of samples (time order) held out for scoring, in (0, 1)")
+                   help="last fraction of samples (time order, over the --data runs in the "
+                   "order given) held out for scoring, in (0, 1)")
     p.add_argument("--robot", default=None,
                    help="robot name or URDF/MJCF path (default: the robot the data were generated "
                    f"on if registered, else {DEFAULT_ROBOT})")
@@ -32,8 +35,9 @@ def register(sub) -> None:
                    help="kinematic: base atoms generated from the robot's kinematics (any arm); "
                    "prior: derived from simple structures (3-DOF arm, symmetric links); "
                    "prior-general: the same without the symmetric-link assumption; paper: the published "
-                   "75 features; generic: polynomial x trig (any dof); auto: prior on the "
-                   f"{DEFAULT_ROBOT} (the paper's reproduction), kinematic on any other robot")
+                   "75 features; generic: polynomial x trig (any dof); auto: the first library "
+                   "the robot's registry entry offers (prior on the paper's Lynxmotion, kinematic "
+                   "on any other robot)")
     p.add_argument("--method", choices=METHODS, default="auto",
                    help="coupled: one Lagrangian, atoms shared by all joints (needs the prior "
                    "library); per-joint: the paper's regression of each joint alone; jointwise: "
@@ -52,36 +56,40 @@ def data_robot(meta: dict, given: str | None) -> str:
 
 
 def choose_library(name: str, dof: int, robot: str = DEFAULT_ROBOT):
+    """The library called name ('auto': the first the robot's registry entry offers)."""
     if name == "auto":
-        name = "prior" if robot == DEFAULT_ROBOT else "kinematic"
-    if name == "kinematic":
-        library = robot_library(robot)
-        if library.dof != dof:
-            raise UserError(f"data have {dof} joints, robot {robot} has {library.dof}")
-        return library
-    if name == "generic" or dof != 3:
-        return generic_library(dof)
-    if name == "paper":
-        return paper_library()
-    return prior_knowledge_library(3, symmetric_links=name != "prior-general")
+        name = robot_entry(robot).libraries[0]
+    return library_named(name, robot, dof)
 
 
 def run(args) -> int:
     if not 0.0 < args.holdout < 1.0:  # 0 would score the training data as "held out"
         raise IdentificationError(f"--holdout must be in (0, 1), got {args.holdout}")
-    data, meta = load_arrays(args.data, ("q", "qd", "qdd", "tau"), optional=("tau_clean",))
-    dof = data["q"].shape[1] if data["q"].ndim == 2 else 1
+    runs = load_runs(split_files(args.data, "--data"))
+    held = {"kind": "last_fraction", "fraction": args.holdout, "of": list(runs.files)}
+    holdout = args.holdout
+    if args.validate is not None:
+        validate = load_runs(split_files(args.validate, "--validate"))
+        held = {"kind": "logs", "logs": list(validate.files), "fitted_on": list(runs.files),
+                "samples": validate.samples}
+        holdout = validate.samples / (runs.samples + validate.samples)
+        runs = join(runs, validate)
+    data, meta = runs.arrays, runs.metas[0]
+    dof = data["q"].shape[1]
     robot = data_robot(meta, args.robot)
     library = choose_library(args.library, dof, robot)
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", LibraryRankWarning)
+        warnings.simplefilter("always")
         result = identify(data["q"], data["qd"], data["qdd"], data["tau"], library,
-                          args.holdout, data.get("tau_clean"),
+                          holdout, data.get("tau_clean"),
                           method=None if args.method == "auto" else args.method)
-    for w in caught:
-        if issubclass(w.category, LibraryRankWarning):
-            print(f"torquebench identify: warning: {w.message}", file=sys.stderr)
-    payload = {"robot": robot_record(robot), **result.model.to_dict(), "metrics": result.metrics()}
+    # every warning reaches the user, once each (a library's rank, a solver's convergence,
+    # a numerical library's complaint alike)
+    for line in dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught):
+        print(f"torquebench identify: warning: {' '.join(line.split())}", file=sys.stderr)
+    payload = {"robot": robot_record(robot), **result.model.to_dict(),
+               "metrics": {**result.metrics(), "heldout": held,
+                           "scored_against": "tau_clean" if "tau_clean" in data else "tau"}}
     if result.lagrangian():
         payload["lagrangian"] = result.lagrangian()
     write_json(args.out, payload)

@@ -63,6 +63,12 @@ def run(args) -> int:
     geometry = arm_geometry(robot)
     if geometry.dof != reference.dof:
         raise UserError(f"the plan has {reference.dof} joints, robot {robot} has {geometry.dof}")
+    if args.video:  # a video asked for and impossible: said before anything is written
+        from harness.replay.video import rendering_problem
+
+        problem = rendering_problem(model)
+        if problem:
+            raise UserError(f"cannot render the video {args.video}: {problem}")
     result, trace = replay(model, reference, PinocchioModel(load_pinocchio(robot)),
                            geometry=geometry)
     write_json(args.out, {**result_json(result, str(args.plant or robot)), "robot": robot,
@@ -71,7 +77,7 @@ def run(args) -> int:
     if args.video:
         from harness.replay.video import render_video
 
-        render_video(model, trace, args.video)
+        render_video(model, trace, args.video, required=True)
     return 0
 
 

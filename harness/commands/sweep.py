@@ -3,6 +3,7 @@ counts, each cell one Ray task -> DIR/results.csv, DIR/summary.md, DIR/*.png."""
 
 from __future__ import annotations
 
+import sys
 import time
 from pathlib import Path
 
@@ -44,7 +45,8 @@ def run(args) -> int:
     write_summary(out / "summary.md", grid, results, command(grid, out, args.address),
                   {"computed": computed, "wall": wall, "reused": len(grid) - computed}, list(figures))
     if store.dropped:
-        print(f"{store.dropped} torn or unreadable line(s) of {out / 'results.csv'} dropped and rerun")
+        print(f"torquebench sweep: warning: {store.dropped} torn last line of "
+              f"{out / 'results.csv'} dropped, its cell runs again", file=sys.stderr)
     rate = f" ({computed / wall * 60:.1f} cells/min)" if computed else ""
     print(f"{computed} cells computed in {wall:.1f} s{rate}, {len(grid) - computed} reused; wrote "
           f"{out / 'results.csv'} ({len(store.rows)} rows), {out / 'summary.md'}, "

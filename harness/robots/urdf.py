@@ -7,6 +7,10 @@ identifies and plans the arm, so:
   held fixed (its link's inertia stays, rigidly attached at its zero position);
 - a prismatic joint with revolute joints below it is an arm joint the harness cannot
   handle, and a floating or planar joint is a moving base: both are errors;
+- a continuous joint (an unbounded revolute joint: Pinocchio would give it a (cos, sin)
+  configuration, nq = 2 for nv = 1) is read as a revolute joint over one turn,
+  [-pi, pi], keeping its effort and velocity limits: every command works with one angle
+  per joint, and no conversion between configurations is needed anywhere;
 - visual and collision geometry is dropped (inertias come from <inertial>), and ROS's
   lower = upper = 0 "no limit" removed, so MuJoCo loads the file without warnings.
 The same text goes to MuJoCo (mj compile) and Pinocchio (buildModelFromXML), so the
@@ -71,6 +75,11 @@ def arm_urdf(text: str, source: str) -> str:
             stack += below.get(c.get("link", "") if c is not None else "", [])
         return False
 
+    continuous = [j for j in joints if j.get("type") == "continuous"]
+    if continuous:
+        for joint in continuous:
+            _one_turn(joint)
+        text = ET.tostring(root, encoding="unicode")
     held = []
     for joint in joints:
         kind, name = joint.get("type"), joint.get("name")
@@ -88,6 +97,21 @@ def arm_urdf(text: str, source: str) -> str:
     text = re.sub(rf'(<joint\b[^>]*name="(?:{pattern})"[^>]*type=")prismatic"', r'\1fixed"', text)
     text = re.sub(rf'(<joint\b[^>]*type=")prismatic("[^>]*name="(?:{pattern})")', r"\1fixed\2", text)
     return re.sub(r"<mimic\b[^>]*/>", "", text)
+
+
+def _one_turn(joint: ET.Element) -> None:
+    """A continuous joint made a revolute joint over [-pi, pi], in place; an effort or
+    velocity limit it states is kept (urdfdom requires both on a revolute joint: a missing
+    one is written unbounded, 1e6)."""
+    joint.set("type", "revolute")
+    limit = joint.find("limit")
+    if limit is None:
+        limit = ET.SubElement(joint, "limit")
+    limit.set("lower", repr(-math.pi))
+    limit.set("upper", repr(math.pi))
+    for key in ("effort", "velocity"):
+        if limit.get(key) is None:
+            limit.set(key, "1e6")
 
 
 def strip_geometry(urdf_text: str) -> str:

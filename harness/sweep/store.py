@@ -2,9 +2,10 @@
 
 Each row is written with one write() of the complete line and fsync'ed before the next cell is
 recorded, so a sweep killed at any moment leaves every finished row on disk and at most a torn
-last line (no final newline). Opening the file again drops a torn or unreadable line (its cell
-runs again), widens the per-joint columns if a robot with more joints joins, and rewrites the
-file atomically when it had to change anything.
+last line (no final newline). Opening the file again drops a torn last line (its cell runs
+again, with a warning); any other unreadable line is damage the sweep did not make: an error
+naming the line, the file left as it is. It widens the per-joint columns if a robot with
+more joints joins, and rewrites the file atomically when it had to change anything.
 
 Columns: robot, noise, seed, method, samples, dof, error_j1..error_jK (relative RMS error per
 joint; empty past the robot's dof), median (over the joints), seconds (the method's fit),
@@ -54,7 +55,8 @@ def _parse(row: dict) -> CellResult:
 
 def read(path: Path) -> tuple[dict[tuple, CellResult], int, int]:
     """The finished cells of a results file (first row of a cell wins), the number of per-joint
-    columns of its header, and the number of lines dropped (torn or unreadable)."""
+    columns of its header, and the number of lines dropped (a torn last line, 0 or 1);
+    UserError for an unreadable complete line."""
     text = path.read_text() if path.exists() else ""
     lines = text.split("\n")
     dropped = 1 if lines[-1] else 0  # a last line without its newline is torn
@@ -65,14 +67,14 @@ def read(path: Path) -> tuple[dict[tuple, CellResult], int, int]:
     if tuple(head[:len(KEY)]) != KEY or head[-len(TIMES):] != list(TIMES):
         raise UserError(f"{path} exists and is not a sweep's results file (header {head[:6]})")
     rows: dict[tuple, CellResult] = {}
-    for fields in csv.reader(lines[1:]):
+    for number, fields in enumerate(csv.reader(lines[1:]), start=2):
         try:
             if len(fields) != len(head):
-                raise ValueError("wrong number of fields")
+                raise ValueError(f"{len(fields)} fields, the header has {len(head)}")
             result = _parse(dict(zip(head, fields, strict=True)))
-        except (ValueError, TypeError, KeyError):
-            dropped += 1
-            continue
+        except (ValueError, TypeError, KeyError) as exc:
+            raise UserError(f"{path} line {number} is unreadable ({exc}); only a torn last line "
+                            "is dropped: repair or remove the file") from None
         rows.setdefault(result.cell.key, result)
     return rows, len(head) - len(KEY) - 2 - len(TIMES), dropped
 

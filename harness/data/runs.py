@@ -1,0 +1,66 @@
+"""Several logs of one robot as one dataset: `--data A.npz,B.npz` and `--validate C.npz`.
+
+Each run keeps its own derivative estimate (made when it was generated or ingested); the
+runs are concatenated in the order given, which is what a static regression on (q, qd, qdd,
+tau) needs: no time series crosses from one run to the next. A run without `tau_clean`
+(a measured log) makes the whole set one: the scores are then against the measured torque.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from harness.data.dataset import load_arrays
+from harness.errors import UserError
+
+KEYS = ("q", "qd", "qdd", "tau")
+
+
+@dataclass(frozen=True)
+class Runs:
+    """Concatenated arrays of several runs, each run's meta and file, and where each starts."""
+
+    arrays: dict[str, np.ndarray]
+    metas: tuple[dict, ...]
+    files: tuple[str, ...]
+
+    @property
+    def samples(self) -> int:
+        return len(self.arrays["q"])
+
+
+def split_files(spec: str, option: str) -> list[str]:
+    """The comma-separated file names of an option; UserError if none is given."""
+    files = [f.strip() for f in spec.split(",") if f.strip()]
+    if not files:
+        raise UserError(f"{option} names no file")
+    return files
+
+
+def load_runs(files: list[str]) -> Runs:
+    """The runs at files, concatenated; UserError if their joints differ."""
+    loaded = [load_arrays(f, KEYS, optional=("tau_clean",)) for f in files]
+    dofs = {a["q"].shape[1] for a, _ in loaded}
+    if len(dofs) > 1:
+        raise UserError(f"the logs {', '.join(files)} have different joint counts "
+                        f"({', '.join(str(a['q'].shape[1]) for a, _ in loaded)})")
+    robots = {str(m.get("robot") or m.get("plant") or "") for _, m in loaded} - {""}
+    if len(robots) > 1:
+        raise UserError(f"the logs {', '.join(files)} record different robots "
+                        f"({', '.join(sorted(robots))}): runs of one robot only")
+    keys = KEYS + (("tau_clean",) if all("tau_clean" in a for a, _ in loaded) else ())
+    arrays = {k: np.concatenate([a[k] for a, _ in loaded]) for k in keys}
+    return Runs(arrays, tuple(m for _, m in loaded), tuple(str(Path(f)) for f in files))
+
+
+def join(train: Runs, validate: Runs) -> Runs:
+    """Training runs then validation runs, as one set whose last part is the validation."""
+    if train.arrays["q"].shape[1] != validate.arrays["q"].shape[1]:
+        raise UserError(f"--validate logs have {validate.arrays['q'].shape[1]} joints, --data "
+                        f"logs {train.arrays['q'].shape[1]}")
+    keys = [k for k in train.arrays if k in validate.arrays]
+    return Runs({k: np.concatenate([train.arrays[k], validate.arrays[k]]) for k in keys},
+                train.metas + validate.metas, train.files + validate.files)
