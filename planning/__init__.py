@@ -10,7 +10,10 @@ Modules, in the order the math flows:
 - nlp, limits: energy sigma/N sum |P| + alpha max(0, lambda - d)^2 with joint limits
 - solver: IPOPT through CasADi (exact derivatives), built once, warm-started
 - screening: which obstacle samples a solve must see
-- replanning: Algorithm 2, re-planning from the current state when the obstacle threatens
+- segments, replanning: one segment planned (penalty loop or anytime SQP); Algorithm 2,
+  re-planning from the current state when the obstacle threatens
+- anytime, sqp, elastic_qp, safety: clearance as elastic rows, an anytime trust-region SQP
+  under a CPU budget (DAQP on its QPs), every iterate checked by compiled functions
 - result: the executed trajectory, checked, and its PLAN.json payload
 - baselines, speed, scenarios: minimum jerk, scipy trust-constr, timings, named scenarios
 

@@ -21,52 +21,17 @@ import time
 from dataclasses import dataclass
 
 import casadi as ca
-import daqp
 import numpy as np
 
 from planning import compiled
+from planning.elastic_qp import VIOLATED, Frame, Layout, Point, step
 
 CONVERGED, BUDGET, STALLED = "converged", "budget", "stalled"
 # predicted decrease (relative to the objective) below which a point is taken as optimal: the
 # energy is nearly flat along many motions, where steps of 1e-8 went on for 100+ iterations
 STEP_TOLERANCE = 1e-6
-QP_PRIMAL_TOLERANCE = 1e-10  # DAQP's (its default, 1e-6, let steps leave the trust region)
 PRIMAL_TOLERANCE = 1e-8  # L1 violation of the hard rows at a converged point
-PROXIMAL = 1e-2  # weight of the slacks' proximal term in each QP (vanishes at a fixed point; e,
-# v move by less than cost / PROXIMAL >= 10 only where the rows allow nothing less)
-CURVATURE = 1e-8  # smallest eigenvalue kept in the coefficient block of the QP's Hessian
-_EQUALITY = 5  # DAQP sense flags: active + immutable
 HARD_WEIGHT = 1e6  # nu's floor: hard rows (goal, limits) weigh far above the clearance's L1
-VIOLATED = 1e-9  # a hard row beyond its bound by more gets an elastic column in the QP
-_INF = 1e30
-
-
-@dataclass(frozen=True)
-class Layout:
-    """Where the NLP's pieces sit: nc coefficient variables first, then the power slacks
-    (slice e) and the clearance slacks (slice v); the epigraph rows (slices above, below:
-    P - e, -P - e) and the clearance rows (slice clearance, D + v)."""
-
-    nc: int
-    e: slice
-    v: slice
-    above: slice
-    below: slice
-    clearance: slice
-
-
-@dataclass
-class Point:
-    """An iterate with its slacks reset: x, objective f, rows g, gradient, Jacobian, the
-    Lagrangian Hessian's coefficient block, and its hard-row violation (L1)."""
-
-    x: np.ndarray
-    f: float
-    g: np.ndarray
-    grad: np.ndarray
-    jac: np.ndarray
-    hess: np.ndarray
-    violation: float
 
 
 @dataclass(frozen=True)
@@ -100,20 +65,6 @@ def layout_of(nlp) -> Layout:
     ne = nlp.slack.numel()
     return Layout(nc, slice(nc, nc + ne), slice(nc + ne, nlp.x.numel()), *nlp.epigraph,
                   nlp.clearance_rows)
-
-
-class _Frame:
-    """What every QP of one solve shares: its rows and variables, the Hessian buffer (the
-    slacks' proximal diagonal set once), the variable bounds and DAQP's constraint types."""
-
-    def __init__(self, rows, cols, nc: int, equality, lbx_slacks):
-        k = len(cols)
-        self.rows, self.cols, self.nc, self.lbx = rows, cols, nc, lbx_slacks
-        self.hess = np.zeros((k, k))
-        self.hess[np.arange(nc, k), np.arange(nc, k)] = PROXIMAL
-        self.low, self.high = np.zeros(k), np.full(k, _INF)
-        self.sense = np.zeros(k + len(rows), dtype=np.int32)
-        self.sense[k + np.flatnonzero(equality)] = _EQUALITY
 
 
 class AnytimeSQP:
@@ -163,7 +114,7 @@ class AnytimeSQP:
         lay = self.layout
         free = ~np.isfinite(lbg[lay.clearance])  # a clearance slack without its row
         cols = np.setdiff1d(np.arange(len(self.lbx)), np.arange(lay.v.start, lay.v.stop)[free])
-        frame = _Frame(rows, cols, lay.nc, lbg[rows] == ubg[rows], self.lbx[cols[lay.nc:]])
+        frame = Frame(rows, cols, lay.nc, lbg[rows] == ubg[rows], self.lbx[cols[lay.nc:]])
         point = self._restored(self.evaluate(x0, p, lam_g0, lbg), p, lbg, ubg, lam_g0)
         accept(point)
         lam_x = np.zeros(len(point.x)) if lam_x0 is None else np.asarray(lam_x0, float)
@@ -238,6 +189,14 @@ class AnytimeSQP:
         restored.violation = _violation(restored.g, lbg, ubg)
         return restored if restored.violation < point.violation else point
 
+    def _qp(self, point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last):
+        """planning.elastic_qp.step, its DAQP time counted in spent_ms."""
+        result = step(point, lbg, ubg, frame, radius, nu, last, self.layout)
+        if result is None:
+            return None
+        self.spent_ms += result[-1]
+        return result[:-1]
+
     def _corrected(self, point: Point, trial: Point, p, lbg, ubg, frame, radius, nu, last):
         """A second-order correction (Fletcher): the QP again with the rows' values at the
         trial point less their linear change, c = g(trial) - J (trial - x), so the step
@@ -252,78 +211,6 @@ class AnytimeSQP:
         corrected = self.evaluate(point.x + step[0], p, step[1], lbg)
         corrected.violation = _violation(corrected.g, lbg, ubg)
         return corrected, (step[1], step[2])
-
-    def _qp(self, point: Point, lbg, ubg, frame: _Frame, radius: float, nu: float, last):
-        """The step d (all variables), its multipliers (rows of g, variables) and the model's
-        decrease parts: (its value grad'd + d'Hd/2, the linearized hard violation). frame:
-        the rows with a bound and the variables the QP has (a clearance slack whose row is
-        free stays 0), with the arrays every QP of the solve shares. last: the multipliers
-        (rows, variables) of the last QP or of the warm start, DAQP's hot start."""
-        rows, cols, nc, n, k = frame.rows, frame.cols, frame.nc, len(point.x), len(frame.cols)
-        g = point.g[rows]
-        low, high = lbg[rows] - g, ubg[rows] - g
-        # hard rows the point violates (beyond rounding): elastic columns of weight nu
-        below, above = low > VIOLATED, high < -VIOLATED
-        violated = np.flatnonzero(below | above)
-        m = len(violated)
-        a = point.jac[rows][:, cols]
-        hess, cost = frame.hess, point.grad[cols]
-        hess[:nc, :nc] = _convex(point.hess)
-        var_low, var_high = frame.low, frame.high
-        var_low[:nc], var_high[:nc] = -radius, radius
-        var_low[nc:] = np.maximum(frame.lbx - point.x[cols[nc:]], -_INF)
-        sense = frame.sense
-        if m:  # elastic columns: the QP grows for this step
-            elastic = np.zeros((len(rows), m))
-            elastic[violated, np.arange(m)] = np.where(below[violated], 1.0, -1.0)
-            a = np.hstack([a, elastic])
-            grown = np.zeros((k + m, k + m))
-            grown[:k, :k], grown[np.arange(k, k + m), np.arange(k, k + m)] = hess, PROXIMAL
-            hess, cost = grown, np.concatenate([cost, np.full(m, nu)])
-            var_low = np.concatenate([var_low, np.zeros(m)])
-            var_high = np.concatenate([var_high, np.full(m, _INF)])
-            sense = np.concatenate([sense[:k], np.zeros(m, np.int32), sense[k:]])
-        blower = np.concatenate([var_low, np.maximum(low, -_INF)])
-        bupper = np.concatenate([var_high, np.minimum(high, _INF)])
-        dual = self._working_set(point, rows, cols, m, last)
-        began = time.thread_time()
-        x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense, dual_start=dual,
-                                      primal_tol=QP_PRIMAL_TOLERANCE)
-        if flag < 0:  # the guessed working set can mislead it (cycling): again, cold
-            x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense,
-                                          primal_tol=QP_PRIMAL_TOLERANCE)
-        self.spent_ms += 1e3 * (time.thread_time() - began)
-        if flag < 0:
-            return None
-        lam = info["lam"]
-        lam_rows, lam_vars, d = np.zeros(len(point.g)), np.zeros(n), np.zeros(n)
-        lam_rows[rows], lam_vars[cols], d[cols] = lam[k + m:], lam[:k], x[:k]
-        model = float(cost[:k] @ x[:k] + 0.5 * x @ hess @ x)
-        return d, lam_rows, lam_vars, (model, float(np.sum(x[k:])))
-
-    def _working_set(self, point: Point, rows, cols, m: int, last) -> np.ndarray:
-        """DAQP's starting working set (signs of multipliers: which bounds are active): the
-        last multipliers, with the slacks' rows and bounds set from the point itself (the
-        active side of each |P| epigraph pair, a clearance row where the point dips, else
-        its slack's bound), the elastic columns at zero."""
-        lay = self.layout
-        lam_rows, lam_vars = (np.array(v, float) for v in last)
-        lam_vars[: lay.nc] = np.sign(lam_vars[: lay.nc])
-        if lay.e.stop > lay.e.start:
-            power = 0.5 * (point.g[lay.above] - point.g[lay.below])
-            lam_rows[lay.above], lam_rows[lay.below] = power > 0, power < 0
-        if lay.v.stop > lay.v.start:
-            dips = point.x[lay.v] > 0
-            lam_rows[lay.clearance], lam_vars[lay.v] = -1.0 * dips, -1.0 * ~dips
-        return np.concatenate([lam_vars[cols], np.full(m, -1.0), lam_rows[rows]])
-
-
-def _convex(hessian: np.ndarray) -> np.ndarray:
-    """The symmetric matrix with its eigenvalues clipped below at CURVATURE (relative)."""
-    w, vectors = np.linalg.eigh(0.5 * (hessian + hessian.T))
-    floor = CURVATURE * max(1.0, float(np.max(np.abs(w), initial=0.0)))
-    return (vectors * np.maximum(w, floor)) @ vectors.T
-
 
 def _violation(g: np.ndarray, lbg: np.ndarray, ubg: np.ndarray) -> float:
     """L1 distance of the rows g from [lbg, ubg]."""

@@ -1,0 +1,138 @@
+"""The QP of one anytime-SQP iteration (planning.sqp): the Sl1QP model of the elastic planning
+NLP at a point, in the variables that have rows (a clearance slack whose row is free stays
+0), the hard rows the point violates given elastic columns, the coefficients in a box trust
+region, the slacks under a small proximal term; solved by DAQP (dual active set) from a
+working set guessed from the last multipliers and the point itself."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import daqp
+import numpy as np
+
+QP_PRIMAL_TOLERANCE = 1e-10  # DAQP's (its default, 1e-6, let steps leave the trust region)
+PROXIMAL = 1e-2  # weight of the slacks' proximal term in each QP (vanishes at a fixed point; e,
+# v move by less than cost / PROXIMAL >= 10 only where the rows allow nothing less)
+CURVATURE = 1e-8  # smallest eigenvalue kept in the coefficient block of the QP's Hessian
+_EQUALITY = 5  # DAQP sense flags: active + immutable
+VIOLATED = 1e-9  # a hard row beyond its bound by more gets an elastic column in the QP
+_INF = 1e30
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Where the NLP's pieces sit: nc coefficient variables first, then the power slacks
+    (slice e) and the clearance slacks (slice v); the epigraph rows (slices above, below:
+    P - e, -P - e) and the clearance rows (slice clearance, D + v)."""
+
+    nc: int
+    e: slice
+    v: slice
+    above: slice
+    below: slice
+    clearance: slice
+
+
+@dataclass
+class Point:
+    """An iterate with its slacks reset: x, objective f, rows g, gradient, Jacobian, the
+    Lagrangian Hessian's coefficient block, and its hard-row violation (L1)."""
+
+    x: np.ndarray
+    f: float
+    g: np.ndarray
+    grad: np.ndarray
+    jac: np.ndarray
+    hess: np.ndarray
+    violation: float
+
+
+class Frame:
+    """What every QP of one solve shares: its rows and variables, the Hessian buffer (the
+    slacks' proximal diagonal set once), the variable bounds and DAQP's constraint types."""
+
+    def __init__(self, rows, cols, nc: int, equality, lbx_slacks):
+        k = len(cols)
+        self.rows, self.cols, self.nc, self.lbx = rows, cols, nc, lbx_slacks
+        self.hess = np.zeros((k, k))
+        self.hess[np.arange(nc, k), np.arange(nc, k)] = PROXIMAL
+        self.low, self.high = np.zeros(k), np.full(k, _INF)
+        self.sense = np.zeros(k + len(rows), dtype=np.int32)
+        self.sense[k + np.flatnonzero(equality)] = _EQUALITY
+
+
+
+def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
+         layout: Layout):
+        """The step d (all variables), its multipliers (rows of g, variables) and the model's
+        decrease parts: (its value grad'd + d'Hd/2, the linearized hard violation), and the
+        CPU ms DAQP took; None if DAQP fails. frame:
+        the rows with a bound and the variables the QP has (a clearance slack whose row is
+        free stays 0), with the arrays every QP of the solve shares. last: the multipliers
+        (rows, variables) of the last QP or of the warm start, DAQP's hot start."""
+        rows, cols, nc, n, k = frame.rows, frame.cols, frame.nc, len(point.x), len(frame.cols)
+        g = point.g[rows]
+        low, high = lbg[rows] - g, ubg[rows] - g
+        # hard rows the point violates (beyond rounding): elastic columns of weight nu
+        below, above = low > VIOLATED, high < -VIOLATED
+        violated = np.flatnonzero(below | above)
+        m = len(violated)
+        a = point.jac[rows][:, cols]
+        hess, cost = frame.hess, point.grad[cols]
+        hess[:nc, :nc] = convex(point.hess)
+        var_low, var_high = frame.low, frame.high
+        var_low[:nc], var_high[:nc] = -radius, radius
+        var_low[nc:] = np.maximum(frame.lbx - point.x[cols[nc:]], -_INF)
+        sense = frame.sense
+        if m:  # elastic columns: the QP grows for this step
+            elastic = np.zeros((len(rows), m))
+            elastic[violated, np.arange(m)] = np.where(below[violated], 1.0, -1.0)
+            a = np.hstack([a, elastic])
+            grown = np.zeros((k + m, k + m))
+            grown[:k, :k], grown[np.arange(k, k + m), np.arange(k, k + m)] = hess, PROXIMAL
+            hess, cost = grown, np.concatenate([cost, np.full(m, nu)])
+            var_low = np.concatenate([var_low, np.zeros(m)])
+            var_high = np.concatenate([var_high, np.full(m, _INF)])
+            sense = np.concatenate([sense[:k], np.zeros(m, np.int32), sense[k:]])
+        blower = np.concatenate([var_low, np.maximum(low, -_INF)])
+        bupper = np.concatenate([var_high, np.minimum(high, _INF)])
+        dual = working_set(point, rows, cols, m, last, layout)
+        began = time.thread_time()
+        x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense, dual_start=dual,
+                                      primal_tol=QP_PRIMAL_TOLERANCE)
+        if flag < 0:  # the guessed working set can mislead it (cycling): again, cold
+            x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense,
+                                          primal_tol=QP_PRIMAL_TOLERANCE)
+        spent = 1e3 * (time.thread_time() - began)
+        if flag < 0:
+            return None
+        lam = info["lam"]
+        lam_rows, lam_vars, d = np.zeros(len(point.g)), np.zeros(n), np.zeros(n)
+        lam_rows[rows], lam_vars[cols], d[cols] = lam[k + m:], lam[:k], x[:k]
+        model = float(cost[:k] @ x[:k] + 0.5 * x @ hess @ x)
+        return d, lam_rows, lam_vars, (model, float(np.sum(x[k:]))), spent
+
+def working_set(point: Point, rows, cols, m: int, last, layout: Layout) -> np.ndarray:
+        """DAQP's starting working set (signs of multipliers: which bounds are active): the
+        last multipliers, with the slacks' rows and bounds set from the point itself (the
+        active side of each |P| epigraph pair, a clearance row where the point dips, else
+        its slack's bound), the elastic columns at zero."""
+        lay = layout
+        lam_rows, lam_vars = (np.array(v, float) for v in last)
+        lam_vars[: lay.nc] = np.sign(lam_vars[: lay.nc])
+        if lay.e.stop > lay.e.start:
+            power = 0.5 * (point.g[lay.above] - point.g[lay.below])
+            lam_rows[lay.above], lam_rows[lay.below] = power > 0, power < 0
+        if lay.v.stop > lay.v.start:
+            dips = point.x[lay.v] > 0
+            lam_rows[lay.clearance], lam_vars[lay.v] = -1.0 * dips, -1.0 * ~dips
+        return np.concatenate([lam_vars[cols], np.full(m, -1.0), lam_rows[rows]])
+
+
+def convex(hessian: np.ndarray) -> np.ndarray:
+    """The symmetric matrix with its eigenvalues clipped below at CURVATURE (relative)."""
+    w, vectors = np.linalg.eigh(0.5 * (hessian + hessian.T))
+    floor = CURVATURE * max(1.0, float(np.max(np.abs(w), initial=0.0)))
+    return (vectors * np.maximum(w, floor)) @ vectors.T
