@@ -51,10 +51,21 @@ class _Problem:
 
 @dataclass
 class _Candidate:
-    rank: tuple
+    """A checked iterate: how far it leaves the hard limits (goal rows, joint limits in rad,
+    torques in N m), whether it misses the threshold beyond the penalty tolerance."""
+
+    hard: float
+    unsafe: bool
     x: np.ndarray
     safety: Safety
     point: sqp.Point
+
+    @property
+    def rank(self) -> tuple:
+        """Within the hard limits first, then keeping the threshold, then the objective (for
+        one that misses the threshold: the energy plus its L1 violation weighed by
+        elastic_weight, which the SQP minimizes)."""
+        return (self.hard > 0, self.unsafe, self.hard, self.point.f)
 
 
 class Anytime:
@@ -128,23 +139,19 @@ class Anytime:
                                    reference, config.elastic_weight)
             lbg, ubg = self._bounds(problem, goal, safety.links[slots])
             start, lam_g, lam_x = self._start(problem, reference, times[slots], last)
-            candidates: list[_Candidate] = []
-
-            def accept(point, candidates=candidates):
-                candidates.append(self._candidate(point, q0, qd0, t_begin, duration, check))
-
+            points: list[sqp.Point] = []
             remaining = budget - 1e3 * (time.thread_time() - cpu)
-            solution, count = problem.sqp.solve(start, p, lbg, ubg, lam_g, remaining, accept,
-                                                lam_x0=lam_x)
+            solution, count = problem.sqp.solve(start, p, lbg, ubg, lam_g, remaining,
+                                                points.append, lam_x0=lam_x)
             iterations += count
-            chosen = min(candidates, key=lambda c: c.rank)
+            chosen = self._choose(points, q0, qd0, t_begin, duration, check)
             segment = self._segment(problem, chosen, solution, p, q0, qd0, t_begin, duration,
                                     times[slots])
             converged = solution.status == sqp.CONVERGED and chosen.x is solution.x
             if best is None or chosen.rank < best.rank:
                 best, plan = chosen, dataclasses.replace(
                     segment, status=self._status(chosen, converged),
-                    success=chosen.rank[1] == 0)
+                    success=chosen.hard == 0)
             last = segment
             more = self._needs_round(chosen, slots, safety.links[slots])
             if more == "torque":
@@ -190,10 +197,22 @@ class Anytime:
         lbg[np.arange(rows.start, rows.stop)[~used.ravel()]] = -np.inf
         return lbg, ubg
 
+    def _choose(self, points, q0, qd0, t_begin, duration, check) -> _Candidate:
+        """The best iterate of a solve by _Candidate.rank. They are checked from the lowest
+        objective up: the first that keeps the threshold and the hard limits is the best (any
+        later one has a larger objective), the same choice as checking every one, with one
+        check where the last iterate is safe."""
+        best = None
+        for point in sorted(points, key=lambda point: point.f):
+            candidate = self._candidate(point, q0, qd0, t_begin, duration, check)
+            if best is None or candidate.rank < best.rank:
+                best = candidate
+            if not candidate.unsafe and not candidate.hard:
+                break
+        return best
+
     def _candidate(self, point, q0, qd0, t_begin, duration, check) -> _Candidate:
-        """An accepted iterate, checked, with its rank: within the hard limits first, then
-        keeping the threshold, then the objective (for one that misses the threshold: its
-        L1 violation weighed by elastic_weight, which the SQP minimizes, plus the energy)."""
+        """An iterate, checked on the whole forecast, the limits and the torques."""
         config = self.config
         trajectory = self.planner.trajectory(point.x, q0, qd0, t_begin, duration)
         safety = check(trajectory.coefficients)
@@ -201,7 +220,7 @@ class Anytime:
             max(safety.torque_excess - TORQUE_TOLERANCE, 0.0) + \
             max(point.violation - HARD_TOLERANCE, 0.0)
         unsafe = config.threshold - safety.lowest > config.penalty_tolerance
-        return _Candidate((unsafe, hard, point.f), point.x, safety, point)
+        return _Candidate(hard, unsafe, point.x, safety, point)
 
     def _needs_round(self, best: _Candidate, slots, near) -> str | None:
         """Why another round: "torque" (a motor overdriven), "limits" (beyond a limit between
@@ -263,7 +282,7 @@ class Anytime:
             detour=detour)
 
     def _status(self, best: _Candidate, converged: bool) -> str:
-        unsafe, hard, _ = best.rank
+        unsafe, hard = best.unsafe, best.hard
         deficit = self.config.threshold - best.safety.lowest
         if hard > 0:
             return f"limits left by {hard:.2e} (joint limits in rad, torques in N m)"
