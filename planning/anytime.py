@@ -28,12 +28,12 @@ from planning.limits import LIMIT_TOLERANCE
 from planning.nlp import PlanningNLP
 from planning.realtime_iteration import ITERATE
 from planning.safety import Safety, SafetyCheck
+from planning.screening import MARGIN, near_samples, on_horizon, uncovered
 from planning.solver import ObstacleForecast, Planner, SegmentPlan
 from planning.starts import start_points
 
 CONVERGED = "converged"
 MIN_VIOLATION = "minimum violation"
-MARGIN = 0.03  # m: samples this far above the threshold on the reference are screened in
 HARD_TOLERANCE = 1e-6  # L1 violation of the goal and limit rows an iterate may keep
 TORQUE_TOLERANCE = 1e-6  # N m
 ROUNDS = 4
@@ -120,7 +120,7 @@ class Anytime:
         wall, cpu = time.perf_counter(), time.thread_time()
         config, planner = self.config, self.planner
         budget = config.replan_budget_ms if budget_ms is None else budget_ms
-        times, centres = _future(forecast, t_begin, duration)
+        times, centres = on_horizon(forecast, t_begin, duration)
         if warm is None:
             x0 = planner.initial_guess(q0, qd0, duration, goal) if x0 is None else x0
             reference = planner.trajectory(x0, q0, qd0, t_begin, duration)
@@ -133,7 +133,7 @@ class Anytime:
         for _ in range(ROUNDS):
             problem = self.problem(goal, torque)
             safety = check(reference.coefficients)
-            slots = _screen(times, safety.clearance, config.threshold, config.obstacle_slots)
+            slots = near_samples(safety.clearance, config.threshold, config.obstacle_slots)
             p = planner.parameters(q0, qd0, duration, goal,
                                    ObstacleForecast(times[slots], centres[slots]), t_begin,
                                    reference, config.elastic_weight)
@@ -231,17 +231,9 @@ class Anytime:
         if best.safety.limit_excess > LIMIT_TOLERANCE:
             return "limits"
         config = self.config
-        dips = np.argwhere(best.safety.links < config.threshold - config.penalty_tolerance)
-        if not len(dips):
-            return None
-        # as planning.screening: when the near samples were thinned to the slots, a dip
-        # within the largest gap between slots of a slot that has its link's row is covered
-        gap = float(np.max(np.diff(slots), initial=0)) if len(slots) == config.obstacle_slots \
-            else 0.0
-        rows = near < config.threshold + MARGIN  # (slots, links)
-        close = np.abs(slots[None, :] - dips[:, :1]) <= gap  # (dips, slots)
-        covered = np.any(close & rows.T[dips[:, 1]], axis=1)
-        return None if np.all(covered) else "screen"
+        dips = best.safety.links < config.threshold - config.penalty_tolerance
+        return "screen" if uncovered(dips, slots, near < config.threshold + MARGIN,
+                                     config.obstacle_slots) else None
 
     def _start(self, problem: _Problem, reference, slot_times, last: SegmentPlan | None):
         """The start point (the reference's free coefficients, slacks reset by the SQP) and
@@ -290,20 +282,3 @@ class Anytime:
         if unsafe:
             status += f", {MIN_VIOLATION}: {1e3 * deficit:.1f} mm below the threshold"
         return status
-
-
-def _future(forecast: ObstacleForecast | None, t_begin: float, duration: float):
-    """The forecast's samples in (t_begin, t_begin + duration]: times (k,), centres (k, 3)."""
-    if forecast is None:
-        return np.zeros(0), np.zeros((0, 3))
-    times = np.asarray(forecast.times, float)
-    keep = (times > t_begin + 1e-12) & (times <= t_begin + duration + 1e-12)
-    return times[keep], np.asarray(forecast.centres, float)[keep]
-
-
-def _screen(times, clearance, threshold: float, slots: int) -> np.ndarray:
-    """Indices of the samples within MARGIN of the threshold, evenly thinned to `slots`."""
-    near = np.flatnonzero(clearance < threshold + MARGIN)
-    if len(near) > slots:
-        near = near[np.round(np.linspace(0, len(near) - 1, slots)).astype(int)]
-    return near

@@ -40,8 +40,11 @@ class Screen:
         return bool(np.all(distance.min(axis=1, initial=np.inf) <= self.gap + 1e-9))
 
 
+MARGIN = 0.03  # m: samples this far above the threshold on the reference are screened in
+
+
 def screen(forecast: ObstacleForecast, reference: PolynomialTrajectory, geometry: ArmGeometry,
-           threshold: float, slots: int, margin: float = 0.03) -> Screen:
+           threshold: float, slots: int, margin: float = MARGIN) -> Screen:
     """The samples in (t_begin, t_end] whose reference clearance is below threshold + margin
     (evenly thinned to `slots`), and those below the threshold."""
     times = np.asarray(forecast.times)
@@ -56,3 +59,37 @@ def screen(forecast: ObstacleForecast, reference: PolynomialTrajectory, geometry
     return Screen(ObstacleForecast(times[near], forecast.centres[near]),
                   times[inside[clearance < threshold]], gap,
                   float(np.min(clearance, initial=np.inf)))
+
+
+# The anytime SQP's screening (planning.anytime): the same rule, on clearances per sample and
+# link that its compiled check already computed.
+
+def on_horizon(forecast: ObstacleForecast | None, t_begin: float, duration: float):
+    """The forecast's samples in (t_begin, t_begin + duration]: times (k,), centres (k, 3)."""
+    if forecast is None:
+        return np.zeros(0), np.zeros((0, 3))
+    times = np.asarray(forecast.times, float)
+    keep = (times > t_begin + 1e-12) & (times <= t_begin + duration + 1e-12)
+    return times[keep], np.asarray(forecast.centres, float)[keep]
+
+
+def near_samples(clearance: np.ndarray, threshold: float, slots: int) -> np.ndarray:
+    """Indices of the samples whose clearance is within MARGIN of the threshold, evenly
+    thinned to `slots`."""
+    near = np.flatnonzero(clearance < threshold + MARGIN)
+    if len(near) > slots:
+        near = near[np.round(np.linspace(0, len(near) - 1, slots)).astype(int)]
+    return near
+
+
+def uncovered(dips: np.ndarray, slots: np.ndarray, rows: np.ndarray, count: int) -> bool:
+    """True if a (sample, link) dip (dips: (k, links) booleans) was not seen by a solve with
+    rows (slots, links) at the sample indices `slots`: as Screen.covered, when the near
+    samples were thinned to `count` slots a dip within the largest gap between slots of one
+    that has its link's row is covered."""
+    where = np.argwhere(dips)
+    if not len(where):
+        return False
+    gap = float(np.max(np.diff(slots), initial=0)) if len(slots) == count else 0.0
+    close = np.abs(slots[None, :] - where[:, :1]) <= gap  # (dips, slots)
+    return not np.all(np.any(close & rows.T[where[:, 1]], axis=1))
