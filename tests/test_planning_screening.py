@@ -9,7 +9,7 @@ from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from planning.clearance import link_clearances
 from planning.config import PlannerConfig, Scenario
-from planning.screening import Screen, screen
+from planning.screening import Screen, near_samples, screen, uncovered
 from planning.solver import ObstacleForecast, Planner
 
 
@@ -77,3 +77,20 @@ def test_samples_above_the_threshold_leave_the_optimum_unchanged():
     assert plan.success and more.success and plan.penalty > 0
     assert np.allclose(more.trajectory.coefficients, plan.trajectory.coefficients, atol=1e-5)
     assert more.energy + more.penalty == pytest.approx(plan.energy + plan.penalty, rel=1e-6)
+
+
+def test_the_anytime_screen_covers_dips_per_link_and_within_the_thinning_gap():
+    """Per (sample, link): a dip is covered by a row of its link at its sample, or, when the
+    near samples were thinned to the slots, within the largest gap between slots; never by a
+    row of another link. Agrees with Screen.covered on one link."""
+    slots, rows = np.array([0, 5, 10]), np.array([[True, False]] * 3)
+    dips = np.zeros((12, 2), bool)
+    dips[3, 0] = True
+    assert not uncovered(dips, slots, rows, count=3)  # thinned: within 5 of a slot
+    assert uncovered(dips, slots, rows, count=4)  # not thinned: sample 3 had no row
+    assert _screen([3.0], 5.0).covered(slots) == (not uncovered(dips, slots, rows, 3))
+    dips[3, 0], dips[5, 1] = False, True
+    assert uncovered(dips, slots, rows, count=3)  # link 2 had no row anywhere
+    assert not uncovered(np.zeros((12, 2), bool), slots, rows, count=3)
+    near = near_samples(np.array([0.2, 0.09, 0.1, 0.5, 0.05]), 0.08, slots=2)
+    assert list(near) == [1, 4]  # below threshold + 3 cm: 1, 2, 4, thinned evenly to 2
