@@ -1,7 +1,7 @@
 """Real time and true optimum over random scenarios: the planning bench's study, alone.
 
     .venv/bin/python -m benchmarks.realtime_planning [--scenarios 20] [--seed 2026]
-        [--ways all|fast] [--out study.json]
+        [--ways all|fast] [--free-end] [--out study.json]
 
 `--ways fast` compares only the two re-planners (the penalty loop with fatrop and the
 anytime elastic SQP; no other compiled variants: each costs one C compilation on first use).
@@ -25,13 +25,17 @@ def main() -> None:
     parser = random_scenarios.parser(__doc__)
     parser.add_argument("--ways", choices=("all", "fast"), default="all")
     parser.add_argument("--out", default=None)
+    parser.add_argument("--free-end", action="store_true",
+                        help="plan with the paper's free end velocity (default: at rest)")
     args = parser.parse_args()
+    changes = {"rest_at_goal": False} if args.free_end else {}
     baseline = PinocchioModel(load_pinocchio(DEFAULT_ROBOT))
     setup = random_scenarios.setup(args)
     ways = None
     if args.ways == "fast":
-        ways = realtime.fast_ways(true_energy_config(compile_code=True))
-    study = realtime.run(baseline, load_mujoco(DEFAULT_ROBOT, scene=True), False, setup, ways)
+        ways = realtime.fast_ways(true_energy_config(compile_code=True, **changes))
+    study = realtime.run(baseline, load_mujoco(DEFAULT_ROBOT, scene=True), False, setup, ways,
+                         **changes)
     print("\n".join(realtime.markdown_lines(study)))
     print(json.dumps(realtime.acceptance(study)))
     print("load average", os.getloadavg())

@@ -122,6 +122,21 @@ def test_plan_command_bad_input_exits_2_without_file(tmp_path, capsys):
     assert not out.exists()
     err = capsys.readouterr().err
     assert "--replan-iterations must be >= 0" in err and len(err.strip().splitlines()) == 1
+    assert main(["plan", "--no-compile", "--model", "pinocchio", "--replanner", "sqp",
+                 "--replan-budget-ms", "0", "--out", str(out)]) == 2
+    assert not out.exists()
+    err = capsys.readouterr().err
+    assert "--replan-budget-ms must be" in err and len(err.strip().splitlines()) == 1
+
+
+def test_plan_command_with_the_anytime_sqp(tmp_path):
+    """plan --replanner sqp writes a feasible plan of the paper scenario, recording it."""
+    out = tmp_path / "plan.json"
+    assert main(["plan", "--no-compile", "--model", "pinocchio", "--replanner", "sqp",
+                 "--out", str(out)]) == 0
+    plan = json.loads(out.read_text())
+    assert plan["replanner"] == "sqp" and plan["feasible"]
+    assert plan["min_clearance"] >= plan["threshold"] - 2e-3
 
 
 def test_obstacle_parked_on_the_goal_is_flagged(paper, baseline):
