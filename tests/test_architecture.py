@@ -10,7 +10,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("harness", "identification", "planning", "models")
-MAX_LINES = 400  # the hard bound; the aim is 300
+MAX_LINES = 300  # modules stay small (DESIGN.md)
 
 
 def _modules() -> dict[str, Path]:

@@ -2,20 +2,16 @@
 
 Every joint's torque comes from the same Lagrangian L = sum_a xi_a * atom_a, so
 an atom's coefficient xi_a is shared: its Euler-Lagrange derivative fixes the
-relative factors of its features on every joint. The paper regresses each
-joint alone (~30 free coefficients for this arm); here the regression is
-stacked over joints (rows = samples x joints, columns = atoms: 11 candidates,
-8 true for this arm; 22 candidates without the symmetric-link assumption),
-each joint's rows weighted by 1 / its noise std, with a per-joint unpenalized
-offset for the sensor bias. Selection is the paper's: Lasso over a swept alpha,
-the proportional filter until the validation error rises, then an unbiased
-weighted least-squares refit; kept atoms whose refit t-statistic is below the
-Bonferroni bound of a `familywise` error over all candidate atoms are then
-dropped one at a time (the weakest first, refitting each time): validation
-error alone cannot tell a null atom from noise, and a general atom set has
-many null atoms. Atoms whose stacked torque signatures are
-linearly dependent on this data are folded into base atoms (pivoted QR), as
-base parameters are formed from standard inertial parameters.
+relative factors of its features on every joint. The paper regresses each joint alone
+(~30 free coefficients for the Lynxmotion); here the regression is stacked over joints
+(rows = samples x joints, columns = atoms: 11 candidates, 8 true; 22 without the
+symmetric-link assumption), each joint's rows weighted by 1 / its noise std, with a
+per-joint unpenalized offset for the sensor bias. Selection is the paper's: Lasso over a
+swept alpha, the proportional filter until the validation error rises, an unbiased weighted
+least-squares refit; kept atoms whose refit t-statistic is below the Bonferroni bound of a
+`familywise` error over all candidates are then dropped one at a time, the weakest first
+(validation error alone cannot tell a null atom from noise). Atoms whose stacked torque
+signatures are linearly dependent on the data are folded into base atoms (pivoted QR).
 """
 
 from __future__ import annotations
@@ -140,9 +136,8 @@ def _offset_design(design: np.ndarray, cols) -> np.ndarray:
 
 
 def weighted_lstsq(design: np.ndarray, tau: np.ndarray, cols, sigma: np.ndarray):
-    """Weighted least squares of tau (n, dof) on design[:, :, cols] + per-joint offsets.
-    Returns (coefficients of cols, offsets (dof,), residual (n, dof), covariance of the
-    coefficients of cols, scaled by the weighted residual variance)."""
+    """Weighted least squares of tau (n, dof) on design[:, :, cols] + per-joint offsets:
+    coefficients of cols, offsets (dof,), residual (n, dof), their covariance (scaled)."""
     n, dof = tau.shape
     x = _offset_design(design, list(cols)) * np.tile(1.0 / sigma, n)[:, None]
     sol = np.linalg.lstsq(x, tau.reshape(-1) * np.tile(1.0 / sigma, n), rcond=None)[0]
