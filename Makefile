@@ -32,7 +32,7 @@ install-check:
 	bash .ci/install-check
 
 lint: $(STAMP)
-	$(VENV)/bin/ruff check harness identification planning tests benchmarks
+	$(VENV)/bin/ruff check harness identification planning tests
 
 clean:
 	rm -rf $(VENV) $(OUT)

@@ -189,7 +189,7 @@ def _heldout(model, q, qd, qdd, tau, tau_clean, n_train: int):
 # serves prediction, not the exact support: leaving out an atom of true size t standard
 # errors costs about t^2 in squared prediction error, keeping it costs 1, and a hard
 # threshold at c risks most for atoms near c. Measured on 10 draws at 5 % per arm
-# (benchmarks/arm_threshold.py, held-out fresh trajectory, ratio to the oracle): c = 1 keeps
+# (a scan of 2026-11 on seeds 1-10, since removed; the bench now scores other seeds): c = 1 keeps
 # every Panda joint within 1.43x (median over joints 0.95-1.05) and every UR5 joint within
 # 1.10x; c = sqrt(2) (Akaike) reaches 1.53x on a Panda joint.
 # Coulomb atoms are held to the familywise (Bonferroni) bound instead: a Coulomb column is

@@ -271,7 +271,7 @@ def test_feasible_sqp_reaches_ipopts_optimum_from_a_feasible_start_and_prints_no
     iterates that keep the constraint and here cost no more than the start or the iterate of
     a lower cap (its trust region shrinks at first, so the first step may be refused; on
     the planning NLP a 5-iteration iterate cost more than the 1-iteration one,
-    benchmarks.replan_anatomy). Its trace, which CasADi 3.8 prints whatever the print
+    harness.studies.realtime.anatomy). Its trace, which CasADi 3.8 prints whatever the print
     options, is swallowed."""
     args = dict(TOY_ARGS, x0=[0.3, 0.3])  # x0^2 + x1^2 = 0.18 <= 0.5
     reference = ca.nlpsol("vm", "ipopt", _toy(), QUIET_IPOPT)(**args)

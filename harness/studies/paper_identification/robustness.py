@@ -186,7 +186,7 @@ def robust_note(rob: dict) -> list[str]:
     cause = (" On every draw the coupled fit kept exactly the true atoms, so its misses are the "
              "perfect selector's own: a better support cannot lift the count; the bar asks "
              "for a draw-by-draw ratio that an unbiased fit on the true atoms misses by chance "
-             "(benchmarks/lynxmotion_draw_ceiling.py estimates that chance on many more draws)."
+             "(docs/history-2026-11.md: a removed script estimated that chance)."
              if exact == n else "")
     return ["", f"Draws within {RATIO_LIMIT} x the oracle on every joint: coupled "
             f"{cp['draws_within_limit']} of {n} (exactly the true atoms kept on {exact} of {n}); "

@@ -1,6 +1,6 @@
 """The optimizer alone: one plan per random scenario with the obstacle's whole path known.
 
-The realtime study (benchmarks.realtime_planning) scores Algorithm 2, whose executed energy
+The realtime study (harness.studies.realtime.ways) scores Algorithm 2, whose executed energy
 also depends on what the constant-velocity forecast got wrong. Here nothing is forecast:
 each scenario of the study (same seed) is planned once, the obstacle at every sample where
 it will be, no re-planning; every plan is replayed in MuJoCo. The default (4 starts, Gauss
@@ -11,7 +11,7 @@ default's rule, the best 2 distinct plans solved again with the split rule at 40
 (config.polish). Printed per scenario, then how many of the default's, the split and the
 polished plans are within 0.5 % of the best of all of them.
 
-    python -m benchmarks.oneshot_optimality [--scenarios 20] [--seed 2026]
+    python -m harness.studies.realtime.oneshot [--scenarios 20] [--seed 2026]
 """
 
 from __future__ import annotations
@@ -20,10 +20,10 @@ import dataclasses
 
 import numpy as np
 
-from benchmarks import random_scenarios
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
 from harness.studies.realtime import measure as realtime
+from harness.studies.realtime import options as random_scenarios
 from planning.config import true_energy_config
 from planning.replanning import Execution, plan_multistart, plan_segment
 from planning.solver import ObstacleForecast, Planner

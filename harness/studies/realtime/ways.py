@@ -1,6 +1,6 @@
 """Real time and true optimum over random scenarios: the planning bench's study, alone.
 
-    .venv/bin/python -m benchmarks.realtime_planning [--scenarios 20] [--seed 2026]
+    .venv/bin/python -m harness.studies.realtime.ways [--scenarios 20] [--seed 2026]
         [--ways all|fast] [--free-end] [--out study.json]
 
 `--ways fast` compares only the two re-planners (the penalty loop with fatrop and the
@@ -13,11 +13,11 @@ from __future__ import annotations
 import json
 import os
 
-from benchmarks import random_scenarios
 from harness.io import write_json
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
 from harness.studies.realtime import measure as realtime
+from harness.studies.realtime import options as random_scenarios
 from planning.config import true_energy_config
 
 

@@ -1,6 +1,6 @@
 """Where a warm re-plan's time goes (issue #15's speed bars), on the random scenarios.
 
-    .venv/bin/python -m benchmarks.replan_anatomy [--scenarios 20] [--seed 2026]
+    .venv/bin/python -m harness.studies.realtime.anatomy [--scenarios 20] [--seed 2026]
         [--split | --polish]
 
 1. Algorithm 2 with the default planner (compiled) on the planning bench's random
@@ -30,10 +30,10 @@ import time
 
 import numpy as np
 
-from benchmarks import random_scenarios
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
 from harness.studies.realtime import measure as realtime
+from harness.studies.realtime import options as random_scenarios
 from planning import backends
 from planning.config import true_energy_config
 from planning.replanning import execute, forecast_at, plan_segment
