@@ -5,6 +5,9 @@
 - least squares: the source README's reference model, recomputed here on the same data -
   the rigid-body base atoms plus, per joint, viscous (qd), Coulomb (the kinematic library's
   smoothed sign) and an offset, plain least squares on the training part;
+- consistent: identification.physical on the training part: standard parameters pulled
+  toward the URDF's (weight chosen inside the training part), every body physically
+  consistent (pseudo-inertia LMI), viscous, Coulomb and offset per joint;
 - identified: `identify --robot R` (the coupled sparse regression on the robot's base atoms
   with armature, viscous and Coulomb atoms), its fitted sensor offsets added.
 
@@ -25,6 +28,7 @@ from harness.robots.torque_models import robot_library
 from identification.identify import identify
 from identification.library.kinematic import COULOMB_WIDTH
 from identification.metrics import rel_error
+from identification.physical import fit_physical
 
 
 @dataclass(frozen=True)
@@ -68,7 +72,15 @@ def score_models(robot: str, q, qd, qdd, tau, holdout: float) -> tuple[dict[str,
         out[name] = Scored(name, torque, rel_error(torque[held], tau[held]),
                            time.process_time() - start)
 
-    add("nominal", lambda: PinocchioModel(load_pinocchio(robot)).torque(q, qd, qdd))
+    nominal = PinocchioModel(load_pinocchio(robot))
+    add("nominal", lambda: nominal.torque(q, qd, qdd))
+
+    def consistent():  # identification.physical: the nominal as a prior, the LMI, friction
+        Y = nominal.regressor(q, qd, qdd)
+        fit = fit_physical(Y[:split], qd[:split], tau[:split], nominal.inertial_parameters())
+        return fit.torque(Y, qd)
+
+    add("consistent", consistent)
     add("least_squares", lambda: least_squares(robot, q, qd, qdd, tau, split))
     result = {}
 

@@ -40,6 +40,8 @@ def _models_table(models, reference, nominal_ref, nominal_whole, ratio, same, so
     rows = [("nominal URDF (RNEA), held out", models["nominal"].heldout),
             ("nominal URDF, whole log", nominal_whole),
             ("least squares, same data", models["least_squares"].heldout),
+            ("nominal prior + consistency LMI + friction (identification.physical)",
+             models["consistent"].heldout),
             ("**identified** (`identify --robot panda`)", models["identified"].heldout),
             ("identified / least squares on same data", same),
             ("rigid-body identification (closeloop before)", r.error_before),
