@@ -60,6 +60,7 @@ class Identification:
     # one CoupledRegression
     method: str = "per-joint"
     basis: AtomBasis | None = field(default=None, repr=False)  # coupled: the atoms
+    physical: dict = field(default_factory=dict)  # consistent: prior, weight, consistency
 
     def metrics(self) -> dict:
         """JSON metrics; the held-out errors are null when nothing was held out (holdout 0)."""
@@ -74,6 +75,8 @@ class Identification:
                "seconds": self.seconds}
         if self.method == "coupled":
             out["noise_sigma"] = self.regressions[0].sigma_.tolist()
+        if self.physical:
+            out["physical"] = self.physical
         return out
 
     def lagrangian(self) -> dict:
@@ -145,7 +148,7 @@ def identify(q, qd, qdd, tau, library: Library, holdout: float = 0.25, tau_clean
         return _identify(q, qd, qdd, tau, library, holdout, tau_clean, regression, method)
 
 
-def _split(q, qd, qdd, tau, dof: int, name: str, holdout: float, n_features: int):
+def split_training(q, qd, qdd, tau, dof: int, name: str, holdout: float, n_features: int):
     """Validated arrays and the number of training samples (the first 1 - holdout)."""
     if not 0.0 <= holdout < 1.0:
         raise IdentificationError(f"holdout must be in [0, 1), got {holdout}")
@@ -172,7 +175,7 @@ def sensor_offsets(model) -> np.ndarray:
     return np.zeros(model.dof)
 
 
-def _heldout(model, q, qd, qdd, tau, tau_clean, n_train: int):
+def heldout_errors(model, q, qd, qdd, tau, tau_clean, n_train: int):
     """Held-out errors against the clean torque, or, without one (a measured log), against
     the measured torque, which carries the sensor offsets: the model's torque plus its
     fitted offsets is then what predicts the measurement."""
@@ -220,7 +223,7 @@ def _identify_atoms(q, qd, qdd, tau, library: KinematicLibrary, holdout: float, 
                     regression: SparseRegression | None) -> Identification:
     """Coupled sparse regression on a robot's base atoms (one coefficient per atom, shared by
     every joint it acts on)."""
-    q, qd, qdd, tau, n_train = _split(q, qd, qdd, tau, library.dof, library.name, holdout,
+    q, qd, qdd, tau, n_train = split_training(q, qd, qdd, tau, library.dof, library.name, holdout,
                                       len(library) // library.dof + 1)
     start = time.perf_counter()
     design = library.evaluate(q[:n_train], qd[:n_train], qdd[:n_train])
@@ -230,7 +233,7 @@ def _identify_atoms(q, qd, qdd, tau, library: KinematicLibrary, holdout: float, 
                             shrink=SHRINK).fit(design, tau[:n_train])
     seconds = time.perf_counter() - start
     model = KinematicModel(library, reg.coef_.copy(), np.asarray(reg.intercept_, float).copy())
-    rel, mse = _heldout(model, q, qd, qdd, tau, tau_clean, n_train)
+    rel, mse = heldout_errors(model, q, qd, qdd, tau, tau_clean, n_train)
     return Identification(model, rel, mse, cond, seconds, (reg,), "coupled", library)
 
 
@@ -242,7 +245,7 @@ def _identify(q, qd, qdd, tau, library: Library, holdout: float, tau_clean,
     if method in ("coupled", "jointwise") and not library.atoms:
         raise IdentificationError(f"library {library.name} has no Lagrangian atoms: "
                                   "use method 'per-joint'")
-    q, qd, qdd, tau, n_train = _split(q, qd, qdd, tau, library.dof, library.name, holdout,
+    q, qd, qdd, tau, n_train = split_training(q, qd, qdd, tau, library.dof, library.name, holdout,
                                       len(library))
     start = time.perf_counter()
     theta = library.evaluate(q[:n_train], qd[:n_train], qdd[:n_train])
@@ -276,7 +279,7 @@ def _identify(q, qd, qdd, tau, library: Library, holdout: float, tau_clean,
             joints.append(_feature_joint(library, fits[-1]))
     seconds = time.perf_counter() - start
     model = IdentifiedModel(library.dof, tuple(joints), library.name, method)
-    rel, mse = _heldout(model, q, qd, qdd, tau, tau_clean, n_train)
+    rel, mse = heldout_errors(model, q, qd, qdd, tau, tau_clean, n_train)
     return Identification(model, rel, mse, cond, seconds, tuple(fits), method, basis)
 
 

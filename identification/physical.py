@@ -1,19 +1,23 @@
 """Physically consistent identification relative to a nominal model (convex, cvxpy).
 
-The rigid-body torque is linear in the standard inertial parameters pi (10 per body:
-m, m c, and the rotational inertia about the body frame's origin, in Pinocchio's
-toDynamicParameters order), tau = Y(q, qd, qdd) pi, plus per-joint friction
-phi_j: viscous qd, Coulomb qd / sqrt(qd^2 + w^2), and an offset. The fit is
+The torque of a chain is linear in its candidate atoms' coefficients x
+(identification.library.kinematic.atom_names: 10 standard inertial parameters per body -
+m, m c, and the rotational inertia about the joint frame's origin, Pinocchio's
+toDynamicParameters order - then armature, viscous and Coulomb per joint), tau = A x,
+plus an offset per joint and, per joint, the column of its friction law
+(identification.friction). The fit is
 
-    minimize  mean_k,j ((tau - Y pi - F phi) / s_j)^2 + lam * sum_b ||(pi_b - nom_b) / r_b||^2
-    subject to  J_b(pi_b) >= 0 (positive semidefinite) for every body b,
-                viscous >= 0, Coulomb >= 0,
+    minimize  mean_k,j ((tau - A x - offsets - G g) / s_j)^2 + lam * ||(x - nom) / r||^2
+    subject to  J_b(x_b) >= 0 (positive semidefinite) for every body b,
+                armature, viscous, Coulomb, the laws' coefficients g >= 0,
 
-where s_j is joint j's torque scale, r_b a per-parameter scale of body b's nominal values,
-and J_b = [[tr(I)/2 1 - I, h], [h^T, m]] the pseudo-inertia (Wensing, Wensing & Slotine 2017:
+where s_j is joint j's torque scale, r a per-parameter scale of the nominal values (the
+body's largest, so a link with no nominal inertia is not pinned), and
+J_b = [[tr(I)/2 1 - I, h], [h^T, m]] the pseudo-inertia (Wensing, Wensing & Slotine 2017:
 a body's (m, h, I) is physically consistent iff J_b is positive semidefinite). lam = 0 is
-least squares under the LMI; lam is chosen by validation inside the training data (its last
-contiguous block), never on a scored part. Solved by Clarabel (SCS if it fails).
+least squares under the LMI; lam > 0 pulls what the data leave open toward the nominal
+model. lam and each joint's friction law are chosen by validation inside the training data
+(its last contiguous block), never on a scored part. Solved by Clarabel (SCS if it fails).
 """
 
 from __future__ import annotations
@@ -23,17 +27,11 @@ from dataclasses import dataclass
 import cvxpy as cp
 import numpy as np
 
-COULOMB_WIDTH = 0.01  # rad/s: the smoothed sign's linear zone
-LAMBDAS = (0.0, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)  # ridge weights tried toward the nominal
+from identification.friction import FrictionLaw, choose_law
 
-
-def friction_columns(qd: np.ndarray) -> np.ndarray:
-    """(n, dof, 3 dof): viscous, Coulomb and offset columns, each acting on its joint."""
-    n, dof = qd.shape
-    eye = np.eye(dof)
-    coulomb = qd / np.sqrt(qd**2 + COULOMB_WIDTH**2)
-    return np.concatenate([qd[:, :, None] * eye, coulomb[:, :, None] * eye,
-                           np.broadcast_to(eye, (n, dof, dof))], axis=2)
+LAMBDAS = (1e-6, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)  # ridge weights tried toward the nominal
+TIE = 1e-3  # a larger weight must predict the validation block this much better
+CONSISTENT_TOL = 1e-8  # smallest pseudo-inertia eigenvalue still consistent (solver accuracy)
 
 
 def pseudo_inertia(p) -> list:
@@ -52,64 +50,126 @@ def min_pseudo_eigenvalues(params: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class PhysicalFit:
-    """Identified standard parameters (10 per body), friction (viscous, Coulomb, offset per
-    joint), the ridge weight chosen, and each body's smallest pseudo-inertia eigenvalue."""
+    """Identified candidate-atom coefficients (13 per joint, atom_names order), offsets, each
+    joint's friction law and its column's coefficient, the ridge weight chosen, each body's
+    smallest pseudo-inertia eigenvalue, and the validation errors the choices were made on."""
 
     params: np.ndarray
-    friction: np.ndarray
+    offsets: np.ndarray
+    laws: tuple[FrictionLaw, ...]
+    law_coefficients: np.ndarray
     lam: float
     min_eigenvalues: np.ndarray
+    validation: dict
 
     @property
     def consistent(self) -> bool:
-        return bool(np.all(self.min_eigenvalues >= -1e-8))
+        return bool(np.all(self.min_eigenvalues >= -CONSISTENT_TOL))
 
-    def torque(self, regressor: np.ndarray, qd: np.ndarray) -> np.ndarray:
-        """(n, dof) torque from the regressor Y (n, dof, 10 nb) and the velocities."""
-        return regressor @ self.params + friction_columns(qd) @ self.friction
+    @property
+    def dof(self) -> int:
+        return len(self.offsets)
+
+    def torque(self, atoms: np.ndarray, qd: np.ndarray, offsets: bool = True) -> np.ndarray:
+        """(n, dof) torque from every atom's torque (n, dof, 13 dof) and the velocities;
+        offsets False: the robot's torque without the sensor's constant."""
+        out = atoms @ self.params + law_columns(self.laws, qd) * self.law_coefficients
+        return out + self.offsets if offsets else out
 
 
-def _solve(Y, F, tau, scale, nominal, lam: float) -> tuple[np.ndarray, np.ndarray]:
-    n, dof, p = Y.shape
-    pi, phi = cp.Variable(p), cp.Variable(F.shape[2])
-    a = (np.concatenate([Y, F], axis=2) / scale[None, :, None]).reshape(n * dof, -1)
+def law_columns(laws, qd: np.ndarray) -> np.ndarray:
+    """(n, dof): each joint's own friction column (zeros for viscous-coulomb)."""
+    return np.column_stack([law.column(qd[:, j]) if law.has_column else np.zeros(len(qd))
+                            for j, law in enumerate(laws)])
+
+
+def ridge_scale(nominal: np.ndarray, dof: int) -> np.ndarray:
+    """Per coefficient, the size a deviation from the nominal is measured in: body b's mass m,
+    first moments m rho and inertias m rho^2, rho = sqrt(tr(I_O) / m) its nominal radius of
+    gyration about the joint; its joint's armature as its inertias. A body with no nominal
+    mass (a frame) is measured by the robot's largest body."""
+    bodies = nominal[:10 * dof].reshape(dof, 10)
+    mass = np.abs(bodies[:, 0])
+    trace = np.abs(bodies[:, 4] + bodies[:, 6] + bodies[:, 9])
+    heavy = int(np.argmax(mass))
+    if mass[heavy] <= 0:
+        mass, trace = np.ones(dof), np.ones(dof)
+    light = mass < 1e-3 * mass[heavy]
+    mass[light], trace[light] = mass[heavy], trace[heavy]
+    rho2 = np.maximum(trace / mass, 1e-6)
+    per_body = np.column_stack([mass, *(3 * [mass * np.sqrt(rho2)]), *(6 * [mass * rho2])])
+    return np.concatenate([per_body.ravel(), mass * rho2, np.ones(2 * dof)])
+
+
+def _solve(A, tau, law_cols, laws, scale, nominal, lam: float):
+    n, dof, p = A.shape
+    x, off, g = cp.Variable(p), cp.Variable(dof), cp.Variable(dof)
+    eye = np.broadcast_to(np.eye(dof), (n, dof, dof))
+    cols = np.concatenate([A, eye, law_cols[:, :, None] * np.eye(dof)], axis=2)
+    a = (cols / scale[None, :, None]).reshape(n * dof, -1)
     b = (tau / scale).reshape(-1)
-    # the least-squares term through a's QR factors (the problem's size is its columns';
-    # R may be singular: parameters the data do not excite, held by the LMI and the ridge)
+    # the squared error through a's QR factors (the problem's size is its columns'; R may
+    # be singular: parameters the data do not excite, held by the LMI and the ridge)
     q, r = np.linalg.qr(a / np.sqrt(len(b)))
     c = q.T @ (b / np.sqrt(len(b)))
-    x = cp.hstack([pi, phi])
-    ref = np.maximum(np.abs(nominal).reshape(-1, 10).max(axis=1), 1e-6).repeat(10)
-    cost = cp.sum_squares(r @ x - c)
+    cost = cp.sum_squares(r @ cp.hstack([x, off, g]) - c)
     if lam > 0:
-        cost = cost + lam * cp.sum_squares(cp.multiply(1.0 / ref, pi - nominal))
-    blocks = [cp.bmat(pseudo_inertia(pi[10 * k:10 * k + 10])) for k in range(p // 10)]
-    constraints = [(j + j.T) / 2 >> 0 for j in blocks]
-    constraints += [phi[:2 * dof] >= 0]
+        ref = ridge_scale(nominal, dof)
+        ridged = np.arange(11 * dof)  # inertial parameters and armature, not friction
+        cost = cost + lam * cp.sum_squares(cp.multiply(1.0 / ref[ridged], x[ridged] - nominal[ridged]))
+    constraints = [(j + j.T) / 2 >> 0 for j in
+                   (cp.bmat(pseudo_inertia(x[10 * k:10 * k + 10])) for k in range(dof))]
+    constraints += [x[10 * dof:] >= 0, g >= 0]
+    for j, law in enumerate(laws):
+        if not law.has_column:
+            constraints.append(g[j] == 0)
+        if not law.keeps_coulomb:
+            constraints.append(x[12 * dof + j] == 0)
     problem = cp.Problem(cp.Minimize(cost), constraints)
     try:
         problem.solve(solver=cp.CLARABEL)
     except cp.SolverError:
         problem.solve(solver=cp.SCS)
-    if pi.value is None:
+    if x.value is None:
         raise ValueError(f"the consistent fit did not solve ({problem.status})")
-    return np.asarray(pi.value), np.asarray(phi.value)
+    return np.asarray(x.value), np.asarray(off.value), np.asarray(g.value)
 
 
-def fit_physical(Y: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np.ndarray,
-                 lambdas=LAMBDAS, validation: float = 0.2) -> PhysicalFit:
-    """The consistent fit of tau (n, dof) on the regressor Y (n, dof, 10 nb) and friction,
-    pulled toward the nominal parameters with the lam of `lambdas` that predicts the last
-    `validation` fraction of these samples best when fitted on the rest; refitted on all."""
-    Y, qd, tau = (np.asarray(x, float) for x in (Y, qd, tau))
-    F = friction_columns(qd)
+def _predict(A, law_cols, fitted) -> np.ndarray:
+    x, off, g = fitted
+    return A @ x + off + law_cols * g
+
+
+def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np.ndarray,
+                 lambdas=LAMBDAS, validation: float = 0.2, choose_friction: bool = True) -> PhysicalFit:
+    """The consistent fit of tau (n, dof) on every atom's torque (n, dof, 13 dof), offsets and
+    friction, pulled toward the nominal coefficients (13 dof) with the lam of `lambdas` that
+    predicts the last `validation` fraction of these samples best when fitted on the rest;
+    each joint's friction law chosen on the same split (choose_friction); refitted on all."""
+    A, qd, tau, nominal = (np.asarray(x, float) for x in (atoms, qd, tau, nominal))
+    n, dof, _ = A.shape
     scale = np.maximum(tau.std(axis=0), 1e-9)
-    split = int(round(len(tau) * (1 - validation)))
+    split = int(round(n * (1 - validation)))
+    laws = (FrictionLaw(),) * dof
+    cols = law_columns(laws, qd)
     errors = []
     for lam in lambdas:
-        pi, phi = _solve(Y[:split], F[:split], tau[:split], scale, nominal, lam)
-        pred = Y[split:] @ pi + F[split:] @ phi
+        fitted = _solve(A[:split], tau[:split], cols[:split], laws, scale, nominal, lam)
+        pred = _predict(A[split:], cols[split:], fitted)
         errors.append(float(np.mean(((pred - tau[split:]) / scale) ** 2)))
-    lam = float(lambdas[int(np.argmin(errors))])
-    pi, phi = _solve(Y, F, tau, scale, nominal, lam)
-    return PhysicalFit(pi, phi, lam, min_pseudo_eigenvalues(pi))
+    # the smallest weight within TIE of the best: where validation cannot tell, the data
+    # and not the nominal decide
+    lam = float(min(l for l, e in zip(lambdas, errors, strict=True) if e <= (1 + TIE) * min(errors)))
+    chosen = {}
+    if choose_friction:
+        x = _solve(A[:split], tau[:split], cols[:split], laws, scale, nominal, lam)[0]
+        rigid = A[:, :, :11 * dof] @ x[:11 * dof]  # the rigid body and the armature
+        coulomb = A[:, :, 12 * dof:].diagonal(axis1=1, axis2=2)
+        picks = [choose_law(tau[:, j] - rigid[:, j], qd[:, j], coulomb[:, j], split)
+                 for j in range(dof)]
+        laws = tuple(p[0] for p in picks)
+        chosen = {"friction": [[[law.describe(), err] for law, err in p[1]] for p in picks]}
+        cols = law_columns(laws, qd)
+    x, off, g = _solve(A, tau, cols, laws, scale, nominal, lam)
+    return PhysicalFit(x, off, laws, g, lam, min_pseudo_eigenvalues(x[:10 * dof]),
+                       {"lambdas": list(lambdas), "lambda_errors": errors, **chosen})

@@ -122,3 +122,23 @@ def closed_form_gap(robot: str, motion: Motion) -> float:
     tau = model.torque(motion.q, motion.qd, motion.qdd)
     return float(np.max(np.abs(tau - motion.tau_clean)) / max(np.max(np.abs(motion.tau_clean)),
                                                                1e-300))
+
+
+def perturbed_nominal(baseline: PinocchioModel, seed: int, spread: float = 0.3,
+                      shift: float = 0.02) -> np.ndarray:
+    """A nominal model as a roboticist's URDF is wrong: every body's mass and rotational
+    inertia (about its centre of mass) scaled by factors drawn in [1 - spread, 1 + spread],
+    its centre of mass moved by `shift` m in a random direction; armature, damping and
+    friction as declared. Every body stays physical; atom_parameters' order."""
+    import pinocchio as pin
+
+    rng = np.random.default_rng([seed, 4049])
+    nominal = baseline.atom_parameters().copy()
+    for j in range(1, baseline.model.njoints):
+        body = baseline.model.inertias[j]
+        direction = rng.normal(size=3)
+        moved = pin.Inertia(body.mass * rng.uniform(1 - spread, 1 + spread),
+                            body.lever + shift * direction / np.linalg.norm(direction),
+                            body.inertia * rng.uniform(1 - spread, 1 + spread))
+        nominal[10 * (j - 1):10 * j] = moved.toDynamicParameters()
+    return nominal

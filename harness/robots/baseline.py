@@ -50,6 +50,14 @@ class PinocchioModel:
         return np.concatenate([self.model.inertias[j].toDynamicParameters()
                                for j in range(1, self.model.njoints)])
 
+    def atom_parameters(self) -> np.ndarray:
+        """The URDF's coefficients of every candidate atom (identification.library.kinematic.
+        atom_names): the standard parameters, then armature, viscous damping and Coulomb
+        friction per joint - the nominal model a fit is pulled toward."""
+        m = self.model
+        return np.concatenate([self.inertial_parameters(), np.asarray(m.armature, float),
+                               np.asarray(m.damping, float), np.asarray(m.friction, float)])
+
     def symbolic_torque(self, q, qd, qdd):
         """CasADi form of `torque`, verified against RNEA in the tests."""
         from harness.robots.casadi_rnea import symbolic_rnea

@@ -104,6 +104,36 @@ class KinematicLibrary:
         """(dof, p) CasADi expression of the base atoms at column vectors q, qd, qdd."""
         return self.function(q, qd, qdd)
 
+    @cached_property
+    def every_function(self) -> ca.Function:
+        """CasADi function (q, qd, qdd) -> (dof, 13 dof): every candidate atom (atom_names)."""
+        q, qd, qdd = (ca.SX.sym(s, self.dof) for s in ("q", "qd", "qdd"))
+        return ca.Function("every_atom", [q, qd, qdd], [_all_atoms(self.chain, q, qd, qdd)])
+
+    def evaluate_every(self, q, qd, qdd) -> np.ndarray:
+        """Every candidate atom's torque (n, dof, 13 dof) at states (n, dof): the standard
+        parameters' regressor, then armature, viscous and Coulomb per joint."""
+        n, p = len(q), self.every_function.size2_out(0)
+        out = self.every_function.map(n)(np.asarray(q, float).T, np.asarray(qd, float).T,
+                                         np.asarray(qdd, float).T)
+        return np.asarray(out).reshape(self.dof, n, p).transpose(1, 0, 2)
+
+    @cached_property
+    def fold(self) -> np.ndarray:
+        """(p, 13 dof): the base coefficients of any candidate-atom coefficients x are fold @ x
+        (every atom's torque is the base atoms' times its column); ValueError if an atom is
+        outside the base atoms' span (a library generated without it)."""
+        states = random_states(self.dof, N_STATES, seed=1)
+        every = self.evaluate_every(*states).reshape(-1, 13 * self.dof)
+        base = every[:, list(self.columns)]
+        fold = np.linalg.lstsq(base, every, rcond=None)[0]
+        miss = np.linalg.norm(base @ fold - every, axis=0) > 1e-6 * (1 + np.linalg.norm(every, axis=0))
+        if miss.any():
+            names = [atom_names(self.dof)[k] for k in np.flatnonzero(miss)]
+            raise ValueError(f"library {self.name} does not span the atoms {', '.join(names[:5])}")
+        fold[np.abs(fold) < 1e-12] = 0.0
+        return fold
+
     @classmethod
     def generate(cls, chain: KinematicChain, coulomb: bool = True,
                  joint_atoms: bool = True) -> KinematicLibrary:

@@ -1,0 +1,135 @@
+"""Joint friction laws a fit can choose among, per joint, by held-out error.
+
+Every law is viscous + Coulomb + offset (the kinematic library's `viscous` and `coulomb`
+atoms and the fitted intercept) plus at most one column of its own, linear in its
+coefficient once its shape is fixed; the shape is taken from a grid by the same
+validation that chooses the law:
+
+- viscous-coulomb: nothing more;
+- stribeck (v_s): + F_s sign(qd) exp(-(qd / v_s)^2), the static friction's excess over
+  Coulomb at low speed (Stribeck, Armstrong-Helouvry 1994), F_s >= 0;
+- sigmoid (slope, shift): the Coulomb atom replaced by Gaz et al.'s (2019) friction of the
+  Panda, phi / (1 + exp(-slope (qd + shift))) - phi / (1 + exp(-slope shift)), phi >= 0:
+  an asymmetric, smooth Coulomb that is zero at rest.
+
+The column is written once for numpy and CasADi (the `lib` argument), so the planner
+differentiates the law the fit chose.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from identification.errors import IdentificationError
+from identification.library.kinematic import COULOMB_WIDTH
+
+STRIBECK_SPEEDS = (0.01, 0.03, 0.1)  # rad/s
+SIGMOID_SLOPES = (3.0, 10.0, 30.0, 100.0)  # s/rad
+SIGMOID_SHIFTS = (-0.03, 0.0, 0.03)  # rad/s
+LAWS = ("viscous-coulomb", "stribeck", "sigmoid")
+
+
+def _sigmoid(x, lib):
+    if lib is np:
+        from scipy.special import expit
+
+        return expit(x)
+    return 1.0 / (1.0 + lib.exp(-x))
+
+
+@dataclass(frozen=True)
+class FrictionLaw:
+    """One joint's law: its name and its shape (stribeck: (v_s,); sigmoid: (slope, shift))."""
+
+    name: str = "viscous-coulomb"
+    shape: tuple[float, ...] = ()
+
+    def __post_init__(self):
+        sizes = {"viscous-coulomb": 0, "stribeck": 1, "sigmoid": 2}
+        if self.name not in sizes:
+            raise IdentificationError(f"unknown friction law {self.name!r} (one of {', '.join(LAWS)})")
+        if len(self.shape) != sizes[self.name] or not all(np.isfinite(self.shape)):
+            raise IdentificationError(f"friction law {self.name} needs {sizes[self.name]} finite "
+                                      f"shape values, got {list(self.shape)}")
+        if self.name == "stribeck" and self.shape[0] <= 0:
+            raise IdentificationError("a Stribeck speed must be positive")
+
+    @property
+    def has_column(self) -> bool:
+        return self.name != "viscous-coulomb"
+
+    @property
+    def keeps_coulomb(self) -> bool:
+        """The sigmoid takes the Coulomb atom's place; the others add to it."""
+        return self.name != "sigmoid"
+
+    def column(self, qd, lib=np):
+        """The law's own column at joint velocities qd (array or CasADi expression)."""
+        if self.name == "stribeck":
+            (speed,) = self.shape
+            return qd / lib.sqrt(qd**2 + COULOMB_WIDTH**2) * lib.exp(-(qd / speed) ** 2)
+        if self.name == "sigmoid":
+            slope, shift = self.shape
+            return _sigmoid(slope * (qd + shift), lib) - float(_sigmoid(slope * shift, np))
+        raise IdentificationError("the viscous-coulomb law has no column of its own")
+
+    def term(self, joint: int) -> str:
+        """The column's name in a model's equation of joint `joint` (1-based)."""
+        return f"{self.name}{joint}"
+
+    def describe(self) -> str:
+        if self.name == "stribeck":
+            return f"stribeck, v_s = {self.shape[0]:g} rad/s"
+        if self.name == "sigmoid":
+            return f"sigmoid (Gaz et al.), slope {self.shape[0]:g} s/rad, shift {self.shape[1]:g} rad/s"
+        return self.name
+
+    def to_dict(self) -> dict:
+        return {"law": self.name, "shape": list(self.shape)}
+
+    @classmethod
+    def from_dict(cls, payload) -> FrictionLaw:
+        if not isinstance(payload, dict) or not isinstance(payload.get("shape", []), list):
+            raise IdentificationError("malformed model: a friction entry must be "
+                                      "{'law': name, 'shape': [numbers]}")
+        try:
+            shape = tuple(float(x) for x in payload.get("shape", []))
+        except (TypeError, ValueError):
+            raise IdentificationError("malformed model: friction shape must be numbers") from None
+        return cls(str(payload.get("law")), shape)
+
+
+def candidate_laws() -> list[FrictionLaw]:
+    """Every law and shape the choice is made among (viscous-coulomb first)."""
+    return ([FrictionLaw()] + [FrictionLaw("stribeck", (v,)) for v in STRIBECK_SPEEDS]
+            + [FrictionLaw("sigmoid", (s, d)) for s in SIGMOID_SLOPES for d in SIGMOID_SHIFTS])
+
+
+def law_design(law: FrictionLaw, qd: np.ndarray, coulomb: np.ndarray) -> np.ndarray:
+    """(n, k) columns of one joint's friction under `law`: viscous, [Coulomb], [own column],
+    offset (+1) - every coefficient but the offset's non-negative."""
+    cols = [qd] + ([coulomb] if law.keeps_coulomb else [])
+    if law.has_column:
+        cols.append(law.column(qd))
+    return np.column_stack(cols + [np.ones_like(qd)])
+
+
+def choose_law(residual: np.ndarray, qd: np.ndarray, coulomb: np.ndarray, split: int,
+               margin: float = 0.02) -> tuple[FrictionLaw, list[tuple[FrictionLaw, float]]]:
+    """The law whose fit of one joint's friction residual (the torque minus the rigid body's,
+    n samples) on the first `split` samples predicts the rest best; a law other than
+    viscous-coulomb must beat it by `margin` (relative mean square). Also every candidate's
+    validation error."""
+    from scipy.optimize import nnls
+
+    scored = []
+    for law in candidate_laws():
+        x = law_design(law, qd, coulomb)
+        x = np.column_stack([x, -x[:, -1]])  # the offset free: +1 and -1, both >= 0
+        coef, _ = nnls(x[:split], residual[:split], maxiter=50 * x.shape[1])
+        scored.append((law, float(np.mean((x[split:] @ coef - residual[split:]) ** 2))))
+    plain = scored[0][1]
+    best = min(scored[1:], key=lambda s: s[1])
+    return (best[0] if best[1] < (1 - margin) * plain else scored[0][0]), scored
