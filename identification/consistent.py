@@ -26,6 +26,8 @@ from identification.library.kinematic import KinematicLibrary
 from identification.physical import CONSISTENT_TOL, LAMBDAS, fit_physical
 
 PRIORS = ("nominal", "flat")
+FLAT = 1e-8  # without a prior: a vanishing pull toward zero, so that what the data leave
+# open has one solution (the solver's accuracy on a singular least squares)
 
 
 def model_of(library: KinematicLibrary, fit) -> KinematicModel:
@@ -56,7 +58,7 @@ def identify_consistent(q, qd, qdd, tau, library: KinematicLibrary, nominal: np.
                             library.names)
         fit = fit_physical(atoms, qd[:n_train], tau[:n_train],
                            np.zeros(13 * dof) if nominal is None else nominal,
-                           lambdas=(0.0,) if nominal is None else LAMBDAS, choose_friction=choose_friction)
+                           lambdas=(FLAT,) if nominal is None else LAMBDAS, choose_friction=choose_friction)
         seconds = time.perf_counter() - start
     model = model_of(library, fit)
     physical = {"prior": "flat" if nominal is None else "nominal", "lambda": fit.lam,

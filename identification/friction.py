@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from identification.closeloop.effects import sigmoid_friction
 from identification.errors import IdentificationError
 from identification.library.kinematic import COULOMB_WIDTH
 
@@ -29,14 +30,6 @@ STRIBECK_SPEEDS = (0.01, 0.03, 0.1)  # rad/s
 SIGMOID_SLOPES = (3.0, 10.0, 30.0, 100.0)  # s/rad
 SIGMOID_SHIFTS = (-0.03, 0.0, 0.03)  # rad/s
 LAWS = ("viscous-coulomb", "stribeck", "sigmoid")
-
-
-def _sigmoid(x, lib):
-    if lib is np:
-        from scipy.special import expit
-
-        return expit(x)
-    return 1.0 / (1.0 + lib.exp(-x))
 
 
 @dataclass(frozen=True)
@@ -72,7 +65,9 @@ class FrictionLaw:
             return qd / lib.sqrt(qd**2 + COULOMB_WIDTH**2) * lib.exp(-(qd / speed) ** 2)
         if self.name == "sigmoid":
             slope, shift = self.shape
-            return _sigmoid(slope * (qd + shift), lib) - float(_sigmoid(slope * shift, np))
+            if lib is np:
+                return sigmoid_friction(qd, slope, shift)
+            return 1 / (1 + lib.exp(-slope * (qd + shift))) - 1 / (1 + np.exp(-slope * shift))
         raise IdentificationError("the viscous-coulomb law has no column of its own")
 
     def term(self, joint: int) -> str:
@@ -116,20 +111,26 @@ def law_design(law: FrictionLaw, qd: np.ndarray, coulomb: np.ndarray) -> np.ndar
     return np.column_stack(cols + [np.ones_like(qd)])
 
 
-def choose_law(residual: np.ndarray, qd: np.ndarray, coulomb: np.ndarray, split: int,
-               margin: float = 0.02) -> tuple[FrictionLaw, list[tuple[FrictionLaw, float]]]:
+def choose_law(residual: np.ndarray, qd: np.ndarray, coulomb: np.ndarray, folds: int = 5,
+               margin: float = 0.05) -> tuple[FrictionLaw, list[tuple[FrictionLaw, float]]]:
     """The law whose fit of one joint's friction residual (the torque minus the rigid body's,
-    n samples) on the first `split` samples predicts the rest best; a law other than
-    viscous-coulomb must beat it by `margin` (relative mean square). Also every candidate's
-    validation error."""
+    n samples) predicts it best in blocked cross-validation (`folds` contiguous blocks, each
+    predicted from the others); a law other than viscous-coulomb must beat it by `margin`
+    (relative mean square). Also every candidate's validation error."""
     from scipy.optimize import nnls
 
+    blocks = np.array_split(np.arange(len(residual)), folds)
     scored = []
     for law in candidate_laws():
         x = law_design(law, qd, coulomb)
         x = np.column_stack([x, -x[:, -1]])  # the offset free: +1 and -1, both >= 0
-        coef, _ = nnls(x[:split], residual[:split], maxiter=50 * x.shape[1])
-        scored.append((law, float(np.mean((x[split:] @ coef - residual[split:]) ** 2))))
+        error = 0.0
+        for block in blocks:
+            train = np.ones(len(residual), bool)
+            train[block] = False
+            coef, _ = nnls(x[train], residual[train], maxiter=50 * x.shape[1])
+            error += float(np.sum((x[block] @ coef - residual[block]) ** 2))
+        scored.append((law, error / len(residual)))
     plain = scored[0][1]
     best = min(scored[1:], key=lambda s: s[1])
     return (best[0] if best[1] < (1 - margin) * plain else scored[0][0]), scored

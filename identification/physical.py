@@ -165,10 +165,11 @@ def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np
         x = _solve(A[:split], tau[:split], cols[:split], laws, scale, nominal, lam)[0]
         rigid = A[:, :, :11 * dof] @ x[:11 * dof]  # the rigid body and the armature
         coulomb = A[:, :, 12 * dof:].diagonal(axis1=1, axis2=2)
-        picks = [choose_law(tau[:, j] - rigid[:, j], qd[:, j], coulomb[:, j], split)
+        picks = [choose_law(tau[:, j] - rigid[:, j], qd[:, j], coulomb[:, j])
                  for j in range(dof)]
         laws = tuple(p[0] for p in picks)
-        chosen = {"friction": [[[law.describe(), err] for law, err in p[1]] for p in picks]}
+        chosen = {"friction_errors": [{law.name: min(e for other, e in p[1] if other.name == law.name)
+                                       for law, _ in p[1]} for p in picks]}
         cols = law_columns(laws, qd)
     x, off, g = _solve(A, tau, cols, laws, scale, nominal, lam)
     return PhysicalFit(x, off, laws, g, lam, min_pseudo_eigenvalues(x[:10 * dof]),

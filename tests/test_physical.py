@@ -1,17 +1,25 @@
-"""Physically consistent identification (identification.physical): the pseudo-inertia of a
-rigid body is positive semidefinite (a point mass, a negative mass, a triangle inequality
-broken), the fit keeps every body consistent, recovers the truth from noise-free data, and
-pulls toward a nominal model only as far as validation inside the training data allows."""
+"""Physically consistent identification (identification.physical, .consistent, .friction):
+the pseudo-inertia of a rigid body is positive semidefinite (a point mass, a negative mass, a
+triangle inequality broken), the fit keeps every body consistent, recovers the truth from
+noise-free MuJoCo data, pulls toward a nominal model only as far as validation inside the
+training data allows, folds into the base atoms without changing a prediction, and chooses
+the friction law the data were made with."""
 
 from __future__ import annotations
 
+import casadi as ca
 import numpy as np
 import pinocchio as pin
+import pytest
 
 from harness.data.generate import generate
-from harness.experiments.identification import sines_motion
+from harness.experiments.identification import perturbed_nominal, sines_motion
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
+from harness.robots.torque_models import robot_library
+from identification.consistent import identify_consistent
+from identification.friction import FrictionLaw, choose_law
+from identification.kinematic_model import KinematicModel
 from identification.metrics import rel_error
 from identification.physical import fit_physical, min_pseudo_eigenvalues
 
@@ -26,26 +34,85 @@ def test_pseudo_inertia_says_which_bodies_are_physical():
     assert min_pseudo_eigenvalues(negative) < 0 and min_pseudo_eigenvalues(broken) < 0
 
 
-def test_consistent_fit_recovers_noise_free_truth_on_another_motion():
-    base = PinocchioModel(load_pinocchio("lynxmotion"))
+@pytest.fixture(scope="module")
+def lynx():
+    library = robot_library("lynxmotion")
+    return library, PinocchioModel(load_pinocchio("lynxmotion")), sines_motion("lynxmotion", 600, 9)
+
+
+def test_noise_free_truth_recovered_on_another_motion(lynx):
+    """MuJoCo's torque (armature and damping included) is in the atoms' span: with or without
+    the true nominal, the fit predicts a motion of another family to 1e-3."""
+    library, base, judge = lynx
     data = generate("lynxmotion", 1500, 0.0, 3, "inverse")
-    fit = fit_physical(base.regressor(data.q, data.qd, data.qdd), data.qd, data.tau,
-                       base.inertial_parameters())
-    assert fit.consistent and np.all(fit.min_eigenvalues >= -1e-8)
-    judge = sines_motion("lynxmotion", 600, 9)
-    pred = fit.torque(base.regressor(judge.q, judge.qd, judge.qdd), judge.qd)
-    assert np.max(rel_error(pred, judge.tau_clean)) <= 1e-3
+    atoms = library.evaluate_every(data.q, data.qd, data.qdd)
+    judged = library.evaluate_every(judge.q, judge.qd, judge.qdd)
+    for nominal in (base.atom_parameters(), np.zeros(39)):
+        fit = fit_physical(atoms, data.qd, data.tau, nominal, choose_friction=False)
+        assert fit.consistent and np.all(fit.min_eigenvalues >= -1e-8)
+        pred = fit.torque(judged, judge.qd, offsets=False)
+        assert np.max(rel_error(pred, judge.tau_clean)) <= 1e-3
 
 
-def test_a_wrong_nominal_is_not_followed_where_the_data_speak():
-    """With 5 % noise and a nominal model 30 % off, the fit chosen by validation predicts an
-    unseen motion far better than the nominal model itself."""
-    base = PinocchioModel(load_pinocchio("lynxmotion"))
+def test_a_wrong_nominal_is_not_followed_where_the_data_speak(lynx):
+    """5 % noise, a nominal 30 % heavy: the fit predicts an unseen motion far better than the
+    nominal model itself, and its folded model predicts exactly what the fit does."""
+    library, base, judge = lynx
     data = generate("lynxmotion", 1500, 0.05, 3, "inverse")
-    wrong = base.inertial_parameters() * 1.3
-    fit = fit_physical(base.regressor(data.q, data.qd, data.qdd), data.qd, data.tau, wrong)
-    judge = sines_motion("lynxmotion", 600, 9)
-    y = base.regressor(judge.q, judge.qd, judge.qdd)
-    assert fit.consistent
-    assert np.all(rel_error(fit.torque(y, judge.qd), judge.tau_clean)
-                  < 0.2 * rel_error(y @ wrong, judge.tau_clean))
+    wrong = base.atom_parameters() * 1.3
+    result = identify_consistent(data.q, data.qd, data.qdd, data.tau, library, wrong, 0.25,
+                                 data.tau_clean)
+    assert result.physical["consistent"] and result.physical["prior"] == "nominal"
+    judged = library.evaluate_every(judge.q, judge.qd, judge.qdd)
+    ours = result.model.torque(judge.q, judge.qd, judge.qdd)
+    assert np.all(rel_error(ours, judge.tau_clean)
+                  < 0.2 * rel_error(judged @ wrong, judge.tau_clean))
+    params = np.r_[result.physical["standard_parameters"],
+                   *result.physical["joint_parameters"].values()]
+    np.testing.assert_allclose(ours, judged @ params + result.model.law_coefficients
+                               * np.column_stack([law.column(judge.qd[:, j]) if law.has_column
+                                                  else np.zeros(len(judge.q))
+                                                  for j, law in enumerate(result.model.laws)]),
+                               atol=1e-9 * np.abs(ours).max())
+
+
+def test_a_perturbed_nominal_stays_physical_and_differs(lynx):
+    _, base, _ = lynx
+    nominal = perturbed_nominal(base, 4)
+    assert np.all(min_pseudo_eigenvalues(nominal[:30]) >= 0)
+    ratio = nominal[:30:10] / base.atom_parameters()[:30:10]  # masses
+    assert np.all((ratio >= 0.7) & (ratio <= 1.3)) and np.ptp(ratio) > 0.01
+
+
+@pytest.mark.parametrize("law", [FrictionLaw("sigmoid", (30.0, 0.03)), FrictionLaw("stribeck", (0.03,)),
+                                 FrictionLaw()])
+def test_the_law_the_data_were_made_with_is_chosen(law):
+    rng = np.random.default_rng(5)
+    t = np.arange(4000) / 100
+    qd = 0.6 * np.sin(0.7 * t) + 0.3 * np.sin(1.9 * t + 1)
+    coulomb = qd / np.sqrt(qd**2 + 1e-6)
+    torque = 0.4 * qd + 0.2 + (0.0 if law.has_column else 0.5 * coulomb)
+    if law.has_column:
+        torque = torque + 0.5 * law.column(qd) + (0.3 * coulomb if law.keeps_coulomb else 0)
+    chosen, scored = choose_law(torque + 0.01 * rng.normal(size=len(t)), qd, coulomb)
+    assert chosen == law, [(s[0].describe(), round(s[1], 6)) for s in scored[:4]]
+
+
+def test_friction_law_columns_agree_in_casadi_and_round_trip():
+    qd = np.linspace(-1, 1, 41)
+    x = ca.SX.sym("qd")
+    for law in (FrictionLaw("sigmoid", (10.0, -0.03)), FrictionLaw("stribeck", (0.1,))):
+        f = ca.Function("f", [x], [law.column(x, ca)])
+        np.testing.assert_allclose(np.asarray(f(qd)).ravel(), law.column(qd), atol=1e-12)
+        assert FrictionLaw.from_dict(law.to_dict()) == law
+
+
+def test_consistent_model_reads_back_from_model_json(lynx):
+    library, base, judge = lynx
+    data = generate("lynxmotion", 1500, 0.02, 5, "inverse")
+    model = identify_consistent(data.q, data.qd, data.qdd, data.tau, library,
+                                perturbed_nominal(base, 2), 0.25, data.tau_clean).model
+    back = KinematicModel.from_dict(model.to_dict(), library)
+    np.testing.assert_allclose(back.torque(judge.q, judge.qd, judge.qdd),
+                               model.torque(judge.q, judge.qd, judge.qdd), rtol=1e-12, atol=1e-12)
+    assert back.laws == model.laws and back.method == "consistent"

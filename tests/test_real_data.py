@@ -57,4 +57,9 @@ def test_checks_follow_the_results(section):
     checks = {c.name: c.passed for c in section.checks}
     assert checks["closeloop_never_worse_held_out"] == bool(
         np.all(np.array(loop["error_after"]) <= np.array(loop["error_before"])))
-    assert set(checks) == {"closeloop_never_worse_held_out", "closeloop_friction_named_first"}
+    assert set(checks) == {"closeloop_never_worse_held_out", "closeloop_friction_named_first",
+                           "identified_bodies_physically_consistent"}
+    physical = section.results["identified"]["physical"]
+    assert checks["identified_bodies_physically_consistent"] == bool(
+        min(physical["min_pseudo_eigenvalues"]) >= -1e-8)
+    assert physical["prior"] == "nominal" and len(physical["friction"]) == 7

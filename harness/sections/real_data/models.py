@@ -1,14 +1,19 @@
-"""The models of the real-data section on one ingested log, each scored on its held-out part.
+"""The models of the real-data section on one ingested log, each scored on its held-out part
+(the peers the identification is measured against, on the same data):
 
 - nominal: Pinocchio's RNEA with the URDF's inertials (example-robot-data), no friction,
   no offset: nothing fitted (scored on the held-out part and on the whole log);
+- nominal + friction: the same plus, per joint, viscous, Coulomb and an offset fitted by
+  least squares to the nominal model's residual on the training part;
 - least squares: the source README's reference model, recomputed here on the same data -
   the rigid-body base atoms plus, per joint, viscous (qd), Coulomb (the kinematic library's
   smoothed sign) and an offset, plain least squares on the training part;
-- consistent: identification.physical on the training part: standard parameters pulled
-  toward the URDF's (weight chosen inside the training part), every body physically
-  consistent (pseudo-inertia LMI), viscous, Coulomb and offset per joint;
-- identified: `identify --robot R` (the coupled sparse regression on the robot's base atoms
+- least squares + LMI: `identify --prior flat` (every body physically consistent, friction
+  >= 0 and its law chosen per joint, no pull toward the URDF);
+- identified: `identify --robot panda`, the default on a measured log (`--prior nominal`:
+  the same pulled toward the URDF's inertias as far as validation inside the training part
+  allows);
+- sparse: `identify --prior none` (the coupled sparse regression on the robot's base atoms
   with armature, viscous and Coulomb atoms), its fitted sensor offsets added.
 
 Errors are relative RMS ||tau_hat - tau|| / ||tau|| per joint against the measured torque.
@@ -25,10 +30,10 @@ from harness.closeloop.measured import rigid_library
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from harness.robots.torque_models import robot_library
+from identification.consistent import identify_consistent
 from identification.identify import identify
 from identification.library.kinematic import COULOMB_WIDTH
 from identification.metrics import rel_error
-from identification.physical import fit_physical
 
 
 @dataclass(frozen=True)
@@ -60,8 +65,17 @@ def least_squares(robot: str, q, qd, qdd, tau, split: int) -> np.ndarray:
     return X @ coef
 
 
+def nominal_friction(nominal: np.ndarray, qd, tau, split: int) -> np.ndarray:
+    """The nominal torque (n, dof) plus viscous, Coulomb and offset per joint fitted to its
+    residual on the first split samples."""
+    X = joint_friction_columns(qd)
+    coef, *_ = np.linalg.lstsq(X[:split].reshape(-1, X.shape[2]),
+                               (tau - nominal)[:split].ravel(), rcond=None)
+    return nominal + X @ coef
+
+
 def score_models(robot: str, q, qd, qdd, tau, holdout: float) -> tuple[dict[str, Scored], object]:
-    """The three models on the data; also the identification (its MODEL.json payload)."""
+    """The peers on the data; also the default identification (its MODEL.json payload)."""
     split = int(round(len(q) * (1 - holdout)))
     held = slice(split, None)
     out = {}
@@ -74,19 +88,18 @@ def score_models(robot: str, q, qd, qdd, tau, holdout: float) -> tuple[dict[str,
 
     nominal = PinocchioModel(load_pinocchio(robot))
     add("nominal", lambda: nominal.torque(q, qd, qdd))
-
-    def consistent():  # identification.physical: the nominal as a prior, the LMI, friction
-        Y = nominal.regressor(q, qd, qdd)
-        fit = fit_physical(Y[:split], qd[:split], tau[:split], nominal.inertial_parameters())
-        return fit.torque(Y, qd)
-
-    add("consistent", consistent)
+    add("nominal_friction", lambda: nominal_friction(out["nominal"].torque, qd, tau, split))
     add("least_squares", lambda: least_squares(robot, q, qd, qdd, tau, split))
-    result = {}
+    library, result = robot_library(robot), {}
 
-    def identified():
-        result["id"] = identify(q, qd, qdd, tau, robot_library(robot), holdout)
-        return result["id"].model.torque(q, qd, qdd) + result["id"].model.offsets
+    def fitted(name, prior):
+        def fn():
+            result[name] = (identify(q, qd, qdd, tau, library, holdout) if isinstance(prior, str) else
+                            identify_consistent(q, qd, qdd, tau, library, prior, holdout))
+            return result[name].model.torque(q, qd, qdd) + result[name].model.offsets
+        return fn
 
-    add("identified", identified)
-    return out, result["id"]
+    add("least_squares_lmi", fitted("least_squares_lmi", None))
+    add("identified", fitted("identified", nominal.atom_parameters()))
+    add("sparse", fitted("sparse", "none"))
+    return out, result["identified"]
