@@ -159,7 +159,7 @@ def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np
         errors.append(float(np.mean(((pred - tau[split:]) / scale) ** 2)))
     # the smallest weight within TIE of the best: where validation cannot tell, the data
     # and not the nominal decide
-    lam = float(min(l for l, e in zip(lambdas, errors, strict=True) if e <= (1 + TIE) * min(errors)))
+    lam = float(min(w for w, e in zip(lambdas, errors, strict=True) if e <= (1 + TIE) * min(errors)))
     chosen = {}
     if choose_friction:
         x = _solve(A[:split], tau[:split], cols[:split], laws, scale, nominal, lam)[0]

@@ -128,7 +128,8 @@ def log_result(out_dir: Path) -> SectionResult:
                         f"{min(identification.physical['min_pseudo_eigenvalues']):.3g}"))
     figures_dir = out_dir / "figures"
     errors = {"nominal": models["nominal"].heldout, "least_squares": models["least_squares"].heldout,
-              "least_squares_lmi": models["least_squares_lmi"].heldout, "identified": identified, "rigid_body": r.error_before, "closed_loop": r.error_after}
+              "least_squares_lmi": models["least_squares_lmi"].heldout, "identified": identified,
+              "rigid_body": r.error_before, "closed_loop": r.error_after}
     figures = [
         error_figure(errors, reference, figures_dir / "real_data_errors.png"),
         residual_time_figure(a["t"] - a["t"][0], tau, {
