@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from harness.data.ingest import ingest
+from harness.experiments.peers import joint_friction_columns
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from harness.sections.real_data.models import joint_friction_columns
 from harness.sections.real_data.section import HOLDOUT, LOG, RATE, ROBOT, log_result
 from identification.metrics import rel_error
 

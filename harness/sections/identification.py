@@ -21,15 +21,17 @@ import numpy as np
 from harness.data.generate import generate
 from harness.experiments.identification import (
     HOLDOUT,
-    ConsistentFit,
     NOISE,
     SAMPLES,
+    ConsistentFit,
     closed_form_gap,
     generated_motion,
     ratios,
     score_draw,
     sines_motion,
 )
+from harness.experiments.next_run import markdown as next_run_markdown
+from harness.experiments.next_run import next_run, rule_targets
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from harness.robots.torque_models import library_named, robot_library
@@ -43,6 +45,7 @@ from identification.identify import identify
 # (one draw rescaled would give the same ratios at every level wherever the selection holds)
 LEVELS = {0.02: (201, 202, 203), NOISE: (101, 102, 103, 104, 105), 0.10: (301, 302, 303)}
 QUICK_LEVELS = {NOISE: (101, 102)}
+NEXT_RUNS, QUICK_NEXT_RUNS = (401, 402), (401,)  # seeds of the next-run experiment
 FRESH_SEED = 1005
 EXACT = 1e-6  # noise-free held-out relative error
 AGREEMENT = 1e-9  # Pinocchio vs MuJoCo, relative to the largest torque
@@ -98,6 +101,8 @@ def run(ctx: Context) -> SectionResult:
         Target(f"{PRIOR} identification CPU time (LMI included), median over draws",
                float(np.median([d[PRIOR]["timing"]["cpu_s"] for d in draws])), 30.0, "s",
                timing=True)]
+    runs = [next_run(robot, seed) for seed in (QUICK_NEXT_RUNS if ctx.quick else NEXT_RUNS)]
+    targets += rule_targets(runs)
     errors = np.median([d[default]["sines"] for d in draws], axis=0)
     oracle = np.median([d["oracle"]["sines"] for d in draws], axis=0)
     headline = [Row(f"Identified torque model ({default} library, {100 * NOISE:g} % noise, {SAMPLES} "
@@ -111,8 +116,9 @@ def run(ctx: Context) -> SectionResult:
                "oracle_parameters": draws[0]["oracle_parameters"],
                "draws": {f"{level:g}": [{k: v for k, v in d.items() if k != "models"} for d in ds]
                          for level, ds in by_level.items()},
-               "summary": summary}
-    out = SectionResult(_markdown(results, libraries), results, checks, targets, headline,
+               "summary": summary, "next_run": runs}
+    md = "\n".join([_markdown(results, libraries), "", *next_run_markdown(runs)])
+    out = SectionResult(md, results, checks, targets, headline,
                         outputs={"model": model, "draws": draws})
     for extra in ctx.robot.extras:
         out.extend(EXTRAS[extra].identification(ctx), extra)

@@ -26,13 +26,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.closeloop.measured import rigid_library
+from harness.experiments.peers import least_squares, nominal_friction
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from harness.robots.torque_models import robot_library
 from identification.consistent import identify_consistent
 from identification.identify import identify
-from identification.library.kinematic import COULOMB_WIDTH
 from identification.metrics import rel_error
 
 
@@ -44,34 +43,6 @@ class Scored:
     torque: np.ndarray
     heldout: np.ndarray
     seconds: float
-
-
-def joint_friction_columns(qd: np.ndarray) -> np.ndarray:
-    """(n, dof, 3 dof): viscous, Coulomb and offset columns of every joint."""
-    n, dof = qd.shape
-    eye = np.eye(dof)
-    viscous = qd[:, :, None] * eye
-    coulomb = (qd / np.sqrt(qd**2 + COULOMB_WIDTH**2))[:, :, None] * eye
-    return np.concatenate([viscous, coulomb, np.broadcast_to(eye, (n, dof, dof))], axis=2)
-
-
-def least_squares(robot: str, q, qd, qdd, tau, split: int) -> np.ndarray:
-    """The reference model's torque (n, dof): rigid-body atoms + viscous, Coulomb and offset
-    per joint, least squares on the first split samples."""
-    X = np.concatenate([rigid_library(robot).evaluate(q, qd, qdd), joint_friction_columns(qd)],
-                       axis=2)
-    coef, *_ = np.linalg.lstsq(X[:split].reshape(-1, X.shape[2]), tau[:split].ravel(),
-                               rcond=None)
-    return X @ coef
-
-
-def nominal_friction(nominal: np.ndarray, qd, tau, split: int) -> np.ndarray:
-    """The nominal torque (n, dof) plus viscous, Coulomb and offset per joint fitted to its
-    residual on the first split samples."""
-    X = joint_friction_columns(qd)
-    coef, *_ = np.linalg.lstsq(X[:split].reshape(-1, X.shape[2]),
-                               (tau - nominal)[:split].ravel(), rcond=None)
-    return nominal + X @ coef
 
 
 def score_models(robot: str, q, qd, qdd, tau, holdout: float) -> tuple[dict[str, Scored], object]:

@@ -1,0 +1,135 @@
+"""The robot's next motion: fit on one run, predict another, as on a real arm - simulated.
+
+Two independent runs of one arm: `generate`'s excitation (fitted) and a motion of another
+family (`sines_motion`, scored). Both carry what a real arm's log carries beyond the rigid
+body: joint friction (per joint viscous, Coulomb and a Stribeck bump of magnitudes drawn as
+fractions of the joint's torque spread, Coulomb a shifted tanh of a drawn width), a constant
+sensor offset, and sensor noise (NOISE of each joint's torque std). The user's URDF is
+wrong (perturbed_nominal). Scored on the second run against the torque its sensor reads
+without the noise:
+
+- nominal: the perturbed URDF's RNEA (its atoms: inertias, declared armature and damping);
+- least squares + friction: rigid-body base atoms + viscous, Coulomb, offset (peers);
+- identified: `identify --prior nominal` on the first run (`--validate` the second);
+- consistent, no prior: `--prior flat`.
+
+The rule a real arm's held-out run is judged by: on every joint whose torque is above
+RULE_RMS N m RMS, the identified model at or below both the nominal and least squares; at the
+median over joints, at or below least squares.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from harness.data.generate import generate
+from harness.experiments.identification import NOISE, SAMPLES, perturbed_nominal, sines_motion
+from harness.experiments.peers import least_squares
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
+from harness.robots.torque_models import robot_library
+from identification.consistent import identify_consistent
+from identification.metrics import rel_error
+
+RULE_RMS = 2.0  # N m: joints that carry real torque
+VISCOUS, COULOMB = (0.02, 0.08), (0.03, 0.12)  # of the joint's torque std, per rad/s and N m
+
+
+def _friction(qd: np.ndarray, rng, spread: np.ndarray) -> tuple[dict, np.ndarray]:
+    """A friction law per joint drawn once for the arm (a shape none of the fits' candidate
+    laws has exactly), and its torque at qd."""
+    dof = qd.shape[1]
+    law = {"viscous": spread * rng.uniform(*VISCOUS, dof), "coulomb": spread * rng.uniform(*COULOMB, dof),
+           "width": rng.uniform(0.005, 0.05, dof), "shift": rng.uniform(-0.02, 0.02, dof),
+           "stribeck": spread * rng.uniform(0.0, 0.05, dof), "speed": rng.uniform(0.02, 0.2, dof),
+           "offset": spread * rng.uniform(-0.05, 0.05, dof)}
+    return law, law_torque(law, qd)
+
+
+def law_torque(law: dict, qd: np.ndarray) -> np.ndarray:
+    """Viscous + Coulomb (tanh of a given width, shifted) + a Stribeck bump + offset."""
+    moving = np.tanh((qd + law["shift"]) / law["width"])
+    return (law["viscous"] * qd + law["coulomb"] * moving + law["offset"]
+            + law["stribeck"] * moving * np.exp(-((qd / law["speed"]) ** 2)))
+
+
+@dataclass(frozen=True)
+class Runs:
+    """The two runs: the fitted one (first) and the scored one (second, `sines_motion`), the
+    measured torques of both, the second's torque without noise, the perturbed nominal."""
+
+    first: object
+    second: object
+    tau_first: np.ndarray
+    tau_second: np.ndarray
+    truth_second: np.ndarray
+    nominal: np.ndarray
+
+
+def two_runs(robot: str, seed: int, samples: int = SAMPLES, noise: float = NOISE) -> Runs:
+    rng = np.random.default_rng([seed, 6007])
+    first, second = generate(robot, samples, 0.0, seed, "inverse"), sines_motion(robot, samples, seed)
+    spread = first.tau_clean.std(axis=0)
+    law, friction = _friction(first.qd, rng, spread)
+    tau_first = first.tau_clean + friction + noise * spread * rng.normal(size=first.q.shape)
+    truth = second.tau_clean + law_torque(law, second.qd)
+    tau_second = truth + noise * spread * rng.normal(size=second.q.shape)
+    nominal = perturbed_nominal(PinocchioModel(load_pinocchio(robot)), seed)
+    return Runs(first, second, tau_first, tau_second, truth, nominal)
+
+
+def next_run(robot: str, seed: int, samples: int = SAMPLES, noise: float = NOISE) -> dict:
+    """Every model's relative RMS error per joint on the second run, the joints' torque RMS,
+    and the rule's outcome."""
+    runs, library = two_runs(robot, seed, samples, noise), robot_library(robot)
+    first, second = runs.first, runs.second
+    states = [np.r_[x, y] for x, y in ((first.q, second.q), (first.qd, second.qd),
+                                       (first.qdd, second.qdd))]
+    tau, n = np.r_[runs.tau_first, runs.tau_second], len(first.q)
+    out = {"nominal": library.evaluate_every(second.q, second.qd, second.qdd) @ runs.nominal,
+           "least_squares": least_squares(robot, *states, tau, n)[n:]}
+    for name, prior in (("identified", runs.nominal), ("consistent_flat", None)):
+        fit = identify_consistent(*states, tau, library, prior, len(second.q) / len(tau))
+        out[name] = fit.model.torque(second.q, second.qd, second.qdd) + fit.model.offsets
+    errors = {k: rel_error(v, runs.truth_second) for k, v in out.items()}
+    rms = np.sqrt(np.mean(runs.truth_second**2, axis=0))
+    carried = rms > RULE_RMS
+    ours = errors["identified"]
+    holds = (ours <= errors["nominal"]) & (ours <= errors["least_squares"])
+    return {"seed": seed, "errors": {k: v.tolist() for k, v in errors.items()},
+            "torque_rms": rms.tolist(), "rule_joints": np.flatnonzero(carried).tolist(),
+            "rule_holds_on": np.flatnonzero(carried & holds).tolist(),
+            "median_ratio_to_least_squares": float(np.median(ours / errors["least_squares"]))}
+
+
+def rule_targets(runs: list[dict]) -> list:
+    """The rule's targets over runs: the joints carrying real torque where the identified
+    model is at or below both peers (of how many), and the worst run's median ratio to least
+    squares."""
+    from harness.sections.base import Target
+
+    carried = sum(len(r["rule_joints"]) for r in runs)
+    held = sum(len(r["rule_holds_on"]) for r in runs)
+    return [Target(f"next run: joints above {RULE_RMS:g} N m RMS where identified (perturbed URDF "
+                   "prior) is at or below both the nominal and least squares + friction",
+                   held if carried else None, carried, "joints", lower_is_better=False,
+                   note="" if carried else f"no joint above {RULE_RMS:g} N m"),
+            Target("next run: identified / least squares + friction, median over joints (worst "
+                   "run)", max(r["median_ratio_to_least_squares"] for r in runs), 1.0, "x")]
+
+
+def markdown(runs: list[dict]) -> list[str]:
+    names = list(runs[0]["errors"])
+    out = ["Next run (harness.experiments.next_run): fitted on one run of the project's "
+           "excitation with friction, a sensor offset and noise added, the URDF perturbed; "
+           "scored on a run of another family (random sines) against its torque without the "
+           "noise. Relative RMS error per joint:", "",
+           "| seed | " + " | ".join(names) + " | joints > 2 N m | rule holds on |",
+           "|---|" + "---|" * (len(names) + 2)]
+    for r in runs:
+        out.append(f"| {r['seed']} | " + " | ".join(
+            ", ".join(f"{x:.3f}" for x in r["errors"][n]) for n in names)
+            + f" | {[j + 1 for j in r['rule_joints']]} | {[j + 1 for j in r['rule_holds_on']]} |")
+    return out
