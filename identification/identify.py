@@ -4,18 +4,15 @@ The held-out part is the last `holdout` fraction in time order; relative RMS
 error is ||tau_hat - tau_clean|| / ||tau_clean|| per joint on it (tau when no
 clean torque is given). The regression target is the raw measured torque, not
 a denoised one. The bench section ("Denoise then regress") fits the coupled
-model both ways on the same draws at 1, 5 and 10 % noise (training part
-denoised by GCV Tikhonov smoothing, identification.regression.denoise). Measured there
-(seeds fixed): the denoised target leaves the training residual almost
-perfectly correlated (lag-1 autocorrelation 0.93-1.00 vs ~0 on the raw
-torque), so the refit's standard errors are too small (RMS of (estimate -
-truth) / s.e. over the true atoms 3.8-8.3 vs 0.9-1.2 raw), the significance
-test keeps a null atom at 1 and 5 % (9 atoms for 8 true; precision 0.89-0.92
-on joints 2-3), and the held-out error vs the clean torque is worse at 1 and
-5 % (up to 2.0x: joint 2 at 1 %, joint 3 at 5 %) and mixed at 10 % (joint 1
-1.09x, joints 2-3 0.93x and 0.73x), one draw per level. Smoothing a linear-in-parameters target removes no
-information the least-squares fit does not already average out; it only
-correlates the residuals. Denoising stays a reported diagnostic (Fig. 2).
+model both ways on the same draws at 1, 5 and 10 % noise (training part denoised
+by GCV Tikhonov smoothing, identification.regression.denoise). Measured there:
+the denoised target leaves the training residual almost perfectly correlated
+(lag-1 autocorrelation 0.93-1.00 vs ~0 raw), the refit's standard errors too
+small (RMS of (estimate - truth) / s.e. 3.8-8.3 vs 0.9-1.2 raw), a null atom
+kept at 1 and 5 %, and the held-out error worse at 1 and 5 % (up to 2.0x) and
+mixed at 10 %. Smoothing a linear-in-parameters target removes no information
+least squares does not already average out; it only correlates the residuals.
+Denoising stays a reported diagnostic (Fig. 2).
 
 Two methods: "per-joint" (the paper: each joint's torque regressed alone on
 the library) and "coupled" (identification.regression.coupled: one Lagrangian, atoms
