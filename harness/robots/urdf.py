@@ -12,7 +12,13 @@ identifies and plans the arm, so:
   [-pi, pi], keeping its effort and velocity limits: every command works with one angle
   per joint, and no conversion between configurations is needed anywhere;
 - visual and collision geometry is dropped (inertias come from <inertial>), and ROS's
-  lower = upper = 0 "no limit" removed, so MuJoCo loads the file without warnings.
+  lower = upper = 0 "no limit" removed, so MuJoCo loads the file without warnings;
+- a joint's Coulomb friction (<dynamics friction>) is dropped: MuJoCo would make
+  it a frictionloss constraint inside mj_inverse (a soft constraint, not sign(qd) times a
+  constant), absent from Pinocchio's RNEA, the baseline (Unitree's Z1 states 1-2 N m: 3.6 %
+  of the peak torque apart); viscous damping stays in both (PinocchioModel adds it). The
+  torque data are the rigid body's and the damping's; Coulomb friction is what the
+  close-the-loop plants and the bench's next-run draws add, each with its own known law.
 The same text goes to MuJoCo (mj compile) and Pinocchio (buildModelFromXML), so the
 two models agree by construction (checked in the tests).
 """
@@ -76,9 +82,12 @@ def arm_urdf(text: str, source: str) -> str:
         return False
 
     continuous = [j for j in joints if j.get("type") == "continuous"]
-    if continuous:
+    coulomb = [d for j in joints for d in j.findall("dynamics") if d.get("friction") is not None]
+    if continuous or coulomb:
         for joint in continuous:
             _one_turn(joint)
+        for dynamics in coulomb:
+            del dynamics.attrib["friction"]
         text = ET.tostring(root, encoding="unicode")
     held = []
     for joint in joints:
