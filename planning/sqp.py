@@ -113,7 +113,9 @@ class AnytimeSQP:
         rows = np.flatnonzero(np.isfinite(lbg) | np.isfinite(ubg))
         lay = self.layout
         free = ~np.isfinite(lbg[lay.clearance])  # a clearance slack without its row
-        cols = np.setdiff1d(np.arange(len(self.lbx)), np.arange(lay.v.start, lay.v.stop)[free])
+        kept = np.ones(len(self.lbx), bool)
+        kept[lay.v][free] = False
+        cols = np.flatnonzero(kept)
         frame = Frame(rows, cols, lay.nc, lbg[rows] == ubg[rows], self.lbx[cols[lay.nc:]])
         point = self._restored(self.evaluate(x0, p, lam_g0, lbg), p, lbg, ubg, lam_g0)
         accept(point)
