@@ -64,72 +64,72 @@ class Frame:
         self.sense[k + np.flatnonzero(equality)] = _EQUALITY
 
 
-
 def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
          layout: Layout):
-        """The step d (all variables), its multipliers (rows of g, variables) and the model's
-        decrease parts: (its value grad'd + d'Hd/2, the linearized hard violation), and the
-        CPU ms DAQP took; None if DAQP fails. frame:
-        the rows with a bound and the variables the QP has (a clearance slack whose row is
-        free stays 0), with the arrays every QP of the solve shares. last: the multipliers
-        (rows, variables) of the last QP or of the warm start, DAQP's hot start."""
-        rows, cols, nc, n, k = frame.rows, frame.cols, frame.nc, len(point.x), len(frame.cols)
-        g = point.g[rows]
-        low, high = lbg[rows] - g, ubg[rows] - g
-        # hard rows the point violates (beyond rounding): elastic columns of weight nu
-        below, above = low > VIOLATED, high < -VIOLATED
-        violated = np.flatnonzero(below | above)
-        m = len(violated)
-        a = point.jac[np.ix_(rows, cols)]
-        hess, cost = frame.hess, point.grad[cols]
-        hess[:nc, :nc] = convex(point.hess)
-        var_low, var_high = frame.low, frame.high
-        var_low[:nc], var_high[:nc] = -radius, radius
-        var_low[nc:] = np.maximum(frame.lbx - point.x[cols[nc:]], -_INF)
-        sense = frame.sense
-        if m:  # elastic columns: the QP grows for this step
-            elastic = np.zeros((len(rows), m))
-            elastic[violated, np.arange(m)] = np.where(below[violated], 1.0, -1.0)
-            a = np.hstack([a, elastic])
-            grown = np.zeros((k + m, k + m))
-            grown[:k, :k], grown[np.arange(k, k + m), np.arange(k, k + m)] = hess, PROXIMAL
-            hess, cost = grown, np.concatenate([cost, np.full(m, nu)])
-            var_low = np.concatenate([var_low, np.zeros(m)])
-            var_high = np.concatenate([var_high, np.full(m, _INF)])
-            sense = np.concatenate([sense[:k], np.zeros(m, np.int32), sense[k:]])
-        blower = np.concatenate([var_low, np.maximum(low, -_INF)])
-        bupper = np.concatenate([var_high, np.minimum(high, _INF)])
-        dual = working_set(point, rows, cols, m, last, layout)
-        began = time.thread_time()
-        x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense, dual_start=dual,
+    """The step d (all variables), its multipliers (rows of g, variables) and the model's
+    decrease parts: (its value grad'd + d'Hd/2, the linearized hard violation), and the
+    CPU ms DAQP took; None if DAQP fails. frame:
+    the rows with a bound and the variables the QP has (a clearance slack whose row is
+    free stays 0), with the arrays every QP of the solve shares. last: the multipliers
+    (rows, variables) of the last QP or of the warm start, DAQP's hot start."""
+    rows, cols, nc, n, k = frame.rows, frame.cols, frame.nc, len(point.x), len(frame.cols)
+    g = point.g[rows]
+    low, high = lbg[rows] - g, ubg[rows] - g
+    # hard rows the point violates (beyond rounding): elastic columns of weight nu
+    below, above = low > VIOLATED, high < -VIOLATED
+    violated = np.flatnonzero(below | above)
+    m = len(violated)
+    a = point.jac[np.ix_(rows, cols)]
+    hess, cost = frame.hess, point.grad[cols]
+    hess[:nc, :nc] = convex(point.hess)
+    var_low, var_high = frame.low, frame.high
+    var_low[:nc], var_high[:nc] = -radius, radius
+    var_low[nc:] = np.maximum(frame.lbx - point.x[cols[nc:]], -_INF)
+    sense = frame.sense
+    if m:  # elastic columns: the QP grows for this step
+        elastic = np.zeros((len(rows), m))
+        elastic[violated, np.arange(m)] = np.where(below[violated], 1.0, -1.0)
+        a = np.hstack([a, elastic])
+        grown = np.zeros((k + m, k + m))
+        grown[:k, :k], grown[np.arange(k, k + m), np.arange(k, k + m)] = hess, PROXIMAL
+        hess, cost = grown, np.concatenate([cost, np.full(m, nu)])
+        var_low = np.concatenate([var_low, np.zeros(m)])
+        var_high = np.concatenate([var_high, np.full(m, _INF)])
+        sense = np.concatenate([sense[:k], np.zeros(m, np.int32), sense[k:]])
+    blower = np.concatenate([var_low, np.maximum(low, -_INF)])
+    bupper = np.concatenate([var_high, np.minimum(high, _INF)])
+    dual = working_set(point, rows, cols, m, last, layout)
+    began = time.thread_time()
+    x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense, dual_start=dual,
+                                  primal_tol=QP_PRIMAL_TOLERANCE)
+    if flag < 0:  # the guessed working set can mislead it (cycling): again, cold
+        x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense,
                                       primal_tol=QP_PRIMAL_TOLERANCE)
-        if flag < 0:  # the guessed working set can mislead it (cycling): again, cold
-            x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense,
-                                          primal_tol=QP_PRIMAL_TOLERANCE)
-        spent = 1e3 * (time.thread_time() - began)
-        if flag < 0:
-            return None
-        lam = info["lam"]
-        lam_rows, lam_vars, d = np.zeros(len(point.g)), np.zeros(n), np.zeros(n)
-        lam_rows[rows], lam_vars[cols], d[cols] = lam[k + m:], lam[:k], x[:k]
-        model = float(cost[:k] @ x[:k] + 0.5 * x @ hess @ x)
-        return d, lam_rows, lam_vars, (model, float(np.sum(x[k:]))), spent
+    spent = 1e3 * (time.thread_time() - began)
+    if flag < 0:
+        return None
+    lam = info["lam"]
+    lam_rows, lam_vars, d = np.zeros(len(point.g)), np.zeros(n), np.zeros(n)
+    lam_rows[rows], lam_vars[cols], d[cols] = lam[k + m:], lam[:k], x[:k]
+    model = float(cost[:k] @ x[:k] + 0.5 * x @ hess @ x)
+    return d, lam_rows, lam_vars, (model, float(np.sum(x[k:]))), spent
+
 
 def working_set(point: Point, rows, cols, m: int, last, layout: Layout) -> np.ndarray:
-        """DAQP's starting working set (signs of multipliers: which bounds are active): the
-        last multipliers, with the slacks' rows and bounds set from the point itself (the
-        active side of each |P| epigraph pair, a clearance row where the point dips, else
-        its slack's bound), the elastic columns at zero."""
-        lay = layout
-        lam_rows, lam_vars = (np.array(v, float) for v in last)
-        lam_vars[: lay.nc] = np.sign(lam_vars[: lay.nc])
-        if lay.e.stop > lay.e.start:
-            power = 0.5 * (point.g[lay.above] - point.g[lay.below])
-            lam_rows[lay.above], lam_rows[lay.below] = power > 0, power < 0
-        if lay.v.stop > lay.v.start:
-            dips = point.x[lay.v] > 0
-            lam_rows[lay.clearance], lam_vars[lay.v] = -1.0 * dips, -1.0 * ~dips
-        return np.concatenate([lam_vars[cols], np.full(m, -1.0), lam_rows[rows]])
+    """DAQP's starting working set (signs of multipliers: which bounds are active): the
+    last multipliers, with the slacks' rows and bounds set from the point itself (the
+    active side of each |P| epigraph pair, a clearance row where the point dips, else
+    its slack's bound), the elastic columns at zero."""
+    lay = layout
+    lam_rows, lam_vars = (np.array(v, float) for v in last)
+    lam_vars[: lay.nc] = np.sign(lam_vars[: lay.nc])
+    if lay.e.stop > lay.e.start:
+        power = 0.5 * (point.g[lay.above] - point.g[lay.below])
+        lam_rows[lay.above], lam_rows[lay.below] = power > 0, power < 0
+    if lay.v.stop > lay.v.start:
+        dips = point.x[lay.v] > 0
+        lam_rows[lay.clearance], lam_vars[lay.v] = -1.0 * dips, -1.0 * ~dips
+    return np.concatenate([lam_vars[cols], np.full(m, -1.0), lam_rows[rows]])
 
 
 def convex(hessian: np.ndarray) -> np.ndarray:
