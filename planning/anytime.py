@@ -119,6 +119,7 @@ class Anytime:
         its wall and CPU time (ms, end to end)."""
         wall, cpu = time.perf_counter(), time.thread_time()
         config, planner = self.config, self.planner
+        clock = sqp.Clock(config.iteration_ms)  # what the budget counts
         budget = config.replan_budget_ms if budget_ms is None else budget_ms
         times, centres = on_horizon(forecast, t_begin, duration)
         if warm is None:
@@ -140,9 +141,8 @@ class Anytime:
             lbg, ubg = self._bounds(problem, goal, safety.links[slots])
             start, lam_g, lam_x = self._start(problem, reference, times[slots], last)
             points: list[sqp.Point] = []
-            remaining = budget - 1e3 * (time.thread_time() - cpu)
-            solution, count = problem.sqp.solve(start, p, lbg, ubg, lam_g, remaining,
-                                                points.append, lam_x0=lam_x)
+            solution, count = problem.sqp.solve(start, p, lbg, ubg, lam_g, budget,
+                                                points.append, lam_x0=lam_x, clock=clock)
             iterations += count
             chosen = self._choose(points, q0, qd0, t_begin, duration, check)
             segment = self._segment(problem, chosen, solution, p, q0, qd0, t_begin, duration,
@@ -156,8 +156,8 @@ class Anytime:
             more = self._needs_round(chosen, slots, safety.links[slots])
             if more == "torque":
                 torque = True
-            spare = budget - 1e3 * (time.thread_time() - cpu)
-            if not more or spare < 2.0 * problem.sqp.iteration_ms:
+            spare = budget - clock.ms()
+            if not more or spare < 2.0 * clock.iteration(problem.sqp.iteration_ms):
                 break
             reference = segment.trajectory
         elapsed = (1e3 * (time.perf_counter() - wall), 1e3 * (time.thread_time() - cpu))

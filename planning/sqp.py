@@ -34,6 +34,32 @@ PRIMAL_TOLERANCE = 1e-8  # L1 violation of the hard rows at a converged point
 HARD_WEIGHT = 1e6  # nu's floor: hard rows (goal, limits) weigh far above the clearance's L1
 
 
+class Clock:
+    """What a budget counts: the planning thread's CPU time (ms) since the clock was made, or,
+    for reproducible runs (PlannerConfig.iteration_ms), iteration_ms per SQP iteration ticked
+    whatever CPU it took, a plan's own screening, checks and bookkeeping counted as
+    OVERHEAD_ITERATIONS more (measured on the Lynxmotion: ~1 ms a re-plan, ~0.45 ms an
+    iteration)."""
+
+    OVERHEAD_ITERATIONS = 2
+
+    def __init__(self, iteration_ms: float | None = None):
+        self.nominal, self.ticks, self._began = iteration_ms, 0, time.thread_time()
+
+    def ms(self) -> float:
+        if self.nominal is not None:
+            return (self.ticks + self.OVERHEAD_ITERATIONS) * self.nominal
+        return 1e3 * (time.thread_time() - self._began)
+
+    def tick(self) -> None:
+        self.ticks += 1
+
+    def iteration(self, measured_ms: float) -> float:
+        """What the next iteration is expected to cost: measured_ms (a recent one's CPU) or
+        the nominal cost."""
+        return measured_ms if self.nominal is None else self.nominal
+
+
 @dataclass(frozen=True)
 class Solution:
     """What a solve returns: the chosen point, its multipliers (rows, variables), why it
@@ -103,12 +129,14 @@ class AnytimeSQP:
         return Point(x, f, g, grad, jac, hess.copy(), 0.0)
 
     def solve(self, x0, p, lbg, ubg, lam_g0, budget_ms: float, accept, max_iter: int = 200,
-              radius: float = 0.5, lam_x0=None) -> tuple[Solution, int]:
+              radius: float = 0.5, lam_x0=None, clock: Clock | None = None
+              ) -> tuple[Solution, int]:
         """Iterate from x0 (multipliers lam_g0 for the first Hessian) until the predicted
-        decrease vanishes or budget_ms of CPU time are spent. accept(point) is called on the
-        start and every accepted iterate (its return value is ignored: the caller keeps the
-        best one); returns the last point's solution and the iteration count."""
-        clock = time.thread_time()
+        decrease vanishes or the clock (default: CPU time from now) reaches budget_ms; no
+        iteration starts that would end past it. accept(point) is called on the start and
+        every accepted iterate (its return value is ignored: the caller keeps the best one);
+        returns the last point's solution and the iteration count."""
+        clock = Clock() if clock is None else clock
         lbg, ubg = np.asarray(lbg, float), np.asarray(ubg, float)
         rows = np.flatnonzero(np.isfinite(lbg) | np.isfinite(ubg))
         lay = self.layout
@@ -122,9 +150,9 @@ class AnytimeSQP:
         lam_x = np.zeros(len(point.x)) if lam_x0 is None else np.asarray(lam_x0, float)
         nu, lam_g = HARD_WEIGHT, np.asarray(lam_g0, float)
         status, iterations = BUDGET, 0
-        longest = self.iteration_ms  # no iteration starts that would end past the budget
+        longest = clock.iteration(self.iteration_ms)  # what the next iteration will cost
         while iterations < max_iter:
-            began = 1e3 * (time.thread_time() - clock)
+            began = clock.ms()
             if began + longest > budget_ms:
                 break
             iterations += 1
@@ -158,8 +186,10 @@ class AnytimeSQP:
             if ratio >= 1e-4:
                 point, lam_g, lam_x = trial, lam_rows, lam_vars
                 accept(point)
-            longest = max(longest, 1e3 * (time.thread_time() - clock) - began)
-            self.iteration_ms = max(0.9 * self.iteration_ms, longest)
+            clock.tick()
+            longest = max(longest, clock.ms() - began)
+            if clock.nominal is None:
+                self.iteration_ms = max(0.9 * self.iteration_ms, longest)
             if ratio < 0.25:
                 radius = 0.5 * step_size
                 if radius < 1e-10:

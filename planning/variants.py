@@ -23,13 +23,15 @@ class Parametrization:
     samples: int = 10
     smoothing: float = 0.0
     rest_at_goal: bool = False  # the paper's free end velocity
+    replanner: str = "fatrop"  # the paper's exterior penalty loop (PlannerConfig.replanner)
 
     def config(self, base: PlannerConfig | None = None) -> PlannerConfig:
         """`base` (default: the paper's configuration) with this parametrization."""
         return dataclasses.replace(base or PlannerConfig(), degree=self.degree,
                                    energy_quadrature=self.quadrature,
                                    energy_samples=self.samples, power_smoothing=self.smoothing,
-                                   rest_at_goal=self.rest_at_goal)
+                                   rest_at_goal=self.rest_at_goal,
+                                   replanner=self.replanner)
 
 
 PAPER = Parametrization("quartic, N=10 (paper)")

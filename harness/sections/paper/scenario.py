@@ -5,7 +5,7 @@ the default planner (true energy, rest to rest) on the same scenario."""
 
 from __future__ import annotations
 
-from harness.experiments.planning import plan_checks, summary
+from harness.experiments.planning import plan_checks, reproducible, summary
 from harness.robots.arm import planner_config
 from harness.robots.baseline import PinocchioModel
 from harness.sections.base import Context, Row, SectionResult, Target
@@ -21,7 +21,7 @@ IDENTIFIED_TARGET = 0.02  # identified plan's true energy within 2 % of the clos
 def run(ctx: Context, models: dict) -> SectionResult:
     baseline = next(m for m in models.values() if isinstance(m, PinocchioModel))
     paper = PAPER.config(planner_config(ctx.robot.name, rest_at_goal=False))
-    default = planner_config(ctx.robot.name)
+    default = reproducible(planner_config(ctx.robot.name))
     scenario = paper_scenario()
     runs = {f"paper_{name}": (model, paper) for name, model in models.items()}
     runs["default_pinocchio"] = (baseline, default)

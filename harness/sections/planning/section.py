@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
-from harness.experiments.planning import plan_checks, summary
+from harness.experiments.planning import REPLAY_ITERATION_MS, plan_checks, reproducible, summary
 from harness.robots.arm import bench_motion, planner_config
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
@@ -26,7 +28,9 @@ SWAY_REPLANS = 5  # a swaying obstacle's forecast changes at every sample
 def run(ctx: Context) -> SectionResult:
     robot = ctx.robot.name
     baseline = PinocchioModel(load_pinocchio(robot))
-    config = planner_config(robot, compile_code=True)  # as `plan` plans
+    # as `plan` plans, the anytime budgets counted in SQP iterations (the same plans on any
+    # load); the speed is measured under the real CPU budget, the penalty loop beside
+    config = reproducible(planner_config(robot, compile_code=True))
     base, link = bench_motion(robot)
     planner = Planner(baseline, config)
     free = evaluate(execute(planner, base, avoid=False), base, baseline, config)
@@ -73,17 +77,31 @@ def run(ctx: Context) -> SectionResult:
     checks, clearances = checks + plan_c, clearances + plan_t
     checks.append(check("swaying_replans_repeatedly", results["swaying"]["replans"] >= SWAY_REPLANS,
                         f"{results['swaying']['replans']} re-plans (at least {SWAY_REPLANS})"))
-    timings, _ = measure(planner, scenario, cold_repeats=2 if ctx.quick else 5,
-                         stride=10 if ctx.quick else 2)
-    speed = {**timings.summary(), "cold_cpu_max_ms": float(np.max(timings.cold_cpu_ms)),
-             "replan_cpu_max_ms": float(np.max(timings.replan_cpu_ms))}
-    results["timing"] = {"speed": speed}
+    speeds = {}
+    for replanner in ("sqp", "fatrop"):
+        live = dataclasses.replace(config, iteration_ms=None, replanner=replanner)
+        timings, _ = measure(Planner(baseline, live), scenario,
+                             cold_repeats=2 if ctx.quick else 5, stride=10 if ctx.quick else 2)
+        speeds[replanner] = {**timings.summary(),
+                             "cold_cpu_max_ms": float(np.max(timings.cold_cpu_ms)),
+                             "replan_cpu_max_ms": float(np.max(timings.replan_cpu_ms))}
+    speed = speeds[config.replanner]
+    # the executed plans' re-plans, budgets counted in iterations: their real CPU
+    executed_cpu = [ms for name in ("pinocchio", "swaying")
+                    for ms in executed[name].execution.solve_cpu_ms[1:]]
+    speed["executed_replan_cpu_max_ms"] = float(max(executed_cpu, default=0.0))
+    results["timing"] = {"speed": speed, "penalty_loop_speed": speeds["fatrop"],
+                         "replay_iteration_ms": REPLAY_ITERATION_MS}
     targets = [Target("cold plan CPU time, max", speed["cold_cpu_max_ms"], COLD_TARGET_MS,
                       "ms", timing=True),
                Target("warm re-plan CPU time, median", speed["replan_cpu_median_ms"],
                       REPLAN_MEDIAN_MS, "ms", timing=True),
                Target("warm re-plan CPU time, max", speed["replan_cpu_max_ms"],
-                      REPLAN_MAX_MS, "ms", timing=True), *clearances]
+                      REPLAN_MAX_MS, "ms", timing=True),
+               Target(f"executed plans' re-plan CPU time (budget counted at "
+                      f"{REPLAY_ITERATION_MS:g} ms per SQP iteration), max",
+                      speed["executed_replan_cpu_max_ms"], REPLAN_MAX_MS, "ms", timing=True),
+               *clearances]
     headline = []
     if "identified" in results:
         ratio = results["identified"]["true_energy_J"] / results["pinocchio"]["true_energy_J"]
