@@ -150,6 +150,37 @@ def test_a_plan_out_of_budget_returns_its_best_iterate(planner):
     assert np.allclose(plan.trajectory.coefficients, start.coefficients)
 
 
+def test_a_budget_counted_in_iterations_gives_the_same_plan_under_any_load(baseline):
+    """PlannerConfig.iteration_ms: a cold plan of a random crossing with 6 nominal ms at 1 ms
+    an iteration (2 for the plan's own overhead) takes exactly 4 iterations, stops there
+    unconverged, and gives the same plan again while another thread keeps the process busy."""
+    import threading
+
+    config = true_energy_config(compile_code=False, torque_limit=None, iteration_ms=1.0)
+    planner = Planner(baseline, config)
+    case, forecast = random_crossing(planner, seed=7)
+    anytime = anytime_of(planner)
+    anytime.prepare(case.goal)
+    x0 = planner.initial_guess(case.start, case.start_velocity, case.duration, case.goal)
+
+    def plan():
+        return anytime.plan(case.start, case.start_velocity, 0.0, case.duration, case.goal,
+                            forecast, x0=x0, budget_ms=6.0)[0]
+
+    quiet = plan()
+    stop = threading.Event()
+    busy = threading.Thread(target=lambda: [np.linalg.svd(np.ones((200, 200)))
+                                            for _ in iter(stop.is_set, True)])
+    busy.start()
+    try:
+        loaded = plan()
+    finally:
+        stop.set()
+        busy.join()
+    assert quiet.iterations == loaded.iterations == 4 and quiet.status.startswith(ITERATE)
+    assert np.array_equal(quiet.x, loaded.x)
+
+
 def test_a_cold_start_off_the_rest_rows_is_restored(planner):
     """A start point with bumps reaches the goal but not at rest (the bumps vanish there, their
     slopes do not): the SQP restores its equality rows before its first iteration, so even a
