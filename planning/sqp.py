@@ -144,7 +144,7 @@ class AnytimeSQP:
         kept = np.ones(len(self.lbx), bool)
         kept[lay.v][free] = False
         cols = np.flatnonzero(kept)
-        frame = Frame(rows, cols, lay.nc, lbg[rows] == ubg[rows], self.lbx[cols[lay.nc:]])
+        frame = Frame(rows, cols, lay, lbg[rows] == ubg[rows], self.lbx[cols[lay.nc:]])
         point = self._restored(self.evaluate(x0, p, lam_g0, lbg), p, lbg, ubg, lam_g0)
         accept(point)
         lam_x = np.zeros(len(point.x)) if lam_x0 is None else np.asarray(lam_x0, float)

@@ -12,7 +12,7 @@ import pytest
 
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from planning import sqp
+from planning import elastic_qp, sqp
 from planning.anytime import MIN_VIOLATION
 from planning.clearance import link_clearances
 from planning.config import Scenario, true_energy_config
@@ -88,6 +88,41 @@ def test_the_anytime_sqp_reaches_ipopts_optimum_of_the_same_nlp(planner):
     from_sqp = ipopt(x0=solution.x, p=p, lbg=lbg, ubg=ubg, lbx=nlp.lbx)
     assert objective(from_sqp["x"]) >= solution.f * (1 - 1e-7)
     assert np.max(np.abs(solution.lam_g[nlp.clearance_rows])) > 1e-3  # the obstacle binds
+
+
+@pytest.mark.parametrize("radius", [0.05, 0.5, 5.0])
+def test_the_qp_with_power_signs_held_is_the_full_epigraph_qp(planner, monkeypatch, radius):
+    """planning.elastic_qp.step with the power samples' |P| linearized by their signs (slacks
+    and epigraph rows out of the QP) gives the step, multipliers and model decrease of the
+    QP with every epigraph slack and row in it (HOLD so large no sign is held), at a start
+    point and at the point after one step, for small and large trust regions."""
+    case, forecast = random_crossing(planner, seed=7)
+    nlp, p, lbg, ubg, start = _elastic_problem(planner, case, forecast)
+    layout = sqp.layout_of(nlp)
+    solver = sqp.AnytimeSQP(sqp.local_function(nlp, "local"), layout, nlp.lbx, nlp.g.numel())
+    rows = np.flatnonzero(np.isfinite(lbg) | np.isfinite(ubg))
+    cols = np.arange(nlp.x.numel())
+    frame = elastic_qp.Frame(rows, cols, layout, lbg[rows] == ubg[rows], nlp.lbx[layout.nc:])
+    last = (np.zeros(nlp.g.numel()), np.zeros(nlp.x.numel()))
+    point = solver.evaluate(start, p, last[0], lbg)
+    held_any = False
+    for _ in range(2):
+        point.violation = 0.0
+        held = elastic_qp.step(point, lbg, ubg, frame, radius, 1e6, last, layout)
+        power = 0.5 * (point.g[layout.above] - point.g[layout.below])
+        slope = 0.5 * (point.jac[layout.above, :layout.nc] - point.jac[layout.below, :layout.nc])
+        held_any |= bool(np.any(np.abs(power) >= elastic_qp.HOLD * radius
+                                * np.abs(slope).sum(axis=1)))
+        with monkeypatch.context() as m:
+            m.setattr(elastic_qp, "HOLD", np.inf)
+            full = elastic_qp.step(point, lbg, ubg, frame, radius, 1e6, last, layout)
+        scale = 1.0 + np.max(np.abs(full[0]))
+        assert np.allclose(held[0], full[0], atol=1e-7 * scale)
+        assert held[3][0] == pytest.approx(full[3][0], rel=1e-7, abs=1e-10)
+        assert np.allclose(held[1], full[1], atol=1e-6 * (1 + np.max(np.abs(full[1]))))
+        last = full[1], full[2]
+        point = solver.evaluate(point.x + full[0], p, full[1], lbg)
+    assert held_any  # the case exercised the reduced QP
 
 
 def test_compiled_safety_checks_match_the_numpy_ones(baseline):
