@@ -103,9 +103,8 @@ class AnytimeSQP:
         ends = np.cumsum([1, n, rows, rows * n, layout.nc**2])
         self._parts = (ends, n, rows)
         self.spent_ms = 0.0  # CPU ms in the compiled evaluations and the QP solver, so far
-        # CPU ms of a slow iteration lately: the maximum, fading by 0.9 an iteration (it
-        # never faded before: one 4.5 ms iteration of a long cold solve kept every later
-        # re-plan from starting an iteration in its last 4.5 ms)
+        # CPU ms of a slow iteration lately: the maximum, fading by 0.9 an iteration (one
+        # slow iteration of a long solve must not shorten every later re-plan's budget)
         self.iteration_ms = 0.0
 
     def evaluate(self, x, p, lam, lbg) -> Point:
