@@ -96,6 +96,8 @@ class Anytime:
         start = np.clip(np.asarray(goal, float) + 0.1, lower, upper)
         far = ObstacleForecast(np.array([0.5, 1.0]), np.full((2, 3), 10.0))
         self.plan(start, np.zeros(len(start)), 0.0, 1.0, goal, far, budget_ms=5.0)
+        for problem in self._problems.values():  # the first calls' costs predict nothing
+            problem.sqp.forget()
 
     def problem(self, goal, torque: bool) -> _Problem:
         key = (self.planner._goal_limits(goal), torque)

@@ -172,14 +172,19 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
     if planner.polisher is not None:
         planner.polisher.prepare(goal)  # its solvers' build is not part of a plan's time
     plans, wall, cpu = [], 0.0, 0.0
-    share = planner.config.cold_budget_ms / count  # the anytime SQP's: one budget for all
-    for x0 in start_points(planner, q0, qd0, duration, goal, count):
+    sqp = uses_anytime(planner.config)
+    for i, x0 in enumerate(start_points(planner, q0, qd0, duration, goal, count)):
+        # the anytime SQP's starts share one budget: each gets an even share of what the
+        # starts before it left (their checks and bookkeeping run past their iterations'
+        # budget), and none starts once it is spent
+        share = (planner.config.cold_budget_ms - cpu) / (count - i)
+        if sqp and plans and share <= 0.0:
+            break
         plan, ms, cpu_ms = plan_segment(planner, q0, qd0, t_begin, duration, goal, forecast,
                                         x0=x0, settle_breaks=not split, budget_ms=share)
         plans.append(plan)
         wall, cpu = wall + ms, cpu + cpu_ms
     clock = _Clock()  # the ranking (a dense integral per plan) and polishing are plan time
-    sqp = uses_anytime(planner.config)
     ranked = sorted(plans, key=anytime_of(planner).rank if sqp else
                     (lambda plan: rank(planner, plan)))
     best = ranked[0]

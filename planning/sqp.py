@@ -18,6 +18,7 @@ on the whole forecast); the solve stops at convergence or at a CPU budget (threa
 from __future__ import annotations
 
 import time
+from collections import deque
 from dataclasses import dataclass
 
 import casadi as ca
@@ -31,6 +32,7 @@ CONVERGED, BUDGET, STALLED = "converged", "budget", "stalled"
 # energy is nearly flat along many motions, where steps of 1e-8 went on for 100+ iterations
 STEP_TOLERANCE = 1e-6
 PRIMAL_TOLERANCE = 1e-8  # L1 violation of the hard rows at a converged point
+RECENT = 32  # iterations whose CPU cost predicts the next one's
 HARD_WEIGHT = 1e6  # nu's floor: hard rows (goal, limits) weigh far above the clearance's L1
 
 
@@ -103,9 +105,19 @@ class AnytimeSQP:
         ends = np.cumsum([1, n, rows, rows * n, layout.nc**2])
         self._parts = (ends, n, rows)
         self.spent_ms = 0.0  # CPU ms in the compiled evaluations and the QP solver, so far
-        # CPU ms of a slow iteration lately: the maximum, fading by 0.9 an iteration (one
-        # slow iteration of a long solve must not shorten every later re-plan's budget)
-        self.iteration_ms = 0.0
+        # CPU ms of the last RECENT iterations: the next one is expected to cost their most
+        # (a spike, such as a first call's loading, ages out instead of shortening every
+        # later re-plan's budget)
+        self._recent: deque[float] = deque(maxlen=RECENT)
+
+    @property
+    def iteration_ms(self) -> float:
+        """What the next iteration is expected to cost (CPU ms): the most of the recent."""
+        return max(self._recent, default=0.0)
+
+    def forget(self) -> None:
+        """Drop the recent iterations' costs (after the warm-up calls of prepare)."""
+        self._recent.clear()
 
     def evaluate(self, x, p, lam, lbg) -> Point:
         """The point x with its slacks reset (see the module docstring)."""
@@ -155,6 +167,8 @@ class AnytimeSQP:
         while iterations < max_iter:
             began = clock.ms()
             if began + clock.iteration(self.iteration_ms) > budget_ms:
+                if not iterations and self._recent:  # none fits: the oldest cost ages out
+                    self._recent.popleft()
                 break
             iterations += 1
             step = self._qp(point, lbg, ubg, frame, radius, nu, (lam_g, lam_x))
@@ -188,8 +202,8 @@ class AnytimeSQP:
                 point, lam_g, lam_x = trial, lam_rows, lam_vars
                 accept(point)
             clock.tick()
-            if clock.nominal is None:  # a slow iteration's cost, fading over the next ones
-                self.iteration_ms = max(0.9 * self.iteration_ms, clock.ms() - began)
+            if clock.nominal is None:
+                self._recent.append(clock.ms() - began)
             if ratio < 0.25:
                 radius = 0.5 * step_size
                 if radius < 1e-10:

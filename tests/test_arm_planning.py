@@ -82,7 +82,8 @@ def _potential(model, q) -> float:
 def test_ur5_plan_ends_at_rest_and_spends_what_it_descends(tmp_path):
     """Between two poses with the obstacle far away: by default the plan arrives at rest and
     spends at least |V(T) - V(0) + dissipated| (the kinetic energy is zero at both ends);
-    with --free-end (the paper's formulation) it may arrive moving."""
+    with --free-end (the paper's formulation, solved by its penalty loop) it may arrive
+    moving."""
     base, _ = bench_motion(ROBOT)
     args = ["plan", "--robot", ROBOT, "--model", "pinocchio", "--start", _csv(base.start),
             "--goal", _csv(base.goal), "--obstacle-from", "5,5,5", "--obstacle-to", "5,5,6"]
@@ -96,6 +97,8 @@ def test_ur5_plan_ends_at_rest_and_spends_what_it_descends(tmp_path):
         p = np.sum(np.asarray(model.damping) * qd**2, axis=1)
         dissipated = float(np.sum(0.5 * (p[1:] + p[:-1]) * np.diff(t)))
         drop = _potential(model, plan["q"][0]) - _potential(model, plan["q"][-1])
+        # the anytime SQP by default; the penalty loop with the paper's free end
+        assert plan["replanner"] == ("sqp" if path == rest else "fatrop")
         if path == rest:
             assert np.max(np.abs(qd[-1])) <= 1e-6 and plan["rest_at_goal"] is True
             assert plan["energy"] >= abs(drop - dissipated) - 1e-3, (plan["energy"], drop)
