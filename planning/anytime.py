@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections import deque
 from dataclasses import dataclass
 
 import casadi as ca
@@ -76,6 +77,7 @@ class Anytime:
         self.check = SafetyCheck(planner.model, self.config, self.config.compile_code)
         self._problems: dict[tuple, _Problem] = {}
         self._prepared: set[tuple] = set()
+        self._wrapup: deque[float] = deque(maxlen=sqp.RECENT)  # CPU ms after recent solves
         # when a list: (inputs, plan, CPU ms in the solver's evaluations and QPs) of every
         # warm plan (the realtime study's references and overhead)
         self.record: list | None = None
@@ -98,6 +100,7 @@ class Anytime:
         self.plan(start, np.zeros(len(start)), 0.0, 1.0, goal, far, budget_ms=5.0)
         for problem in self._problems.values():  # the first calls' costs predict nothing
             problem.sqp.forget()
+        self._wrapup.clear()
 
     def problem(self, goal, torque: bool) -> _Problem:
         key = (self.planner._goal_limits(goal), torque)
@@ -143,8 +146,12 @@ class Anytime:
             lbg, ubg = self._bounds(problem, goal, safety.links[slots])
             start, lam_g, lam_x = self._start(problem, reference, times[slots], last)
             points: list[sqp.Point] = []
-            solution, count = problem.sqp.solve(start, p, lbg, ubg, lam_g, budget,
+            # what choosing, checking and packing the plan after the solve costs is kept
+            # from its budget (CPU budgets: the most of the recent plans')
+            reserve = max(self._wrapup, default=0.0) if clock.nominal is None else 0.0
+            solution, count = problem.sqp.solve(start, p, lbg, ubg, lam_g, budget - reserve,
                                                 points.append, lam_x0=lam_x, clock=clock)
+            solved = clock.ms()
             iterations += count
             chosen = self._choose(points, q0, qd0, t_begin, duration, check)
             segment = self._segment(problem, chosen, solution, p, q0, qd0, t_begin, duration,
@@ -158,7 +165,9 @@ class Anytime:
             more = self._needs_round(chosen, slots, safety.links[slots])
             if more == "torque":
                 torque = True
-            spare = budget - clock.ms()
+            if clock.nominal is None:
+                self._wrapup.append(clock.ms() - solved)
+            spare = budget - reserve - clock.ms()
             if not more or spare < 2.0 * clock.iteration(problem.sqp.iteration_ms):
                 break
             reference = segment.trajectory

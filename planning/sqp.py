@@ -189,7 +189,9 @@ class AnytimeSQP:
             actual = point.f + nu * point.violation - trial.f - nu * trial.violation
             ratio = actual / pred if pred > 0 else -1.0
             step_size = float(np.max(np.abs(d[: self.layout.nc]), initial=0.0))
-            if ratio < 1e-4:  # the rows' curvature spoiled the step (Maratos): correct it
+            # the rows' curvature spoiled the step (Maratos): correct it, if the correction
+            # (a QP and an evaluation, about what the iteration cost so far) fits the budget
+            if ratio < 1e-4 and 2.0 * clock.ms() - began <= budget_ms:
                 corrected = self._corrected(point, trial, p, lbg, ubg, frame, radius, nu,
                                             (lam_rows, lam_vars))
                 if corrected is not None:
