@@ -137,6 +137,7 @@ class Anytime:
         best, plan, iterations, last = None, None, 0, warm
         spent = sum(problem.sqp.spent_ms for problem in self._problems.values())
         for _ in range(ROUNDS):
+            clock.tick(sqp.Clock.ROUND_ITERATIONS)
             problem = self.problem(goal, torque)
             safety = check(reference.coefficients)
             slots = near_samples(safety.clearance, config.threshold, config.obstacle_slots)

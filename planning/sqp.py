@@ -38,23 +38,24 @@ HARD_WEIGHT = 1e6  # nu's floor: hard rows (goal, limits) weigh far above the cl
 
 class Clock:
     """What a budget counts: the planning thread's CPU time (ms) since the clock was made, or,
-    for reproducible runs (PlannerConfig.iteration_ms), iteration_ms per SQP iteration ticked
-    whatever CPU it took, a plan's own screening, checks and bookkeeping counted as
-    OVERHEAD_ITERATIONS more (measured on the Lynxmotion: ~1 ms a re-plan, ~0.45 ms an
+    for reproducible runs (PlannerConfig.iteration_ms), iteration_ms per unit of work ticked
+    whatever CPU it took: an SQP iteration (a QP and an evaluation), a second-order
+    correction (another), and ROUND_ITERATIONS for each round of a plan (its screening,
+    checks and bookkeeping; measured on the Lynxmotion: ~1 ms a round, ~0.45 ms an
     iteration)."""
 
-    OVERHEAD_ITERATIONS = 2
+    ROUND_ITERATIONS = 2
 
     def __init__(self, iteration_ms: float | None = None):
         self.nominal, self.ticks, self._began = iteration_ms, 0, time.thread_time()
 
     def ms(self) -> float:
         if self.nominal is not None:
-            return (self.ticks + self.OVERHEAD_ITERATIONS) * self.nominal
+            return self.ticks * self.nominal
         return 1e3 * (time.thread_time() - self._began)
 
-    def tick(self) -> None:
-        self.ticks += 1
+    def tick(self, units: int = 1) -> None:
+        self.ticks += units
 
     def iteration(self, measured_ms: float) -> float:
         """What the next iteration is expected to cost: measured_ms (a recent one's CPU) or
@@ -194,6 +195,7 @@ class AnytimeSQP:
             if ratio < 1e-4 and 2.0 * clock.ms() - began <= budget_ms:
                 corrected = self._corrected(point, trial, p, lbg, ubg, frame, radius, nu,
                                             (lam_rows, lam_vars))
+                clock.tick()
                 if corrected is not None:
                     better = point.f + nu * point.violation - corrected[0].f \
                         - nu * corrected[0].violation
