@@ -78,6 +78,7 @@ class Anytime:
         self._problems: dict[tuple, _Problem] = {}
         self._prepared: set[tuple] = set()
         self._wrapup: deque[float] = deque(maxlen=sqp.RECENT)  # CPU ms after recent solves
+        self._fixed: deque[float] = deque(maxlen=sqp.RECENT)  # ... of rounds less iterations
         # when a list: (inputs, plan, CPU ms in the solver's evaluations and QPs) of every
         # warm plan (the realtime study's references and overhead)
         self.record: list | None = None
@@ -101,6 +102,7 @@ class Anytime:
         for problem in self._problems.values():  # the first calls' costs predict nothing
             problem.sqp.forget()
         self._wrapup.clear()
+        self._fixed.clear()
 
     def problem(self, goal, torque: bool) -> _Problem:
         key = (self.planner._goal_limits(goal), torque)
@@ -138,6 +140,7 @@ class Anytime:
         spent = sum(problem.sqp.spent_ms for problem in self._problems.values())
         for _ in range(ROUNDS):
             clock.tick(sqp.Clock.ROUND_ITERATIONS)
+            round_began = clock.ms()
             problem = self.problem(goal, torque)
             safety = check(reference.coefficients)
             slots = near_samples(safety.clearance, config.threshold, config.obstacle_slots)
@@ -168,8 +171,8 @@ class Anytime:
                 torque = True
             if clock.nominal is None:
                 self._wrapup.append(clock.ms() - solved)
-            spare = budget - reserve - clock.ms()
-            if not more or spare < 2.0 * clock.iteration(problem.sqp.iteration_ms):
+                self._fixed.append(clock.ms() - round_began - problem.sqp.loop_ms)
+            if not more or budget - clock.ms() < self.round_ms(clock, problem):
                 break
             reference = segment.trajectory
         elapsed = (1e3 * (time.perf_counter() - wall), 1e3 * (time.thread_time() - cpu))
@@ -180,6 +183,18 @@ class Anytime:
             self.record.append(((q0, qd0, t_begin, duration, goal, forecast, warm), plan,
                                 solver))
         return plan, *elapsed
+
+    def round_ms(self, clock: sqp.Clock | None = None, problem: _Problem | None = None
+                 ) -> float:
+        """What a round of a plan with two iterations is expected to cost: the most CPU a
+        recent round spent outside its iterations plus two of the problem's iterations (of any
+        problem's without one; the nominal cost of each under a nominal clock)."""
+        clock = clock or sqp.Clock(self.config.iteration_ms)
+        iteration = max((other.sqp.iteration_ms for other in self._problems.values()),
+                        default=0.0) if problem is None else problem.sqp.iteration_ms
+        if clock.nominal is not None:
+            return (sqp.Clock.ROUND_ITERATIONS + 2) * clock.nominal
+        return max(self._fixed, default=0.0) + 2.0 * iteration
 
     def rank(self, plan: SegmentPlan) -> tuple[bool, float]:
         """Sort key of candidate plans (as planning.starts.rank, compiled): usable first,

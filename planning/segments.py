@@ -176,9 +176,9 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
     for i, x0 in enumerate(start_points(planner, q0, qd0, duration, goal, count)):
         # the anytime SQP's starts share one budget: each gets an even share of what the
         # starts before it left (their checks and bookkeeping run past their iterations'
-        # budget), and none starts once it is spent
+        # budget), and none starts without the CPU a round of a plan has recently taken
         share = (planner.config.cold_budget_ms - cpu) / (count - i)
-        if sqp and plans and share <= 0.0:
+        if sqp and plans and share < anytime_of(planner).round_ms():
             break
         plan, ms, cpu_ms = plan_segment(planner, q0, qd0, t_begin, duration, goal, forecast,
                                         x0=x0, settle_breaks=not split, budget_ms=share)

@@ -110,6 +110,7 @@ class AnytimeSQP:
         # (a spike, such as a first call's loading, ages out instead of shortening every
         # later re-plan's budget)
         self._recent: deque[float] = deque(maxlen=RECENT)
+        self.loop_ms = 0.0
 
     @property
     def iteration_ms(self) -> float:
@@ -165,6 +166,7 @@ class AnytimeSQP:
         lam_x = np.zeros(len(point.x)) if lam_x0 is None else np.asarray(lam_x0, float)
         nu, lam_g = HARD_WEIGHT, np.asarray(lam_g0, float)
         status, iterations = BUDGET, 0
+        self.loop_ms = 0.0  # CPU ms of this solve's iterations (CPU clocks)
         while iterations < max_iter:
             began = clock.ms()
             if began + clock.iteration(self.iteration_ms) > budget_ms:
@@ -208,6 +210,7 @@ class AnytimeSQP:
             clock.tick()
             if clock.nominal is None:
                 self._recent.append(clock.ms() - began)
+                self.loop_ms += self._recent[-1]
             if ratio < 0.25:
                 radius = 0.5 * step_size
                 if radius < 1e-10:
