@@ -3,28 +3,27 @@
 elastic=True), solved by planning.sqp under a CPU budget, every accepted iterate checked on
 the whole forecast, the joint limits and the torque limits (planning.safety).
 
-A plan returns the best safe iterate (least energy among those that keep the threshold
-within the penalty tolerance, the limits and the torques), else the one that misses the
-threshold least, reported as a minimum-violation plan (its status says by how many mm).
-One that stopped at its budget unconverged has status ITERATE: Algorithm 2 re-plans at the
-next sample from it. The obstacle samples the NLP sees are screened from the check's own
-clearances (planning.screening's rule); a round re-screens when the chosen iterate dips
-where the solve did not look, or when it leaves a limit between its constrained points.
-The torque rows join (a second NLP, as planning.solver's pair) when an iterate overdrives a
-motor.
+A plan returns the best safe iterate (least energy among those keeping the threshold within
+the penalty tolerance, the limits and the torques), else the one that misses the threshold
+least (a minimum-violation plan: its status says by how many mm); one stopped by its budget
+(planning.budget) unconverged has status ITERATE, and Algorithm 2 re-plans from it at the
+next sample. The NLP sees the obstacle samples screened from the check's own clearances
+(planning.screening's rule); a round re-screens where the chosen iterate dips unseen or
+leaves a limit between its constrained points; the torque rows join (a second NLP, as
+planning.solver's pair) when an iterate overdrives a motor.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import time
-from collections import deque
 from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
 from planning import compiled, sqp
+from planning.budget import Clock, RoundCosts
 from planning.limits import LIMIT_TOLERANCE
 from planning.nlp import PlanningNLP
 from planning.realtime_iteration import ITERATE
@@ -77,8 +76,7 @@ class Anytime:
         self.check = SafetyCheck(planner.model, self.config, self.config.compile_code)
         self._problems: dict[tuple, _Problem] = {}
         self._prepared: set[tuple] = set()
-        self._wrapup: deque[float] = deque(maxlen=sqp.RECENT)  # CPU ms after recent solves
-        self._fixed: deque[float] = deque(maxlen=sqp.RECENT)  # ... of rounds less iterations
+        self.rounds = RoundCosts()
         # when a list: (inputs, plan, CPU ms in the solver's evaluations and QPs) of every
         # warm plan (the realtime study's references and overhead)
         self.record: list | None = None
@@ -101,8 +99,7 @@ class Anytime:
         self.plan(start, np.zeros(len(start)), 0.0, 1.0, goal, far, budget_ms=5.0)
         for problem in self._problems.values():  # the first calls' costs predict nothing
             problem.sqp.forget()
-        self._wrapup.clear()
-        self._fixed.clear()
+        self.rounds.clear()
 
     def problem(self, goal, torque: bool) -> _Problem:
         key = (self.planner._goal_limits(goal), torque)
@@ -126,7 +123,7 @@ class Anytime:
         its wall and CPU time (ms, end to end)."""
         wall, cpu = time.perf_counter(), time.thread_time()
         config, planner = self.config, self.planner
-        clock = sqp.Clock(config.iteration_ms)  # what the budget counts
+        clock = Clock(config.iteration_ms)  # what the budget counts
         budget = config.replan_budget_ms if budget_ms is None else budget_ms
         times, centres = on_horizon(forecast, t_begin, duration)
         if warm is None:
@@ -139,7 +136,7 @@ class Anytime:
         best, plan, iterations, last = None, None, 0, warm
         spent = sum(problem.sqp.spent_ms for problem in self._problems.values())
         for _ in range(ROUNDS):
-            clock.tick(sqp.Clock.ROUND_ITERATIONS)
+            clock.tick(Clock.ROUND_ITERATIONS)
             round_began = clock.ms()
             problem = self.problem(goal, torque)
             safety = check(reference.coefficients)
@@ -150,9 +147,7 @@ class Anytime:
             lbg, ubg = self._bounds(problem, goal, safety.links[slots])
             start, lam_g, lam_x = self._start(problem, reference, times[slots], last)
             points: list[sqp.Point] = []
-            # what choosing, checking and packing the plan after the solve costs is kept
-            # from its budget (CPU budgets: the most of the recent plans')
-            reserve = max(self._wrapup, default=0.0) if clock.nominal is None else 0.0
+            reserve = self.rounds.reserve(clock)  # for choosing and packing after the solve
             solution, count = problem.sqp.solve(start, p, lbg, ubg, lam_g, budget - reserve,
                                                 points.append, lam_x0=lam_x, clock=clock)
             solved = clock.ms()
@@ -169,9 +164,8 @@ class Anytime:
             more = self._needs_round(chosen, slots, safety.links[slots])
             if more == "torque":
                 torque = True
-            if clock.nominal is None:
-                self._wrapup.append(clock.ms() - solved)
-                self._fixed.append(clock.ms() - round_began - problem.sqp.loop_ms)
+            self.rounds.record(clock, clock.ms() - solved,
+                               clock.ms() - round_began - problem.sqp.loop_ms)
             if not more or budget - clock.ms() < self.round_ms(clock, problem):
                 break
             reference = segment.trajectory
@@ -184,17 +178,12 @@ class Anytime:
                                 solver))
         return plan, *elapsed
 
-    def round_ms(self, clock: sqp.Clock | None = None, problem: _Problem | None = None
-                 ) -> float:
-        """What a round of a plan with two iterations is expected to cost: the most CPU a
-        recent round spent outside its iterations plus two of the problem's iterations (of any
-        problem's without one; the nominal cost of each under a nominal clock)."""
-        clock = clock or sqp.Clock(self.config.iteration_ms)
+    def round_ms(self, clock: Clock | None = None, problem: _Problem | None = None) -> float:
+        """What a round of a plan with two iterations (of the problem's, else of any
+        problem's) is expected to cost (planning.budget.RoundCosts)."""
         iteration = max((other.sqp.iteration_ms for other in self._problems.values()),
                         default=0.0) if problem is None else problem.sqp.iteration_ms
-        if clock.nominal is not None:
-            return (sqp.Clock.ROUND_ITERATIONS + 2) * clock.nominal
-        return max(self._fixed, default=0.0) + 2.0 * iteration
+        return self.rounds.round_ms(clock or Clock(self.config.iteration_ms), iteration)
 
     def rank(self, plan: SegmentPlan) -> tuple[bool, float]:
         """Sort key of candidate plans (as planning.starts.rank, compiled): usable first,

@@ -25,6 +25,7 @@ import casadi as ca
 import numpy as np
 
 from planning import compiled
+from planning.budget import RECENT, Clock
 from planning.elastic_qp import VIOLATED, Frame, Layout, Point, step
 
 CONVERGED, BUDGET, STALLED = "converged", "budget", "stalled"
@@ -32,35 +33,7 @@ CONVERGED, BUDGET, STALLED = "converged", "budget", "stalled"
 # energy is nearly flat along many motions, where steps of 1e-8 went on for 100+ iterations
 STEP_TOLERANCE = 1e-6
 PRIMAL_TOLERANCE = 1e-8  # L1 violation of the hard rows at a converged point
-RECENT = 32  # iterations whose CPU cost predicts the next one's
 HARD_WEIGHT = 1e6  # nu's floor: hard rows (goal, limits) weigh far above the clearance's L1
-
-
-class Clock:
-    """What a budget counts: the planning thread's CPU time (ms) since the clock was made, or,
-    for reproducible runs (PlannerConfig.iteration_ms), iteration_ms per unit of work ticked
-    whatever CPU it took: an SQP iteration (a QP and an evaluation), a second-order
-    correction (another), and ROUND_ITERATIONS for each round of a plan (its screening,
-    checks and bookkeeping; measured on the Lynxmotion: ~1 ms a round, ~0.45 ms an
-    iteration)."""
-
-    ROUND_ITERATIONS = 2
-
-    def __init__(self, iteration_ms: float | None = None):
-        self.nominal, self.ticks, self._began = iteration_ms, 0, time.thread_time()
-
-    def ms(self) -> float:
-        if self.nominal is not None:
-            return self.ticks * self.nominal
-        return 1e3 * (time.thread_time() - self._began)
-
-    def tick(self, units: int = 1) -> None:
-        self.ticks += units
-
-    def iteration(self, measured_ms: float) -> float:
-        """What the next iteration is expected to cost: measured_ms (a recent one's CPU) or
-        the nominal cost."""
-        return measured_ms if self.nominal is None else self.nominal
 
 
 @dataclass(frozen=True)
