@@ -77,9 +77,10 @@ class PlannerConfig:
     replanner: str = "fatrop"
     replan_budget_ms: float = 10.0  # "sqp": CPU per re-plan (one obstacle sample period)
     cold_budget_ms: float = 25.0  # "sqp": CPU for a first plan, all its starts together
-    # "sqp", reproducible runs: each SQP iteration counts this many ms of the budgets above,
-    # whatever CPU it took (the same plans on a loaded machine; the bench's executed plans).
-    # None: the budgets are CPU time of the planning thread (real time)
+    # "sqp", reproducible runs: each SQP iteration counts this many ms of the budgets above
+    # whatever CPU it took, as do a second-order correction and each half of a plan's round
+    # (planning.budget.Clock): the same plans on a loaded machine (the bench's executed
+    # plans). None: the budgets are CPU time of the planning thread (real time)
     iteration_ms: float | None = None
     elastic_weight: float = 1e3  # "sqp": J per m of clearance missed, per sample and link
     replan_starts: int = 0  # "sqp": a re-plan also solves from this many cold start points

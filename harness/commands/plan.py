@@ -112,7 +112,7 @@ def register(sub) -> None:
                         "or fatrop (the penalty loop: alpha raised until the plan keeps the "
                         f"threshold); default {PLANNER.replanner}, fatrop with --free-end (on 20 "
                         "random crossings with a free end the sqp executions broke the "
-                        "threshold on 4, the penalty loop's on none: docs/realtime.md)")
+                        "threshold on 2, the penalty loop's on none: docs/realtime.md)")
     p.add_argument("--replan-budget-ms", type=float, default=PLANNER.replan_budget_ms,
                    help="sqp: CPU ms a re-plan may take (it returns its best iterate then)")
     p.add_argument("--replan-iterations", type=int, default=0,

@@ -77,7 +77,6 @@ def markdown(r: dict) -> list[str]:
                    "any load); their re-plans' real CPU, max "
                    f"{speed['executed_replan_cpu_max_ms']:.1f} ms.")
     return md
-    return md
 
 
 def _angles(values) -> str:
