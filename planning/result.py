@@ -51,6 +51,22 @@ def sample_execution(execution: Execution, t: np.ndarray):
     return tuple(states)
 
 
+def executed_energy(model: TorqueModel, execution: Execution, t: np.ndarray) -> float:
+    """Integral of |P| dt (J) of the concatenated segments, each on the points of the grid t
+    inside the interval it was followed plus that interval's ends, from its own polynomial.
+    A re-plan keeps position and velocity but changes the acceleration, so the power jumps
+    there; a trapezoid across the jump misses by half a step times it (measured: the xArm7's
+    swaying crossing, 123 re-plans, 0.12 J below the physical bound of 107.66 J)."""
+    segments = execution.segments
+    starts = [s.trajectory.t_begin for s in segments]
+    total = 0.0
+    for segment, a, b in zip(segments, starts, [*starts[1:], float(t[-1])], strict=True):
+        grid = np.unique(np.concatenate([[a], t[(t > a) & (t < b)], [b]]))
+        if len(grid) > 1:
+            total += absolute_energy(model, grid, *segment.trajectory.state(grid))
+    return total
+
+
 def evaluate(execution: Execution, scenario: Scenario, model: TorqueModel,
              config: PlannerConfig, refine: int = 5) -> PlanResult:
     """Sample the execution (refine points per obstacle sample interval) and check it."""
@@ -74,7 +90,7 @@ def evaluate(execution: Execution, scenario: Scenario, model: TorqueModel,
         problems.append(f"clearance {sample_clearance.min():.4f} m < threshold "
                         f"{config.threshold} m - {CLEARANCE_TOLERANCE} m")
     return PlanResult(t, q, qd, qdd, obstacle, clearance, sample_clearance,
-                      absolute_energy(model, t, q, qd, qdd), end_error, limit, peak_torque,
+                      executed_energy(model, execution, t), end_error, limit, peak_torque,
                       execution, not problems, tuple(problems))
 
 

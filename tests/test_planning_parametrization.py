@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from types import SimpleNamespace
 
 import numpy as np
 import pinocchio as pin
@@ -16,6 +17,7 @@ from planning.config import PlannerConfig
 from planning.energy import absolute_energy, net_work, power
 from planning.obstacle import SwayingObstacle, predict_linear
 from planning.quadrature import energy_nodes
+from planning.result import executed_energy, sample_execution
 from planning.solver import ObstacleForecast, Planner
 from planning.trajectory import PolynomialTrajectory, hermite, stationary_points
 from tests.helpers import central_difference as _central_difference
@@ -173,3 +175,28 @@ def test_plan_command_with_degree_quadrature_and_sway(tmp_path):
     assert plan["replans"] >= 2  # the forecast is wrong at every sample near the arm
     assert plan["min_clearance"] >= plan["threshold"] - 2e-3
     assert main(["plan", "--no-compile", "--model", "pinocchio", "--degree", "3", "--out", str(out)]) == 2
+
+
+def test_executed_energy_integrates_each_segment_across_a_replan(baseline):
+    """Two segments joined at a re-plan (position and velocity kept, acceleration changed:
+    the power jumps): executed_energy against scipy's quad of |P| on each followed interval,
+    and the trapezoid on one grid across the join, which misses by about half a step times
+    the jump."""
+    first = _fixed_trajectory()
+    join = 0.7003  # between the grid's points
+    q, qd, qdd = (v[0] for v in first.state(join))
+    second = PolynomialTrajectory.from_free(join, 2.0 - join, q, qd,
+                                            np.array([[1.0, -0.5, 0.2]] * 3))
+    assert np.max(np.abs(second.state(join)[2][0] - qdd)) > 1.0  # the acceleration jumps
+    segment = SimpleNamespace(trajectory=first), SimpleNamespace(trajectory=second)
+    execution = SimpleNamespace(segments=segment)
+
+    def absolute(trajectory, t: float) -> float:
+        return float(abs(power(baseline, *trajectory.state(t))[0]))
+
+    exact = sum(quad(lambda t, s=s: absolute(s, t), a, b, limit=400, epsabs=1e-12)[0]
+                for s, a, b in ((first, 0.0, join), (second, join, 2.0)))
+    grid = np.linspace(0.0, 2.0, 201)
+    assert np.isclose(executed_energy(baseline, execution, grid), exact, rtol=1e-4)
+    across = absolute_energy(baseline, grid, *sample_execution(execution, grid))
+    assert abs(across - exact) > 10 * abs(executed_energy(baseline, execution, grid) - exact)

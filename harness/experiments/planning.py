@@ -11,8 +11,7 @@ import pinocchio as pin
 
 from harness.robots.baseline import PinocchioModel
 from harness.sections.base import Check, Target, check
-from planning.energy import absolute_energy
-from planning.result import CLEARANCE_TOLERANCE, END_TOLERANCE, closest_link
+from planning.result import CLEARANCE_TOLERANCE, END_TOLERANCE, closest_link, executed_energy
 
 # the bench's executed plans count each iteration of the anytime SQP as this many ms of its
 # budgets (PlannerConfig.iteration_ms: the same plans on a loaded machine; measured on the
@@ -44,7 +43,7 @@ def summary(result, baseline: PinocchioModel, config) -> dict:
     """What one executed plan costs and how close it comes (true energy: Pinocchio)."""
     links = closest_link(result, config)
     return {"energy_J": result.energy,
-            "true_energy_J": absolute_energy(baseline, result.t, result.q, result.qd, result.qdd),
+            "true_energy_J": executed_energy(baseline, result.execution, result.t),
             "energy_bound_J": energy_bound(baseline.model, result),
             "end_speed_rad_s": float(np.max(np.abs(result.qd[-1]))),
             "min_clearance_m": float(result.clearance.min()),

@@ -51,7 +51,7 @@ def run(ctx: Context) -> SectionResult:
                "obstacle_from": list(scenario.obstacle.start),
                "obstacle_to": list(scenario.obstacle.end),
                "unobstructed": summary(free_crossing, baseline, config)}
-    plans, executed, clearances = {}, {"unobstructed": free_crossing}, []
+    plans, executed, plan_targets = {}, {"unobstructed": free_crossing}, []
     checks = [check("obstacle_crosses_the_free_path",
                     free_crossing.clearance.min() < config.threshold,
                     f"unobstructed clearance {1e3 * free_crossing.clearance.min():.1f} mm")]
@@ -62,9 +62,8 @@ def run(ctx: Context) -> SectionResult:
         plans[f"{name}_crossing"] = to_json(executed[name], scenario, config, name)
         plan_c, plan_t = plan_checks(name, results[name], config.threshold,
                                      config.rest_at_goal, clearable)
-        checks, clearances = checks + plan_c, clearances + plan_t
-    checks.append(check("pinocchio_replanned", results["pinocchio"]["replans"] >= 1,
-                        f"{results['pinocchio']['replans']} re-plans"))
+        checks, plan_targets = checks + plan_c, plan_targets + plan_t
+    replanning = [("pinocchio_replanned", results["pinocchio"]["replans"], 1)]
     # the obstacle swaying sideways as it crosses: its forecast changes at every sample, so
     # Algorithm 2 re-plans again and again
     sway = swaying_scenario(free.execution.segments[0].trajectory, config.geometry,
@@ -74,9 +73,17 @@ def run(ctx: Context) -> SectionResult:
     plans["pinocchio_swaying"] = to_json(executed["swaying"], sway, config, "pinocchio")
     plan_c, plan_t = plan_checks("swaying", results["swaying"], config.threshold,
                                  config.rest_at_goal, clearable)
-    checks, clearances = checks + plan_c, clearances + plan_t
-    checks.append(check("swaying_replans_repeatedly", results["swaying"]["replans"] >= SWAY_REPLANS,
-                        f"{results['swaying']['replans']} re-plans (at least {SWAY_REPLANS})"))
+    checks, plan_targets = checks + plan_c, plan_targets + plan_t
+    replanning.append(("swaying_replans_repeatedly", results["swaying"]["replans"], SWAY_REPLANS))
+    for name, replans, least in replanning:
+        # a registered motion's crossing is designed to force re-plans; on one derived from
+        # a user's joint limits the first plan may already clear the whole path (measured:
+        # the Kinova's, 104 mm), and how often the arm re-plans is then a target
+        if clearable:
+            checks.append(check(name, replans >= least, f"{replans} re-plans (at least {least})"))
+        else:
+            plan_targets.append(Target(f"{name.replace('_', ' ')}: re-plans", replans, least,
+                                     lower_is_better=False))
     speeds = {}
     for replanner in ("sqp", "fatrop"):
         live = dataclasses.replace(config, iteration_ms=None, replanner=replanner)
@@ -101,7 +108,7 @@ def run(ctx: Context) -> SectionResult:
                Target(f"executed plans' re-plan CPU time (budget counted at "
                       f"{REPLAY_ITERATION_MS:g} ms per SQP iteration), max",
                       speed["executed_replan_cpu_max_ms"], REPLAN_MAX_MS, "ms", timing=True),
-               *clearances]
+               *plan_targets]
     headline = []
     if "identified" in results:
         ratio = results["identified"]["true_energy_J"] / results["pinocchio"]["true_energy_J"]
