@@ -57,18 +57,23 @@ class Point:
 
 class Frame:
     """What every QP of one solve shares: its rows and variables, the Hessian buffer (the
-    slacks' proximal diagonal set once), the variable bounds and DAQP's constraint types."""
+    slacks' proximal diagonal set once), the variable bounds and DAQP's constraint types,
+    and where the slacks' rows and columns sit (see step)."""
 
     def __init__(self, rows, cols, layout: Layout, equality, lbx_slacks):
         k, nc = len(cols), layout.nc
         self.rows, self.cols, self.nc, self.lbx = rows, cols, nc, lbx_slacks
-        # the power samples' epigraph rows (above, below) and slacks (e): their indices in
-        # the NLP and their positions among the QP's rows and variables
+        # the power samples' epigraph rows (above, below: P - e, -P - e) and slacks (e), the
+        # bounded clearance rows (D + v) and their slacks (v): their indices in the NLP and
+        # their positions among the QP's rows and variables
         self.above, self.below, self.e = (np.arange(part.start, part.stop) for part in
                                           (layout.above, layout.below, layout.e))
-        self.above_at, self.below_at = (np.searchsorted(rows, part)
-                                        for part in (self.above, self.below))
-        self.e_at = np.searchsorted(cols, self.e)
+        clearance = np.arange(layout.clearance.start, layout.clearance.stop)
+        self.clearance = clearance[np.isin(clearance, rows)]
+        self.v = layout.v.start + self.clearance - layout.clearance.start
+        self.above_at, self.below_at, self.clearance_at = (
+            np.searchsorted(rows, part) for part in (self.above, self.below, self.clearance))
+        self.e_at, self.v_at = np.searchsorted(cols, self.e), np.searchsorted(cols, self.v)
         self.hess = np.zeros((k, k))
         self.hess[np.arange(nc, k), np.arange(nc, k)] = PROXIMAL
         self.low, self.high = np.zeros(k), np.full(k, _INF)
@@ -85,46 +90,63 @@ def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
     free stays 0), with the arrays every QP of the solve shares. last: the multipliers
     (rows, variables) of the last QP or of the warm start, DAQP's hot start.
 
-    Each power sample's |P| enters the QP linearized with its sign at the point (its slack
-    and its two epigraph rows leave the QP: w sign(P) grad P in the cost, the slack's
-    proximal term rho (grad P d)^2 / 2 in the Hessian), the same QP wherever P keeps its
-    sign along the step. Samples near a sign change keep their slack and rows (|P| below
-    HOLD times its largest linear change in the trust region, |grad P|_1 radius); a sample
-    whose linearized P changes sign at the step all the same goes back, and the QP is
-    solved again. Measured on 8 random crossings' re-plans (Lynxmotion): DAQP 250 -> 160 us
-    a step, 1 % of the steps solved twice (fixing every sign: 40 %), re-plan CPU median
-    2.40 -> 1.99 ms."""
-    nc, spent = layout.nc, 0.0
-    power = 0.5 * (point.g[frame.above] - point.g[frame.below])
-    slope = 0.5 * (point.jac[frame.above, :nc] - point.jac[frame.below, :nc])
-    weight = point.grad[frame.e]
-    signs = np.sign(power)
-    signs[np.abs(power) <= SIGN_FLOOR * (1.0 + np.max(np.abs(power), initial=0.0))] = 0.0
-    signs[np.abs(power) < HOLD * radius * np.abs(slope).sum(axis=1)] = 0.0
-    for _ in range(len(power) + 1):
-        fixed = signs != 0
+    A slack whose branch the step cannot change leaves the QP with its rows: a power
+    sample's e = |P| is linearized with the sign of P (w sign(P) grad P in the cost, the
+    slack's proximal term rho (grad P d)^2 / 2 in the Hessian), a clearance row's v =
+    max(0, lambda - D) is 0 where the row stays clear (nothing in the QP) and linearized,
+    -grad D d, where it stays violated. It is the same QP wherever the branch holds along
+    the step. A slack keeps its rows when its margin (|P|, |D - lambda|) is below HOLD
+    times its largest linear change in the trust region (|grad|_1 radius); one whose
+    linearized margin changes sign at the step all the same goes back, and the QP is
+    solved again. Measured on 8 random crossings' re-plans (Lynxmotion), with the power
+    samples held: DAQP 250 -> 160 us a step, 1 % of the steps solved twice (fixing every
+    sign: 40 %), re-plan CPU median 2.40 -> 1.99 ms."""
+    nc, spent, g, jac = layout.nc, 0.0, point.g, point.jac
+    power = 0.5 * (g[frame.above] - g[frame.below])
+    margin = g[frame.clearance] - point.x[frame.v] - lbg[frame.clearance]  # D - lambda
+    slope = np.concatenate([0.5 * (jac[frame.above, :nc] - jac[frame.below, :nc]),
+                            jac[frame.clearance, :nc]])
+    weight = np.concatenate([point.grad[frame.e], point.grad[frame.v]])
+    value = np.concatenate([power, margin])
+    side = np.sign(value)  # the branch: the margin keeps this sign
+    # the slack's change per unit of the row's linear change (e: sign P; v: -1 or 0)
+    rate = np.concatenate([side[: len(power)], np.minimum(side[len(power):], 0.0)])
+    floor = SIGN_FLOOR * (1.0 + np.max(np.abs(power), initial=0.0))
+    held = (np.abs(value) > floor) & (np.abs(value) >= HOLD * radius * np.abs(slope).sum(axis=1))
+    rows_at = np.concatenate([frame.above_at, frame.clearance_at])
+    cols_at = np.concatenate([frame.e_at, frame.v_at])
+    count = len(power)
+    for _ in range(len(value) + 1):
         keep_rows, keep_cols = np.ones(len(frame.rows), bool), np.ones(len(frame.cols), bool)
-        keep_rows[frame.above_at[fixed]] = keep_rows[frame.below_at[fixed]] = False
-        keep_cols[frame.e_at[fixed]] = False
-        held = slope[fixed]
+        keep_rows[rows_at[held]] = keep_rows[frame.below_at[held[:count]]] = False
+        keep_cols[cols_at[held]] = False
+        moving = held & (rate != 0)
+        linear = slope[moving]
         result = _solve(point, lbg, ubg, frame, radius, nu, last, layout, keep_rows,
-                        keep_cols, (weight[fixed] * signs[fixed]) @ held,
-                        PROXIMAL * held.T @ held)
+                        keep_cols, (weight[moving] * rate[moving]) @ linear,
+                        PROXIMAL * linear.T @ linear)
         if result is None:
             return None
         d, lam_rows, lam_vars, parts, ms = result
         spent += ms
-        change = slope @ d[:nc]  # of P along the step (linearized)
-        flipped = fixed & (np.sign(power + change) != signs)
+        change = slope @ d[:nc]  # of P and of D along the step (linearized)
+        flipped = held & (side * (value + change) <= 0.0)
         if not np.any(flipped):
-            change = signs[fixed] * change[fixed]  # of |P|
-            d[frame.e[fixed]] = change
-            lam = weight[fixed] + PROXIMAL * change
-            lam_rows[frame.above[fixed]] = np.where(signs[fixed] > 0, lam, 0.0)
-            lam_rows[frame.below[fixed]] = np.where(signs[fixed] < 0, lam, 0.0)
+            moved = rate[held] * change[held]  # of the held slacks
+            slack = np.concatenate([frame.e, frame.v])[held]
+            d[slack] = moved
+            lam = weight[held] + PROXIMAL * moved  # of the row holding a moving slack
+            power_held, clear_held = held[:count], held[count:]
+            sign, lam_power = side[:count][power_held], lam[: np.count_nonzero(power_held)]
+            lam_rows[frame.above[power_held]] = np.where(sign > 0, lam_power, 0.0)
+            lam_rows[frame.below[power_held]] = np.where(sign < 0, lam_power, 0.0)
+            violated = side[count:][clear_held] < 0  # lower bounds: DAQP's multipliers < 0
+            lam_clear = lam[np.count_nonzero(power_held):]
+            lam_rows[frame.clearance[clear_held]] = np.where(violated, -lam_clear, 0.0)
+            lam_vars[frame.v[clear_held]] = np.where(violated, 0.0, -lam_clear)
             return d, lam_rows, lam_vars, parts, spent
-        signs[flipped] = 0.0
-    raise AssertionError("unreachable: with every sample back in the QP none can flip")
+        held &= ~flipped
+    raise AssertionError("unreachable: with every slack back in the QP none can flip")
 
 
 def _solve(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,

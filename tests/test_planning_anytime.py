@@ -91,11 +91,13 @@ def test_the_anytime_sqp_reaches_ipopts_optimum_of_the_same_nlp(planner):
 
 
 @pytest.mark.parametrize("radius", [0.05, 0.5, 5.0])
-def test_the_qp_with_power_signs_held_is_the_full_epigraph_qp(planner, monkeypatch, radius):
-    """planning.elastic_qp.step with the power samples' |P| linearized by their signs (slacks
-    and epigraph rows out of the QP) gives the step, multipliers and model decrease of the
-    QP with every epigraph slack and row in it (HOLD so large no sign is held), at a start
-    point and at the point after one step, for small and large trust regions."""
+def test_the_qp_with_slacks_held_is_the_full_elastic_qp(planner, monkeypatch, radius):
+    """planning.elastic_qp.step with the slacks whose branch the step cannot change out of
+    the QP (power samples' |P| linearized by their signs, clearance rows that stay clear
+    dropped, those that stay violated linearized) gives the step, the multipliers of rows
+    and variables and the model decrease of the QP with every slack and row in it (HOLD so
+    large nothing is held), at a start point and at the points after one and two steps,
+    for small and large trust regions."""
     case, forecast = random_crossing(planner, seed=7)
     nlp, p, lbg, ubg, start = _elastic_problem(planner, case, forecast)
     layout = sqp.layout_of(nlp)
@@ -105,24 +107,29 @@ def test_the_qp_with_power_signs_held_is_the_full_epigraph_qp(planner, monkeypat
     frame = elastic_qp.Frame(rows, cols, layout, lbg[rows] == ubg[rows], nlp.lbx[layout.nc:])
     last = (np.zeros(nlp.g.numel()), np.zeros(nlp.x.numel()))
     point = solver.evaluate(start, p, last[0], lbg)
-    held_any = False
-    for _ in range(2):
+    held = {"power": 0, "clear": 0, "violated": 0}
+    for _ in range(3):
         point.violation = 0.0
-        held = elastic_qp.step(point, lbg, ubg, frame, radius, 1e6, last, layout)
+        reduced = elastic_qp.step(point, lbg, ubg, frame, radius, 1e6, last, layout)
         power = 0.5 * (point.g[layout.above] - point.g[layout.below])
         slope = 0.5 * (point.jac[layout.above, :layout.nc] - point.jac[layout.below, :layout.nc])
-        held_any |= bool(np.any(np.abs(power) >= elastic_qp.HOLD * radius
-                                * np.abs(slope).sum(axis=1)))
+        reach = elastic_qp.HOLD * radius
+        held["power"] += np.count_nonzero(np.abs(power) >= reach * np.abs(slope).sum(axis=1))
+        margin = point.g[layout.clearance] - point.x[layout.v] - lbg[layout.clearance]
+        reach_d = reach * np.abs(point.jac[layout.clearance, :layout.nc]).sum(axis=1)
+        held["clear"] += np.count_nonzero(margin >= reach_d)
+        held["violated"] += np.count_nonzero(-margin >= reach_d)
         with monkeypatch.context() as m:
             m.setattr(elastic_qp, "HOLD", np.inf)
             full = elastic_qp.step(point, lbg, ubg, frame, radius, 1e6, last, layout)
         scale = 1.0 + np.max(np.abs(full[0]))
-        assert np.allclose(held[0], full[0], atol=1e-7 * scale)
-        assert held[3][0] == pytest.approx(full[3][0], rel=1e-7, abs=1e-10)
-        assert np.allclose(held[1], full[1], atol=1e-6 * (1 + np.max(np.abs(full[1]))))
+        assert np.allclose(reduced[0], full[0], atol=1e-7 * scale)
+        assert reduced[3][0] == pytest.approx(full[3][0], rel=1e-7, abs=1e-10)
+        for ours, theirs in zip(reduced[1:3], full[1:3], strict=True):  # rows, variables
+            assert np.allclose(ours, theirs, atol=1e-6 * (1 + np.max(np.abs(theirs))))
         last = full[1], full[2]
         point = solver.evaluate(point.x + full[0], p, full[1], lbg)
-    assert held_any  # the case exercised the reduced QP
+    assert min(held.values()) > 0, held  # the case exercised every kind of held slack
 
 
 def test_compiled_safety_checks_match_the_numpy_ones(baseline):
