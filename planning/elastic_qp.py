@@ -15,11 +15,12 @@ import daqp
 import numpy as np
 from scipy.linalg.lapack import dsyevd as syevd
 
+from planning import qp_kernels as kernels
+
 QP_PRIMAL_TOLERANCE = 1e-10  # DAQP's (its default, 1e-6, let steps leave the trust region)
 PROXIMAL = 1e-2  # weight of the slacks' proximal term in each QP (vanishes at a fixed point; e,
 # v move by less than cost / PROXIMAL >= 10 only where the rows allow nothing less)
 CURVATURE = 1e-8  # smallest eigenvalue kept in the coefficient block of the QP's Hessian
-_EQUALITY = 5  # DAQP sense flags: active + immutable
 VIOLATED = 1e-9  # a hard row beyond its bound by more gets an elastic column in the QP
 _INF = 1e30
 SIGN_FLOOR = 1e-9  # a power sample this small (relative to the largest) keeps its slack,
@@ -56,13 +57,12 @@ class Point:
 
 
 class Frame:
-    """What every QP of one solve shares: its rows and variables, the Hessian buffer (the
-    slacks' proximal diagonal set once), the variable bounds and DAQP's constraint types,
-    and where the slacks' rows and columns sit (see step)."""
+    """What every QP of one solve shares: its rows and variables, which rows are equalities,
+    the slacks' variable bounds, and where the slacks' rows and columns sit (see step)."""
 
     def __init__(self, rows, cols, layout: Layout, equality, lbx_slacks):
-        k, nc = len(cols), layout.nc
-        self.rows, self.cols, self.nc, self.lbx = rows, cols, nc, lbx_slacks
+        self.rows, self.cols, self.nc = rows, cols, layout.nc
+        self.lbx, self.equality = np.asarray(lbx_slacks, float), np.asarray(equality, bool)
         # the power samples' epigraph rows (above, below: P - e, -P - e) and slacks (e), the
         # bounded clearance rows (D + v) and their slacks (v): their indices in the NLP and
         # their positions among the QP's rows and variables
@@ -74,11 +74,14 @@ class Frame:
         self.above_at, self.below_at, self.clearance_at = (
             np.searchsorted(rows, part) for part in (self.above, self.below, self.clearance))
         self.e_at, self.v_at = np.searchsorted(cols, self.e), np.searchsorted(cols, self.v)
-        self.hess = np.zeros((k, k))
-        self.hess[np.arange(nc, k), np.arange(nc, k)] = PROXIMAL
-        self.low, self.high = np.zeros(k), np.full(k, _INF)
-        self.sense = np.zeros(k + len(rows), dtype=np.int32)
-        self.sense[k + np.flatnonzero(equality)] = _EQUALITY
+        # per slack item (power samples, then clearance rows): its rows in the QP, its column
+        self.rows_at = np.concatenate([self.above_at, self.clearance_at])
+        self.second_at = np.concatenate([self.below_at, np.full(len(self.clearance), -1)])
+        self.cols_at = np.concatenate([self.e_at, self.v_at])
+        self.slack = np.concatenate([self.e, self.v])
+        self.item_rows = np.column_stack([np.concatenate([self.above, self.clearance]),
+                                          np.concatenate([self.below, np.full(len(self.v), -1)])])
+        self.start = (self.above, self.below, self.clearance, self.v)
 
 
 def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
@@ -100,121 +103,43 @@ def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
     linearized margin changes sign at the step all the same goes back, and the QP is
     solved again. Measured on 8 random crossings' re-plans (Lynxmotion), with the power
     samples held: DAQP 250 -> 160 us a step, 1 % of the steps solved twice (fixing every
-    sign: 40 %), re-plan CPU median 2.40 -> 1.99 ms."""
-    nc, spent, g, jac = layout.nc, 0.0, point.g, point.jac
-    power = 0.5 * (g[frame.above] - g[frame.below])
-    margin = g[frame.clearance] - point.x[frame.v] - lbg[frame.clearance]  # D - lambda
-    slope = np.concatenate([0.5 * (jac[frame.above, :nc] - jac[frame.below, :nc]),
-                            jac[frame.clearance, :nc]])
-    weight = np.concatenate([point.grad[frame.e], point.grad[frame.v]])
-    value = np.concatenate([power, margin])
-    side = np.sign(value)  # the branch: the margin keeps this sign
-    # the slack's change per unit of the row's linear change (e: sign P; v: -1 or 0)
-    rate = np.concatenate([side[: len(power)], np.minimum(side[len(power):], 0.0)])
-    floor = SIGN_FLOOR * (1.0 + np.max(np.abs(power), initial=0.0))
-    held = (np.abs(value) > floor) & (np.abs(value) >= HOLD * radius * np.abs(slope).sum(axis=1))
-    rows_at = np.concatenate([frame.above_at, frame.clearance_at])
-    cols_at = np.concatenate([frame.e_at, frame.v_at])
-    count = len(power)
+    sign: 40 %), re-plan CPU median 2.40 -> 1.99 ms; with the clearance rows held too
+    (391 replayed re-plans): DAQP 127 -> 47 us a step. The array work is compiled
+    (planning.qp_kernels)."""
+    nc, spent, g, jac, x = layout.nc, 0.0, point.g, point.jac, point.x
+    value, side, rate, slope, weight, held = kernels.branches(
+        g, jac, point.grad, x, lbg, frame.above, frame.below, frame.e, frame.clearance,
+        frame.v, nc, radius, HOLD, SIGN_FLOOR)
+    convexified = convex(point.hess)
+    lam_rows_last, lam_vars_last = (np.asarray(v, float) for v in last)
     for _ in range(len(value) + 1):
         keep_rows, keep_cols = np.ones(len(frame.rows), bool), np.ones(len(frame.cols), bool)
-        keep_rows[rows_at[held]] = keep_rows[frame.below_at[held[:count]]] = False
-        keep_cols[cols_at[held]] = False
+        keep_rows[frame.rows_at[held]] = False
+        keep_rows[frame.second_at[held & (frame.second_at >= 0)]] = False
+        keep_cols[frame.cols_at[held]] = False
         moving = held & (rate != 0)
         linear = slope[moving]
-        result = _solve(point, lbg, ubg, frame, radius, nu, last, layout, keep_rows,
-                        keep_cols, (weight[moving] * rate[moving]) @ linear,
-                        PROXIMAL * linear.T @ linear)
-        if result is None:
+        h, f, a, upper, lower, sense, dual, rk, ck = kernels.assemble(
+            g, jac, point.grad, x, convexified, lbg, ubg, frame.rows, frame.cols, nc,
+            frame.lbx, frame.equality, keep_rows, keep_cols,
+            (weight[moving] * rate[moving]) @ linear, PROXIMAL * linear.T @ linear, radius,
+            nu, lam_rows_last, lam_vars_last, frame.start, PROXIMAL, VIOLATED, _INF)
+        began = time.thread_time()
+        solution, _, flag, info = daqp.solve(h, f, a, upper, lower, sense, dual_start=dual,
+                                             primal_tol=QP_PRIMAL_TOLERANCE)
+        if flag < 0:  # the guessed working set can mislead it (cycling): again, cold
+            solution, _, flag, info = daqp.solve(h, f, a, upper, lower, sense,
+                                                 primal_tol=QP_PRIMAL_TOLERANCE)
+        spent += 1e3 * (time.thread_time() - began)
+        if flag < 0:
             return None
-        d, lam_rows, lam_vars, parts, ms = result
-        spent += ms
-        change = slope @ d[:nc]  # of P and of D along the step (linearized)
-        flipped = held & (side * (value + change) <= 0.0)
-        if not np.any(flipped):
-            moved = rate[held] * change[held]  # of the held slacks
-            slack = np.concatenate([frame.e, frame.v])[held]
-            d[slack] = moved
-            lam = weight[held] + PROXIMAL * moved  # of the row holding a moving slack
-            power_held, clear_held = held[:count], held[count:]
-            sign, lam_power = side[:count][power_held], lam[: np.count_nonzero(power_held)]
-            lam_rows[frame.above[power_held]] = np.where(sign > 0, lam_power, 0.0)
-            lam_rows[frame.below[power_held]] = np.where(sign < 0, lam_power, 0.0)
-            violated = side[count:][clear_held] < 0  # lower bounds: DAQP's multipliers < 0
-            lam_clear = lam[np.count_nonzero(power_held):]
-            lam_rows[frame.clearance[clear_held]] = np.where(violated, -lam_clear, 0.0)
-            lam_vars[frame.v[clear_held]] = np.where(violated, 0.0, -lam_clear)
-            return d, lam_rows, lam_vars, parts, spent
+        d, lam_rows, lam_vars, model, violation, flipped = kernels.unpack(
+            solution, info["lam"], h, f, len(ck), rk, ck, len(x), len(g), value, side, rate,
+            slope, weight, held, frame.slack, frame.item_rows, PROXIMAL)
+        if not flipped.any():
+            return d, lam_rows, lam_vars, (model, violation), spent
         held &= ~flipped
     raise AssertionError("unreachable: with every slack back in the QP none can flip")
-
-
-def _solve(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
-           layout: Layout, keep_rows, keep_cols, extra_cost, extra_curvature):
-    """The QP of step with the frame's rows and variables where keep_rows, keep_cols, the
-    coefficients' cost and Hessian block plus extra_cost, extra_curvature."""
-    rows, cols, nc, n = frame.rows[keep_rows], frame.cols[keep_cols], frame.nc, len(point.x)
-    k = len(cols)
-    g = point.g[rows]
-    low, high = lbg[rows] - g, ubg[rows] - g
-    # hard rows the point violates (beyond rounding): elastic columns of weight nu
-    below, above = low > VIOLATED, high < -VIOLATED
-    violated = np.flatnonzero(below | above)
-    m = len(violated)
-    a = point.jac[rows][:, cols]
-    hess = frame.hess[keep_cols][:, keep_cols]
-    cost = point.grad[cols]
-    cost[:nc] += extra_cost
-    hess[:nc, :nc] = convex(point.hess) + extra_curvature
-    var_low, var_high = frame.low[keep_cols], frame.high[keep_cols]
-    var_low[:nc], var_high[:nc] = -radius, radius
-    var_low[nc:] = np.maximum(frame.lbx[keep_cols[nc:]] - point.x[cols[nc:]], -_INF)
-    sense = np.concatenate([frame.sense[: len(frame.cols)][keep_cols],
-                            frame.sense[len(frame.cols):][keep_rows]])
-    if m:  # elastic columns: the QP grows for this step
-        elastic = np.zeros((len(rows), m))
-        elastic[violated, np.arange(m)] = np.where(below[violated], 1.0, -1.0)
-        a = np.hstack([a, elastic])
-        grown = np.zeros((k + m, k + m))
-        grown[:k, :k], grown[np.arange(k, k + m), np.arange(k, k + m)] = hess, PROXIMAL
-        hess, cost = grown, np.concatenate([cost, np.full(m, nu)])
-        var_low = np.concatenate([var_low, np.zeros(m)])
-        var_high = np.concatenate([var_high, np.full(m, _INF)])
-        sense = np.concatenate([sense[:k], np.zeros(m, np.int32), sense[k:]])
-    blower = np.concatenate([var_low, np.maximum(low, -_INF)])
-    bupper = np.concatenate([var_high, np.minimum(high, _INF)])
-    dual = working_set(point, rows, cols, m, last, layout)
-    began = time.thread_time()
-    x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense, dual_start=dual,
-                                  primal_tol=QP_PRIMAL_TOLERANCE)
-    if flag < 0:  # the guessed working set can mislead it (cycling): again, cold
-        x, _, flag, info = daqp.solve(hess, cost, a, bupper, blower, sense,
-                                      primal_tol=QP_PRIMAL_TOLERANCE)
-    spent = 1e3 * (time.thread_time() - began)
-    if flag < 0:
-        return None
-    lam = info["lam"]
-    lam_rows, lam_vars, d = np.zeros(len(point.g)), np.zeros(n), np.zeros(n)
-    lam_rows[rows], lam_vars[cols], d[cols] = lam[k + m:], lam[:k], x[:k]
-    model = float(cost[:k] @ x[:k] + 0.5 * x @ hess @ x)
-    return d, lam_rows, lam_vars, (model, float(np.sum(x[k:]))), spent
-
-
-def working_set(point: Point, rows, cols, m: int, last, layout: Layout) -> np.ndarray:
-    """DAQP's starting working set (signs of multipliers: which bounds are active): the
-    last multipliers, with the slacks' rows and bounds set from the point itself (the
-    active side of each |P| epigraph pair, a clearance row where the point dips, else
-    its slack's bound), the elastic columns at zero."""
-    lay = layout
-    lam_rows, lam_vars = (np.array(v, float) for v in last)
-    lam_vars[: lay.nc] = np.sign(lam_vars[: lay.nc])
-    if lay.e.stop > lay.e.start:
-        power = 0.5 * (point.g[lay.above] - point.g[lay.below])
-        lam_rows[lay.above], lam_rows[lay.below] = power > 0, power < 0
-    if lay.v.stop > lay.v.start:
-        dips = point.x[lay.v] > 0
-        lam_rows[lay.clearance], lam_vars[lay.v] = -1.0 * dips, -1.0 * ~dips
-    return np.concatenate([lam_vars[cols], np.full(m, -1.0), lam_rows[rows]])
 
 
 def convex(hessian: np.ndarray) -> np.ndarray:

@@ -25,6 +25,7 @@ import casadi as ca
 import numpy as np
 
 from planning import compiled
+from planning import qp_kernels as kernels
 from planning.budget import RECENT, Clock
 from planning.elastic_qp import VIOLATED, Frame, Layout, Point, step
 
@@ -76,8 +77,10 @@ class AnytimeSQP:
     def __init__(self, local: ca.Function, layout: Layout, lbx: np.ndarray, rows: int):
         self.local, self.layout, self.lbx = compiled.Buffered(local), layout, np.asarray(lbx, float)
         n = len(self.lbx)
-        ends = np.cumsum([1, n, rows, rows * n, layout.nc**2])
-        self._parts = (ends, n, rows)
+        self._parts = (n, rows)
+        # the slacks' rows and columns (above, below, e, clearance, v), for kernels.reset
+        self._slacks = tuple(np.arange(part.start, part.stop) for part in
+                             (layout.above, layout.below, layout.e, layout.clearance, layout.v))
         self.spent_ms = 0.0  # CPU ms in the compiled evaluations and the QP solver, so far
         # CPU ms of the last RECENT iterations: the next one is expected to cost their most
         # (a spike, such as a first call's loading, ages out instead of shortening every
@@ -99,23 +102,11 @@ class AnytimeSQP:
         began = time.thread_time()
         (out,) = self.local(x, p, lam)
         self.spent_ms += 1e3 * (time.thread_time() - began)
-        ends, n, rows = self._parts
-        f, grad, g = float(out[0]), out[1:ends[1]].copy(), out[ends[1]:ends[2]].copy()
-        jac = out[ends[2]:ends[3]].reshape((rows, n)).copy()
-        hess = out[ends[3]:ends[4]].reshape((self.layout.nc, self.layout.nc))
-        x = np.array(x, float)
-        lay = self.layout
-        if lay.e.stop > lay.e.start:
-            power = 0.5 * (g[lay.above] - g[lay.below])
-            e = np.abs(power)
-            f += grad[lay.e] @ (e - x[lay.e])
-            x[lay.e], g[lay.above], g[lay.below] = e, power - e, -power - e
-        if lay.v.stop > lay.v.start:
-            distance = g[lay.clearance] - x[lay.v]
-            v = np.maximum(0.0, lbg[lay.clearance] - distance)
-            f += grad[lay.v] @ (v - x[lay.v])
-            x[lay.v], g[lay.clearance] = v, distance + v
-        return Point(x, f, g, grad, jac, hess.copy(), 0.0)
+        n, rows = self._parts
+        f, grad, g, jac, hess, x = kernels.reset(out, np.asarray(x, float),
+                                                 np.asarray(lbg, float), n, rows,
+                                                 self.layout.nc, *self._slacks)
+        return Point(x, f, g, grad, jac, hess, 0.0)
 
     def solve(self, x0, p, lbg, ubg, lam_g0, budget_ms: float, accept, max_iter: int = 200,
               radius: float = 0.5, lam_x0=None, clock: Clock | None = None
@@ -238,6 +229,7 @@ class AnytimeSQP:
         corrected.violation = _violation(corrected.g, lbg, ubg)
         return corrected, (step[1], step[2])
 
+
 def _violation(g: np.ndarray, lbg: np.ndarray, ubg: np.ndarray) -> float:
     """L1 distance of the rows g from [lbg, ubg]."""
-    return float(np.sum(np.maximum(lbg - g, 0.0)) + np.sum(np.maximum(g - ubg, 0.0)))
+    return kernels.violation(g, np.asarray(lbg, float), np.asarray(ubg, float))
