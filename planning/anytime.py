@@ -24,18 +24,17 @@ import numpy as np
 
 from planning import compiled, sqp
 from planning.budget import Clock, RoundCosts
+from planning.candidates import TORQUE_TOLERANCE, Candidate, choose
 from planning.limits import LIMIT_TOLERANCE
 from planning.nlp import PlanningNLP
 from planning.realtime_iteration import ITERATE
-from planning.safety import Safety, SafetyCheck
+from planning.safety import SafetyCheck
 from planning.screening import MARGIN, near_samples, on_horizon, uncovered
 from planning.solver import ObstacleForecast, Planner, SegmentPlan
 from planning.starts import start_points
 
 CONVERGED = "converged"
 MIN_VIOLATION = "minimum violation"
-HARD_TOLERANCE = 1e-6  # L1 violation of the goal and limit rows an iterate may keep
-TORQUE_TOLERANCE = 1e-6  # N m
 ROUNDS = 4
 
 
@@ -47,25 +46,6 @@ class _Problem:
     sqp: sqp.AnytimeSQP
     parts: compiled.Buffered
     layout: tuple
-
-
-@dataclass
-class _Candidate:
-    """A checked iterate: how far it leaves the hard limits (goal rows, joint limits in rad,
-    torques in N m), whether it misses the threshold beyond the penalty tolerance."""
-
-    hard: float
-    unsafe: bool
-    x: np.ndarray
-    safety: Safety
-    point: sqp.Point
-
-    @property
-    def rank(self) -> tuple:
-        """Within the hard limits first, then keeping the threshold, then the objective (for
-        one that misses the threshold: the energy plus its L1 violation weighed by
-        elastic_weight, which the SQP minimizes)."""
-        return (self.hard > 0, self.unsafe, self.hard, self.point.f)
 
 
 class Anytime:
@@ -152,7 +132,8 @@ class Anytime:
                                                 points.append, lam_x0=lam_x, clock=clock)
             solved = clock.ms()
             iterations += count
-            chosen = self._choose(points, q0, qd0, t_begin, duration, check)
+            chosen = choose(points, lambda x: planner.trajectory(x, q0, qd0, t_begin,
+                                                                 duration), check, config)
             segment = self._segment(problem, chosen, solution, p, q0, qd0, t_begin, duration,
                                     times[slots])
             converged = solution.status == sqp.CONVERGED and chosen.x is solution.x
@@ -213,32 +194,7 @@ class Anytime:
         lbg[np.arange(rows.start, rows.stop)[~used.ravel()]] = -np.inf
         return lbg, ubg
 
-    def _choose(self, points, q0, qd0, t_begin, duration, check) -> _Candidate:
-        """The best iterate of a solve by _Candidate.rank. They are checked from the lowest
-        objective up: the first that keeps the threshold and the hard limits is the best (any
-        later one has a larger objective), the same choice as checking every one, with one
-        check where the last iterate is safe."""
-        best = None
-        for point in sorted(points, key=lambda point: point.f):
-            candidate = self._candidate(point, q0, qd0, t_begin, duration, check)
-            if best is None or candidate.rank < best.rank:
-                best = candidate
-            if not candidate.unsafe and not candidate.hard:
-                break
-        return best
-
-    def _candidate(self, point, q0, qd0, t_begin, duration, check) -> _Candidate:
-        """An iterate, checked on the whole forecast, the limits and the torques."""
-        config = self.config
-        trajectory = self.planner.trajectory(point.x, q0, qd0, t_begin, duration)
-        safety = check(trajectory.coefficients)
-        hard = max(safety.limit_excess - LIMIT_TOLERANCE, 0.0) + \
-            max(safety.torque_excess - TORQUE_TOLERANCE, 0.0) + \
-            max(point.violation - HARD_TOLERANCE, 0.0)
-        unsafe = config.threshold - safety.lowest > config.penalty_tolerance
-        return _Candidate(hard, unsafe, point.x, safety, point)
-
-    def _needs_round(self, best: _Candidate, slots, near) -> str | None:
+    def _needs_round(self, best: Candidate, slots, near) -> str | None:
         """Why another round: "torque" (a motor overdriven), "limits" (beyond a limit between
         the turning points constrained), "screen" (a link dips at a sample where the solve
         had no row for it)."""
@@ -274,7 +230,7 @@ class Anytime:
         lam_g[rows], lam_x[v] = new_g.ravel(), new_x.ravel()
         return x, lam_g, lam_x
 
-    def _segment(self, problem: _Problem, chosen: _Candidate, solution, p, q0, qd0,
+    def _segment(self, problem: _Problem, chosen: Candidate, solution, p, q0, qd0,
                  t_begin, duration, slot_times) -> SegmentPlan:
         (parts,) = problem.parts(chosen.x, p)
         last = chosen.x is solution.x
@@ -289,7 +245,7 @@ class Anytime:
             multipliers=(lam_g, lam_x), layout=problem.layout, slot_times=slot_times,
             detour=detour)
 
-    def _status(self, best: _Candidate, converged: bool) -> str:
+    def _status(self, best: Candidate, converged: bool) -> str:
         unsafe, hard = best.unsafe, best.hard
         deficit = self.config.threshold - best.safety.lowest
         if hard > 0:

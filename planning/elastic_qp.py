@@ -13,7 +13,6 @@ from dataclasses import dataclass
 
 import daqp
 import numpy as np
-from scipy.linalg.lapack import dsyevd as syevd
 
 from planning import qp_kernels as kernels
 
@@ -110,7 +109,7 @@ def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
     value, side, rate, slope, weight, held = kernels.branches(
         g, jac, point.grad, x, lbg, frame.above, frame.below, frame.e, frame.clearance,
         frame.v, nc, radius, HOLD, SIGN_FLOOR)
-    convexified = convex(point.hess)
+    convexified = kernels.convex(point.hess, CURVATURE)
     lam_rows_last, lam_vars_last = (np.asarray(v, float) for v in last)
     for _ in range(len(value) + 1):
         keep_rows, keep_cols = np.ones(len(frame.rows), bool), np.ones(len(frame.cols), bool)
@@ -140,13 +139,3 @@ def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
             return d, lam_rows, lam_vars, (model, violation), spent
         held &= ~flipped
     raise AssertionError("unreachable: with every slack back in the QP none can flip")
-
-
-def convex(hessian: np.ndarray) -> np.ndarray:
-    """The symmetric matrix with its eigenvalues clipped below at CURVATURE (relative); LAPACK's
-    syevd called directly (numpy's eigh wrapper cost as much again on the 9 x 9 block)."""
-    w, vectors, info = syevd(0.5 * (hessian + hessian.T), lower=1)  # LAPACK: ascending w
-    if info != 0:
-        raise np.linalg.LinAlgError(f"the QP's Hessian has no eigendecomposition (info {info})")
-    floor = CURVATURE * max(1.0, abs(float(w[0])), abs(float(w[-1])))
-    return (vectors * np.maximum(w, floor)) @ vectors.T

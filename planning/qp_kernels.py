@@ -204,3 +204,12 @@ def violation(g, lbg, ubg):
     for i in range(len(g)):
         total += max(lbg[i] - g[i], 0.0) + max(g[i] - ubg[i], 0.0)
     return total
+
+
+@numba.njit(**_JIT)
+def convex(hessian, curvature):
+    """The symmetric part of hessian with its eigenvalues clipped below at curvature x
+    max(1, its largest |eigenvalue|)."""
+    w, vectors = np.linalg.eigh(0.5 * (hessian + hessian.T))  # ascending w
+    floor = curvature * max(1.0, abs(w[0]), abs(w[-1]))
+    return (vectors * np.maximum(w, floor)) @ vectors.T

@@ -83,7 +83,8 @@ class SafetyCheck:
     def against(self, times: np.ndarray, centres: np.ndarray, t_begin: float,
                 duration: float):
         """The check of motions on [t_begin, t_begin + duration] against one forecast, its
-        samples packed once: a function of the coefficients (dof, degree + 1) -> Safety."""
+        samples packed once: a function of the coefficients (dof, degree + 1) -> Safety,
+        whose `links` gives the clearances alone."""
         s = (np.asarray(times, float) - t_begin) / duration
         k, count = len(s), len(self.config.geometry.links)
         chunks = []
@@ -92,19 +93,7 @@ class SafetyCheck:
             chunk_s, chunk_c = np.zeros(CHUNK), np.full((CHUNK, 3), FAR)
             chunk_s[: stop - start], chunk_c[: stop - start] = s[start:stop], centres[start:stop]
             chunks.append((start, stop, chunk_s, chunk_c.ravel()))
-        sigma = np.array([duration])
-
-        def check(coefficients: np.ndarray) -> Safety:
-            c = coefficients.ravel(order="F")
-            out = np.empty((k, count))
-            for start, stop, chunk_s, chunk_c in chunks:
-                (values,) = self._clearance(c, chunk_s, chunk_c)
-                out[start:stop] = values.reshape(CHUNK, count)[: stop - start]
-            (motion,) = self._motion(c, sigma)
-            return Safety(out.min(axis=1, initial=np.inf), float(motion[0]), float(motion[1]),
-                          out)
-
-        return check
+        return _Bound(self, chunks, k, count, np.array([duration]))
 
     def _coefficients(self):
         return ca.SX.sym("c", self.dof, self.degree + 1)
@@ -143,6 +132,28 @@ class SafetyCheck:
             torque = ca.mmax(ca.vertcat(*[ca.fabs(tau(*(m[i, :].T for m in states))) - limit
                                           for i in range(TORQUE_GRID)]))
         return ca.Function("motion_check", [c, sigma], [ca.vertcat(excess, torque)])
+
+
+class _Bound:
+    """SafetyCheck.against's check: one forecast's samples packed in chunks."""
+
+    def __init__(self, check: SafetyCheck, chunks, k: int, count: int, sigma: np.ndarray):
+        self.check, self.chunks, self.shape, self.sigma = check, chunks, (k, count), sigma
+
+    def links(self, coefficients: np.ndarray) -> np.ndarray:
+        """Each link's distance (k, links) in m at each sample."""
+        c = coefficients.ravel(order="F")
+        out = np.empty(self.shape)
+        for start, stop, chunk_s, chunk_c in self.chunks:
+            (values,) = self.check._clearance(c, chunk_s, chunk_c)
+            out[start:stop] = values.reshape(CHUNK, self.shape[1])[: stop - start]
+        return out
+
+    def __call__(self, coefficients: np.ndarray) -> Safety:
+        links = self.links(coefficients)
+        (motion,) = self.check._motion(coefficients.ravel(order="F"), self.sigma)
+        return Safety(links.min(axis=1, initial=np.inf), float(motion[0]), float(motion[1]),
+                      links)
 
 
 def _poly(row, s):

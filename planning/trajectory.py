@@ -9,6 +9,7 @@ joint: 9 for the paper's three quartics).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 from math import comb
 
 import numpy as np
@@ -75,18 +76,21 @@ class PolynomialTrajectory:
         """The same motion re-expressed on [t_begin, t_begin + duration] (exact: a
         polynomial in s is one of the same degree in any affinely shifted normalized time)."""
         shift, scale = (t_begin - self.t_begin) / self.duration, duration / self.duration
-        n = self.degree + 1
-        p, k = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+        binomial, lower, power, k = _binomial(self.degree + 1)
         # s = shift + scale u:  s^p = sum_k C(p, k) shift^(p-k) scale^k u^k
-        change = np.where(k <= p, _binomial(n) * shift ** np.maximum(p - k, 0) * scale**k, 0.0)
+        change = np.where(lower, binomial * shift**power * scale**k, 0.0)
         return PolynomialTrajectory(t_begin, duration, self.coefficients @ change)
 
 
 QuarticTrajectory = PolynomialTrajectory  # the paper's degree; the name older code uses
 
 
-def _binomial(n: int) -> np.ndarray:
-    return np.array([[comb(p, k) for k in range(n)] for p in range(n)], dtype=float)
+@cache
+def _binomial(n: int) -> tuple[np.ndarray, ...]:
+    """C(p, k) (n, n), where k <= p, max(p - k, 0) and k, for p, k < n (computed once)."""
+    p, k = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    binomial = np.array([[comb(i, j) for j in range(n)] for i in range(n)], dtype=float)
+    return binomial, k <= p, np.maximum(p - k, 0), k
 
 
 def stationary_points_rows(coefficients: np.ndarray) -> np.ndarray:
