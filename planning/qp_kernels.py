@@ -55,13 +55,16 @@ def branches(g, jac, grad, x, lbg, above, below, e, clearance, v, nc, radius, ho
 @numba.njit(**_JIT)
 def assemble(g, jac, grad, x, convexified, lbg, ubg, rows, cols, nc, col_lbx, equality,
              keep_rows, keep_cols, extra_cost, extra_curvature, radius, nu, last_rows,
-             last_vars, start, proximal, violated_tol, inf):
+             last_vars, start, proximal, violated_tol, inf, drop):
     """DAQP's QP (H, f, A, bupper, blower, sense, dual start) over the kept rows and
-    columns, with an elastic column for each hard row the point violates; and the kept
-    rows' and columns' NLP indices. start: (above, below, clearance, v) of the layout, whose
-    multipliers the working set takes from the point (see _working_set)."""
-    rk, ck = rows[keep_rows], cols[keep_cols]
-    eq = equality[keep_rows]
+    columns, with an elastic column for each hard row the point violates, without the rows
+    no step in the trust region can reach (if drop); and the kept rows' and columns' NLP
+    indices. start: (above, below, clearance, v) of the layout, whose multipliers the
+    working set takes from the point (see _working_set)."""
+    ck = cols[keep_cols]
+    if drop:
+        keep_rows = keep_rows & ~_out_of_reach(g, jac, lbg, ubg, rows, ck, nc, equality, radius)
+    rk, eq = rows[keep_rows], equality[keep_rows]
     lr, k = len(rk), len(ck)
     low, high = lbg[rk] - g[rk], ubg[rk] - g[rk]
     m = 0
@@ -99,6 +102,27 @@ def assemble(g, jac, grad, x, convexified, lbg, ubg, rows, cols, nc, col_lbx, eq
             sense[size + r] = 5  # DAQP: active + immutable
     dual = _working_set(g, x, rk, ck, k, m, nc, last_rows, last_vars, start)
     return h, f, a, upper, lower, sense, dual, rk, ck
+
+
+@numba.njit(**_JIT)
+def _out_of_reach(g, jac, lbg, ubg, rows, ck, nc, equality, radius):
+    """The inequality rows in only the coefficients (the first nc columns) that no step in
+    the trust region (|d_j| <= radius) brings to a bound: inactive in the QP whatever its
+    solution, so leaving them out changes neither the step nor a multiplier (each 0)."""
+    out = np.zeros(len(rows), np.bool_)
+    for i in range(len(rows)):
+        r = rows[i]
+        if equality[i]:
+            continue
+        reach, slack = 0.0, False
+        for j in range(len(ck)):
+            if j < nc:
+                reach += abs(jac[r, ck[j]])
+            elif jac[r, ck[j]] != 0.0:
+                slack = True
+        reach *= radius * (1.0 + 1e-9)
+        out[i] = not slack and lbg[r] - g[r] < -reach and ubg[r] - g[r] > reach
+    return out
 
 
 @numba.njit(**_JIT)

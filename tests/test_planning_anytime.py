@@ -121,6 +121,7 @@ def test_the_qp_with_slacks_held_is_the_full_elastic_qp(planner, monkeypatch, ra
         held["violated"] += np.count_nonzero(-margin >= reach_d)
         with monkeypatch.context() as m:
             m.setattr(elastic_qp, "HOLD", np.inf)
+            m.setattr(elastic_qp, "DROP_UNREACHABLE", False)
             full = elastic_qp.step(point, lbg, ubg, frame, radius, 1e6, last, layout)
         scale = 1.0 + np.max(np.abs(full[0]))
         assert np.allclose(reduced[0], full[0], atol=1e-7 * scale)
@@ -130,6 +131,40 @@ def test_the_qp_with_slacks_held_is_the_full_elastic_qp(planner, monkeypatch, ra
         last = full[1], full[2]
         point = solver.evaluate(point.x + full[0], p, full[1], lbg)
     assert min(held.values()) > 0, held  # the case exercised every kind of held slack
+
+
+@pytest.mark.parametrize("radius", [0.05, 0.5])
+def test_the_qp_without_rows_out_of_reach_is_the_full_qp(planner, monkeypatch, radius):
+    """The hard inequality rows no step in the trust region can bring to a bound leave the QP
+    (elastic_qp.DROP_UNREACHABLE): the step and every multiplier are those of the QP with
+    them, on a cold start whose limit rows are given bounds within reach (a third just
+    above the point's value, a third just below) so that some bind, the rest out of reach."""
+    case, forecast = random_crossing(planner, seed=7)
+    nlp, p, lbg, ubg, start = _elastic_problem(planner, case, forecast)
+    layout = sqp.layout_of(nlp)
+    solver = sqp.AnytimeSQP(sqp.local_function(nlp, "local"), layout, nlp.lbx, nlp.g.numel())
+    last = (np.zeros(nlp.g.numel()), np.zeros(nlp.x.numel()))
+    point = solver.evaluate(start, p, last[0], lbg)
+    rows = np.flatnonzero(np.isfinite(lbg) | np.isfinite(ubg))
+    hard = np.setdiff1d(rows, np.r_[layout.above, layout.below, layout.clearance])
+    hard = hard[lbg[hard] != ubg[hard]]
+    reach = radius * np.abs(point.jac[hard, :layout.nc]).sum(axis=1)
+    lbg, ubg = lbg.copy(), ubg.copy()
+    ubg[hard[0::3]] = point.g[hard[0::3]] + 0.2 * reach[0::3]
+    lbg[hard[1::3]] = point.g[hard[1::3]] - 0.2 * reach[1::3]
+    lbg[hard[2::3]], ubg[hard[2::3]] = (point.g[hard[2::3]] + sign * 2 * reach[2::3]
+                                        for sign in (-1, 1))
+    frame = elastic_qp.Frame(rows, np.arange(nlp.x.numel()), layout, lbg[rows] == ubg[rows],
+                             nlp.lbx[layout.nc:])
+    point.violation = 0.0
+    dropped = elastic_qp.step(point, lbg, ubg, frame, radius, 1e6, last, layout)
+    with monkeypatch.context() as m:
+        m.setattr(elastic_qp, "DROP_UNREACHABLE", False)
+        full = elastic_qp.step(point, lbg, ubg, frame, radius, 1e6, last, layout)
+    assert np.count_nonzero(np.abs(full[1][hard]) > 1e-6) >= 2  # some limit rows bind
+    assert np.allclose(dropped[0], full[0], atol=1e-8 * (1 + np.max(np.abs(full[0]))))
+    for ours, theirs in zip(dropped[1:3], full[1:3], strict=True):
+        assert np.allclose(ours, theirs, atol=1e-6 * (1 + np.max(np.abs(theirs))))
 
 
 def test_compiled_safety_checks_match_the_numpy_ones(baseline):
