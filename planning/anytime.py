@@ -57,8 +57,8 @@ class Anytime:
         self._problems: dict[tuple, _Problem] = {}
         self._prepared: set[tuple] = set()
         self.rounds = RoundCosts()
-        # when a list: (inputs, plan, CPU ms in the solver's evaluations and QPs) of every
-        # warm plan (the realtime study's references and overhead)
+        # when a list: (inputs, plan, CPU ms in the solver's evaluations and QPs, CPU ms in
+        # its solves) of every warm plan (the realtime study's references and overhead)
         self.record: list | None = None
 
     def prepare(self, goal) -> None:
@@ -114,7 +114,8 @@ class Anytime:
         torque = warm is not None and warm.layout[-1:] == (True,)
         check = self.check.against(times, centres, t_begin, duration)
         best, plan, iterations, last = None, None, 0, warm
-        spent = sum(problem.sqp.spent_ms for problem in self._problems.values())
+        spent = [sum(getattr(problem.sqp, name) for problem in self._problems.values())
+                 for name in ("spent_ms", "solve_ms")]
         for _ in range(ROUNDS):
             clock.tick(Clock.ROUND_ITERATIONS)
             round_began = clock.ms()
@@ -154,9 +155,12 @@ class Anytime:
         plan = dataclasses.replace(plan, iterations=iterations, solve_ms=elapsed[0],
                                    solve_cpu_ms=elapsed[1])
         if self.record is not None and warm is not None:
-            solver = sum(problem.sqp.spent_ms for problem in self._problems.values()) - spent
+            solver, solves = (sum(getattr(problem.sqp, name) for problem in
+                                  self._problems.values()) - before
+                              for name, before in zip(("spent_ms", "solve_ms"), spent,
+                                                      strict=True))
             self.record.append(((q0, qd0, t_begin, duration, goal, forecast, warm), plan,
-                                solver))
+                                solver, solves))
         return plan, *elapsed
 
     def round_ms(self, clock: Clock | None = None, problem: _Problem | None = None) -> float:

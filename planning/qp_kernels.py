@@ -15,9 +15,17 @@ import numba
 import numpy as np
 
 _JIT = {"cache": True, "nogil": True}
+# the entry points are compiled when this module loads (from numba's cache after the first
+# time), for these argument types only: a plan never pays for a compilation (measured: 5.3 s
+# inside the first cold plan when compiled on first call), and a call with other types fails
+# instead of compiling
 
 
-@numba.njit(**_JIT)
+def _entry(signature: str):
+    return numba.njit(signature, **_JIT)
+
+
+@_entry("(f8[:], f8[:, :], f8[:], f8[:], f8[:], i8[:], i8[:], i8[:], i8[:], i8[:], i8, f8, f8, f8)")
 def branches(g, jac, grad, x, lbg, above, below, e, clearance, v, nc, radius, hold, floor):
     """Per item: its margin (P; D - lambda), the sign it keeps on its branch, the slack's
     change per unit of the row's linear change (e: sign P; v: -1 violated, 0 clear), the
@@ -53,6 +61,54 @@ def branches(g, jac, grad, x, lbg, above, below, e, clearance, v, nc, radius, ho
 
 
 @numba.njit(**_JIT)
+def _out_of_reach(g, jac, lbg, ubg, rows, ck, nc, equality, radius):
+    """The inequality rows in only the coefficients (the first nc columns) that no step in
+    the trust region (|d_j| <= radius) brings to a bound: inactive in the QP whatever its
+    solution, so leaving them out changes neither the step nor a multiplier (each 0)."""
+    out = np.zeros(len(rows), np.bool_)
+    for i in range(len(rows)):
+        r = rows[i]
+        if equality[i]:
+            continue
+        reach, slack = 0.0, False
+        for j in range(len(ck)):
+            if j < nc:
+                reach += abs(jac[r, ck[j]])
+            elif jac[r, ck[j]] != 0.0:
+                slack = True
+        reach *= radius * (1.0 + 1e-9)
+        out[i] = not slack and lbg[r] - g[r] < -reach and ubg[r] - g[r] > reach
+    return out
+
+
+@numba.njit(**_JIT)
+def _working_set(g, x, rk, ck, k, m, nc, last_rows, last_vars, start):
+    """DAQP's starting working set: the last multipliers' signs for the coefficients' bounds
+    and the hard rows, the active side of each power sample's epigraph pair, a clearance row
+    where the point dips (else its slack's bound), the elastic columns at zero."""
+    above, below, clearance, v = start
+    lam_rows, lam_vars = last_rows.copy(), last_vars.copy()
+    for j in range(nc):
+        lam_vars[j] = np.sign(lam_vars[j])
+    for i in range(len(above)):
+        power = 0.5 * (g[above[i]] - g[below[i]])
+        lam_rows[above[i]] = 1.0 if power > 0 else 0.0
+        lam_rows[below[i]] = 1.0 if power < 0 else 0.0
+    for i in range(len(clearance)):
+        dips = x[v[i]] > 0
+        lam_rows[clearance[i]] = -1.0 if dips else 0.0
+        lam_vars[v[i]] = 0.0 if dips else -1.0
+    dual = np.empty(k + m + len(rk))
+    for j in range(k):
+        dual[j] = lam_vars[ck[j]]
+    dual[k:k + m] = -1.0
+    for r in range(len(rk)):
+        dual[k + m + r] = lam_rows[rk[r]]
+    return dual
+
+
+@_entry("(f8[:], f8[:, :], f8[:], f8[:], f8[:, :], f8[:], f8[:], i8[:], i8[:], i8, f8[:], b1[:], "
+        "b1[:], b1[:], f8[:], f8[:, :], f8, f8, f8[:], f8[:], UniTuple(i8[:], 4), f8, f8, f8, b1)")
 def assemble(g, jac, grad, x, convexified, lbg, ubg, rows, cols, nc, col_lbx, equality,
              keep_rows, keep_cols, extra_cost, extra_curvature, radius, nu, last_rows,
              last_vars, start, proximal, violated_tol, inf, drop):
@@ -104,54 +160,8 @@ def assemble(g, jac, grad, x, convexified, lbg, ubg, rows, cols, nc, col_lbx, eq
     return h, f, a, upper, lower, sense, dual, rk, ck
 
 
-@numba.njit(**_JIT)
-def _out_of_reach(g, jac, lbg, ubg, rows, ck, nc, equality, radius):
-    """The inequality rows in only the coefficients (the first nc columns) that no step in
-    the trust region (|d_j| <= radius) brings to a bound: inactive in the QP whatever its
-    solution, so leaving them out changes neither the step nor a multiplier (each 0)."""
-    out = np.zeros(len(rows), np.bool_)
-    for i in range(len(rows)):
-        r = rows[i]
-        if equality[i]:
-            continue
-        reach, slack = 0.0, False
-        for j in range(len(ck)):
-            if j < nc:
-                reach += abs(jac[r, ck[j]])
-            elif jac[r, ck[j]] != 0.0:
-                slack = True
-        reach *= radius * (1.0 + 1e-9)
-        out[i] = not slack and lbg[r] - g[r] < -reach and ubg[r] - g[r] > reach
-    return out
-
-
-@numba.njit(**_JIT)
-def _working_set(g, x, rk, ck, k, m, nc, last_rows, last_vars, start):
-    """DAQP's starting working set: the last multipliers' signs for the coefficients' bounds
-    and the hard rows, the active side of each power sample's epigraph pair, a clearance row
-    where the point dips (else its slack's bound), the elastic columns at zero."""
-    above, below, clearance, v = start
-    lam_rows, lam_vars = last_rows.copy(), last_vars.copy()
-    for j in range(nc):
-        lam_vars[j] = np.sign(lam_vars[j])
-    for i in range(len(above)):
-        power = 0.5 * (g[above[i]] - g[below[i]])
-        lam_rows[above[i]] = 1.0 if power > 0 else 0.0
-        lam_rows[below[i]] = 1.0 if power < 0 else 0.0
-    for i in range(len(clearance)):
-        dips = x[v[i]] > 0
-        lam_rows[clearance[i]] = -1.0 if dips else 0.0
-        lam_vars[v[i]] = 0.0 if dips else -1.0
-    dual = np.empty(k + m + len(rk))
-    for j in range(k):
-        dual[j] = lam_vars[ck[j]]
-    dual[k:k + m] = -1.0
-    for r in range(len(rk)):
-        dual[k + m + r] = lam_rows[rk[r]]
-    return dual
-
-
-@numba.njit(**_JIT)
+@_entry("(f8[:], f8[:], f8[:, :], f8[:], i8, i8[:], i8[:], i8, i8, f8[:], f8[:], f8[:], "
+        "f8[:, :], f8[:], b1[:], i8[:], i8[:, :], f8)")
 def unpack(solution, lam, h, f, k, rk, ck, n, rows_total, value, side, rate, slope, weight,
            held, slack, held_rows, proximal):
     """The NLP's step and multipliers from DAQP's solution, the model's value and the
@@ -175,7 +185,10 @@ def unpack(solution, lam, h, f, k, rk, ck, n, rows_total, value, side, rate, slo
     for i in range(k, size):
         linear += solution[i]
     flipped = np.zeros(len(value), np.bool_)
-    change = slope @ d[:nc]  # of P and of D along the step (linearized)
+    change = np.zeros(len(value))  # of P and of D along the step (linearized)
+    for i in range(len(value)):
+        for j in range(nc):
+            change[i] += slope[i, j] * d[j]
     for i in range(len(value)):
         flipped[i] = held[i] and side[i] * (value[i] + change[i]) <= 0.0
     if flipped.any():
@@ -197,7 +210,7 @@ def unpack(solution, lam, h, f, k, rk, ck, n, rows_total, value, side, rate, slo
     return d, lam_rows, lam_vars, model, linear, flipped
 
 
-@numba.njit(**_JIT)
+@_entry("(f8[:], f8[:], f8[:], i8, i8, i8, i8[:], i8[:], i8[:], i8[:], i8[:])")
 def reset(out, x, lbg, n, rows, nc, above, below, e, clearance, v):
     """A local evaluation's column (f, grad f, g, jacobian row-major, the coefficients'
     Hessian) unpacked into copies, at x with its slacks reset to the least values their
@@ -221,7 +234,7 @@ def reset(out, x, lbg, n, rows, nc, above, below, e, clearance, v):
     return f, grad, g, jac, hess, x
 
 
-@numba.njit(**_JIT)
+@_entry("(f8[:], f8[:], f8[:])")
 def violation(g, lbg, ubg):
     """L1 distance of the rows g from [lbg, ubg]."""
     total = 0.0
@@ -230,7 +243,7 @@ def violation(g, lbg, ubg):
     return total
 
 
-@numba.njit(**_JIT)
+@_entry("(f8[:, :], f8)")
 def convex(hessian, curvature):
     """The symmetric part of hessian with its eigenvalues clipped below at curvature x
     max(1, its largest |eigenvalue|)."""

@@ -82,6 +82,7 @@ class AnytimeSQP:
         self._slacks = tuple(np.arange(part.start, part.stop) for part in
                              (layout.above, layout.below, layout.e, layout.clearance, layout.v))
         self.spent_ms = 0.0  # CPU ms in the compiled evaluations and the QP solver, so far
+        self.solve_ms = 0.0  # CPU ms in solve, so far
         # CPU ms of the last RECENT iterations: the next one is expected to cost their most
         # (a spike, such as a first call's loading, ages out instead of shortening every
         # later re-plan's budget)
@@ -116,6 +117,7 @@ class AnytimeSQP:
         iteration starts that would end past it. accept(point) is called on the start and
         every accepted iterate (its return value is ignored: the caller keeps the best one);
         returns the last point's solution and the iteration count."""
+        entered = time.thread_time()
         clock = Clock() if clock is None else clock
         lbg, ubg = np.asarray(lbg, float), np.asarray(ubg, float)
         rows = np.flatnonzero(np.isfinite(lbg) | np.isfinite(ubg))
@@ -186,6 +188,7 @@ class AnytimeSQP:
                 # boundary, measured at ratios 0.6-0.8; growing only above 0.75 took 171
                 # iterations on a random crossing
                 radius = min(2.0 * radius, 10.0)
+        self.solve_ms += 1e3 * (time.thread_time() - entered)
         return Solution(point.x, point.f, lam_g, lam_x, status, iterations,
                         point.violation), iterations
 

@@ -13,7 +13,9 @@ from harness.sections.base import Context, SectionResult, Target
 from harness.studies.realtime import measure
 
 REPLAN_MEDIAN_MS, REPLAN_MAX_MS, COLD_MAX_MS = 2.0, 10.0, 25.0
-OVERHEAD_MS = 0.3  # Python around the anytime SQP's solver per re-plan
+# a re-plan's work outside the anytime SQP's solve (the bar), and beside it
+# everything but the compiled evaluations and DAQP
+OVERHEAD_MS = 0.3
 
 
 def run(ctx: Context) -> SectionResult:
@@ -53,4 +55,6 @@ def _anytime_targets(row: dict, per: dict) -> list[Target]:
             Target("anytime SQP: cold plan CPU time, max", cold["max"], COLD_MAX_MS, "ms",
                    timing=True),
             Target("anytime SQP: Python around the solver per re-plan, median",
-                   per["overhead_cpu_ms"]["median"], OVERHEAD_MS, "ms", timing=True)]
+                   per["overhead_cpu_ms"]["median"], OVERHEAD_MS, "ms", timing=True),
+            Target("anytime SQP: CPU outside its solve per re-plan, median",
+                   per["outside_cpu_ms"]["median"], OVERHEAD_MS, "ms", timing=True)]
