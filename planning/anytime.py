@@ -120,12 +120,13 @@ class Anytime:
             clock.tick(Clock.ROUND_ITERATIONS)
             round_began = clock.ms()
             problem = self.problem(goal, torque)
-            safety = check(reference.coefficients)
-            slots = near_samples(safety.clearance, config.threshold, config.obstacle_slots)
+            links = check.links(reference.coefficients)  # what the screening needs
+            slots = near_samples(links.min(axis=1, initial=np.inf), config.threshold,
+                                 config.obstacle_slots)
             p = planner.parameters(q0, qd0, duration, goal,
                                    ObstacleForecast(times[slots], centres[slots]), t_begin,
                                    reference, config.elastic_weight)
-            lbg, ubg = self._bounds(problem, goal, safety.links[slots])
+            lbg, ubg = self._bounds(problem, goal, links[slots])
             start, lam_g, lam_x = self._start(problem, reference, times[slots], last)
             points: list[sqp.Point] = []
             reserve = self.rounds.reserve(clock)  # for choosing and packing after the solve
@@ -143,7 +144,7 @@ class Anytime:
                     segment, status=self._status(chosen, converged),
                     success=chosen.hard == 0)
             last = segment
-            more = self._needs_round(chosen, slots, safety.links[slots])
+            more = self._needs_round(chosen, slots, links[slots])
             if more == "torque":
                 torque = True
             self.rounds.record(clock, clock.ms() - solved,

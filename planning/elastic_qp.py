@@ -71,7 +71,8 @@ class Frame:
         self.above, self.below, self.e = (np.arange(part.start, part.stop) for part in
                                           (layout.above, layout.below, layout.e))
         clearance = np.arange(layout.clearance.start, layout.clearance.stop)
-        self.clearance = clearance[np.isin(clearance, rows)]
+        at = np.minimum(np.searchsorted(rows, clearance), max(len(rows) - 1, 0))
+        self.clearance = clearance[rows[at] == clearance] if len(rows) else clearance[:0]
         self.v = layout.v.start + self.clearance - layout.clearance.start
         self.above_at, self.below_at, self.clearance_at = (
             np.searchsorted(rows, part) for part in (self.above, self.below, self.clearance))

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from functools import cache
 from math import comb
 
+import numba
 import numpy as np
 
 DEGREE = 4  # the paper's quartic
@@ -95,25 +96,40 @@ def _binomial(n: int) -> tuple[np.ndarray, ...]:
 
 def stationary_points_rows(coefficients: np.ndarray) -> np.ndarray:
     """stationary_points of each row of coefficients (n, degree + 1) -> (n, degree - 1),
-    NaN-padded; one batched eigenvalue call for the companion matrices of the derivatives."""
-    c = np.asarray(coefficients, dtype=float)
+    NaN-padded (compiled: the eigenvalues of each derivative's companion matrix)."""
+    return _stationary_points_rows(np.asarray(coefficients, dtype=float))
+
+
+@numba.njit("(f8[:, :],)", cache=True, nogil=True)
+def _stationary_points_rows(c):
+    """A row's derivative keeps its full degree unless its leading coefficient is below 1e-12
+    of its largest (then exact zeros are trimmed, as stationary_points does); its real roots
+    in (0, 1), sorted. Measured: as numpy (a batched eigvals) ~0.12 ms of a 2.2 ms re-plan."""
     m = c.shape[1] - 2  # degree of the derivative
-    slope = c[:, 1:] * np.arange(1, m + 2)  # ascending coefficients of dq/ds
-    lead = slope[:, -1]
-    out = np.full((len(c), m), np.nan)
-    regular = np.abs(lead) > 1e-12 * (np.abs(slope).max(axis=1) + 1e-300)
-    if regular.any() and m > 0:
-        monic = slope[regular, :-1] / lead[regular, None]
-        companion = np.zeros((int(regular.sum()), m, m))
-        companion[:, 0, :] = -monic[:, ::-1]
-        companion[:, np.arange(1, m), np.arange(m - 1)] = 1.0
+    out = np.full((c.shape[0], max(m, 0)), np.nan)
+    for j in range(c.shape[0]):
+        slope = np.empty(m + 1)
+        for p in range(m + 1):
+            slope[p] = c[j, p + 1] * (p + 1)  # ascending coefficients of dq/ds
+        top = m
+        if abs(slope[m]) <= 1e-12 * (np.max(np.abs(slope)) + 1e-300):
+            while top >= 0 and slope[top] == 0.0:
+                top -= 1
+        if top < 1:
+            continue
+        companion = np.zeros((top, top), np.complex128)
+        for i in range(top):
+            companion[0, i] = -slope[top - 1 - i] / slope[top]
+        for i in range(1, top):
+            companion[i, i - 1] = 1.0
         roots = np.linalg.eigvals(companion)
-        ok = (np.abs(roots.imag) < 1e-9) & (roots.real > 1e-6) & (roots.real < 1 - 1e-6)
-        values = np.sort(np.where(ok, roots.real, np.nan), axis=1)
-        out[regular] = values
-    for j in np.flatnonzero(~regular):
-        roots = stationary_points(c[j])
-        out[j, : len(roots)] = roots
+        inside = np.empty(top)
+        count = 0
+        for root in roots:
+            if abs(root.imag) < 1e-9 and 1e-6 < root.real < 1 - 1e-6:
+                inside[count] = root.real
+                count += 1
+        out[j, :count] = np.sort(inside[:count])
     return out
 
 
