@@ -116,17 +116,13 @@ def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
     convexified = kernels.convex(point.hess, CURVATURE)
     lam_rows_last, lam_vars_last = (np.asarray(v, float) for v in last)
     for _ in range(len(value) + 1):
-        keep_rows, keep_cols = np.ones(len(frame.rows), bool), np.ones(len(frame.cols), bool)
-        keep_rows[frame.rows_at[held]] = False
-        keep_rows[frame.second_at[held & (frame.second_at >= 0)]] = False
-        keep_cols[frame.cols_at[held]] = False
-        moving = held & (rate != 0)
-        linear = slope[moving]
+        keep_rows, keep_cols, extra_cost, extra_curvature = kernels.held_out(
+            held, rate, weight, slope, frame.rows_at, frame.second_at, frame.cols_at,
+            len(frame.rows), len(frame.cols), PROXIMAL)
         h, f, a, upper, lower, sense, dual, rk, ck = kernels.assemble(
             g, jac, point.grad, x, convexified, lbg, ubg, frame.rows, frame.cols, nc,
-            frame.lbx, frame.equality, keep_rows, keep_cols,
-            (weight[moving] * rate[moving]) @ linear, PROXIMAL * linear.T @ linear, radius,
-            nu, lam_rows_last, lam_vars_last, frame.start, PROXIMAL, VIOLATED, _INF,
+            frame.lbx, frame.equality, keep_rows, keep_cols, extra_cost, extra_curvature,
+            radius, nu, lam_rows_last, lam_vars_last, frame.start, PROXIMAL, VIOLATED, _INF,
             DROP_UNREACHABLE)
         began = time.thread_time()
         solution, _, flag, info = daqp.solve(h, f, a, upper, lower, sense, dual_start=dual,

@@ -60,6 +60,30 @@ def branches(g, jac, grad, x, lbg, above, below, e, clearance, v, nc, radius, ho
     return value, side, rate, slope, weight, held
 
 
+@_entry("(b1[:], f8[:], f8[:], f8[:, :], i8[:], i8[:], i8[:], i8, i8, f8)")
+def held_out(held, rate, weight, slope, rows_at, second_at, cols_at, rows, cols, proximal):
+    """The QP's rows and columns kept (masks over the frame's) with the held items' out, and
+    what the held moving slacks add to the coefficients' cost and Hessian: sum w rate grad,
+    proximal sum grad grad'."""
+    keep_rows, keep_cols = np.ones(rows, np.bool_), np.ones(cols, np.bool_)
+    nc = slope.shape[1]
+    cost, curvature = np.zeros(nc), np.zeros((nc, nc))
+    for i in range(len(held)):
+        if not held[i]:
+            continue
+        keep_rows[rows_at[i]] = False
+        if second_at[i] >= 0:
+            keep_rows[second_at[i]] = False
+        keep_cols[cols_at[i]] = False
+        if rate[i] == 0.0:
+            continue
+        for j in range(nc):
+            cost[j] += weight[i] * rate[i] * slope[i, j]
+            for k in range(nc):
+                curvature[j, k] += proximal * slope[i, j] * slope[i, k]
+    return keep_rows, keep_cols, cost, curvature
+
+
 @numba.njit(**_JIT)
 def _out_of_reach(g, jac, lbg, ubg, rows, ck, nc, equality, radius):
     """The inequality rows in only the coefficients (the first nc columns) that no step in
