@@ -46,7 +46,8 @@ class Layout:
 
 @dataclass
 class Point:
-    """An iterate with its slacks reset: x, objective f, rows g, gradient, Jacobian, the
+    """An iterate with its slacks reset: x, objective f, rows g, gradient, the rows'
+    Jacobian in the coefficients (the slacks' columns are constant: slack_structure), the
     Lagrangian Hessian's coefficient block, and its hard-row violation (L1)."""
 
     x: np.ndarray
@@ -85,6 +86,33 @@ class Frame:
         self.item_rows = np.column_stack([np.concatenate([self.above, self.clearance]),
                                           np.concatenate([self.below, np.full(len(self.v), -1)])])
         self.start = (self.above, self.below, self.clearance, self.v)
+        self.slack_rows, self.slack_sign, self.slack_row = slack_structure(layout)
+
+
+def slack_structure(layout: Layout) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The slacks' constant columns of the rows' Jacobian (a Point's jac has the coefficients'
+    only): per slack (e, then v), its rows (a power sample's above and below, a clearance
+    row and -1) and its coefficient in them (e: -1, v: +1); and which rows (up to the last
+    with a slack) have one."""
+    e, v = layout.e.stop - layout.e.start, layout.v.stop - layout.v.start
+    rows = np.full((e + v, 2), -1)
+    rows[:e, 0] = np.arange(layout.above.start, layout.above.stop)
+    rows[:e, 1] = np.arange(layout.below.start, layout.below.stop)
+    rows[e:, 0] = np.arange(layout.clearance.start, layout.clearance.stop)
+    sign = np.concatenate([np.full(e, -1.0), np.full(v, 1.0)])
+    has = np.zeros(max(layout.above.stop, layout.below.stop, layout.clearance.stop), bool)
+    has[rows[rows >= 0]] = True
+    return rows, sign, has
+
+
+def linear_change(point: Point, dx: np.ndarray, layout: Layout) -> np.ndarray:
+    """The rows' linear change J dx along a step dx of all variables."""
+    nc = layout.nc
+    change = point.jac @ dx[:nc]
+    change[layout.above] -= dx[layout.e]
+    change[layout.below] -= dx[layout.e]
+    change[layout.clearance] += dx[layout.v]
+    return change
 
 
 def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
@@ -122,7 +150,8 @@ def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
         h, f, a, upper, lower, sense, dual, rk, ck = kernels.assemble(
             g, jac, point.grad, x, convexified, lbg, ubg, frame.rows, frame.cols, nc,
             frame.lbx, frame.equality, keep_rows, keep_cols, extra_cost, extra_curvature,
-            radius, nu, lam_rows_last, lam_vars_last, frame.start, PROXIMAL, VIOLATED, _INF,
+            radius, nu, lam_rows_last, lam_vars_last, frame.start, frame.slack_rows,
+            frame.slack_sign, frame.slack_row, PROXIMAL, VIOLATED, _INF,
             DROP_UNREACHABLE)
         began = time.thread_time()
         solution, _, flag, info = daqp.solve(h, f, a, upper, lower, sense, dual_start=dual,
@@ -140,3 +169,4 @@ def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
             return d, lam_rows, lam_vars, (model, violation), spent
         held &= ~flipped
     raise AssertionError("unreachable: with every slack back in the QP none can flip")
+

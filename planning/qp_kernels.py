@@ -85,23 +85,20 @@ def held_out(held, rate, weight, slope, rows_at, second_at, cols_at, rows, cols,
 
 
 @numba.njit(**_JIT)
-def _out_of_reach(g, jac, lbg, ubg, rows, ck, nc, equality, radius):
-    """The inequality rows in only the coefficients (the first nc columns) that no step in
-    the trust region (|d_j| <= radius) brings to a bound: inactive in the QP whatever its
+def _out_of_reach(g, jac, lbg, ubg, rows, nc, equality, radius, slack_row):
+    """The inequality rows in only the coefficients (no slack_row) that no step in the
+    trust region (|d_j| <= radius) brings to a bound: inactive in the QP whatever its
     solution, so leaving them out changes neither the step nor a multiplier (each 0)."""
     out = np.zeros(len(rows), np.bool_)
     for i in range(len(rows)):
         r = rows[i]
-        if equality[i]:
+        if equality[i] or (r < len(slack_row) and slack_row[r]):
             continue
-        reach, slack = 0.0, False
-        for j in range(len(ck)):
-            if j < nc:
-                reach += abs(jac[r, ck[j]])
-            elif jac[r, ck[j]] != 0.0:
-                slack = True
+        reach = 0.0
+        for j in range(nc):
+            reach += abs(jac[r, j])
         reach *= radius * (1.0 + 1e-9)
-        out[i] = not slack and lbg[r] - g[r] < -reach and ubg[r] - g[r] > reach
+        out[i] = lbg[r] - g[r] < -reach and ubg[r] - g[r] > reach
     return out
 
 
@@ -132,18 +129,23 @@ def _working_set(g, x, rk, ck, k, m, nc, last_rows, last_vars, start):
 
 
 @_entry("(f8[:], f8[:, :], f8[:], f8[:], f8[:, :], f8[:], f8[:], i8[:], i8[:], i8, f8[:], b1[:], "
-        "b1[:], b1[:], f8[:], f8[:, :], f8, f8, f8[:], f8[:], UniTuple(i8[:], 4), f8, f8, f8, b1)")
+        "b1[:], b1[:], f8[:], f8[:, :], f8, f8, f8[:], f8[:], UniTuple(i8[:], 4), i8[:, :], "
+        "f8[:], b1[:], f8, f8, f8, b1)")
 def assemble(g, jac, grad, x, convexified, lbg, ubg, rows, cols, nc, col_lbx, equality,
              keep_rows, keep_cols, extra_cost, extra_curvature, radius, nu, last_rows,
-             last_vars, start, proximal, violated_tol, inf, drop):
+             last_vars, start, slack_rows, slack_sign, slack_row, proximal, violated_tol, inf,
+             drop):
     """DAQP's QP (H, f, A, bupper, blower, sense, dual start) over the kept rows and
     columns, with an elastic column for each hard row the point violates, without the rows
     no step in the trust region can reach (if drop); and the kept rows' and columns' NLP
-    indices. start: (above, below, clearance, v) of the layout, whose multipliers the
-    working set takes from the point (see _working_set)."""
+    indices. jac: the rows' Jacobian in the coefficients; the slacks' columns are
+    slack_sign at slack_rows (elastic_qp.slack_structure). start: (above, below, clearance,
+    v) of the layout, whose multipliers the working set takes from the point (see
+    _working_set)."""
     ck = cols[keep_cols]
     if drop:
-        keep_rows = keep_rows & ~_out_of_reach(g, jac, lbg, ubg, rows, ck, nc, equality, radius)
+        keep_rows = keep_rows & ~_out_of_reach(g, jac, lbg, ubg, rows, nc, equality, radius,
+                                               slack_row)
     rk, eq = rows[keep_rows], equality[keep_rows]
     lr, k = len(rk), len(ck)
     low, high = lbg[rk] - g[rk], ubg[rk] - g[rk]
@@ -167,9 +169,15 @@ def assemble(g, jac, grad, x, convexified, lbg, ubg, rows, cols, nc, col_lbx, eq
         h[i, i] = proximal
         f[i] = grad[ck[i]]
         lower[i], upper[i] = max(slack_lbx[i - nc] - x[ck[i]], -inf), inf
+    at = np.full(len(g), -1)  # each NLP row's position among the kept
     for r in range(lr):
-        for j in range(k):
-            a[r, j] = jac[rk[r], ck[j]]
+        at[rk[r]] = r
+        for j in range(nc):
+            a[r, j] = jac[rk[r], j]
+    for j in range(nc, k):
+        for row in slack_rows[ck[j] - nc]:
+            if row >= 0 and at[row] >= 0:
+                a[at[row], j] = slack_sign[ck[j] - nc]
     column = k
     for r in range(lr):
         if low[r] > violated_tol or high[r] < -violated_tol:
@@ -236,14 +244,14 @@ def unpack(solution, lam, h, f, k, rk, ck, n, rows_total, value, side, rate, slo
 
 @_entry("(f8[:], f8[:], f8[:], i8, i8, i8, i8[:], i8[:], i8[:], i8[:], i8[:])")
 def reset(out, x, lbg, n, rows, nc, above, below, e, clearance, v):
-    """A local evaluation's column (f, grad f, g, jacobian row-major, the coefficients'
-    Hessian) unpacked into copies, at x with its slacks reset to the least values their
+    """A local evaluation's column (f, grad f, g, the Jacobian in the coefficients
+    row-major, their Hessian) unpacked into copies, at x with its slacks reset to the least values their
     rows allow (e = |P|, v = max(0, lambda - D)) and f, g moved with them: f, grad, g, jac,
     hess, x."""
     grad, g = out[1:1 + n].copy(), out[1 + n:1 + n + rows].copy()
     start = 1 + n + rows
-    jac = out[start:start + rows * n].copy().reshape((rows, n))
-    hess = out[start + rows * n:start + rows * n + nc * nc].copy().reshape((nc, nc))
+    jac = out[start:start + rows * nc].copy().reshape((rows, nc))
+    hess = out[start + rows * nc:start + rows * nc + nc * nc].copy().reshape((nc, nc))
     x, f = x.copy(), out[0]
     for i in range(len(e)):
         power = 0.5 * (g[above[i]] - g[below[i]])

@@ -27,7 +27,7 @@ import numpy as np
 from planning import compiled
 from planning import qp_kernels as kernels
 from planning.budget import RECENT, Clock
-from planning.elastic_qp import VIOLATED, Frame, Layout, Point, step
+from planning.elastic_qp import VIOLATED, Frame, Layout, Point, linear_change, slack_structure, step
 
 CONVERGED, BUDGET, STALLED = "converged", "budget", "stalled"
 # predicted decrease (relative to the objective) below which a point is taken as optimal: the
@@ -52,14 +52,23 @@ class Solution:
 
 
 def local_function(nlp, name: str) -> ca.Function:
-    """(x, p, lam_g) -> one dense column: f, grad f, g, jacobian g (column-major) and the
-    coefficient block of the Lagrangian's Hessian (the slacks enter linearly), so that one
+    """(x, p, lam_g) -> one dense column: f, grad f, g, the rows' Jacobian in the
+    coefficients (the slacks' columns are constants, checked here) and the coefficient block
+    of the Lagrangian's Hessian (the slacks enter linearly), so that one
     call through a buffer (Function.buffer: no conversion of its outputs) gives everything."""
     lam = ca.SX.sym("lam", nlp.g.numel())
-    coefficients = nlp.x[: layout_of(nlp).nc]
+    layout = layout_of(nlp)
+    coefficients = nlp.x[: layout.nc]
+    rows, sign, _ = slack_structure(layout)  # the slacks' columns, which stay out
+    slacks = ca.evalf(ca.jacobian(nlp.g, nlp.x[layout.nc:])).full()
+    expected = np.zeros_like(slacks)
+    for column, (pair, value) in enumerate(zip(rows, sign, strict=True)):
+        expected[pair[pair >= 0], column] = value
+    if not np.array_equal(slacks, expected):
+        raise ValueError("the NLP's slacks do not enter its rows as elastic_qp.slack_structure")
     hessian, _ = ca.hessian(nlp.f + ca.dot(lam, nlp.g), coefficients)
     column = ca.vertcat(nlp.f, ca.gradient(nlp.f, nlp.x), nlp.g,
-                        ca.vec(ca.jacobian(nlp.g, nlp.x).T), ca.vec(hessian))  # J row-major
+                        ca.vec(ca.jacobian(nlp.g, coefficients).T), ca.vec(hessian))  # row-major
     return ca.Function(name, [nlp.x, nlp.p, lam], [ca.densify(column)])
 
 
@@ -223,7 +232,8 @@ class AnytimeSQP:
         lands on the rows' curved surfaces; the corrected trial point and its multipliers,
         or None. Measured: near a minimum-violation plan's kinks the plain steps were
         refused and accepted in turn, halving the progress each time."""
-        shifted = Point(point.x, point.f, trial.g - point.jac @ (trial.x - point.x),
+        shifted = Point(point.x, point.f,
+                        trial.g - linear_change(point, trial.x - point.x, self.layout),
                         point.grad, point.jac, point.hess, point.violation)
         step = self._qp(shifted, lbg, ubg, frame, radius, nu, last)
         if step is None:

@@ -167,6 +167,24 @@ def test_the_qp_without_rows_out_of_reach_is_the_full_qp(planner, monkeypatch, r
         assert np.allclose(ours, theirs, atol=1e-6 * (1 + np.max(np.abs(theirs))))
 
 
+def test_a_points_jacobian_with_its_constant_slack_columns_is_the_nlps(planner):
+    """A Point keeps the rows' Jacobian in the coefficients only; with the slacks' constant
+    columns (elastic_qp.slack_structure, linear_change) it is CasADi's Jacobian of every row
+    in every variable, along random steps."""
+    case, forecast = random_crossing(planner, seed=7)
+    nlp, p, lbg, _, start = _elastic_problem(planner, case, forecast)
+    layout = sqp.layout_of(nlp)
+    solver = sqp.AnytimeSQP(sqp.local_function(nlp, "local"), layout, nlp.lbx, nlp.g.numel())
+    point = solver.evaluate(start, p, np.zeros(nlp.g.numel()), lbg)
+    jacobian = ca.Function("J", [nlp.x, nlp.p], [ca.jacobian(nlp.g, nlp.x)])
+    full = np.asarray(jacobian(point.x, p))
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        dx = rng.normal(size=nlp.x.numel())
+        assert np.allclose(elastic_qp.linear_change(point, dx, layout), full @ dx,
+                           rtol=1e-10, atol=1e-10 * np.max(np.abs(full @ dx)))
+
+
 def test_compiled_safety_checks_match_the_numpy_ones(baseline):
     """Clearance at each sample (planning.clearance), the limit excess with its turning
     points (planning.limits), the torque excess (Planner.torque_excess) and the dense energy
