@@ -17,13 +17,14 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections import deque
 from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
 from planning import compiled, sqp
-from planning.budget import Clock, RoundCosts
+from planning.budget import RECENT, Clock, RoundCosts
 from planning.candidates import TORQUE_TOLERANCE, Candidate, choose
 from planning.limits import LIMIT_TOLERANCE
 from planning.nlp import PlanningNLP
@@ -57,6 +58,8 @@ class Anytime:
         self._problems: dict[tuple, _Problem] = {}
         self._prepared: set[tuple] = set()
         self.rounds = RoundCosts()
+        # CPU ms of recent cold plans' ranking of their starts (kept from their budget)
+        self.ranking: deque[float] = deque(maxlen=RECENT)
         # when a list: (inputs, plan, CPU ms in the solver's evaluations and QPs, CPU ms in
         # its solves) of every warm plan (the realtime study's references and overhead)
         self.record: list | None = None
