@@ -40,8 +40,11 @@ class PolynomialTrajectory:
     def from_free(cls, t_begin: float, duration: float, q0, qd0, free: np.ndarray):
         """Segment from its start state and the free coefficients (dof, degree - 1) of
         s^2..s^degree."""
-        fixed = np.stack([np.asarray(q0, float), np.asarray(qd0, float) * duration], axis=1)
-        return cls(t_begin, duration, np.hstack([fixed, np.asarray(free, float)]))
+        free = np.asarray(free, float)
+        coefficients = np.empty((free.shape[0], free.shape[1] + 2))
+        coefficients[:, 0], coefficients[:, 1], coefficients[:, 2:] = q0, qd0, free
+        coefficients[:, 1] *= duration
+        return cls(t_begin, duration, coefficients)
 
     @property
     def degree(self) -> int:
