@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from functools import cache
 
 import daqp
 import numpy as np
@@ -83,8 +84,6 @@ class Frame:
         self.second_at = np.concatenate([self.below_at, np.full(len(self.clearance), -1)])
         self.cols_at = np.concatenate([self.e_at, self.v_at])
         self.slack = np.concatenate([self.e, self.v])
-        self.item_rows = np.column_stack([np.concatenate([self.above, self.clearance]),
-                                          np.concatenate([self.below, np.full(len(self.v), -1)])])
         self.start = (self.above, self.below, self.clearance, self.v)
         self.slack_rows, self.slack_sign, self.slack_row = slack_structure(layout)
 
@@ -93,25 +92,30 @@ def slack_structure(layout: Layout) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     """The slacks' constant columns of the rows' Jacobian (a Point's jac has the coefficients'
     only): per slack (e, then v), its rows (a power sample's above and below, a clearance
     row and -1) and its coefficient in them (e: -1, v: +1); and which rows (up to the last
-    with a slack) have one."""
-    e, v = layout.e.stop - layout.e.start, layout.v.stop - layout.v.start
-    rows = np.full((e + v, 2), -1)
-    rows[:e, 0] = np.arange(layout.above.start, layout.above.stop)
-    rows[:e, 1] = np.arange(layout.below.start, layout.below.stop)
-    rows[e:, 0] = np.arange(layout.clearance.start, layout.clearance.stop)
-    sign = np.concatenate([np.full(e, -1.0), np.full(v, 1.0)])
-    has = np.zeros(max(layout.above.stop, layout.below.stop, layout.clearance.stop), bool)
+    with a slack) have one. Built once per layout: shared, never written."""
+    return _slack_structure(*((part.start, part.stop) for part in
+                              (layout.e, layout.v, layout.above, layout.below, layout.clearance)))
+
+
+@cache
+def _slack_structure(e, v, above, below, clearance) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    count, total = e[1] - e[0], e[1] - e[0] + v[1] - v[0]
+    rows = np.full((total, 2), -1)
+    rows[:count, 0], rows[:count, 1] = np.arange(*above), np.arange(*below)
+    rows[count:, 0] = np.arange(*clearance)
+    sign = np.concatenate([np.full(count, -1.0), np.full(total - count, 1.0)])
+    has = np.zeros(max(above[1], below[1], clearance[1]), bool)
     has[rows[rows >= 0]] = True
     return rows, sign, has
 
 
 def linear_change(point: Point, dx: np.ndarray, layout: Layout) -> np.ndarray:
     """The rows' linear change J dx along a step dx of all variables."""
-    nc = layout.nc
-    change = point.jac @ dx[:nc]
-    change[layout.above] -= dx[layout.e]
-    change[layout.below] -= dx[layout.e]
-    change[layout.clearance] += dx[layout.v]
+    change = point.jac @ dx[: layout.nc]
+    rows, sign, _ = slack_structure(layout)
+    for column in rows.T:
+        there = column >= 0
+        change[column[there]] += sign[there] * dx[layout.nc:][there]
     return change
 
 
@@ -164,7 +168,7 @@ def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
             return None
         d, lam_rows, lam_vars, model, violation, flipped = kernels.unpack(
             solution, info["lam"], h, f, len(ck), rk, ck, len(x), len(g), value, side, rate,
-            slope, weight, held, frame.slack, frame.item_rows, PROXIMAL)
+            slope, weight, held, frame.slack, frame.slack_rows, PROXIMAL)
         if not flipped.any():
             return d, lam_rows, lam_vars, (model, violation), spent
         held &= ~flipped

@@ -195,11 +195,11 @@ def assemble(g, jac, grad, x, convexified, lbg, ubg, rows, cols, nc, col_lbx, eq
 @_entry("(f8[:], f8[:], f8[:, :], f8[:], i8, i8[:], i8[:], i8, i8, f8[:], f8[:], f8[:], "
         "f8[:, :], f8[:], b1[:], i8[:], i8[:, :], f8)")
 def unpack(solution, lam, h, f, k, rk, ck, n, rows_total, value, side, rate, slope, weight,
-           held, slack, held_rows, proximal):
+           held, slack, slack_rows, proximal):
     """The NLP's step and multipliers from DAQP's solution, the model's value and the
     linearized hard violation, and which held items' branches the step flips (then nothing
-    else is meaningful: the QP is solved again without them). held_rows: per item, its
-    (above, below) rows for a power sample, (row, -1) for a clearance row."""
+    else is meaningful: the QP is solved again without them). slack: each item's slack (an
+    NLP column); slack_rows: each slack's rows (elastic_qp.slack_structure)."""
     nc = slope.shape[1]
     d, lam_rows, lam_vars = np.zeros(n), np.zeros(rows_total), np.zeros(n)
     for j in range(k):
@@ -231,7 +231,7 @@ def unpack(solution, lam, h, f, k, rk, ck, n, rows_total, value, side, rate, slo
         moved = rate[i] * change[i]
         d[slack[i]] = moved
         multiplier = weight[i] + proximal * moved  # of the row holding a moving slack
-        first, second = held_rows[i, 0], held_rows[i, 1]
+        first, second = slack_rows[slack[i] - nc, 0], slack_rows[slack[i] - nc, 1]
         if second >= 0:  # a power sample: the row of its sign's side
             lam_rows[first] = multiplier if side[i] > 0 else 0.0
             lam_rows[second] = multiplier if side[i] < 0 else 0.0
