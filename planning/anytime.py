@@ -17,14 +17,13 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from collections import deque
 from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
 from planning import compiled, sqp
-from planning.budget import RECENT, Clock, RoundCosts
+from planning.budget import Clock, RoundCosts
 from planning.candidates import TORQUE_TOLERANCE, Candidate, choose
 from planning.limits import LIMIT_TOLERANCE
 from planning.nlp import PlanningNLP
@@ -58,8 +57,6 @@ class Anytime:
         self._problems: dict[tuple, _Problem] = {}
         self._prepared: set[tuple] = set()
         self.rounds = RoundCosts()
-        # CPU ms of recent cold plans' ranking of their starts (kept from their budget)
-        self.ranking: deque[float] = deque(maxlen=RECENT)
         # when a list: (inputs, plan, CPU ms in the solver's evaluations and QPs, CPU ms in
         # its solves) of every warm plan (the realtime study's references and overhead)
         self.record: list | None = None
@@ -117,8 +114,7 @@ class Anytime:
         torque = warm is not None and warm.layout[-1:] == (True,)
         check = self.check.against(times, centres, t_begin, duration)
         best, plan, iterations, last = None, None, 0, warm
-        spent = [sum(getattr(problem.sqp, name) for problem in self._problems.values())
-                 for name in ("spent_ms", "solve_ms")]
+        spent = self._solver_ms()
         for _ in range(ROUNDS):
             clock.tick(Clock.ROUND_ITERATIONS)
             round_began = clock.ms()
@@ -159,13 +155,15 @@ class Anytime:
         plan = dataclasses.replace(plan, iterations=iterations, solve_ms=elapsed[0],
                                    solve_cpu_ms=elapsed[1])
         if self.record is not None and warm is not None:
-            solver, solves = (sum(getattr(problem.sqp, name) for problem in
-                                  self._problems.values()) - before
-                              for name, before in zip(("spent_ms", "solve_ms"), spent,
-                                                      strict=True))
+            solver, solves = self._solver_ms() - spent
             self.record.append(((q0, qd0, t_begin, duration, goal, forecast, warm), plan,
                                 solver, solves))
         return plan, *elapsed
+
+    def _solver_ms(self) -> np.ndarray:
+        """CPU ms so far in the solvers' compiled evaluations and QPs, and in their solves."""
+        return np.array([[problem.sqp.spent_ms, problem.sqp.solve_ms]
+                         for problem in self._problems.values()]).reshape(-1, 2).sum(axis=0)
 
     def round_ms(self, clock: Clock | None = None, problem: _Problem | None = None) -> float:
         """What a round of a plan with two iterations (of the problem's, else of any

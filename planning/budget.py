@@ -47,15 +47,25 @@ class RoundCosts:
     def __init__(self):
         self.after: deque[float] = deque(maxlen=RECENT)
         self.fixed: deque[float] = deque(maxlen=RECENT)
+        self.ranking: deque[float] = deque(maxlen=RECENT)  # of a cold plan's starts
 
     def clear(self) -> None:
         self.after.clear()
         self.fixed.clear()
+        self.ranking.clear()
 
     def record(self, clock: Clock, after_ms: float, fixed_ms: float) -> None:
         if clock.nominal is None:
             self.after.append(after_ms)
             self.fixed.append(fixed_ms)
+
+    def record_ranking(self, clock: Clock, ms: float) -> None:
+        if clock.nominal is None:
+            self.ranking.append(ms)
+
+    def ranking_ms(self, clock: Clock) -> float:
+        """What to keep from a cold plan's budget for ranking its starts (ms on the clock)."""
+        return max(self.ranking, default=0.0) if clock.nominal is None else 0.0
 
     def reserve(self, clock: Clock) -> float:
         """What to keep from a solve's budget for the work after it (ms on the clock)."""

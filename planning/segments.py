@@ -13,6 +13,7 @@ import numpy as np
 
 from planning import breaks
 from planning.anytime import Anytime
+from planning.budget import Clock
 from planning.clearance import link_clearances
 from planning.limits import LIMIT_TOLERANCE, limit_excess
 from planning.realtime_iteration import ITERATE
@@ -173,7 +174,7 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
         planner.polisher.prepare(goal)  # its solvers' build is not part of a plan's time
     plans, wall, cpu = [], 0.0, 0.0
     sqp = uses_anytime(planner.config)
-    entered = time.thread_time()
+    entered, budget = time.thread_time(), Clock(planner.config.iteration_ms)
     for i, x0 in enumerate(start_points(planner, q0, qd0, duration, goal, count)):
         # the anytime SQP's starts share one budget: each gets an even share of what the
         # starts before it left (their checks and bookkeeping run past their iterations'
@@ -182,9 +183,9 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
         # included) and of the ranking after the starts (the most of recent ones': the cold
         # max was 25.29 ms against 25 without them, realtime study at 3c12065)
         used = cpu
-        if sqp and planner.config.iteration_ms is None:
+        if sqp and budget.nominal is None:
             used = 1e3 * (time.thread_time() - entered) + \
-                max(anytime_of(planner).ranking, default=0.0)
+                anytime_of(planner).rounds.ranking_ms(budget)
         share = (planner.config.cold_budget_ms - used) / (count - i)
         if sqp and plans and share < anytime_of(planner).round_ms():
             break
@@ -196,7 +197,7 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
     ranked = sorted(plans, key=anytime_of(planner).rank if sqp else
                     (lambda plan: rank(planner, plan)))
     if sqp:
-        anytime_of(planner).ranking.append(clock.cpu_ms())
+        anytime_of(planner).rounds.record_ranking(budget, clock.cpu_ms())
     best = ranked[0]
     if split and best.success:
         settled, _, _ = plan_segment(planner, q0, qd0, t_begin, duration, goal, forecast,
