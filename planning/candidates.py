@@ -45,11 +45,12 @@ def choose(points: list[Point], motion, check, config: PlannerConfig) -> Candida
     220 of 382 replayed re-plans ended on such a candidate, every iterate checked)."""
     best = None
     for point in sorted(points, key=lambda point: point.f):
-        coefficients = motion(point.x).coefficients
-        if best is not None and not best.hard and \
-                not keeps(check.links(coefficients).min(initial=np.inf), config):
-            continue
-        safety = check(coefficients)
+        coefficients, links = motion(point.x).coefficients, None
+        if best is not None and not best.hard:
+            links = check.links(coefficients)
+            if not keeps(links.min(initial=np.inf), config):
+                continue
+        safety = check(coefficients, links)
         hard = max(safety.limit_excess - LIMIT_TOLERANCE, 0.0) + \
             max(safety.torque_excess - TORQUE_TOLERANCE, 0.0) + \
             max(point.violation - HARD_TOLERANCE, 0.0)

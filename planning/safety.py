@@ -149,8 +149,9 @@ class _Bound:
             out[start:stop] = values.reshape(CHUNK, self.shape[1])[: stop - start]
         return out
 
-    def __call__(self, coefficients: np.ndarray) -> Safety:
-        links = self.links(coefficients)
+    def __call__(self, coefficients: np.ndarray, links: np.ndarray | None = None) -> Safety:
+        """The whole check; links: this motion's clearances if already computed."""
+        links = self.links(coefficients) if links is None else links
         (motion,) = self.check._motion(coefficients.ravel(order="F"), self.sigma)
         return Safety(links.min(axis=1, initial=np.inf), float(motion[0]), float(motion[1]),
                       links)
