@@ -46,6 +46,8 @@ class _Problem:
     sqp: sqp.AnytimeSQP
     parts: compiled.Buffered
     layout: tuple
+    n: int  # variables
+    rows: int  # constraint rows
 
 
 class Anytime:
@@ -92,7 +94,8 @@ class Anytime:
             parts = compiled.Buffered(build(ca.Function("elastic_parts", [nlp.x, nlp.p],
                                                         [ca.vertcat(nlp.energy, nlp.penalty)])))
             self._problems[key] = _Problem(nlp, sqp.AnytimeSQP(
-                local, sqp.layout_of(nlp), nlp.lbx, nlp.g.numel()), parts, ("elastic",) + key)
+                local, sqp.layout_of(nlp), nlp.lbx, nlp.g.numel()), parts, ("elastic",) + key,
+                nlp.x.numel(), nlp.g.numel())
         return self._problems[key]
 
     def plan(self, q0, qd0, t_begin: float, duration: float, goal,
@@ -134,7 +137,8 @@ class Anytime:
             solved = clock.ms()
             iterations += count
             chosen = choose(points, lambda x: planner.trajectory(x, q0, qd0, t_begin,
-                                                                 duration), check, config)
+                                                                 duration), check, config,
+                            problem.sqp.layout.v)
             segment = self._segment(problem, chosen, solution, p, q0, qd0, t_begin, duration,
                                     times[slots])
             converged = solution.status == sqp.CONVERGED and chosen.x is solution.x
@@ -162,8 +166,9 @@ class Anytime:
 
     def _solver_ms(self) -> np.ndarray:
         """CPU ms so far in the solvers' compiled evaluations and QPs, and in their solves."""
-        return np.array([[problem.sqp.spent_ms, problem.sqp.solve_ms]
-                         for problem in self._problems.values()]).reshape(-1, 2).sum(axis=0)
+        problems = self._problems.values()
+        return np.array([sum(problem.sqp.spent_ms for problem in problems),
+                         sum(problem.sqp.solve_ms for problem in problems)])
 
     def round_ms(self, clock: Clock | None = None, problem: _Problem | None = None) -> float:
         """What a round of a plan with two iterations (of the problem's, else of any
@@ -217,22 +222,22 @@ class Anytime:
         """The start point (the reference's free coefficients, slacks reset by the SQP) and
         the multipliers of `last` where they belong to this NLP, those of its clearance
         rows moved with their sample times."""
-        nlp = problem.nlp
-        x = np.zeros(nlp.x.numel())
-        nc = sqp.layout_of(nlp).nc
-        x[:nc] = reference.coefficients[:, 2:].ravel()
-        lam_g, lam_x = np.zeros(nlp.g.numel()), np.zeros(nlp.x.numel())
+        nlp, layout = problem.nlp, problem.sqp.layout
+        x = np.zeros(problem.n)
+        x[:layout.nc] = reference.coefficients[:, 2:].ravel()
+        lam_g, lam_x = np.zeros(problem.rows), np.zeros(problem.n)
         if last is None or last.layout != problem.layout or not len(last.multipliers[0]):
             return x, lam_g, lam_x
         lam_g[:], lam_x[:] = last.multipliers
-        rows, links, v = nlp.clearance_rows, nlp.links, sqp.layout_of(nlp).v
+        rows, links, v = nlp.clearance_rows, nlp.links, layout.v
         old_g = last.multipliers[0][rows].reshape(-1, links)
         old_x = last.multipliers[1][v].reshape(-1, links)
         new_g, new_x = np.zeros_like(old_g), np.zeros_like(old_x)
-        index = np.searchsorted(last.slot_times, slot_times)
-        for j, i in enumerate(index):
-            if i < len(last.slot_times) and abs(last.slot_times[i] - slot_times[j]) < 1e-9:
-                new_g[j], new_x[j] = old_g[i], old_x[i]
+        if len(last.slot_times) and len(slot_times):
+            index = np.minimum(np.searchsorted(last.slot_times, slot_times),
+                               len(last.slot_times) - 1)
+            same = np.flatnonzero(np.abs(last.slot_times[index] - slot_times) < 1e-9)
+            new_g[same], new_x[same] = old_g[index[same]], old_x[index[same]]
         lam_g[rows], lam_x[v] = new_g.ravel(), new_x.ravel()
         return x, lam_g, lam_x
 
@@ -240,8 +245,8 @@ class Anytime:
                  t_begin, duration, slot_times) -> SegmentPlan:
         (parts,) = problem.parts(chosen.x, p)
         last = chosen.x is solution.x
-        lam_g = solution.lam_g if last else np.zeros(problem.nlp.g.numel())
-        lam_x = solution.lam_x if last else np.zeros(problem.nlp.x.numel())
+        lam_g = solution.lam_g if last else np.zeros(problem.rows)
+        lam_x = solution.lam_x if last else np.zeros(problem.n)
         detour = bool(np.any(np.abs(solution.lam_g[problem.nlp.clearance_rows]) > 1e-9))
         return SegmentPlan(
             trajectory=self.planner.trajectory(chosen.x, q0, qd0, t_begin, duration),

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planning.trajectory import PolynomialTrajectory, stationary_points
+from planning.trajectory import PolynomialTrajectory, stationary_points_rows
 
 LIMIT_TOLERANCE = 1e-6  # rad: a plan beyond a limit by more is infeasible (planning.result)
 END_MARGIN = 0.02  # normalized time: q's turning points this close to a limit goal are
@@ -48,10 +48,14 @@ def quotient_turning_points(trajectory: PolynomialTrajectory, goal, signs, order
                             slots: int) -> np.ndarray:
     """Turning points (dof, slots) in (0, 1) of each joint's quotient v; NaN if none."""
     out = np.full((len(trajectory.coefficients), slots), np.nan)
-    for j, (c, sign) in enumerate(zip(trajectory.coefficients, signs, strict=True)):
-        if sign:
-            roots = stationary_points(quotient(list(c), goal[j], sign, order))
-            out[j, : min(len(roots), slots)] = roots[:slots]
+    joints = np.flatnonzero(signs)
+    if not len(joints):
+        return out
+    quotients = [quotient(list(trajectory.coefficients[j]), goal[j], signs[j], order)
+                 for j in joints]
+    roots = stationary_points_rows(np.array(quotients, float))  # sorted, NaN-padded
+    width = min(roots.shape[1], slots)
+    out[joints, :width] = roots[:, :width]
     return out
 
 

@@ -61,7 +61,7 @@ class ProblemNumbers:
         and those of the goal-limit quotient (planning.limits), NaN for none; and the
         per-joint goal-limit signs."""
         dof, (extrema, order, slots) = self.model.dof, turning_slots(self.config)
-        signs = goal_limit_signs(goal, self.config.lower, self.config.upper)
+        signs = self.goal_signs(goal)
         if reference is None:
             return (np.full((dof, extrema), np.nan), np.full((dof, slots), np.nan), signs)
         turning = reference.turning_points()
@@ -74,10 +74,23 @@ class ProblemNumbers:
         """lbg, ubg for this goal: the quotient rows hold (>= 0) where it is on a limit."""
         nlp = nlp or self.nlp
         lbg, ubg = nlp.lbg.copy(), nlp.ubg.copy()
-        signs = goal_limit_signs(goal, self.config.lower, self.config.upper)
+        signs = self.goal_signs(goal)
         for j in np.flatnonzero(signs):
             lbg[nlp.quotient_rows[int(j)]] = 0.0
         return lbg, ubg
+
+    def goal_signs(self, goal) -> np.ndarray:
+        """planning.limits.goal_limit_signs of a goal, kept per goal (read-only): a re-plan
+        asks for them several times."""
+        cache = self.__dict__.setdefault("_goal_signs", {})
+        key = tuple(np.asarray(goal, float).tolist())
+        if key not in cache:
+            if len(cache) > 64:
+                cache.clear()
+            signs = goal_limit_signs(goal, self.config.lower, self.config.upper)
+            signs.flags.writeable = False
+            cache[key] = signs
+        return cache[key]
 
     def initial_guess(self, q0, qd0, duration: float, goal, bumps=None) -> np.ndarray:
         """A cubic that reaches the goal at rest, plus bumps (dof, degree - 2) in rad times

@@ -85,14 +85,12 @@ class SafetyCheck:
         """The check of motions on [t_begin, t_begin + duration] against one forecast, its
         samples packed once: a function of the coefficients (dof, degree + 1) -> Safety,
         whose `links` gives the clearances alone."""
-        s = (np.asarray(times, float) - t_begin) / duration
-        k, count = len(s), len(self.config.geometry.links)
-        chunks = []
-        for start in range(0, k, CHUNK):
-            stop = min(k, start + CHUNK)
-            chunk_s, chunk_c = np.zeros(CHUNK), np.full((CHUNK, 3), FAR)
-            chunk_s[: stop - start], chunk_c[: stop - start] = s[start:stop], centres[start:stop]
-            chunks.append((start, stop, chunk_s, chunk_c.ravel()))
+        k, count = len(times), len(self.config.geometry.links)
+        padded = -(-k // CHUNK) * CHUNK
+        s, c = np.zeros(padded), np.full((padded, 3), FAR)
+        s[:k], c[:k] = (np.asarray(times, float) - t_begin) / duration, centres
+        chunks = [(start, s[start:start + CHUNK], c[start:start + CHUNK].ravel())
+                  for start in range(0, k, CHUNK)]
         return _Bound(self, chunks, k, count, np.array([duration]))
 
     def _coefficients(self):
@@ -143,11 +141,11 @@ class _Bound:
     def links(self, coefficients: np.ndarray) -> np.ndarray:
         """Each link's distance (k, links) in m at each sample."""
         c = coefficients.ravel(order="F")
-        out = np.empty(self.shape)
-        for start, stop, chunk_s, chunk_c in self.chunks:
+        out = np.empty((len(self.chunks) * CHUNK, self.shape[1]))
+        for start, chunk_s, chunk_c in self.chunks:
             (values,) = self.check._clearance(c, chunk_s, chunk_c)
-            out[start:stop] = values.reshape(CHUNK, self.shape[1])[: stop - start]
-        return out
+            out[start:start + CHUNK] = values.reshape(CHUNK, self.shape[1])
+        return out[: self.shape[0]]
 
     def __call__(self, coefficients: np.ndarray, links: np.ndarray | None = None) -> Safety:
         """The whole check; links: this motion's clearances if already computed."""

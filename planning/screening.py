@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from planning.clearance import link_clearances
@@ -54,7 +55,7 @@ def screen(forecast: ObstacleForecast, reference: PolynomialTrajectory, geometry
     clearance = link_clearances(geometry, q, forecast.centres[inside]).min(axis=1)
     near, gap = inside[clearance < threshold + margin], 0.0
     if len(near) > slots:
-        near = near[np.round(np.linspace(0, len(near) - 1, slots)).astype(int)]
+        near = near[_thinned(len(near), slots)]
         gap = float(np.max(np.diff(times[near])))
     return Screen(ObstacleForecast(times[near], forecast.centres[near]),
                   times[inside[clearance < threshold]], gap,
@@ -78,8 +79,27 @@ def near_samples(clearance: np.ndarray, threshold: float, slots: int) -> np.ndar
     thinned to `slots`."""
     near = np.flatnonzero(clearance < threshold + MARGIN)
     if len(near) > slots:
-        near = near[np.round(np.linspace(0, len(near) - 1, slots)).astype(int)]
+        near = near[_thinned(len(near), slots)]
     return near
+
+
+@numba.njit("i8[:](i8, i8)", cache=True, nogil=True)
+def _thinned(count, slots):
+    """`slots` of range(count) evenly: np.round(np.linspace(0, count - 1, slots)), the same
+    floating-point steps and halves to even, in a loop (~1 us instead of ~12)."""
+    out = np.empty(slots, np.int64)
+    step = (count - 1) / (slots - 1) if slots > 1 else 0.0
+    for i in range(slots):
+        out[i] = np.round(i * step)
+    out[slots - 1] = count - 1 if slots > 1 else 0
+    return out
+    span = slots - 1
+    for i in range(slots):
+        whole, rest = divmod(i * (count - 1), span)
+        if 2 * rest > span or (2 * rest == span and whole % 2 == 1):
+            whole += 1
+        out[i] = whole
+    return out
 
 
 def uncovered(dips: np.ndarray, slots: np.ndarray, rows: np.ndarray, count: int) -> bool:
@@ -87,9 +107,23 @@ def uncovered(dips: np.ndarray, slots: np.ndarray, rows: np.ndarray, count: int)
     rows (slots, links) at the sample indices `slots`: as Screen.covered, when the near
     samples were thinned to `count` slots a dip within the largest gap between slots of one
     that has its link's row is covered."""
-    where = np.argwhere(dips)
-    if not len(where):
-        return False
-    gap = float(np.max(np.diff(slots), initial=0)) if len(slots) == count else 0.0
-    close = np.abs(slots[None, :] - where[:, :1]) <= gap  # (dips, slots)
-    return not np.all(np.any(close & rows.T[where[:, 1]], axis=1))
+    slots = np.asarray(slots, np.int64)
+    gap = int(np.max(np.diff(slots), initial=0)) if len(slots) == count else 0
+    return _uncovered(np.asarray(dips, bool), slots, np.asarray(rows, bool), gap)
+
+
+@numba.njit("(b1[:, :], i8[:], b1[:, :], i8)", cache=True, nogil=True)
+def _uncovered(dips, slots, rows, gap):
+    """uncovered's loop, compiled (numpy's argwhere and (dips, slots) masks took ~30 us)."""
+    for i in range(dips.shape[0]):
+        for link in range(dips.shape[1]):
+            if not dips[i, link]:
+                continue
+            seen = False
+            for j in range(len(slots)):
+                if abs(slots[j] - i) <= gap and rows[j, link]:
+                    seen = True
+                    break
+            if not seen:
+                return True
+    return False

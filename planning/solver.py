@@ -15,7 +15,6 @@ import numpy as np
 from identification.torque_model import TorqueModel
 from planning import backends, realtime_iteration
 from planning.config import PlannerConfig
-from planning.limits import goal_limit_signs
 from planning.nlp import PlanningNLP
 from planning.problem import ObstacleForecast, ProblemNumbers, _breaks
 from planning.quadrature import splits_evenly
@@ -160,8 +159,7 @@ class Planner(ProblemNumbers):
 
     def _goal_limits(self, goal) -> tuple[int, ...]:
         """The joints whose goal is on a limit."""
-        signs = goal_limit_signs(goal, self.config.lower, self.config.upper)
-        return tuple(int(j) for j in np.flatnonzero(signs))
+        return tuple(int(j) for j in np.flatnonzero(self.goal_signs(goal)))
 
     def torque_excess(self, trajectory: PolynomialTrajectory) -> float:
         """Largest |tau_i| - torque_limit_i (N m) on a dense grid of the segment (< 0: inside;

@@ -231,6 +231,49 @@ def test_a_forecast_no_motion_can_clear_gets_the_minimum_violation_plan(planner)
                                      forecast.centres).min() - 1e-9
 
 
+def test_iterates_whose_own_rows_miss_the_threshold_are_passed_over_soundly(planner,
+                                                                           monkeypatch):
+    """The choice passes over an iterate whose clearance slacks already miss the threshold
+    (planning.candidates.misses) once the best so far is within the hard limits: on the
+    minimum-violation plan of an obstacle no motion can clear, every choice is the one that
+    checks every iterate in full, and some iterates were passed over."""
+    from planning import anytime as module
+    from planning import candidates
+
+    goal = Scenario().goal
+    end = planner.config.geometry.points(np.asarray([goal]))[0]
+    centre = tuple(0.5 * (end[-1] + end[-2]))
+    times = np.linspace(0.05, 2.0, 40)
+    forecast = ObstacleForecast(times, np.tile(centre, (len(times), 1)))
+    calls, passed = [], []
+    real_misses = candidates.misses
+
+    def counted(point, slacks, config):
+        answer = real_misses(point, slacks, config)
+        passed.append(answer)
+        return answer
+
+    def recorded(points, motion, check, config, slacks=None):
+        chosen = candidates.choose(points, motion, check, config, slacks)
+        calls.append((chosen, candidates.choose(points, motion, check, config, None)))
+        for point in points:  # sound: one passed over misses the threshold on the whole check
+            if real_misses(point, slacks, config):
+                lowest = check.links(motion(point.x).coefficients).min()
+                assert not candidates.keeps(lowest, config)
+        return chosen
+
+    monkeypatch.setattr(candidates, "misses", counted)
+    monkeypatch.setattr(module, "choose", recorded)
+    anytime = anytime_of(planner)
+    anytime.prepare(goal)
+    calls.clear()
+    plan, _, _ = anytime.plan(Scenario().start, Scenario().start_velocity, 0.0, 2.0, goal,
+                              forecast, budget_ms=1e5)
+    assert MIN_VIOLATION in plan.status and calls and any(passed)
+    for chosen, full in calls:
+        assert chosen.x is full.x and chosen.rank == full.rank
+
+
 def test_a_plan_out_of_budget_returns_its_best_iterate(planner):
     """With no CPU to spend the plan is its start (the best, and only, iterate checked),
     status ITERATE (Algorithm 2 goes on from it at the next sample)."""

@@ -19,7 +19,7 @@ from planning.obstacle import SwayingObstacle, predict_linear
 from planning.quadrature import energy_nodes
 from planning.result import executed_energy, sample_execution
 from planning.solver import ObstacleForecast, Planner
-from planning.trajectory import PolynomialTrajectory, hermite, stationary_points
+from planning.trajectory import PolynomialTrajectory, hermite, stationary_points, stationary_points_rows
 from tests.helpers import central_difference as _central_difference
 
 RNG = np.random.default_rng(7)
@@ -83,6 +83,21 @@ def test_degree_seven_restriction_and_turning_points():
     assert turning.shape == (3, 6)
     for row, c in zip(turning, trajectory.coefficients, strict=True):
         assert np.allclose(row[np.isfinite(row)], stationary_points(c), atol=1e-9)
+
+
+@pytest.mark.parametrize("degree", [2, 3, 4, 5, 7, 9])
+def test_compiled_turning_points_are_numpys_roots(degree):
+    # the compiled bracketing against np.roots' companion eigenvalues, rows of three scales
+    c = RNG.normal(size=(2000, degree + 1)) * RNG.choice([1e-3, 1.0, 1e3], size=(2000, 1))
+    c[:50, -1] = 0.0  # a lower degree than the array's
+    rows = stationary_points_rows(c)
+    assert rows.shape == (2000, max(degree - 1, 0))
+    for row, coefficients in zip(rows, c, strict=True):
+        expected = stationary_points(coefficients)
+        found = row[np.isfinite(row)]
+        assert len(found) == len(expected)
+        assert np.allclose(found, expected, atol=1e-9)
+    assert np.sum(np.isfinite(rows)) > 500  # the rows have turning points to find
 
 
 def test_degree_five_rest_to_rest_is_minimum_jerk():

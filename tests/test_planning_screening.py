@@ -94,3 +94,12 @@ def test_the_anytime_screen_covers_dips_per_link_and_within_the_thinning_gap():
     assert not uncovered(np.zeros((12, 2), bool), slots, rows, count=3)
     near = near_samples(np.array([0.2, 0.09, 0.1, 0.5, 0.05]), 0.08, slots=2)
     assert list(near) == [1, 4]  # below threshold + 3 cm: 1, 2, 4, thinned evenly to 2
+
+
+def test_thinning_is_numpys_even_rounding():
+    # the compiled thinning against np.round(np.linspace(...)), halves included (26 of 23)
+    from planning.screening import _thinned
+    for count in range(2, 120):
+        for slots in range(1, count):
+            expected = np.round(np.linspace(0, count - 1, slots)).astype(int)
+            assert np.array_equal(_thinned(count, slots), expected), (count, slots)
