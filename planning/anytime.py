@@ -123,7 +123,7 @@ class Anytime:
             round_began = clock.ms()
             problem = self.problem(goal, torque)
             links = check.links(reference.coefficients)  # what the screening needs
-            slots = near_samples(links.min(axis=1, initial=np.inf), config.threshold,
+            slots = near_samples(links.min(axis=1), config.threshold,
                                  config.obstacle_slots)
             p = planner.parameters(q0, qd0, duration, goal,
                                    ObstacleForecast(times[slots], centres[slots]), t_begin,
@@ -139,13 +139,11 @@ class Anytime:
             chosen = choose(points, lambda x: planner.trajectory(x, q0, qd0, t_begin,
                                                                  duration), check, config,
                             problem.sqp.layout.v)
-            segment = self._segment(problem, chosen, solution, p, q0, qd0, t_begin, duration,
-                                    times[slots])
             converged = solution.status == sqp.CONVERGED and chosen.x is solution.x
+            segment = self._segment(problem, chosen, solution, p, times[slots],
+                                    self._status(chosen, converged))
             if best is None or chosen.rank < best.rank:
-                best, plan = chosen, dataclasses.replace(
-                    segment, status=self._status(chosen, converged),
-                    success=chosen.hard == 0)
+                best, plan = chosen, segment
             last = segment
             more = self._needs_round(chosen, slots, links[slots])
             if more == "torque":
@@ -241,16 +239,16 @@ class Anytime:
         lam_g[rows], lam_x[v] = new_g.ravel(), new_x.ravel()
         return x, lam_g, lam_x
 
-    def _segment(self, problem: _Problem, chosen: Candidate, solution, p, q0, qd0,
-                 t_begin, duration, slot_times) -> SegmentPlan:
+    def _segment(self, problem: _Problem, chosen: Candidate, solution, p, slot_times,
+                 status: str) -> SegmentPlan:
         (parts,) = problem.parts(chosen.x, p)
         last = chosen.x is solution.x
         lam_g = solution.lam_g if last else np.zeros(problem.rows)
         lam_x = solution.lam_x if last else np.zeros(problem.n)
         detour = bool(np.any(np.abs(solution.lam_g[problem.nlp.clearance_rows]) > 1e-9))
         return SegmentPlan(
-            trajectory=self.planner.trajectory(chosen.x, q0, qd0, t_begin, duration),
-            energy=float(parts[0]), penalty=float(parts[1]), success=True, status="",
+            trajectory=chosen.trajectory, energy=float(parts[0]), penalty=float(parts[1]),
+            success=chosen.hard == 0, status=status,
             iterations=0, solve_ms=0.0, solve_cpu_ms=0.0,
             penalty_weight=self.config.elastic_weight, x=chosen.x,
             multipliers=(lam_g, lam_x), layout=problem.layout, slot_times=slot_times,

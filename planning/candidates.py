@@ -12,6 +12,7 @@ from planning.config import PlannerConfig
 from planning.elastic_qp import Point
 from planning.limits import LIMIT_TOLERANCE
 from planning.safety import Safety
+from planning.trajectory import PolynomialTrajectory
 
 HARD_TOLERANCE = 1e-6  # L1 violation of the goal and limit rows an iterate may keep
 TORQUE_TOLERANCE = 1e-6  # N m
@@ -27,6 +28,7 @@ class Candidate:
     x: np.ndarray
     safety: Safety
     point: Point
+    trajectory: PolynomialTrajectory  # the motion x stands for
 
     @property
     def rank(self) -> tuple:
@@ -50,7 +52,8 @@ def choose(points: list[Point], motion, check, config: PlannerConfig,
     for point in sorted(points, key=lambda point: point.f):
         if best is not None and not best.hard and misses(point, slacks, config):
             continue
-        coefficients, links = motion(point.x).coefficients, None
+        trajectory, links = motion(point.x), None
+        coefficients = trajectory.coefficients
         if best is not None and not best.hard:
             links = check.links(coefficients)
             if not keeps(links.min(initial=np.inf), config):
@@ -59,7 +62,8 @@ def choose(points: list[Point], motion, check, config: PlannerConfig,
         hard = max(safety.limit_excess - LIMIT_TOLERANCE, 0.0) + \
             max(safety.torque_excess - TORQUE_TOLERANCE, 0.0) + \
             max(point.violation - HARD_TOLERANCE, 0.0)
-        candidate = Candidate(hard, not keeps(safety.lowest, config), point.x, safety, point)
+        candidate = Candidate(hard, not keeps(safety.lowest, config), point.x, safety, point,
+                              trajectory)
         if best is None or candidate.rank < best.rank:
             best = candidate
         if not candidate.unsafe and not candidate.hard:

@@ -14,6 +14,7 @@ leaves the joint limits (whole motion) and the torque limits (a dense grid).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import casadi as ca
 import numpy as np
@@ -41,9 +42,9 @@ class Safety:
     torque_excess: float
     links: np.ndarray  # (k, links) m: each link's distance at each sample
 
-    @property
+    @cached_property
     def lowest(self) -> float:
-        return float(np.min(self.clearance, initial=np.inf))
+        return float(self.clearance.min()) if len(self.clearance) else np.inf
 
 
 class SafetyCheck:
@@ -151,8 +152,7 @@ class _Bound:
         """The whole check; links: this motion's clearances if already computed."""
         links = self.links(coefficients) if links is None else links
         (motion,) = self.check._motion(coefficients.ravel(order="F"), self.sigma)
-        return Safety(links.min(axis=1, initial=np.inf), float(motion[0]), float(motion[1]),
-                      links)
+        return Safety(links.min(axis=1), float(motion[0]), float(motion[1]), links)
 
 
 def _poly(row, s):
