@@ -200,7 +200,7 @@ class Anytime:
         rows, links = problem.nlp.clearance_rows, problem.nlp.links
         used = np.zeros((self.config.obstacle_slots, links), bool)
         used[: len(near)] = near < self.config.threshold + MARGIN
-        lbg[np.arange(rows.start, rows.stop)[~used.ravel()]] = -np.inf
+        lbg[rows][~used.ravel()] = -np.inf  # a slice of lbg: a view
         return lbg, ubg
 
     def _needs_round(self, best: Candidate, slots, near) -> str | None:
