@@ -93,13 +93,6 @@ def _thinned(count, slots):
         out[i] = np.round(i * step)
     out[slots - 1] = count - 1 if slots > 1 else 0
     return out
-    span = slots - 1
-    for i in range(slots):
-        whole, rest = divmod(i * (count - 1), span)
-        if 2 * rest > span or (2 * rest == span and whole % 2 == 1):
-            whole += 1
-        out[i] = whole
-    return out
 
 
 def uncovered(dips: np.ndarray, slots: np.ndarray, rows: np.ndarray, count: int) -> bool:

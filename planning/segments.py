@@ -13,7 +13,7 @@ import numpy as np
 
 from planning import breaks
 from planning.anytime import Anytime
-from planning.budget import Clock
+from planning.budget import Clock, Stopwatch, collection_deferred
 from planning.clearance import link_clearances
 from planning.limits import LIMIT_TOLERANCE, limit_excess
 from planning.realtime_iteration import ITERATE
@@ -28,6 +28,7 @@ LATE = " (converged late)"  # ... whose last solve succeeded (converged, or a re
 # iterate within the constraints): the next re-plan starts from it
 
 
+@collection_deferred
 def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goal,
                  forecast: ObstacleForecast | None, warm: SegmentPlan | None = None,
                  rounds: int = 4, x0: np.ndarray | None = None,
@@ -66,13 +67,13 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
         anytime = anytime_of(planner)
         anytime.prepare(goal)  # built once: not part of a plan's time
         if warm is not None and planner.config.replan_starts:
-            clock = _Clock()
+            clock = Stopwatch()
             plan = anytime.best_of(q0, qd0, t_begin, duration, goal, forecast, warm,
                                    planner.config.replan_starts, budget)
             return plan, *clock.read()
         return anytime.plan(q0, qd0, t_begin, duration, goal, forecast, warm, x0, budget)
     planner.prepare(goal)  # the solvers for this goal, built once: not part of a plan's time
-    clock = _Clock()
+    clock = Stopwatch()
     config = planner.config
     alpha = config.penalty_weight if warm is None else warm.penalty_weight
     replan = warm is not None  # a warm plan beyond the limits is refused: its caller keeps one
@@ -144,19 +145,7 @@ def _within_limits(plan: SegmentPlan, config, warm: bool) -> SegmentPlan:
                                status=f"joint limits exceeded by {excess:.2e} rad")
 
 
-class _Clock:
-    """Wall and CPU time (ms, this thread) since it was made."""
-
-    def __init__(self):
-        self.wall, self.cpu = time.perf_counter(), time.thread_time()
-
-    def cpu_ms(self) -> float:
-        return 1e3 * (time.thread_time() - self.cpu)
-
-    def read(self) -> tuple[float, float]:
-        return 1e3 * (time.perf_counter() - self.wall), self.cpu_ms()
-
-
+@collection_deferred
 def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, goal,
                     forecast: ObstacleForecast | None, count: int | None = None
                     ) -> tuple[SegmentPlan, float, float, list[SegmentPlan]]:
@@ -193,7 +182,7 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
                                         x0=x0, settle_breaks=not split, budget_ms=share)
         plans.append(plan)
         wall, cpu = wall + ms, cpu + cpu_ms
-    clock = _Clock()  # the ranking (a dense integral per plan) and polishing are plan time
+    clock = Stopwatch()  # the ranking (a dense integral per plan) and polishing are plan time
     ranked = sorted(plans, key=anytime_of(planner).rank if sqp else
                     (lambda plan: rank(planner, plan)))
     if sqp:
