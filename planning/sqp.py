@@ -29,7 +29,12 @@ from planning import qp_kernels as kernels
 from planning.budget import RECENT, Clock
 from planning.elastic_qp import VIOLATED, Frame, Layout, Point, linear_change, slack_structure, step
 
-CONVERGED, BUDGET, STALLED = "converged", "budget", "stalled"
+CONVERGED, BUDGET, STALLED, SETTLED = "converged", "budget", "stalled", "settled"
+# an accepted step that lowered the merit by less than this share of the objective ends the
+# solve unconverged (SETTLED; the next re-plan goes on from it): measured on the UR5's
+# re-plans, the ones stopped by the budget gained 0.03 % (median) in their last step and
+# 0.3 % in all, at ~3 ms an iteration
+SETTLED_SHARE = 2e-4
 # predicted decrease (relative to the objective) below which a point is taken as optimal: the
 # energy is nearly flat along many motions, where steps of 1e-8 went on for 100+ iterations
 STEP_TOLERANCE = 1e-6
@@ -186,6 +191,9 @@ class AnytimeSQP:
             if ratio >= 1e-4:
                 point, lam_g, lam_x = trial, lam_rows, lam_vars
                 accept(point)
+                if actual <= SETTLED_SHARE * abs(point.f) and point.violation <= PRIMAL_TOLERANCE:
+                    status = SETTLED
+                    break
             clock.tick()
             if clock.nominal is None:
                 self._recent.append(clock.ms() - began)

@@ -65,7 +65,7 @@ def _elastic_problem(planner, case, forecast):
     return nlp, p, lbg, ubg, start
 
 
-def test_the_anytime_sqp_reaches_ipopts_optimum_of_the_same_nlp(planner):
+def test_the_anytime_sqp_reaches_ipopts_optimum_of_the_same_nlp(planner, monkeypatch):
     """A cold plan of a random crossing (clearance rows active): the SQP, run to convergence,
     and IPOPT from the same start reach the same objective (slacks reset to their least
     values: IPOPT's interior point leaves them a hair off); IPOPT started at the SQP's point
@@ -74,6 +74,7 @@ def test_the_anytime_sqp_reaches_ipopts_optimum_of_the_same_nlp(planner):
     nlp, p, lbg, ubg, start = _elastic_problem(planner, case, forecast)
     solver = sqp.AnytimeSQP(sqp.local_function(nlp, "local"), sqp.layout_of(nlp), nlp.lbx,
                             nlp.g.numel())
+    monkeypatch.setattr(sqp, "SETTLED_SHARE", 0.0)  # to convergence
     solution, _ = solver.solve(start, p, lbg, ubg, np.zeros(nlp.g.numel()), 1e6,
                                lambda point: None)
     assert solution.status == sqp.CONVERGED and solution.violation < 1e-8
@@ -131,6 +132,37 @@ def test_the_qp_with_slacks_held_is_the_full_elastic_qp(planner, monkeypatch, ra
         last = full[1], full[2]
         point = solver.evaluate(point.x + full[0], p, full[1], lbg)
     assert min(held.values()) > 0, held  # the case exercised every kind of held slack
+
+
+def test_a_solve_settles_at_the_first_step_that_gains_less_than_its_share(planner,
+                                                                         monkeypatch):
+    """sqp.SETTLED_SHARE: a solve ends (SETTLED, unconverged) at the first accepted step
+    that lowers the merit by less than that share of the objective, with the hard rows
+    kept; every earlier accepted step gained more. Without it the same solve runs on."""
+    case, forecast = random_crossing(planner, seed=7)
+    nlp, p, lbg, ubg, start = _elastic_problem(planner, case, forecast)
+    solver = sqp.AnytimeSQP(sqp.local_function(nlp, "local"), sqp.layout_of(nlp), nlp.lbx,
+                            nlp.g.numel())
+
+    def solve(share):
+        monkeypatch.setattr(sqp, "SETTLED_SHARE", share)
+        points = []
+        solution, iterations = solver.solve(start, p, lbg, ubg, np.zeros(nlp.g.numel()), 1e6,
+                                            points.append)
+        return solution, iterations, [(q.f, q.violation) for q in points]
+
+    solution, iterations, accepted = solve(1e-2)
+    assert solution.status == sqp.SETTLED
+    # the merit is f + nu x violation; the accepted points here keep the hard rows to 1e-10
+    slack = sqp.HARD_WEIGHT * 1e-10
+    (f_before, v_before), (f_last, v_last) = accepted[-2], accepted[-1]
+    assert max(v_before, v_last) <= 1e-10
+    assert f_before - f_last <= 1e-2 * abs(f_last) + slack
+    for (f0, v0), (f1, v1) in zip(accepted[:-2], accepted[1:-1], strict=True):
+        assert f0 - f1 > 1e-2 * abs(f1) - slack or max(v0, v1) > 1e-10
+    full, full_iterations, _ = solve(0.0)
+    assert full.status == sqp.CONVERGED and full_iterations > iterations
+    assert full.f <= solution.f + 1e-12
 
 
 @pytest.mark.parametrize("radius", [0.05, 0.5])
@@ -272,6 +304,47 @@ def test_iterates_whose_own_rows_miss_the_threshold_are_passed_over_soundly(plan
     assert MIN_VIOLATION in plan.status and calls and any(passed)
     for chosen, full in calls:
         assert chosen.x is full.x and chosen.rank == full.rank
+
+
+def test_no_garbage_collection_runs_inside_a_plan(planner):
+    """planning.budget.collection_deferred: with the collector set to run at nearly every
+    allocation, a cold plan and a warm re-plan (plan_segment) see no collection inside them,
+    and the collector is on again after each (collections then run between plans)."""
+    import gc
+
+    from planning.segments import plan_segment
+
+    case, forecast = random_crossing(planner, seed=5)
+    anytime_of(planner).prepare(case.goal)
+    inside, collections = [False], []
+
+    def watch(phase, info):
+        if phase == "start":
+            collections.append(inside[0])
+
+    def planned(*args, **kwargs):
+        inside[0] = True
+        try:
+            return plan_segment(*args, **kwargs)
+        finally:
+            inside[0] = False
+
+    threshold = gc.get_threshold()
+    gc.callbacks.append(watch)
+    gc.set_threshold(1)
+    try:
+        cold, _, _ = planned(planner, case.start, case.start_velocity, 0.0, case.duration,
+                             case.goal, forecast)
+        assert gc.isenabled()
+        [].append([])  # allocations between plans: collections run here
+        warm, _, _ = planned(planner, case.start, case.start_velocity, 0.0, case.duration,
+                             case.goal, forecast, warm=cold)
+        assert gc.isenabled()
+    finally:
+        gc.set_threshold(*threshold)
+        gc.callbacks.remove(watch)
+    assert cold.success and warm.success
+    assert collections and not any(collections)  # some ran, none inside a plan
 
 
 def test_a_plan_out_of_budget_returns_its_best_iterate(planner):
