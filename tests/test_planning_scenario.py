@@ -139,6 +139,18 @@ def test_plan_command_with_the_anytime_sqp(tmp_path):
     assert plan["min_clearance"] >= plan["threshold"] - 2e-3
 
 
+def test_an_infeasible_anytime_plan_says_what_its_re_plans_had(tmp_path, capsys):
+    """Re-plans with 0.01 ms of CPU follow the first plan into the moving obstacle: exit 2,
+    no file, one error line that names the budget and what may find a plan."""
+    out = tmp_path / "plan.json"
+    assert main(["plan", "--no-compile", "--model", "pinocchio", "--replanner", "sqp",
+                 "--replan-budget-ms", "0.01", "--out", str(out)]) == 2
+    assert not out.exists()
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "no feasible plan: clearance" in err
+    assert "within 0.01 ms of CPU" in err and "--replanner fatrop" in err
+
+
 def test_obstacle_parked_on_the_goal_is_flagged(paper, baseline):
     planner, scenario, _, _ = paper
     tip = planner.config.geometry.flange_position(np.asarray([scenario.goal]))

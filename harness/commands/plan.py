@@ -25,6 +25,7 @@ from planning.obstacle import LinearObstacle, SwayingObstacle
 from planning.quadrature import RULES, splits_evenly
 from planning.replanning import execute
 from planning.result import closest_link, evaluate, to_json
+from planning.segments import uses_anytime
 from planning.solver import Planner
 
 DEFAULT = Scenario()
@@ -233,13 +234,24 @@ def run(args) -> int:
     result = evaluate(execute(planner, scenario, replan=not args.no_replan), scenario, model,
                       config)
     if not result.feasible:
-        raise PlanningError("no feasible plan: " + "; ".join(result.problems))
+        raise PlanningError(infeasible(result.problems, config))
     write_json(args.out, to_json(result, scenario, config, args.model))
     print(f"wrote {args.out}: energy {result.energy:.4f} J, min clearance "
           f"{result.sample_clearance.min():.4f} m (closest: "
           f"{closest_link(result, config)['closest_link']}), "
           f"{len(result.execution.segments) - 1} re-plans")
     return 0
+
+
+def infeasible(problems, config: PlannerConfig) -> str:
+    """The error line of an execution that is not feasible; with the anytime SQP it says
+    what its re-plans had: their quality is what that CPU buys on this machine (the Panda's
+    default plan measured feasible at 10 ms one day, infeasible the next, feasible at 20)."""
+    message = "no feasible plan: " + "; ".join(problems)
+    if uses_anytime(config):
+        message += (f" (the anytime SQP re-planned within {config.replan_budget_ms:g} ms of "
+                    "CPU: a larger --replan-budget-ms or --replanner fatrop may find one)")
+    return message
 
 
 def torque_diagnosis(planner: Planner, scenario: Scenario) -> str | None:
