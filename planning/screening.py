@@ -87,11 +87,12 @@ def near_samples(clearance: np.ndarray, threshold: float, slots: int) -> np.ndar
 def _thinned(count, slots):
     """`slots` of range(count) evenly: np.round(np.linspace(0, count - 1, slots)), the same
     floating-point steps and halves to even, in a loop (~1 us instead of ~12)."""
-    out = np.empty(slots, np.int64)
+    out = np.empty(max(slots, 0), np.int64)
     step = (count - 1) / (slots - 1) if slots > 1 else 0.0
     for i in range(slots):
         out[i] = np.round(i * step)
-    out[slots - 1] = count - 1 if slots > 1 else 0
+    if slots > 1:
+        out[slots - 1] = count - 1
     return out
 
 
