@@ -46,8 +46,6 @@ class _Problem:
     sqp: sqp.AnytimeSQP
     parts: compiled.Buffered
     layout: tuple
-    n: int  # variables
-    rows: int  # constraint rows
 
 
 class Anytime:
@@ -94,8 +92,7 @@ class Anytime:
             parts = compiled.Buffered(build(ca.Function("elastic_parts", [nlp.x, nlp.p],
                                                         [ca.vertcat(nlp.energy, nlp.penalty)])))
             self._problems[key] = _Problem(nlp, sqp.AnytimeSQP(
-                local, sqp.layout_of(nlp), nlp.lbx, nlp.g.numel()), parts, ("elastic",) + key,
-                nlp.x.numel(), nlp.g.numel())
+                local, sqp.layout_of(nlp), nlp.lbx, nlp.g.numel()), parts, ("elastic",) + key)
         return self._problems[key]
 
     def plan(self, q0, qd0, t_begin: float, duration: float, goal,
@@ -220,10 +217,10 @@ class Anytime:
         """The start point (the reference's free coefficients, slacks reset by the SQP) and
         the multipliers of `last` where they belong to this NLP, those of its clearance
         rows moved with their sample times."""
-        nlp, layout = problem.nlp, problem.sqp.layout
-        x = np.zeros(problem.n)
+        nlp, layout, (n, count) = problem.nlp, problem.sqp.layout, problem.sqp.sizes
+        x = np.zeros(n)
         x[:layout.nc] = reference.coefficients[:, 2:].ravel()
-        lam_g, lam_x = np.zeros(problem.rows), np.zeros(problem.n)
+        lam_g, lam_x = np.zeros(count), np.zeros(n)
         if last is None or last.layout != problem.layout or not len(last.multipliers[0]):
             return x, lam_g, lam_x
         lam_g[:], lam_x[:] = last.multipliers
@@ -243,8 +240,9 @@ class Anytime:
                  status: str) -> SegmentPlan:
         (parts,) = problem.parts(chosen.x, p)
         last = chosen.x is solution.x
-        lam_g = solution.lam_g if last else np.zeros(problem.rows)
-        lam_x = solution.lam_x if last else np.zeros(problem.n)
+        n, count = problem.sqp.sizes
+        lam_g = solution.lam_g if last else np.zeros(count)
+        lam_x = solution.lam_x if last else np.zeros(n)
         detour = bool(np.any(np.abs(solution.lam_g[problem.nlp.clearance_rows]) > 1e-9))
         return SegmentPlan(
             trajectory=chosen.trajectory, energy=float(parts[0]), penalty=float(parts[1]),

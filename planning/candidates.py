@@ -50,15 +50,14 @@ def choose(points: list[Point], motion, check, config: PlannerConfig,
     unchecked, the others have their clearance alone checked first."""
     best = None
     for point in sorted(points, key=lambda point: point.f):
-        if best is not None and not best.hard and misses(point, slacks, config):
+        keeping_only = best is not None and not best.hard  # only keeping the threshold wins
+        if keeping_only and misses(point, slacks, config):
             continue
-        trajectory, links = motion(point.x), None
-        coefficients = trajectory.coefficients
-        if best is not None and not best.hard:
-            links = check.links(coefficients)
-            if not keeps(links.min(initial=np.inf), config):
-                continue
-        safety = check(coefficients, links)
+        trajectory = motion(point.x)
+        links = check.links(trajectory.coefficients) if keeping_only else None
+        if keeping_only and not keeps(links.min(initial=np.inf), config):
+            continue
+        safety = check(trajectory.coefficients, links)
         hard = max(safety.limit_excess - LIMIT_TOLERANCE, 0.0) + \
             max(safety.torque_excess - TORQUE_TOLERANCE, 0.0) + \
             max(point.violation - HARD_TOLERANCE, 0.0)

@@ -95,7 +95,7 @@ class AnytimeSQP:
     def __init__(self, local: ca.Function, layout: Layout, lbx: np.ndarray, rows: int):
         self.local, self.layout, self.lbx = compiled.Buffered(local), layout, np.asarray(lbx, float)
         n = len(self.lbx)
-        self._parts = (n, rows)
+        self.sizes = (n, rows)  # variables, constraint rows
         # the slacks' rows and columns (above, below, e, clearance, v), for kernels.reset
         self._slacks = tuple(np.arange(part.start, part.stop) for part in
                              (layout.above, layout.below, layout.e, layout.clearance, layout.v))
@@ -121,7 +121,7 @@ class AnytimeSQP:
         began = time.thread_time()
         (out,) = self.local(x, p, lam)
         self.spent_ms += 1e3 * (time.thread_time() - began)
-        n, rows = self._parts
+        n, rows = self.sizes
         f, grad, g, jac, hess, x = kernels.reset(out, np.asarray(x, float),
                                                  np.asarray(lbg, float), n, rows,
                                                  self.layout.nc, *self._slacks)
