@@ -188,16 +188,19 @@ class AnytimeSQP:
                     if better / pred >= 1e-4:
                         trial, (lam_rows, lam_vars), ratio = corrected[0], corrected[1], \
                             better / pred
-            if ratio >= 1e-4:
+            settled = False
+            if ratio >= 1e-4:  # the merit's decrease is pred x ratio (corrected or not)
+                settled = pred * ratio <= SETTLED_SHARE * abs(trial.f) and \
+                    trial.violation <= PRIMAL_TOLERANCE
                 point, lam_g, lam_x = trial, lam_rows, lam_vars
                 accept(point)
-                if actual <= SETTLED_SHARE * abs(point.f) and point.violation <= PRIMAL_TOLERANCE:
-                    status = SETTLED
-                    break
             clock.tick()
             if clock.nominal is None:
                 self._recent.append(clock.ms() - began)
                 self.loop_ms += self._recent[-1]
+            if settled:
+                status = SETTLED
+                break
             if ratio < 0.25:
                 radius = 0.5 * step_size
                 if radius < 1e-10:
