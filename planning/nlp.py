@@ -18,6 +18,8 @@ turning points of its own solution are the ones constrained.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import casadi as ca
 import numpy as np
 
@@ -37,8 +39,24 @@ def turning_slots(config: PlannerConfig) -> tuple[int, int, int]:
     return extrema, order, extrema - order
 
 
+@dataclass(frozen=True)
+class Site:
+    """One use of a per-sample function in the rows (the torque model at a state, the link
+    distances at a pose): the function (`inputs` -> `expression`, SX), its arguments in the
+    NLP (expressions of x and p) and the symbol its value is in PlanningNLP.lifted_g
+    (planning.sqp differentiates each site in its own arguments)."""
+
+    kind: str
+    inputs: tuple
+    expression: ca.SX
+    args: tuple
+    output: ca.SX
+
+
 class PlanningNLP:
-    """Symbolic objective f(x, p) and constraints lbg <= g(x, p) <= ubg."""
+    """Symbolic objective f(x, p) and constraints lbg <= g(x, p) <= ubg; the same rows as
+    lifted_g, expressions of x, p and the outputs of its sites (each use of the torque model
+    or the link distances, PlanningNLP.sites) standing for them."""
 
     def __init__(self, model: TorqueModel, config: PlannerConfig,
                  goal_limits: tuple[int, ...] | None = None, elastic: bool = False):
@@ -77,9 +95,11 @@ class PlanningNLP:
                             ca.vec(extremum), ca.vec(newton), sign, ca.vec(v_turn),
                             ca.vec(v_newton), alpha, self.breaks)
         self.coefficients = ca.horzcat(q0, qd0 * self.sigma, free)  # column p -> s**p
-        self._torque, self.inline = _torque_function(model)
-        power = self._power(model)
+        self.sites: list[Site] = []
+        self._calls: list = []  # each site's value in g: a call node or its expression
+        self._model, self.inline = _torque_function(model)
         self._g, self._lbg, self._ubg = [], [], []
+        power = self._power(model)
         self.clearance_rows = None
         if elastic:
             slot_weights = ca.vec(ca.repmat(weight.T, self.links, 1))  # slot-major, as v
@@ -97,7 +117,9 @@ class PlanningNLP:
         self.quotient_rows = {j: self._goal_limit(j, goal[j], sign[j], v_turn[j, :],
                                                   v_newton[j, :]) for j in joints}
         self.torque_rows = self._torque_limits(model, s_obs)
-        self.g = ca.vertcat(*self._g)
+        self.lifted_g = ca.vertcat(*self._g)
+        self.g = ca.substitute(self.lifted_g, ca.vertcat(*(site.output for site in self.sites)),
+                               ca.vertcat(*self._calls)) if self.sites else self.lifted_g
         self.lbg, self.ubg = np.array(self._lbg), np.array(self._ubg)
         self.lbx = np.concatenate([np.full(self.x.numel() - self.elastic.numel(), -np.inf),
                                    np.zeros(self.elastic.numel())])
@@ -115,6 +137,17 @@ class PlanningNLP:
         self._lbg += list(np.broadcast_to(lower, count))
         self._ubg += list(np.broadcast_to(upper, count))
         return slice(start, start + count)
+
+    def _site(self, kind: str, function: ca.Function, inputs, expression, *args):
+        """The symbol standing for function(*args) in the lifted rows (a new site)."""
+        output = ca.SX.sym(f"{kind}_{len(self.sites)}", expression.numel())
+        self.sites.append(Site(kind, tuple(inputs), expression, tuple(args), output))
+        self._calls.append(function(*args))
+        return output
+
+    def _torque(self, q, qd, qdd):
+        """The torque model at a state (a site)."""
+        return self._site("torque", *self._model, q, qd, qdd)
 
     def _power(self, model: TorqueModel):
         """P(s_i) = sum_j tau_j qd_j at the N energy samples (eq. 15); keeps the torques
@@ -169,10 +202,11 @@ class PlanningNLP:
         """D_link(q(s_k), c_k) + v_link,k >= lambda for every slot k and link (slot-major);
         a slot without a sample gets lbg = -inf per solve (Planner.bounds)."""
         q, centre = ca.SX.sym("q", self.dof), ca.SX.sym("centre", 3)
-        distances = ca.Function("distances", [q, centre], [ca.vertcat(
-            *symbolic_link_clearances(self.config.geometry, q, centre))],
-            {"never_inline": not self.inline})
-        rows = [distances(self.state(s_obs[j])[0], obstacle[:, j])
+        distances = ca.vertcat(*symbolic_link_clearances(self.config.geometry, q, centre))
+        function = ca.Function("distances", [q, centre], [distances],
+                               {"never_inline": not self.inline})
+        rows = [self._site("distances", function, (q, centre), distances,
+                           self.state(s_obs[j])[0], obstacle[:, j])
                 for j in range(self.config.obstacle_slots)]
         return self._add(ca.vertcat(*rows) + self.elastic, self.config.threshold, np.inf)
 
@@ -205,15 +239,16 @@ class PlanningNLP:
         return f, g, parts
 
 
-def _torque_function(model: TorqueModel) -> tuple[ca.Function, bool]:
-    """The model's torque tau(q, qd, qdd) as an SX function, and whether the NLP copies its
-    expression into every sample (inline) or calls it there (a call node: one copy of the
-    function and of its derivatives in the generated C, the NLP's code no longer grows with
-    the model times the samples)."""
+def _torque_function(model: TorqueModel) -> tuple[tuple, bool]:
+    """The model's torque tau(q, qd, qdd): (its SX function, inputs, expression), and whether
+    the NLP copies its expression into every sample (inline) or calls it there (a call node:
+    one copy of the function and of its derivatives in the generated C, the NLP's code no
+    longer grows with the model times the samples)."""
     q, qd, qdd = (ca.SX.sym(name, model.dof) for name in ("q", "qd", "qdd"))
     tau = model.symbolic_torque(q, qd, qdd)
     inline = ca.Function("torque", [q, qd, qdd], [tau]).n_instructions() <= INLINE_INSTRUCTIONS
-    return ca.Function("torque", [q, qd, qdd], [tau], {"never_inline": not inline}), inline
+    function = ca.Function("torque", [q, qd, qdd], [tau], {"never_inline": not inline})
+    return (function, (q, qd, qdd), tau), inline
 
 
 # Measured (CasADi 3.8, paper quadrature N = 10, 24 obstacle slots): the Lynxmotion's RNEA

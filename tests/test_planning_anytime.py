@@ -217,6 +217,52 @@ def test_a_points_jacobian_with_its_constant_slack_columns_is_the_nlps(planner):
                            rtol=1e-10, atol=1e-10 * np.max(np.abs(full @ dx)))
 
 
+@pytest.mark.parametrize("robot", ["lynxmotion", "ur5"])
+def test_the_local_derivatives_through_the_sites_are_casadis_through_the_rows(robot):
+    """sqp.local_function differentiates each torque and distance site in its own arguments
+    and chains them (sqp.through_sites): at random points, multipliers and parameters, its
+    rows, their Jacobian and the Lagrangian's Hessian are CasADi's AD of the whole rows (the
+    torque model copied into them on the Lynxmotion, called on the UR5), with torque limits
+    (torque sites at the energy nodes, the start and the obstacle samples)."""
+    from harness.robots.arm import planner_config
+
+    config = planner_config(robot, replanner="sqp", compile_code=False)
+    assert config.torque_limit is not None
+    model = PinocchioModel(load_pinocchio(robot))
+    nlp = PlanningNLP(model, config, (0,), elastic=True)
+    kinds = {site.kind for site in nlp.sites}
+    assert kinds == {"torque", "distances"} and nlp.inline == (robot == "lynxmotion")
+    local = sqp.local_function(nlp, "local")
+    nc = sqp.layout_of(nlp).nc
+    lam = ca.SX.sym("lam", nlp.g.numel())
+    coefficients = nlp.x[:nc]
+    hessian, _ = ca.hessian(nlp.f + ca.dot(lam, nlp.g), coefficients)
+    direct = ca.Function("direct", [nlp.x, nlp.p, lam], [ca.densify(ca.vertcat(
+        nlp.f, ca.gradient(nlp.f, nlp.x), nlp.g, ca.vec(ca.jacobian(nlp.g, coefficients).T),
+        ca.vec(hessian)))])
+    rng = np.random.default_rng(11)
+    for _ in range(3):
+        x = rng.uniform(-1, 1, nlp.x.numel())
+        p = rng.uniform(0.1, 1, nlp.p.numel())
+        multipliers = rng.normal(size=nlp.g.numel())
+        ours = np.asarray(local(x, p, multipliers)).ravel()
+        theirs = np.asarray(direct(x, p, multipliers)).ravel()
+        assert np.allclose(ours, theirs, rtol=1e-9, atol=1e-9 * np.max(np.abs(theirs)))
+    # and the Hessian block against central differences of the Lagrangian's gradient
+    rows = nlp.g.numel()
+    gradient = ca.Function("gradient", [nlp.x, nlp.p, lam],
+                           [ca.gradient(nlp.f + ca.dot(lam, nlp.g), coefficients)])
+    offset = 1 + nlp.x.numel() + rows + rows * nc
+    ours = np.asarray(local(x, p, multipliers)).ravel()[offset:].reshape(nc, nc)
+    step = 1e-6
+    for j in range(0, nc, 5):
+        dx = np.zeros(nlp.x.numel())
+        dx[j] = step
+        column = (np.asarray(gradient(x + dx, p, multipliers)).ravel()
+                  - np.asarray(gradient(x - dx, p, multipliers)).ravel()) / (2 * step)
+        assert np.allclose(ours[:, j], column, rtol=1e-5, atol=1e-5 * np.max(np.abs(column)))
+
+
 def test_compiled_safety_checks_match_the_numpy_ones(baseline):
     """Clearance at each sample (planning.clearance), the limit excess with its turning
     points (planning.limits), the torque excess (Planner.torque_excess) and the dense energy
