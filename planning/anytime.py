@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from planning import compiled, sqp
+from planning import compiled, local_model, sqp
 from planning.budget import Clock, RoundCosts
 from planning.candidates import TORQUE_TOLERANCE, Candidate, choose
 from planning.limits import LIMIT_TOLERANCE
@@ -88,11 +88,11 @@ class Anytime:
                                                                     torque_limit=None)
             nlp = PlanningNLP(self.planner.model, config, key[0], elastic=True)
             build = compiled.function if self.config.compile_code else (lambda f: f)
-            local = build(sqp.local_function(nlp, "elastic_local"))
+            local = build(local_model.local_function(nlp, "elastic_local"))
             parts = compiled.Buffered(build(ca.Function("elastic_parts", [nlp.x, nlp.p],
                                                         [ca.vertcat(nlp.energy, nlp.penalty)])))
             self._problems[key] = _Problem(nlp, sqp.AnytimeSQP(
-                local, sqp.layout_of(nlp), nlp.lbx, nlp.g.numel()), parts, ("elastic",) + key)
+                local, local_model.layout_of(nlp), nlp.lbx, nlp.g.numel()), parts, ("elastic",) + key)
         return self._problems[key]
 
     def plan(self, q0, qd0, t_begin: float, duration: float, goal,

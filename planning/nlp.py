@@ -118,8 +118,13 @@ class PlanningNLP:
                                                   v_newton[j, :]) for j in joints}
         self.torque_rows = self._torque_limits(model, s_obs)
         self.lifted_g = ca.vertcat(*self._g)
-        self.g = ca.substitute(self.lifted_g, ca.vertcat(*(site.output for site in self.sites)),
-                               ca.vertcat(*self._calls)) if self.sites else self.lifted_g
+        if self.sites:  # each site's value (its call, or its expression copied) in place
+            outputs = ca.vertcat(*(site.output for site in self.sites))
+            self.g, self.energy = ca.substitute([self.lifted_g, self.energy], [outputs],
+                                                [ca.vertcat(*self._calls)])
+            self.f = self.energy + self.penalty
+        else:
+            self.g = self.lifted_g
         self.lbg, self.ubg = np.array(self._lbg), np.array(self._ubg)
         self.lbx = np.concatenate([np.full(self.x.numel() - self.elastic.numel(), -np.inf),
                                    np.zeros(self.elastic.numel())])

@@ -12,7 +12,7 @@ import pytest
 
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from planning import elastic_qp, sqp
+from planning import elastic_qp, local_model, sqp
 from planning.anytime import MIN_VIOLATION
 from planning.clearance import link_clearances
 from planning.config import Scenario, true_energy_config
@@ -60,8 +60,8 @@ def _elastic_problem(planner, case, forecast):
     p = planner.parameters(case.start, case.start_velocity, case.duration, goal, subset, 0.0,
                            reference, config.elastic_weight)
     lbg, ubg = planner.bounds(goal, nlp)
-    start = np.concatenate([x0[: sqp.layout_of(nlp).nc], np.zeros(nlp.x.numel()
-                                                                    - sqp.layout_of(nlp).nc)])
+    start = np.concatenate([x0[: local_model.layout_of(nlp).nc], np.zeros(nlp.x.numel()
+                                                                    - local_model.layout_of(nlp).nc)])
     return nlp, p, lbg, ubg, start
 
 
@@ -72,7 +72,7 @@ def test_the_anytime_sqp_reaches_ipopts_optimum_of_the_same_nlp(planner, monkeyp
     finds nothing better (an independent KKT check); the clearance rows bind there."""
     case, forecast = random_crossing(planner, seed=7)
     nlp, p, lbg, ubg, start = _elastic_problem(planner, case, forecast)
-    solver = sqp.AnytimeSQP(sqp.local_function(nlp, "local"), sqp.layout_of(nlp), nlp.lbx,
+    solver = sqp.AnytimeSQP(local_model.local_function(nlp, "local"), local_model.layout_of(nlp), nlp.lbx,
                             nlp.g.numel())
     monkeypatch.setattr(sqp, "SETTLED_SHARE", 0.0)  # to convergence
     solution, _ = solver.solve(start, p, lbg, ubg, np.zeros(nlp.g.numel()), 1e6,
@@ -101,8 +101,8 @@ def test_the_qp_with_slacks_held_is_the_full_elastic_qp(planner, monkeypatch, ra
     for small and large trust regions."""
     case, forecast = random_crossing(planner, seed=7)
     nlp, p, lbg, ubg, start = _elastic_problem(planner, case, forecast)
-    layout = sqp.layout_of(nlp)
-    solver = sqp.AnytimeSQP(sqp.local_function(nlp, "local"), layout, nlp.lbx, nlp.g.numel())
+    layout = local_model.layout_of(nlp)
+    solver = sqp.AnytimeSQP(local_model.local_function(nlp, "local"), layout, nlp.lbx, nlp.g.numel())
     rows = np.flatnonzero(np.isfinite(lbg) | np.isfinite(ubg))
     cols = np.arange(nlp.x.numel())
     frame = elastic_qp.Frame(rows, cols, layout, lbg[rows] == ubg[rows], nlp.lbx[layout.nc:])
@@ -141,7 +141,7 @@ def test_a_solve_settles_at_the_first_step_that_gains_less_than_its_share(planne
     kept; every earlier accepted step gained more. Without it the same solve runs on."""
     case, forecast = random_crossing(planner, seed=7)
     nlp, p, lbg, ubg, start = _elastic_problem(planner, case, forecast)
-    solver = sqp.AnytimeSQP(sqp.local_function(nlp, "local"), sqp.layout_of(nlp), nlp.lbx,
+    solver = sqp.AnytimeSQP(local_model.local_function(nlp, "local"), local_model.layout_of(nlp), nlp.lbx,
                             nlp.g.numel())
 
     def solve(share):
@@ -173,8 +173,8 @@ def test_the_qp_without_rows_out_of_reach_is_the_full_qp(planner, monkeypatch, r
     above the point's value, a third just below) so that some bind, the rest out of reach."""
     case, forecast = random_crossing(planner, seed=7)
     nlp, p, lbg, ubg, start = _elastic_problem(planner, case, forecast)
-    layout = sqp.layout_of(nlp)
-    solver = sqp.AnytimeSQP(sqp.local_function(nlp, "local"), layout, nlp.lbx, nlp.g.numel())
+    layout = local_model.layout_of(nlp)
+    solver = sqp.AnytimeSQP(local_model.local_function(nlp, "local"), layout, nlp.lbx, nlp.g.numel())
     last = (np.zeros(nlp.g.numel()), np.zeros(nlp.x.numel()))
     point = solver.evaluate(start, p, last[0], lbg)
     rows = np.flatnonzero(np.isfinite(lbg) | np.isfinite(ubg))
@@ -205,8 +205,8 @@ def test_a_points_jacobian_with_its_constant_slack_columns_is_the_nlps(planner):
     in every variable, along random steps."""
     case, forecast = random_crossing(planner, seed=7)
     nlp, p, lbg, _, start = _elastic_problem(planner, case, forecast)
-    layout = sqp.layout_of(nlp)
-    solver = sqp.AnytimeSQP(sqp.local_function(nlp, "local"), layout, nlp.lbx, nlp.g.numel())
+    layout = local_model.layout_of(nlp)
+    solver = sqp.AnytimeSQP(local_model.local_function(nlp, "local"), layout, nlp.lbx, nlp.g.numel())
     point = solver.evaluate(start, p, np.zeros(nlp.g.numel()), lbg)
     jacobian = ca.Function("J", [nlp.x, nlp.p], [ca.jacobian(nlp.g, nlp.x)])
     full = np.asarray(jacobian(point.x, p))
@@ -219,8 +219,8 @@ def test_a_points_jacobian_with_its_constant_slack_columns_is_the_nlps(planner):
 
 @pytest.mark.parametrize("robot", ["lynxmotion", "ur5"])
 def test_the_local_derivatives_through_the_sites_are_casadis_through_the_rows(robot):
-    """sqp.local_function differentiates each torque and distance site in its own arguments
-    and chains them (sqp.through_sites): at random points, multipliers and parameters, its
+    """local_model.local_function differentiates each torque and distance site in its own arguments
+    and chains them (local_model.through_sites): at random points, multipliers and parameters, its
     rows, their Jacobian and the Lagrangian's Hessian are CasADi's AD of the whole rows (the
     torque model copied into them on the Lynxmotion, called on the UR5), with torque limits
     (torque sites at the energy nodes, the start and the obstacle samples)."""
@@ -232,8 +232,8 @@ def test_the_local_derivatives_through_the_sites_are_casadis_through_the_rows(ro
     nlp = PlanningNLP(model, config, (0,), elastic=True)
     kinds = {site.kind for site in nlp.sites}
     assert kinds == {"torque", "distances"} and nlp.inline == (robot == "lynxmotion")
-    local = sqp.local_function(nlp, "local")
-    nc = sqp.layout_of(nlp).nc
+    local = local_model.local_function(nlp, "local")
+    nc = local_model.layout_of(nlp).nc
     lam = ca.SX.sym("lam", nlp.g.numel())
     coefficients = nlp.x[:nc]
     hessian, _ = ca.hessian(nlp.f + ca.dot(lam, nlp.g), coefficients)
