@@ -128,14 +128,15 @@ class Anytime:
             lbg, ubg = self._bounds(problem, goal, links[slots])
             start, lam_g, lam_x = self._start(problem, reference, times[slots], last)
             points: list[sqp.Point] = []
-            reserve = self.rounds.reserve(clock)  # for choosing and packing after the solve
+            reserve = self.rounds.reserve(clock)  # for packing after the solve
             solution, count = problem.sqp.solve(start, p, lbg, ubg, lam_g, budget - reserve,
-                                                points.append, lam_x0=lam_x, clock=clock)
+                                                points.append, lam_x0=lam_x, clock=clock,
+                                                per_point_ms=self.rounds.check_ms(clock))
             solved = clock.ms()
             iterations += count
-            chosen = choose(points, lambda x: planner.trajectory(x, q0, qd0, t_begin,
-                                                                 duration), check, config,
-                            problem.sqp.layout.v)
+            chosen, checked = choose(points, lambda x: planner.trajectory(
+                x, q0, qd0, t_begin, duration), check, config, problem.sqp.layout.v)
+            chose = clock.ms()
             converged = solution.status == sqp.CONVERGED and chosen.x is solution.x
             segment = self._segment(problem, chosen, solution, p, times[slots],
                                     self._status(chosen, converged))
@@ -145,8 +146,9 @@ class Anytime:
             more = self._needs_round(chosen, slots, links[slots])
             if more == "torque":
                 torque = True
-            self.rounds.record(clock, clock.ms() - solved,
-                               clock.ms() - round_began - problem.sqp.loop_ms)
+            self.rounds.record(clock, clock.ms() - chose,
+                               clock.ms() - round_began - problem.sqp.loop_ms,
+                               (chose - solved) / max(checked, 1))
             if not more or budget - clock.ms() < self.round_ms(clock, problem):
                 break
             reference = segment.trajectory

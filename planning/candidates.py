@@ -39,21 +39,22 @@ class Candidate:
 
 
 def choose(points: list[Point], motion, check, config: PlannerConfig,
-           slacks: slice | None = None) -> Candidate:
-    """The best of points by Candidate.rank; motion(x) is an iterate's trajectory, check a
-    SafetyCheck.against, slacks where a point's clearance slacks sit (v = max(0, lambda - D)
-    of the rows its solve had). They are checked from the lowest objective up: the first
-    that keeps the threshold and the hard limits is the best (any later one has a larger
-    objective). Once a candidate within the hard limits misses the threshold, a later one
-    can only be better by keeping it (measured: 220 of 382 replayed re-plans ended on such a
-    candidate, every iterate checked): one whose own rows already miss it is passed over
-    unchecked, the others have their clearance alone checked first."""
-    best = None
+           slacks: slice | None = None) -> tuple[Candidate, int]:
+    """The best of points by Candidate.rank, and how many were checked; motion(x) is an
+    iterate's trajectory, check a SafetyCheck.against, slacks where a point's clearance
+    slacks sit (v = max(0, lambda - D) of the rows its solve had). They are checked from the
+    lowest objective up: the first that keeps the threshold and the hard limits is the best
+    (any later one has a larger objective). Once a candidate within the hard limits misses
+    the threshold, a later one can only be better by keeping it (measured: 220 of 382
+    replayed re-plans ended on such a candidate, every iterate checked): one whose own rows
+    already miss it is passed over unchecked, the others have their clearance alone checked
+    first."""
+    best, checked = None, 0
     for point in sorted(points, key=lambda point: point.f):
         keeping_only = best is not None and not best.hard  # only keeping the threshold wins
         if keeping_only and misses(point, slacks, config):
             continue
-        trajectory = motion(point.x)
+        trajectory, checked = motion(point.x), checked + 1
         links = check.links(trajectory.coefficients) if keeping_only else None
         if keeping_only and not keeps(links.min(initial=np.inf), config):
             continue
@@ -67,7 +68,7 @@ def choose(points: list[Point], motion, check, config: PlannerConfig,
             best = candidate
         if not candidate.unsafe and not candidate.hard:
             break
-    return best
+    return best, checked
 
 
 def misses(point: Point, slacks: slice | None, config: PlannerConfig) -> bool:

@@ -96,13 +96,15 @@ class AnytimeSQP:
         return Point(x, f, g, grad, jac, hess, 0.0)
 
     def solve(self, x0, p, lbg, ubg, lam_g0, budget_ms: float, accept, max_iter: int = 200,
-              radius: float = 0.5, lam_x0=None, clock: Clock | None = None
-              ) -> tuple[Solution, int]:
+              radius: float = 0.5, lam_x0=None, clock: Clock | None = None,
+              per_point_ms: float = 0.0) -> tuple[Solution, int]:
         """Iterate from x0 (multipliers lam_g0 for the first Hessian) until the predicted
         decrease vanishes or the clock (default: CPU time from now) reaches budget_ms; no
-        iteration starts that would end past it. accept(point) is called on the start and
-        every accepted iterate (its return value is ignored: the caller keeps the best one);
-        returns the last point's solution and the iteration count."""
+        iteration starts that would end past it, per_point_ms kept for each point accepted
+        (and the one it may add: the caller's work per iterate after the solve). accept(point)
+        is called on the start and every accepted iterate (its return value is ignored: the
+        caller keeps the best one); returns the last point's solution and the iteration
+        count."""
         entered = time.thread_time()
         clock = Clock() if clock is None else clock
         lbg, ubg = np.asarray(lbg, float), np.asarray(ubg, float)
@@ -115,13 +117,15 @@ class AnytimeSQP:
         frame = Frame(rows, cols, lay, lbg[rows] == ubg[rows], self.lbx[cols[lay.nc:]])
         point = self._restored(self.evaluate(x0, p, lam_g0, lbg), p, lbg, ubg, lam_g0)
         accept(point)
+        accepted = 1
         lam_x = np.zeros(len(point.x)) if lam_x0 is None else np.asarray(lam_x0, float)
         nu, lam_g = HARD_WEIGHT, np.asarray(lam_g0, float)
         status, iterations = BUDGET, 0
         self.loop_ms = 0.0  # CPU ms of this solve's iterations (CPU clocks)
         while iterations < max_iter:
             began = clock.ms()
-            if began + clock.iteration(self.iteration_ms) > budget_ms:
+            if began + clock.iteration(self.iteration_ms) + per_point_ms * (accepted + 1) \
+                    > budget_ms:
                 if not iterations and self._recent:  # none fits: the oldest cost ages out
                     self._recent.popleft()
                 break
@@ -162,6 +166,7 @@ class AnytimeSQP:
                     trial.violation <= PRIMAL_TOLERANCE
                 point, lam_g, lam_x = trial, lam_rows, lam_vars
                 accept(point)
+                accepted += 1
             clock.tick()
             if clock.nominal is None:
                 self._recent.append(clock.ms() - began)

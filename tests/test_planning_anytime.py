@@ -332,13 +332,13 @@ def test_iterates_whose_own_rows_miss_the_threshold_are_passed_over_soundly(plan
         return answer
 
     def recorded(points, motion, check, config, slacks=None):
-        chosen = candidates.choose(points, motion, check, config, slacks)
-        calls.append((chosen, candidates.choose(points, motion, check, config, None)))
+        chosen, checked = candidates.choose(points, motion, check, config, slacks)
+        calls.append((chosen, candidates.choose(points, motion, check, config, None)[0]))
         for point in points:  # sound: one passed over misses the threshold on the whole check
             if real_misses(point, slacks, config):
                 lowest = check.links(motion(point.x).coefficients).min()
                 assert not candidates.keeps(lowest, config)
-        return chosen
+        return chosen, checked
 
     monkeypatch.setattr(candidates, "misses", counted)
     monkeypatch.setattr(module, "choose", recorded)
@@ -406,6 +406,43 @@ def test_a_plan_out_of_budget_returns_its_best_iterate(planner):
     start = planner.trajectory(x0, case.start, case.start_velocity, 0.0, case.duration)
     assert np.allclose(plan.trajectory.coefficients, start.coefficients)
 
+
+
+def test_a_solve_keeps_the_choices_cpu_for_every_iterate_it_accepts(planner, monkeypatch):
+    """per_point_ms: with a nominal clock (1 ms an iteration) and 10 ms, a solve keeping
+    1.5 ms for each accepted iterate (and the one an iteration may add) stops before the
+    solve that keeps none, and no iteration of it began without room for its own tick and
+    the reserve of every point accepted so far plus one."""
+    from planning.budget import Clock
+
+    case, forecast = random_crossing(planner, seed=7)
+    nlp, p, lbg, ubg, start = _elastic_problem(planner, case, forecast)
+    monkeypatch.setattr(sqp, "SETTLED_SHARE", 0.0)
+    runs = {}
+    for reserve in (0.0, 1.5):
+        solver = sqp.AnytimeSQP(local_model.local_function(nlp, "local"),
+                                local_model.layout_of(nlp), nlp.lbx, nlp.g.numel())
+        clock, seen = Clock(iteration_ms=1.0), []
+        original = solver._qp
+
+        def qp(*args, clock=clock, seen=seen, original=original):
+            seen.append(clock.ms())  # an iteration's QP: the iteration began at this tick
+            return original(*args)
+
+        solver._qp = qp
+        points: list = []
+
+        def accept(point, points=points, seen=seen):
+            points.append(len(seen))  # iterations begun when this point was accepted
+
+        solution, iterations = solver.solve(start, p, lbg, ubg, np.zeros(nlp.g.numel()), 10.0,
+                                            accept, clock=clock, per_point_ms=reserve)
+        runs[reserve] = iterations
+        for began in {s for s in seen}:  # corrections re-enter _qp within an iteration
+            accepted = sum(1 for k in points if k <= seen.index(began))
+            assert began + 1.0 + reserve * (accepted + 1) <= 10.0
+        assert iterations and solution.status == sqp.BUDGET
+    assert runs[1.5] < runs[0.0]
 
 def test_a_budget_counted_in_iterations_gives_the_same_plan_under_any_load(baseline):
     """PlannerConfig.iteration_ms: a cold plan of a random crossing with 6 nominal ms at 1 ms
