@@ -31,12 +31,8 @@ def local_function(nlp, name: str) -> ca.Function:
         if not np.array_equal(np.asarray(at), expected):
             raise ValueError("the NLP's slacks do not enter its rows as "
                              "elastic_qp.slack_structure")
-    if nlp.sites:
-        g, jacobian, hessian = through_sites(nlp, lam, coefficients)
-        hessian += ca.hessian(nlp.f, coefficients)[0]
-    else:
-        g, jacobian = nlp.g, ca.jacobian(nlp.g, coefficients)
-        hessian, _ = ca.hessian(nlp.f + ca.dot(lam, nlp.g), coefficients)
+    g, jacobian, hessian = through_sites(nlp, lam, coefficients)  # every NLP has torque sites
+    hessian += ca.hessian(nlp.f, coefficients)[0]
     column = ca.vertcat(nlp.f, ca.gradient(nlp.f, nlp.x), g, ca.vec(jacobian.T),
                         ca.vec(hessian))  # row-major
     return ca.Function(name, [nlp.x, nlp.p, lam], [ca.densify(column)])

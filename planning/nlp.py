@@ -44,7 +44,7 @@ class Site:
     """One use of a per-sample function in the rows (the torque model at a state, the link
     distances at a pose): the function (`inputs` -> `expression`, SX), its arguments in the
     NLP (expressions of x and p) and the symbol its value is in PlanningNLP.lifted_g
-    (planning.sqp differentiates each site in its own arguments)."""
+    (planning.local_model differentiates each site in its own arguments)."""
 
     kind: str
     inputs: tuple

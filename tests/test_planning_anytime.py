@@ -438,7 +438,7 @@ def test_a_solve_keeps_the_choices_cpu_for_every_iterate_it_accepts(planner, mon
         solution, iterations = solver.solve(start, p, lbg, ubg, np.zeros(nlp.g.numel()), 10.0,
                                             accept, clock=clock, per_point_ms=reserve)
         runs[reserve] = iterations
-        for began in {s for s in seen}:  # corrections re-enter _qp within an iteration
+        for began in set(seen):  # corrections re-enter _qp within an iteration
             accepted = sum(1 for k in points if k <= seen.index(began))
             assert began + 1.0 + reserve * (accepted + 1) <= 10.0
         assert iterations and solution.status == sqp.BUDGET
