@@ -208,3 +208,36 @@ def test_predict_on_a_measured_log_reads_like_its_sensor(tmp_path):
     assert main(["predict", "--model", str(model), "--data", str(clean), "--out",
                  str(tmp_path / "q.npz")]) == 0
     np.testing.assert_allclose(np.load(tmp_path / "q.npz")["tau"], p["tau"] - offset)
+
+
+def test_predict_takes_the_robot_the_data_record_and_refuses_another_robots_model(tmp_path, capsys,
+                                                                                  arrays):
+    """Without --robot, predict works on the robot the log records (a 6-joint UR5 log: not
+    the 3-joint default arm); a model identified for the Lynxmotion is one error line on it,
+    exit 2, no file. Its error against the log's torque is Pinocchio's RNEA written out."""
+    import pinocchio as pin
+
+    from harness.robots.registry import load_pinocchio
+
+    model = load_pinocchio("ur5")
+    data = pin.Model.createData(model)
+    rng = np.random.default_rng(3)
+    q, qd, qdd = (rng.uniform(-1, 1, (40, 6)) for _ in range(3))
+    rnea = np.array([pin.rnea(model, data, *s) for s in zip(q, qd, qdd, strict=True)])
+    tau = rnea * (1 + 0.1 * rng.uniform(size=(40, 1)))
+    log = tmp_path / "ur5.npz"
+    np.savez(log, q=q, qd=qd, qdd=qdd, tau=tau, meta=json.dumps({"robot": "ur5"}))
+    pred = tmp_path / "p.npz"
+    assert main(["predict", "--model", "pinocchio", "--data", str(log), "--out", str(pred)]) == 0
+    out = np.load(pred)
+    np.testing.assert_allclose(out["tau"], rnea, atol=1e-9)
+    expected = np.sqrt(((rnea - tau) ** 2).sum(axis=0) / (tau ** 2).sum(axis=0))
+    np.testing.assert_allclose(out["rel_error"], expected, rtol=1e-12)
+    lynx = _write(tmp_path, arrays, "lynx.npz")
+    lynx_model = tmp_path / "m.json"
+    assert main(["identify", "--data", str(lynx), "--out", str(lynx_model)]) == 0
+    capsys.readouterr()
+    bad = tmp_path / "bad.npz"
+    assert main(["predict", "--model", str(lynx_model), "--data", str(log), "--out", str(bad)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "identified for robot" in err and not bad.exists()

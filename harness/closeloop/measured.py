@@ -14,7 +14,7 @@ from pathlib import Path
 
 from harness.data.dataset import load_arrays
 from harness.errors import UserError
-from harness.robots.registry import DEFAULT_ROBOT, ROBOTS, load_chain
+from harness.robots.registry import data_robot, load_chain
 from identification.closeloop.measured import (
     EXPLAINED,
     MIN_GAIN,
@@ -87,15 +87,6 @@ class MeasuredRun:
         if clean is not None:
             out["error_before_clean"], out["error_after_clean"] = clean
         return out
-
-
-def data_robot(meta: dict, given: str | None) -> str:
-    """--robot if given, else the robot the data record (registered, or a file that exists),
-    else the default."""
-    if given:
-        return given
-    plant = str(meta.get("robot") or meta.get("plant") or "")
-    return plant if plant in ROBOTS or (plant and Path(plant).is_file()) else DEFAULT_ROBOT
 
 
 def run_measured(data: str | Path, robot: str | None = None, holdout: float = 0.25) -> MeasuredRun:

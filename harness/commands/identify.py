@@ -8,7 +8,7 @@ import warnings
 from harness.data.runs import join, load_runs, split_files
 from harness.io import write_json
 from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import DEFAULT_ROBOT, ROBOTS, load_pinocchio, robot_entry
+from harness.robots.registry import DEFAULT_ROBOT, data_robot, load_pinocchio, robot_entry
 from harness.robots.torque_models import library_named, robot_record
 from identification.consistent import identify_consistent
 from identification.errors import IdentificationError
@@ -33,8 +33,8 @@ def register(sub) -> None:
                    help="last fraction of samples (time order, over the --data runs in the "
                    "order given) held out for scoring, in (0, 1)")
     p.add_argument("--robot", default=None,
-                   help="robot name or URDF/MJCF path (default: the robot the data were generated "
-                   f"on if registered, else {DEFAULT_ROBOT})")
+                   help="robot name or URDF/MJCF path (default: the robot the data record, else "
+                   f"{DEFAULT_ROBOT})")
     p.add_argument("--library", choices=LIBRARIES, default="auto",
                    help="kinematic: base atoms generated from the robot's kinematics (any arm); "
                    "prior: derived from simple structures (3-DOF arm, symmetric links); "
@@ -57,14 +57,6 @@ def register(sub) -> None:
                    "the truth)")
     p.set_defaults(func=run)
 
-
-
-def data_robot(meta: dict, given: str | None) -> str:
-    """--robot if given, else the registered robot the data were generated on, else the default."""
-    if given:
-        return given
-    plant = str(meta.get("plant", ""))
-    return plant if plant in ROBOTS else DEFAULT_ROBOT
 
 
 def choose_library(name: str, dof: int, robot: str = DEFAULT_ROBOT):

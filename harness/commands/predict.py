@@ -7,9 +7,10 @@ import numpy as np
 from harness.data.dataset import STATE_KEYS, load_arrays
 from harness.errors import UserError
 from harness.io import write_npz
-from harness.robots.registry import DEFAULT_ROBOT
+from harness.robots.registry import DEFAULT_ROBOT, recorded_robot
 from harness.robots.torque_models import load_torque_model
 from identification.identify import sensor_offsets
+from identification.metrics import rel_error
 
 
 def register(sub) -> None:
@@ -17,19 +18,21 @@ def register(sub) -> None:
     p.add_argument("--model", required=True, help="MODEL.json or 'pinocchio'")
     p.add_argument("--data", required=True, help="dataset .npz with q, qd, qdd")
     p.add_argument("--robot", default=None,
-                   help=f"robot name or URDF/MJCF path: the pinocchio baseline's (default "
-                   f"{DEFAULT_ROBOT}); a MODEL.json's by default the robot it records")
+                   help="robot name or URDF/MJCF path (default: the robot the data record, else a "
+                   f"MODEL.json's own, else {DEFAULT_ROBOT}); a MODEL.json identified for "
+                   "another robot is an error")
     p.add_argument("--out", required=True,
                    help="output .npz: tau, the model's torque at the data's states; on a "
                    "measured log (no tau_clean: ingested or sensed), the torque its sensor would "
                    "read, the model's fitted sensor offset included; the offset also as 'offset' "
-                   "(zeros for a model that fits none)")
+                   "(zeros for a model that fits none); with a torque in the data, also 'rel_error', "
+                   "its per-joint relative error ||tau_hat - tau|| / ||tau||")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    states, _ = load_arrays(args.data, STATE_KEYS, optional=("tau_clean",))
-    model = load_torque_model(args.model, args.robot)
+    states, meta = load_arrays(args.data, STATE_KEYS, optional=("tau", "tau_clean"))
+    model = load_torque_model(args.model, args.robot or recorded_robot(meta))
     if states["q"].shape[1] != model.dof:
         raise UserError(f"data has {states['q'].shape[1]} joints, model has {model.dof}")
     tau = model.torque(states["q"], states["qd"], states["qdd"])
@@ -37,7 +40,13 @@ def run(args) -> int:
     measured = "tau_clean" not in states  # a log's sensor reads the offset too
     if measured:
         tau = tau + offset
-    write_npz(args.out, tau=tau, offset=np.broadcast_to(offset, (len(tau), model.dof)))
+    scored = {}
+    if "tau" in states:  # what the sensor read: against the torque the model says it reads
+        scored["rel_error"] = rel_error(tau, states["tau"])
+    write_npz(args.out, tau=tau, offset=np.broadcast_to(offset, (len(tau), model.dof)), **scored)
     print(f"wrote {args.out}: tau {tau.shape}"
           + (", the fitted sensor offset included (measured log)" if measured else ""))
+    if scored:
+        errors = ", ".join(f"{e:.4g}" for e in scored["rel_error"])
+        print(f"relative error against the data's tau, per joint: [{errors}]")
     return 0

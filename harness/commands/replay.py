@@ -8,7 +8,7 @@ from pathlib import Path
 
 from harness.errors import UserError
 from harness.io import read_json, write_json
-from harness.robots.registry import DEFAULT_ROBOT
+from harness.robots.registry import data_robot
 
 FEEDFORWARD = "pinocchio"  # closed-form model of the robot
 
@@ -58,7 +58,7 @@ def run(args) -> int:
 
     plan = read_plan(args.plan)
     reference = plan_reference(plan)
-    robot = args.robot or _recorded_robot(plan)
+    robot = data_robot(plan if isinstance(plan, dict) else {}, args.robot)
     model = load_mujoco(args.plant, scene=True) if args.plant else replay_scene(robot)
     geometry = arm_geometry(robot)
     if geometry.dof != reference.dof:
@@ -79,17 +79,3 @@ def run(args) -> int:
 
         render_video(model, trace, args.video, required=True)
     return 0
-
-
-def _recorded_robot(plan: dict) -> str:
-    """The robot a PLAN.json was made for (older plans: the default robot)."""
-    from harness.robots.registry import ROBOTS
-
-    robot = plan.get("robot") if isinstance(plan, dict) else None
-    if robot is None:
-        return DEFAULT_ROBOT
-    if not isinstance(robot, str) or not (robot in ROBOTS or ("\0" not in robot
-                                                              and Path(robot).is_file())):
-        raise UserError(f"plan field 'robot' ({str(robot)[:60]!r}) is neither a registered "
-                        "robot nor an existing URDF/MJCF file: pass --robot")
-    return robot

@@ -19,6 +19,7 @@ from harness.data.tracking import simulate_measured
 from harness.errors import UserError
 from harness.robots.baseline import PinocchioModel
 from harness.robots.plant import Plant, load_plant
+from harness.robots.registry import robot_reference
 from identification.regression.oracle import base_columns
 
 MIN_SAMPLES = 10
@@ -82,7 +83,7 @@ def generate(
     exc, cond = design_excitation(lo, hi, seed, _condition_fn(p, SAMPLE_RATE, samples))
     t = np.arange(samples) / SAMPLE_RATE
     rng = np.random.default_rng(seed + 1)
-    meta = dict(plant=str(plant), mode=mode, noise=noise, bias=bias, seed=seed, dof=p.dof,
+    meta = dict(plant=robot_reference(plant), mode=mode, noise=noise, bias=bias, seed=seed, dof=p.dof,
                 samples=samples, rate=SAMPLE_RATE, excitation_condition=cond)
     if mode == "inverse":
         q, qd, qdd = exc.evaluate(t)

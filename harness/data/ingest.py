@@ -25,6 +25,7 @@ import numpy as np
 from harness.data.csvlog import Log, read_log
 from harness.data.derivatives import choose_window, savgol_window_derivatives
 from harness.errors import UserError
+from harness.robots.registry import robot_reference
 
 POLYORDER = 4
 
@@ -94,7 +95,8 @@ def ingest(path: str | Path, dof: int, robot: str, rate: float | None = None,
     keep = slice(None, None, every)
     arrays = {"t": grid[keep], **{k: states[k][keep] for k in ("q", "qd", "qdd", "tau")}}
     steps = np.diff(log.t)
-    meta = {"mode": "measured log", "source": Path(path).name, "plant": robot, "robot": robot,
+    meta = {"mode": "measured log", "source": Path(path).name, "plant": robot_reference(robot),
+            "robot": robot_reference(robot),
             "dof": dof, "samples": int(len(arrays["q"])), "logged": sorted(log.groups),
             "raw_samples": int(len(log.t)), "duration_s": float(log.t[-1] - log.t[0]),
             "raw_step_s": {"min": float(steps.min()), "median": float(np.median(steps)),

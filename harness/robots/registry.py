@@ -121,6 +121,33 @@ def robot_entry(name_or_path: str | Path) -> Robot:
                  source=str(path))
 
 
+def robot_reference(name_or_path: str | Path) -> str:
+    """How data and plans record a robot: its registered name, or its file's absolute path
+    (so the record still finds it from another working directory)."""
+    name = str(name_or_path)
+    return name if name in ROBOTS or not Path(name).is_file() else str(Path(name).resolve())
+
+
+def recorded_robot(record: dict) -> str | None:
+    """The robot a dataset's meta or a PLAN.json records ('robot', else 'plant'): a registered
+    name or the path of its file; None when it records none. UserError when the recorded
+    robot is neither registered nor an existing file (the caller's --robot then names it)."""
+    robot = record.get("robot") or record.get("plant") if isinstance(record, dict) else None
+    if robot is None or robot == "":
+        return None
+    if not isinstance(robot, str) or not (robot in ROBOTS or ("\0" not in robot
+                                                              and Path(robot).is_file())):
+        raise UserError(f"the data record robot {str(robot)[:60]!r}, neither a registered robot "
+                        "nor an existing URDF/MJCF file: pass --robot")
+    return robot
+
+
+def data_robot(record: dict, given: str | None = None) -> str:
+    """The robot a command works on: --robot if given, else the robot the data (or plan)
+    record, else the default robot. Every command infers a data's robot here."""
+    return given or recorded_robot(record) or DEFAULT_ROBOT
+
+
 # What Pinocchio's bindings raise on a description they cannot map (boost.python's
 # translation of std::invalid_argument, runtime_error, out_of_range, overflow_error).
 PINOCCHIO_ERRORS = (ValueError, RuntimeError, IndexError, OverflowError)

@@ -57,13 +57,13 @@ def load_torque_model(spec: str, robot: str | None = None) -> TorqueModel:
         if robot not in ROBOTS and not Path(robot).is_file():
             raise UserError(f"model {path} was identified for robot '{recorded['name']:.60}': "
                             "pass its URDF/MJCF with --robot")
-        if payload.get("library") == LIBRARY:
-            return KinematicModel.from_dict(payload, robot_library(robot))
         chain = load_chain(robot)
         if recorded.get("hash") != chain.digest():
             raise IdentificationError(f"model was identified for robot '{recorded['name']:.60}' "
                                       f"(kinematics {str(recorded.get('hash')):.20}), not "
                                       f"'{chain.name}' ({chain.digest()})")
+        if payload.get("library") == LIBRARY:
+            return KinematicModel.from_dict(payload, robot_library(robot))
         return model_from_dict(payload)
     except IdentificationError as exc:
         raise UserError(f"model {path}: {exc}") from None
