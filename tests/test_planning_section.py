@@ -40,3 +40,14 @@ def test_section_quick(tmp_path):
     target = next(t for t in out.targets if t.name.startswith("identified plan's true energy"))
     assert target.measured == abs(ratio - 1) * 100
     assert "| pinocchio |" in out.markdown
+
+
+def test_no_executed_replan_is_measured_as_nothing_not_as_zero():
+    """With no re-plan executed, the executed re-plans' CPU max is None, so its target is
+    neither met nor missed (0.0 ms read as met)."""
+    from harness.sections.base import Target
+
+    assert section.largest([]) is None
+    assert Target("x", section.largest([]), 10.0, "ms").met is None
+    assert section.largest([3.0, 12.5, 4.0]) == 12.5
+    assert Target("x", section.largest([12.5]), 10.0, "ms").met is False
