@@ -11,7 +11,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
 export MKL_NUM_THREADS ?= 1
 
-.PHONY: install test bench lint clean install-check
+.PHONY: install test test-slow bench lint clean install-check
 
 install: $(STAMP)
 
@@ -21,8 +21,14 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[dev]'
 	touch $(STAMP)
 
+# the fast cross-checks (a few minutes); the slow ones (whole benches, sweeps, studies, arms
+# planned end to end) are named, not skipped silently: `make test-slow` runs them, CI runs both
 test: $(STAMP)
-	MUJOCO_GL=egl TORQUEBENCH_HYPOTHESIS=full $(PY) -m pytest -q -n 2
+	MUJOCO_GL=egl TORQUEBENCH_HYPOTHESIS=full $(PY) -m pytest -q -n 2 -m "not slow"
+	@echo "make test: the tests marked slow were deselected above; 'make test-slow' runs them (CI runs both)"
+
+test-slow: $(STAMP)
+	MUJOCO_GL=egl $(PY) -m pytest -q -n 2 -m slow
 
 bench: $(STAMP)
 	MUJOCO_GL=egl $(VENV)/bin/torquebench bench --out $(OUT) $(ARGS)

@@ -69,6 +69,7 @@ def test_data_of_another_dof_are_one_line(noise_free, tmp_path, capsys):
     assert len(err) == 1 and "robot double_pendulum has 2" in err[0] and not out.exists()
 
 
+@pytest.mark.slow
 def test_identification_section_scores_the_generated_library_against_the_oracle(tmp_path):
     """The bench's identification section on the UR5 (quick: 2 draws): noise-free data
     identified exactly, and per draw the generated library's error against the oracle's on
@@ -94,6 +95,7 @@ def test_identification_section_scores_the_generated_library_against_the_oracle(
     assert out.targets[0].measured == summary["worst_median"] and "ur5" in out.markdown
 
 
+@pytest.mark.slow
 def test_closing_the_loop_on_the_ur5_names_every_effect_within_10_percent(tmp_path):
     """A UR5 plant with viscous, Coulomb, armature, spring and a flange payload the declared
     Pinocchio model lacks: each is named on its joint with its coefficient within 10 %, nothing

@@ -46,6 +46,7 @@ def _plan_args(scenario, out, **extra) -> list[str]:
             *(x for k, v in args.items() for x in (f"--{k}", v))]
 
 
+@pytest.mark.slow
 def test_ur5_plan_avoids_with_every_link_and_replays_as_planned(tmp_path, crossing):
     plan_path, replay_path = tmp_path / "plan.json", tmp_path / "replay.json"
     assert main(_plan_args(crossing, plan_path)) == 0
@@ -79,6 +80,7 @@ def _potential(model, q) -> float:
     return pin.computePotentialEnergy(model, model.createData(), np.asarray(q, float))
 
 
+@pytest.mark.slow
 def test_ur5_plan_ends_at_rest_and_spends_what_it_descends(tmp_path):
     """Between two poses with the obstacle far away: by default the plan arrives at rest and
     spends at least |V(T) - V(0) + dissipated| (the kinetic energy is zero at both ends);

@@ -193,6 +193,7 @@ def test_quick_bench_is_green_and_deterministic_on_two_robots(tmp_path):
     assert _without_timings(first) == _without_timings(second)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig, when", [
     (signal.SIGKILL, 1.0),  # while importing
     (signal.SIGKILL, f"{REDUCED}: started"),  # inside the section
@@ -237,6 +238,7 @@ def test_atomic_write_killed_mid_write_leaves_target_absent(tmp_path):
     assert len(temporaries) == 1 and Path(temporaries[0]).name.startswith(".big.json.")
 
 
+@pytest.mark.slow
 def test_a_robot_given_by_its_file_gets_the_same_sections(tmp_path):
     """A robot given as an MJCF path (no registry entry: no motion, no extras) goes through
     the identification and closeloop sections like a registered one."""

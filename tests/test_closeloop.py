@@ -165,6 +165,7 @@ def test_cli_bad_plant_is_one_line_and_no_output(tmp_path, capsys, text, message
     assert not (out / "closeloop.json").exists()
 
 
+@pytest.mark.slow
 def test_identified_declared_model_refits_jointly():
     """Declared = the sparse model identified on the same training data: the friction plant's
     effects are named at the plant's values (not split with the model's own terms), and the

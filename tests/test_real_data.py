@@ -16,6 +16,9 @@ from harness.robots.registry import load_pinocchio
 from harness.sections.real_data.section import HOLDOUT, LOG, RATE, ROBOT, log_result
 
 
+pytestmark = pytest.mark.slow  # the section on the whole log: half a minute
+
+
 @pytest.fixture(scope="module")
 def section(tmp_path_factory):
     return log_result(tmp_path_factory.mktemp("real"))

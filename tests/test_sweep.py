@@ -58,6 +58,7 @@ def swept(ray_local, tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_one_row_per_cell_with_its_errors(swept):
     rows = _rows(swept / "results.csv")
     want = set(itertools.product(ROBOTS, NOISE, range(SEEDS), METHODS, [SAMPLES]))
@@ -86,6 +87,7 @@ def test_one_row_per_cell_with_its_errors(swept):
     assert (swept / "summary.md").read_text().count("| lynxmotion | coupled |") == 2
 
 
+@pytest.mark.slow
 def test_rerun_reuses_and_a_torn_sweep_resumes(swept, capsys):
     path = swept / "results.csv"
     before = path.read_bytes()
@@ -105,6 +107,7 @@ def test_rerun_reuses_and_a_torn_sweep_resumes(swept, capsys):
     assert len(after) == len(lines)
 
 
+@pytest.mark.slow
 def test_figures_plot_the_median_and_quartiles_of_the_rows(swept, tmp_path):
     grid = parse_grid(",".join(ROBOTS), "0,0.05", SEEDS, ",".join(METHODS), str(SAMPLES))
     results = list(read(swept / "results.csv")[0].values())
