@@ -178,7 +178,12 @@ def test_several_runs_in_another_out(tmp_path):
     # the same model fitted on A alone differs: B was used in fitting
     alone = tmp_path / "alone.json"
     assert main(["identify", "--data", str(a), "--validate", str(c), "--out", str(alone)]) == 0
-    assert json.loads(alone.read_text())["metrics"]["heldout_rel_rmse"] != metrics["heldout_rel_rmse"]
+    assert json.loads(alone.read_text())["joints"] != json.loads(out.read_text())["joints"]
+    # and C was not: validated on another log (D), the model is the same, term for term
+    d = _generated(tmp_path, "d.npz", 4)
+    other = tmp_path / "other.json"
+    assert main(["identify", "--data", f"{a},{b}", "--validate", str(d), "--out", str(other)]) == 0
+    assert json.loads(other.read_text())["joints"] == json.loads(out.read_text())["joints"]
 
 
 def test_runs_of_different_robots_are_one_line_exit_2(tmp_path, arrays, capsys):
