@@ -9,8 +9,8 @@ from math import pi
 import numpy as np
 
 from planning.errors import PlanningError
-from planning.kinematics import ArmGeometry, paper_arm
-from planning.obstacle import LinearObstacle
+from planning.formulation.kinematics import ArmGeometry, paper_arm
+from planning.formulation.obstacle import LinearObstacle
 
 
 @dataclass(frozen=True)
@@ -20,7 +20,7 @@ class PlannerConfig:
     threshold: lambda (m); penalty_weight: alpha (J/m^2 per obstacle sample);
     energy_samples: N, weighted by energy_quadrature; degree: of the joint polynomials;
     obstacle_slots: how many obstacle samples one solve sees (the
-    ones that can come within the threshold, see planning.screening);
+    ones that can come within the threshold, see planning.formulation.screening);
     limits in rad, enforced at limit_samples interior points of every segment;
     torque_limit: |tau_i| <= torque_limit[i] (N m, planning model's torque) at s = 0, the
     energy samples and the obstacle samples of every segment (None: unconstrained). The
@@ -38,7 +38,8 @@ class PlannerConfig:
     max_penalty_weight: float = 2e5
     # the paper's (eq. 18, N = 10); `plan` and the bench default to true_energy_config()
     energy_samples: int = 10
-    energy_quadrature: str = "paper"  # planning.quadrature: "paper" (eq. 18), "gauss", "simpson", "split"
+    # planning.formulation.quadrature: "paper" (eq. 18), "gauss", "simpson", "split"
+    energy_quadrature: str = "paper"
     power_breaks: int = 7  # "split": intervals of the quadrature = power_breaks + 1
     degree: int = 4  # of the joint polynomials (paper: 4); degree - 1 free coefficients per joint
     obstacle_slots: int = 24
@@ -52,12 +53,12 @@ class PlannerConfig:
     torque_limit: tuple[float, ...] | None = (10.0, 10.0, 10.0)
     geometry: ArmGeometry = field(default_factory=paper_arm)  # links for clearance
     hessian: str = "exact"  # or "limited-memory" (IPOPT, sqpmethod)
-    solver: str = "fatrop"  # planning.backends: "fatrop", "sqpmethod" or "ipopt"
-    compile_code: bool = False  # NLP functions as C compiled once (planning.compiled)
+    solver: str = "fatrop"  # planning.penalty.backends: "fatrop", "sqpmethod" or "ipopt"
+    compile_code: bool = False  # NLP functions as C compiled once (planning.formulation.compiled)
     dual_warm_start: bool = True  # warm re-plans also start from the last multipliers
     starts: int = 1  # cold plans solve from this many start points (planning.starts)
     # the best `polish` distinct cold plans are solved again, warm, with the split quadrature
-    # at polish_samples nodes (planning.breaks; the sample count a multiple of power_breaks
+    # at polish_samples nodes (planning.formulation.breaks; the sample count a multiple of power_breaks
     # + 1) and the plan that spends least kept: the many-start search runs on the cheap rule
     polish: int = 0
     polish_samples: int = 40
@@ -65,7 +66,7 @@ class PlannerConfig:
     # abandoned and the arm keeps its last plan (Algorithm 2); None: no deadline
     replan_deadline_ms: float | None = None
     # real-time iterations: a warm re-plan of Algorithm 2 first takes this many iterations of
-    # CasADi's feasible SQP from the last plan (planning.backends "feasiblesqp": every iterate
+    # CasADi's feasible SQP from the last plan (planning.penalty.backends "feasiblesqp": every iterate
     # satisfies the constraints) and the arm follows the iterate if it keeps the threshold
     # and the limits; the next obstacle samples go on from it until it converges. An iterate
     # that dips or leaves a limit is solved on to convergence as without them. None: every
@@ -79,7 +80,7 @@ class PlannerConfig:
     cold_budget_ms: float = 25.0  # "sqp": CPU for a first plan, all its starts together
     # "sqp", reproducible runs: each SQP iteration counts this many ms of the budgets above
     # whatever CPU it took, as do a second-order correction and each half of a plan's round
-    # (planning.budget.Clock): the same plans on a loaded machine (the bench's executed
+    # (planning.anytime.budget.Clock): the same plans on a loaded machine (the bench's executed
     # plans). None: the budgets are CPU time of the planning thread (real time)
     iteration_ms: float | None = None
     elastic_weight: float = 1e3  # "sqp": J per m of clearance missed, per sample and link

@@ -14,7 +14,7 @@ feasible-SQP step from the last plan; while the plan followed is such an unconve
 iterate, the arm re-plans at every sample, going on from it until it converges. So it is
 with the anytime SQP (PlannerConfig.replanner "sqp", planning.anytime): a re-plan that
 reached its CPU budget unconverged is followed and gone on from at the next sample.
-Each segment is planned by planning.segments.
+Each segment is planned by planning.penalty.loop.
 """
 
 from __future__ import annotations
@@ -23,13 +23,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planning.clearance import link_clearances
 from planning.config import Scenario
 from planning.errors import PlanningError
-from planning.obstacle import predict_linear
-from planning.realtime_iteration import ITERATE
-from planning.segments import DEADLINE, LATE, _predicted_clearance, plan_multistart, plan_segment  # noqa: F401 (re-exported: Algorithm 2's vocabulary)
-from planning.solver import ObstacleForecast, Planner, SegmentPlan
+from planning.formulation.clearance import link_clearances
+from planning.formulation.obstacle import predict_linear
+from planning.penalty.loop import _predicted_clearance, plan_multistart, plan_segment
+from planning.penalty.solver import Planner
+from planning.types import DEADLINE, ITERATE, LATE, ObstacleForecast, SegmentPlan  # noqa: F401 (re-exported: Algorithm 2's vocabulary)
 
 TRIGGER_TOLERANCE = 1e-3  # m: predicted dips smaller than this do not trigger a re-plan
 PREDICTION_TOLERANCE = 1e-3  # m: a forecast this close to the last one brings nothing new
@@ -84,7 +84,7 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
         return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures),
                          (), tuple(solve_cpu))
     planned_with, latest = forecast, plan  # latest: the newest successful solve (converged
-    # or a real-time iterate, planning.realtime_iteration.ITERATE), the next re-plan's warm start
+    # or a real-time iterate, planning.penalty.realtime_iteration.ITERATE), the next re-plan's warm start
     for t in obstacle.sample_times[:-1]:
         forecast = forecast_at(obstacle, t)
         iterating = plan.status.startswith(ITERATE)  # it stopped short: go on from it

@@ -7,10 +7,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from identification.torque_model import Motion, TorqueModel
-from planning.clearance import link_clearances
 from planning.config import PlannerConfig, Scenario
-from planning.energy import absolute_energy
-from planning.limits import LIMIT_TOLERANCE
+from planning.formulation.clearance import link_clearances
+from planning.formulation.energy import absolute_energy
+from planning.formulation.limits import LIMIT_TOLERANCE
 from planning.replanning import Execution
 
 CLEARANCE_TOLERANCE = 2e-3  # m below the threshold still counted as avoided (penalty is soft)

@@ -13,9 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from planning.energy import dense_energy
-from planning.limits import LIMIT_TOLERANCE, limit_excess
-from planning.solver import Planner, SegmentPlan
+from planning.formulation.energy import dense_energy
+from planning.formulation.limits import LIMIT_TOLERANCE, limit_excess
+from planning.penalty.solver import Planner
+from planning.types import SegmentPlan
 
 SEED = 20240515
 
@@ -36,7 +37,7 @@ def start_points(planner: Planner, q0, qd0, duration: float, goal, count: int,
 def rank(planner: Planner, plan: SegmentPlan) -> tuple[bool, bool, float]:
     """Sort key of candidate plans: converged first, then within the joint limits (a cold
     plan is returned unchecked when its rounds end beyond one, planning.replanning), then the
-    lower energy actually spent (planning.energy.dense_energy, not the plan's own quadrature:
+    lower energy actually spent (planning.formulation.energy.dense_energy, not the plan's own quadrature:
     measured on the random scenarios, split N = 24 plans' quadrature under-counted it by up to
     6 %, enough to rank a dearer start first) plus the clearance penalty (J)."""
     config = planner.config

@@ -37,7 +37,7 @@ def random_crossing(planner, seed: int):
     """One random scenario of planning.scenarios (the obstacle crossing the planner's
     unobstructed optimum) and its obstacle forecast with the whole path known."""
     from planning.scenarios import random_scenarios
-    from planning.solver import ObstacleForecast
+    from planning.types import ObstacleForecast
 
     config = planner.config
 

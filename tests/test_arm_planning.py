@@ -17,10 +17,10 @@ from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import get_robot, load_pinocchio
 from harness.sections import replay
 from harness.sections.base import Context, SectionResult
-from planning.clearance import link_clearances
+from planning.formulation.clearance import link_clearances
+from planning.penalty.solver import Planner
 from planning.replanning import execute
 from planning.scenarios import crossing_scenario
-from planning.solver import Planner
 
 ROBOT = "ur5"
 

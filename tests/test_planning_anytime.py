@@ -1,4 +1,4 @@
-"""The anytime elastic SQP (planning.sqp, planning.anytime) against IPOPT on the very same NLP,
+"""The anytime elastic SQP (planning.anytime.sqp, planning.anytime) against IPOPT on the very same NLP,
 its compiled safety checks against the numpy ones, its minimum-violation answer, its budget,
 and Algorithm 2 planned with it (speed is measured by the realtime study, never here)."""
 
@@ -12,22 +12,22 @@ import pytest
 
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from planning import elastic_qp, local_model, sqp
-from planning.anytime import MIN_VIOLATION
-from planning.clearance import link_clearances
+from planning.anytime import elastic_qp, local_model, sqp
+from planning.anytime.planner import MIN_VIOLATION
+from planning.anytime.safety import SafetyCheck
 from planning.config import Scenario, true_energy_config
-from planning.energy import dense_energy
-from planning.limits import limit_excess
-from planning.nlp import PlanningNLP
-from planning.obstacle import LinearObstacle
-from planning.realtime_iteration import ITERATE
+from planning.formulation.clearance import link_clearances
+from planning.formulation.energy import dense_energy
+from planning.formulation.limits import limit_excess
+from planning.formulation.nlp import PlanningNLP
+from planning.formulation.obstacle import LinearObstacle
+from planning.formulation.trajectory import PolynomialTrajectory
+from planning.penalty.loop import anytime_of
+from planning.penalty.solver import Planner
 from planning.replanning import execute
 from planning.result import evaluate
-from planning.safety import SafetyCheck
-from planning.segments import anytime_of
-from planning.solver import ObstacleForecast, Planner
 from planning.starts import start_points
-from planning.trajectory import PolynomialTrajectory
+from planning.types import ITERATE, ObstacleForecast
 from tests.helpers import random_crossing
 
 IPOPT = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "ipopt.tol": 1e-10,
@@ -93,7 +93,7 @@ def test_the_anytime_sqp_reaches_ipopts_optimum_of_the_same_nlp(planner, monkeyp
 
 @pytest.mark.parametrize("radius", [0.05, 0.5, 5.0])
 def test_the_qp_with_slacks_held_is_the_full_elastic_qp(planner, monkeypatch, radius):
-    """planning.elastic_qp.step with the slacks whose branch the step cannot change out of
+    """planning.anytime.elastic_qp.step with the slacks whose branch the step cannot change out of
     the QP (power samples' |P| linearized by their signs, clearance rows that stay clear
     dropped, those that stay violated linearized) gives the step, the multipliers of rows
     and variables and the model decrease of the QP with every slack and row in it (HOLD so
@@ -264,9 +264,9 @@ def test_the_local_derivatives_through_the_sites_are_casadis_through_the_rows(ro
 
 
 def test_compiled_safety_checks_match_the_numpy_ones(baseline):
-    """Clearance at each sample (planning.clearance), the limit excess with its turning
-    points (planning.limits), the torque excess (Planner.torque_excess) and the dense energy
-    (planning.energy, same trapezoid points) on random motions."""
+    """Clearance at each sample (planning.formulation.clearance), the limit excess with its turning
+    points (planning.formulation.limits), the torque excess (Planner.torque_excess) and the dense energy
+    (planning.formulation.energy, same trapezoid points) on random motions."""
     config = true_energy_config()
     check, planner = SafetyCheck(baseline, config, compile_code=False), Planner(baseline, config)
     rng = np.random.default_rng(4)
@@ -312,11 +312,11 @@ def test_a_forecast_no_motion_can_clear_gets_the_minimum_violation_plan(planner)
 def test_iterates_whose_own_rows_miss_the_threshold_are_passed_over_soundly(planner,
                                                                            monkeypatch):
     """The choice passes over an iterate whose clearance slacks already miss the threshold
-    (planning.candidates.misses) once the best so far is within the hard limits: on the
+    (planning.anytime.candidates.misses) once the best so far is within the hard limits: on the
     minimum-violation plan of an obstacle no motion can clear, every choice is the one that
     checks every iterate in full, and some iterates were passed over."""
-    from planning import anytime as module
-    from planning import candidates
+    from planning.anytime import candidates
+    from planning.anytime import planner as module
 
     goal = Scenario().goal
     end = planner.config.geometry.points(np.asarray([goal]))[0]
@@ -353,12 +353,12 @@ def test_iterates_whose_own_rows_miss_the_threshold_are_passed_over_soundly(plan
 
 
 def test_no_garbage_collection_runs_inside_a_plan(planner):
-    """planning.budget.collection_deferred: with the collector set to run at nearly every
+    """planning.anytime.budget.collection_deferred: with the collector set to run at nearly every
     allocation, a cold plan and a warm re-plan (plan_segment) see no collection inside them,
     and the collector is on again after each (collections then run between plans)."""
     import gc
 
-    from planning.segments import plan_segment
+    from planning.penalty.loop import plan_segment
 
     case, forecast = random_crossing(planner, seed=5)
     anytime_of(planner).prepare(case.goal)
@@ -413,7 +413,7 @@ def test_a_solve_keeps_the_choices_cpu_for_every_iterate_it_accepts(planner, mon
     1.5 ms for each accepted iterate (and the one an iteration may add) stops before the
     solve that keeps none, and no iteration of it began without room for its own tick and
     the reserve of every point accepted so far plus one."""
-    from planning.budget import Clock
+    from planning.anytime.budget import Clock
 
     case, forecast = random_crossing(planner, seed=7)
     nlp, p, lbg, ubg, start = _elastic_problem(planner, case, forecast)

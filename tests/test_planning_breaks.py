@@ -12,15 +12,15 @@ from scipy.optimize import brentq
 
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from planning.breaks import power_breaks, settled, sign_changes
 from planning.config import PlannerConfig
-from planning.energy import dense_energy, power
-from planning.quadrature import energy_nodes, split_nodes
+from planning.formulation.breaks import power_breaks, settled, sign_changes
+from planning.formulation.energy import dense_energy, power
+from planning.formulation.quadrature import energy_nodes, split_nodes
+from planning.formulation.trajectory import PolynomialTrajectory
+from planning.penalty.solver import Planner
 from planning.replanning import plan_multistart, plan_segment
 from planning.scenarios import paper_scenario
-from planning.solver import Planner
 from planning.starts import rank
-from planning.trajectory import PolynomialTrajectory
 from tests.helpers import random_crossing
 
 
@@ -111,7 +111,7 @@ def test_plan_command_with_the_split_quadrature(tmp_path, capsys):
 
 
 def test_dense_energy_matches_an_adaptive_integral_across_the_kinks(baseline):
-    """planning.energy.dense_energy (513 even points) against scipy's adaptive quad split
+    """planning.formulation.energy.dense_energy (513 even points) against scipy's adaptive quad split
     at brentq roots of the power: within 2e-4 relative on a motion with three kinks (1.2e-4
     measured), far finer than the 0.5 % that separate the plans it ranks."""
     motion = _motion()

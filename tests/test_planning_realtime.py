@@ -9,21 +9,23 @@ import casadi as ca
 import numpy as np
 import pytest
 
+from harness.paper.planning.speed import measure
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from planning import backends, compiled, replanning
-from planning.clearance import link_clearances
+from planning import replanning
 from planning.config import PlannerConfig, Scenario
-from planning.limits import LIMIT_TOLERANCE, limit_excess
-from planning.realtime_iteration import ITERATE
-from planning.replanning import DEADLINE, LATE, execute, forecast_at, plan_multistart, plan_segment
+from planning.formulation import compiled
+from planning.formulation.clearance import link_clearances
+from planning.formulation.limits import LIMIT_TOLERANCE, limit_excess
+from planning.formulation.screening import screen
+from planning.formulation.trajectory import PolynomialTrajectory
+from planning.penalty import backends
+from planning.penalty.solver import Planner
+from planning.replanning import execute, forecast_at, plan_multistart, plan_segment
 from planning.result import evaluate
 from planning.scenarios import random_scenarios, swaying_scenario
-from planning.screening import screen
-from planning.solver import Planner
-from planning.speed import measure
 from planning.starts import start_points
-from planning.trajectory import PolynomialTrajectory
+from planning.types import DEADLINE, ITERATE, LATE
 from tests.helpers import random_crossing
 
 
@@ -266,7 +268,7 @@ def test_a_warm_plan_its_rounds_leave_beyond_a_joint_limit_is_not_successful(bas
 
 
 def test_feasible_sqp_reaches_ipopts_optimum_from_a_feasible_start_and_prints_nothing(capfd):
-    """CasADi's feasiblesqpmethod (planning.backends "feasiblesqp") on the constrained
+    """CasADi's feasiblesqpmethod (planning.penalty.backends "feasiblesqp") on the constrained
     Rosenbrock, from a feasible start: IPOPT's optimum; capped at 1, 3 and 8 iterations,
     iterates that keep the constraint and here cost no more than the start or the iterate of
     a lower cap (its trust region shrinks at first, so the first step may be refused; on

@@ -12,11 +12,11 @@ from harness.cli import main
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from planning.config import PlannerConfig, Scenario
-from planning.energy import absolute_energy
 from planning.errors import PlanningError
+from planning.formulation.energy import absolute_energy
+from planning.penalty.solver import Planner
 from planning.replanning import execute
 from planning.result import evaluate
-from planning.solver import Planner
 from tests.helpers import perturbed_model
 
 
@@ -233,7 +233,7 @@ def test_a_detour_the_obstacle_has_left_is_replanned(paper, baseline):
     """The first plan bends round the obstacle where it stands at t = 0; the obstacle then
     leaves upwards. The first plan stays clear (Algorithm 2 alone would follow it to the
     end), yet its detour is wasted energy: the planner re-plans and spends less."""
-    from planning.obstacle import LinearObstacle
+    from planning.formulation.obstacle import LinearObstacle
     from planning.replanning import _predicted_clearance, forecast_at
 
     planner, scenario, free, _ = paper

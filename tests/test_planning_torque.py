@@ -16,10 +16,10 @@ from harness.robots.arm import motor_torque_limit
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_mujoco, load_pinocchio
 from planning.config import PlannerConfig, Scenario
+from planning.penalty.solver import Planner
 from planning.replanning import execute
 from planning.result import TORQUE_TOLERANCE, evaluate, to_json
 from planning.scenarios import swaying_scenario
-from planning.solver import Planner
 
 
 @pytest.fixture(scope="module")

@@ -18,15 +18,15 @@ from harness.io import write_json
 from harness.robots.arm import planner_config, torque_limit
 from harness.robots.registry import DEFAULT_ROBOT, robot_entry
 from harness.robots.torque_models import load_torque_model
-from planning.backends import SOLVERS
 from planning.config import PlannerConfig, Scenario, true_energy_config
 from planning.errors import PlanningError
-from planning.obstacle import LinearObstacle, SwayingObstacle
-from planning.quadrature import RULES, splits_evenly
+from planning.formulation.obstacle import LinearObstacle, SwayingObstacle
+from planning.formulation.quadrature import RULES, splits_evenly
+from planning.penalty.backends import SOLVERS
+from planning.penalty.loop import uses_anytime
+from planning.penalty.solver import Planner
 from planning.replanning import execute
 from planning.result import closest_link, evaluate, to_json
-from planning.segments import uses_anytime
-from planning.solver import Planner
 
 DEFAULT = Scenario()
 PLANNER = true_energy_config()

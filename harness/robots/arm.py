@@ -1,5 +1,5 @@
 """What the planner needs of a robot, read from its model: the kinematic chain as data
-(planning.kinematics.ArmGeometry), its joint limits and its motors' torque limits.
+(planning.formulation.kinematics.ArmGeometry), its joint limits and its motors' torque limits.
 
 Joint placements and axes come from the Pinocchio model (identification.library.chain);
 the flange is the first of registry.FLANGES the model has (else the frame on the last
@@ -27,7 +27,7 @@ from harness.robots.registry import (
     robot_entry,
 )
 from planning.config import PlannerConfig, Scenario, true_energy_config
-from planning.kinematics import ArmGeometry
+from planning.formulation.kinematics import ArmGeometry
 
 
 def robot_label(robot: str | Path) -> str:

@@ -6,14 +6,14 @@ the default planner (true energy, rest to rest) on the same scenario."""
 from __future__ import annotations
 
 from harness.experiments.planning import plan_checks, reproducible, summary
+from harness.paper.planning.variants import PAPER
 from harness.robots.arm import planner_config
 from harness.robots.baseline import PinocchioModel
 from harness.sections.base import Context, Row, SectionResult, Target
+from planning.penalty.solver import Planner
 from planning.replanning import execute
 from planning.result import evaluate, to_json
 from planning.scenarios import paper_scenario
-from planning.solver import Planner
-from planning.variants import PAPER
 
 IDENTIFIED_TARGET = 0.02  # identified plan's true energy within 2 % of the closed form's
 

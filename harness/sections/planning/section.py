@@ -7,17 +7,17 @@ import dataclasses
 import numpy as np
 
 from harness.experiments.planning import REPLAY_ITERATION_MS, plan_checks, reproducible, summary
+from harness.paper.planning.speed import measure
 from harness.robots.arm import bench_motion, planner_config
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from harness.sections.base import Context, Row, SectionResult, Target, check
 from harness.sections.paper import EXTRAS
 from harness.sections.planning import figures
+from planning.penalty.solver import Planner
 from planning.replanning import execute
 from planning.result import evaluate, to_json
 from planning.scenarios import crossing_scenario, swaying_scenario
-from planning.solver import Planner
-from planning.speed import measure
 
 IDENTIFIED_TARGET = 0.02  # identified plan's true energy within 2 % of the closed form's
 COLD_TARGET_MS, REPLAN_MEDIAN_MS, REPLAN_MAX_MS = 25.0, 2.0, 10.0

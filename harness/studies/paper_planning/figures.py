@@ -8,8 +8,8 @@ import numpy as np
 
 from harness.report.figures import plt, save_figure
 from planning.config import Scenario
-from planning.energy import power as mechanical_power
-from planning.kinematics import paper_arm
+from planning.formulation.energy import power as mechanical_power
+from planning.formulation.kinematics import paper_arm
 
 COLORS = {"pinocchio": "tab:green", "identified": "tab:orange"}
 

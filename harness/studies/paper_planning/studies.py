@@ -7,16 +7,17 @@ import dataclasses
 
 import numpy as np
 
-from planning.baselines import MinimumJerk, solve_trust_constr
+from harness.paper.planning.baselines import MinimumJerk, solve_trust_constr
+from harness.paper.planning.speed import measure
+from harness.paper.planning.variants import PARAMETRIZATIONS, Parametrization
 from planning.config import PlannerConfig
-from planning.energy import absolute_energy, net_work
+from planning.formulation.energy import absolute_energy, net_work
+from planning.formulation.screening import screen
+from planning.penalty.solver import Planner
 from planning.replanning import execute
 from planning.result import PlanResult, evaluate, sample_execution
 from planning.scenarios import swaying_scenario
-from planning.screening import screen
-from planning.solver import ObstacleForecast, Planner
-from planning.speed import measure
-from planning.variants import PARAMETRIZATIONS, Parametrization
+from planning.types import ObstacleForecast
 
 
 def plan_scenario(model, scenario, config=None, avoid=True) -> PlanResult:

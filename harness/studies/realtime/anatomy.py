@@ -34,12 +34,12 @@ from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
 from harness.studies.realtime import measure as realtime
 from harness.studies.realtime import options as random_scenarios
-from planning import backends
 from planning.config import true_energy_config
+from planning.formulation.screening import screen
+from planning.penalty import backends
+from planning.penalty.solver import Planner
 from planning.replanning import execute, forecast_at, plan_segment
 from planning.scenarios import paper_scenario
-from planning.screening import screen
-from planning.solver import Planner
 
 
 class RecordingPlanner(Planner):

@@ -25,10 +25,11 @@ from harness.replay.reference import plan_reference
 from harness.replay.simulate import replay
 from harness.studies.realtime import references
 from planning.config import PlannerConfig, Scenario, true_energy_config
-from planning.replanning import DEADLINE, Execution, execute
+from planning.penalty.solver import Planner
+from planning.replanning import Execution, execute
 from planning.result import evaluate, to_json
 from planning.scenarios import random_scenarios
-from planning.solver import Planner
+from planning.types import DEADLINE
 
 
 @dataclass(frozen=True)

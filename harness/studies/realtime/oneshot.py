@@ -6,7 +6,7 @@ each scenario of the study (same seed) is planned once, the obstacle at every sa
 it will be, no re-planning; every plan is replayed in MuJoCo. The default (4 starts, Gauss
 N = 20) against the best of a global check: each of 8 start points alone, and the default's
 starts at Gauss N = 40; beside it the split quadrature (Gauss between the power's sign
-changes, planning.breaks: 7 breaks, 3 nodes each), 4 starts; and polished: 8 starts on the
+changes, planning.formulation.breaks: 7 breaks, 3 nodes each), 4 starts; and polished: 8 starts on the
 default's rule, the best 2 distinct plans solved again with the split rule at 40 nodes
 (config.polish). Printed per scenario, then how many of the default's, the split and the
 polished plans are within 0.5 % of the best of all of them.
@@ -25,9 +25,10 @@ from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
 from harness.studies.realtime import measure as realtime
 from harness.studies.realtime import options as random_scenarios
 from planning.config import true_energy_config
+from planning.penalty.solver import Planner
 from planning.replanning import Execution, plan_multistart, plan_segment
-from planning.solver import ObstacleForecast, Planner
 from planning.starts import start_points
+from planning.types import ObstacleForecast
 
 GLOBAL_STARTS = 8
 FINE_SAMPLES = 40

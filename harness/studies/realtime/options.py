@@ -7,7 +7,7 @@ import argparse
 
 from harness.studies.realtime import measure as realtime
 
-# the split energy quadrature as the tools plan it beside the default (planning.breaks)
+# the split energy quadrature as the tools plan it beside the default (planning.formulation.breaks)
 SPLIT = {"energy_quadrature": "split", "power_breaks": 7, "energy_samples": 24}
 # 8 starts on the default's rule, the best 2 distinct plans polished (config.polish)
 POLISHED = {"starts": 8, "polish": 2, "polish_samples": 40}

@@ -9,7 +9,7 @@
 (iii) the one-shot plan with the obstacle's whole path known at t = 0 (multi-start, not
     re-planned): the value of information, reported, not a bar;
 and, beside them, the quadrature's own error: each re-plan's planned energy (Gauss N) against
-the dense integral of |P| along the same motion (planning.energy.dense_energy).
+the dense integral of |P| along the same motion (planning.formulation.energy.dense_energy).
 """
 
 from __future__ import annotations
@@ -19,10 +19,11 @@ import dataclasses
 import numpy as np
 
 from planning.config import PlannerConfig, Scenario
-from planning.energy import dense_energy
+from planning.formulation.energy import dense_energy
+from planning.penalty.loop import anytime_of, plan_multistart
+from planning.penalty.solver import Planner
 from planning.replanning import Execution, execute
-from planning.segments import anytime_of, plan_multistart
-from planning.solver import ObstacleForecast, Planner
+from planning.types import ObstacleForecast
 
 TOLERANCE = 0.005  # relative: "within 0.5 %"
 UNLIMITED_MS = 1e4  # the references' CPU budget per solve: they run to convergence

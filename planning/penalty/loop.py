@@ -11,21 +11,19 @@ import time
 
 import numpy as np
 
-from planning import breaks
-from planning.anytime import Anytime
-from planning.budget import Clock, Stopwatch, collection_deferred
-from planning.clearance import link_clearances
-from planning.limits import LIMIT_TOLERANCE, limit_excess
-from planning.realtime_iteration import ITERATE
-from planning.screening import screen
-from planning.solver import ObstacleForecast, Planner, SegmentPlan
+from planning.anytime.budget import Clock
+from planning.anytime.planner import Anytime
+from planning.formulation import breaks
+from planning.formulation.clearance import link_clearances
+from planning.formulation.limits import LIMIT_TOLERANCE, limit_excess
+from planning.formulation.screening import screen
+from planning.penalty.solver import Planner
 from planning.starts import rank, start_points
+from planning.timing import Stopwatch, collection_deferred
+from planning.types import DEADLINE, ITERATE, LATE, ObstacleForecast, SegmentPlan
 
 LIMIT_SETTLED = 1e-8  # rad: a plan this close to its limits (dense grid) needs no re-solve
 UNCHANGED = 1e-9  # rad: a re-solve that moves no coefficient further has settled
-DEADLINE = "deadline exceeded"  # status of a re-plan abandoned at its deadline
-LATE = " (converged late)"  # ... whose last solve succeeded (converged, or a real-time
-# iterate within the constraints): the next re-plan starts from it
 
 
 @collection_deferred
@@ -41,7 +39,7 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     deadline_ms: CPU time (ms) after which no further solve starts; a plan that took longer
     is returned unsuccessful with status DEADLINE (it would arrive too late to be followed).
     Under a deadline no solve goes on with IPOPT when the fast solver cannot finish it (its
-    answer would come too late: planning.solver.Planner._solve).
+    answer would come too late: planning.penalty.solver.Planner._solve).
     settle_breaks: re-solve until the split quadrature's breaks are the plan's own power sign
     changes (False: solved once with those of the start; plan_multistart settles the best).
     budget_ms: CPU budget of a cold plan by the anytime SQP (config.replanner "sqp"; default
@@ -229,7 +227,7 @@ def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan
     """Solve with the obstacle samples screened on a reference (`plan`, re-expressed on
     this horizon) and the limits at its turning points; re-screen on the result until
     the samples where it dips were seen by its solves (Screen.covered), it keeps the
-    limits and (settle_breaks) the split quadrature's breaks are its own (planning.breaks).
+    limits and (settle_breaks) the split quadrature's breaks are its own (planning.formulation.breaks).
     seen: the obstacle sample times `plan` was solved with, if it solves this very problem
     (same horizon and alpha: then it may be settled without a further solve); None if not.
     late(): True once no further solve may start (a deadline); rescue: whether a solve the
@@ -273,7 +271,7 @@ def _predicted_clearance(planner: Planner, plan: SegmentPlan, forecast: Obstacle
 
 def anytime_of(planner: Planner) -> Anytime:
     """The planner's anytime SQP (config.replanner "sqp"), built on first need and kept with
-    it (planning.solver cannot import planning.anytime, which builds on it)."""
+    it (planning.penalty.solver cannot import planning.anytime, which builds on it)."""
     found = planner.__dict__.get("_anytime")
     if found is None:
         found = planner.__dict__["_anytime"] = Anytime(planner)

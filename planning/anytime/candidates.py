@@ -1,5 +1,5 @@
 """The choice among a solve's accepted iterates (planning.anytime): each one checked on the
-whole forecast, the joint limits and the torques (planning.safety), ranked within the hard
+whole forecast, the joint limits and the torques (planning.anytime.safety), ranked within the hard
 limits first, then keeping the threshold, then by the objective the SQP minimizes."""
 
 from __future__ import annotations
@@ -8,11 +8,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planning.anytime.elastic_qp import Point
+from planning.anytime.safety import Safety
 from planning.config import PlannerConfig
-from planning.elastic_qp import Point
-from planning.limits import LIMIT_TOLERANCE
-from planning.safety import Safety
-from planning.trajectory import PolynomialTrajectory
+from planning.formulation.limits import LIMIT_TOLERANCE
+from planning.formulation.trajectory import PolynomialTrajectory
 
 HARD_TOLERANCE = 1e-6  # L1 violation of the goal and limit rows an iterate may keep
 TORQUE_TOLERANCE = 1e-6  # N m

@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from identification.torque_model import TorqueModel
-from planning.energy import power
-from planning.trajectory import PolynomialTrajectory
+from planning.formulation.energy import power
+from planning.formulation.trajectory import PolynomialTrajectory
 
 GRID = 129  # points of normalized time where the power's sign is read
 SETTLED = 0.005  # normalized time: a sign change this close to a break needs no re-solve

@@ -1,9 +1,9 @@
-"""The array work of one anytime-SQP QP (planning.elastic_qp.step), compiled by numba: the
+"""The array work of one anytime-SQP QP (planning.anytime.elastic_qp.step), compiled by numba: the
 slacks' branches at a point, the dense QP DAQP solves, and its solution unpacked into the
 NLP's step and multipliers. Measured in numpy on 391 replayed warm re-plans (Lynxmotion)
 this was ~60 small array calls a QP, 150-170 us of Python around DAQP's ~45 us.
 
-Conventions as planning.elastic_qp: DAQP's variables are the kept columns, then one elastic
+Conventions as planning.anytime.elastic_qp: DAQP's variables are the kept columns, then one elastic
 column per violated hard row; its multipliers are < 0 where a lower bound is active. A
 slack "item" is a power sample (rows above/below, slack e) or a clearance row (row D + v,
 slack v), power samples first.

@@ -1,4 +1,4 @@
-"""An anytime trust-region SQP for the elastic planning NLP (planning.nlp, elastic=True).
+"""An anytime trust-region SQP for the elastic planning NLP (planning.formulation.nlp, elastic=True).
 
 The NLP's slacks enter linearly: the power epigraph e (rows P - e <= 0, -P - e <= 0) and the
 clearance slacks v (rows D + v >= lambda, v >= 0). After every step they are reset to the
@@ -24,10 +24,10 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from planning import compiled
-from planning import qp_kernels as kernels
-from planning.budget import RECENT, Clock
-from planning.elastic_qp import VIOLATED, Frame, Layout, Point, linear_change, step
+from planning.anytime import qp_kernels as kernels
+from planning.anytime.budget import RECENT, Clock
+from planning.anytime.elastic_qp import VIOLATED, Frame, Layout, Point, linear_change, step
+from planning.formulation import compiled
 
 CONVERGED, BUDGET, STALLED, SETTLED = "converged", "budget", "stalled", "settled"
 # an accepted step that lowered the merit by less than this share of the objective ends the
@@ -58,7 +58,7 @@ class Solution:
 
 class AnytimeSQP:
     """The solver for one elastic NLP: local evaluations by `local` (a compiled
-    planning.local_model.local_function), the QPs by DAQP."""
+    planning.anytime.local_model.local_function), the QPs by DAQP."""
 
     def __init__(self, local: ca.Function, layout: Layout, lbx: np.ndarray, rows: int):
         self.local, self.layout, self.lbx = compiled.Buffered(local), layout, np.asarray(lbx, float)
@@ -207,7 +207,7 @@ class AnytimeSQP:
         return restored if restored.violation < point.violation else point
 
     def _qp(self, point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last):
-        """planning.elastic_qp.step, its DAQP time counted in spent_ms."""
+        """planning.anytime.elastic_qp.step, its DAQP time counted in spent_ms."""
         result = step(point, lbg, ubg, frame, radius, nu, last, self.layout)
         if result is None:
             return None

@@ -1,48 +1,14 @@
 """What an anytime plan may spend and what its parts recently cost: the clock its budget
 counts (CPU time of the planning thread, or nominal units for reproducible runs) and the
 recent costs of a plan's rounds that keep the budget (planning.anytime; an iteration's own
-in planning.sqp)."""
+in planning.anytime.sqp)."""
 
 from __future__ import annotations
 
-import functools
-import gc
 import time
 from collections import deque
 
 RECENT = 32  # iterations (or rounds) whose CPU cost predicts the next one's
-
-
-class Stopwatch:
-    """Wall and CPU time (ms, this thread) since it was made."""
-
-    def __init__(self):
-        self.wall, self.cpu = time.perf_counter(), time.thread_time()
-
-    def cpu_ms(self) -> float:
-        return 1e3 * (time.thread_time() - self.cpu)
-
-    def read(self) -> tuple[float, float]:
-        return 1e3 * (time.perf_counter() - self.wall), self.cpu_ms()
-
-
-def collection_deferred(plan):
-    """`plan` with Python's cyclic garbage collector held off while it runs (and set back as
-    it was after): a collection inside a plan frees whatever cycles the process left,
-    measured in the realtime study's deadline run at 39 and 50 ms of a re-plan's CPU (earlier
-    planners' compiled functions). It runs at an allocation between plans instead."""
-
-    @functools.wraps(plan)
-    def deferred(*args, **kwargs):
-        enabled = gc.isenabled()
-        gc.disable()
-        try:
-            return plan(*args, **kwargs)
-        finally:
-            if enabled:
-                gc.enable()
-
-    return deferred
 
 
 class Clock:

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from planning import compiled
+from planning.formulation import compiled
 
 SOLVERS = ("fatrop", "sqpmethod", "ipopt")  # cold and warm solves; feasiblesqp: warm only
 _QUIET = {"print_time": False}
@@ -138,7 +138,7 @@ class Silenced:
         return getattr(self.function, name)
 
 
-# a point whose returned KKT residuals are this small is converged (planning.backends.stats):
+# a point whose returned KKT residuals are this small is converged (planning.penalty.backends.stats):
 # sqpmethod's own test is tol_pr 1e-9 and tol_du 1e-6 warm, 1e-8 cold; the check takes 1e-8
 # (room for the rounding of g) and 1e-6 for both, so a cold solve capped within 1e-6 passes
 KKT_PRIMAL, KKT_DUAL = 1e-8, 1e-6

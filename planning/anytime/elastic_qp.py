@@ -1,4 +1,4 @@
-"""The QP of one anytime-SQP iteration (planning.sqp): the Sl1QP model of the elastic planning
+"""The QP of one anytime-SQP iteration (planning.anytime.sqp): the Sl1QP model of the elastic planning
 NLP at a point, in the variables that have rows (a clearance slack whose row is free stays
 0), the hard rows the point violates given elastic columns, the coefficients in a box trust
 region, the slacks under a small proximal term, the power samples whose sign the step
@@ -15,7 +15,7 @@ from functools import cache
 import daqp
 import numpy as np
 
-from planning import qp_kernels as kernels
+from planning.anytime import qp_kernels as kernels
 
 QP_PRIMAL_TOLERANCE = 1e-10  # DAQP's (its default, 1e-6, let steps leave the trust region)
 PROXIMAL = 1e-2  # weight of the slacks' proximal term in each QP (vanishes at a fixed point; e,
@@ -140,7 +140,7 @@ def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
     samples held: DAQP 250 -> 160 us a step, 1 % of the steps solved twice (fixing every
     sign: 40 %), re-plan CPU median 2.40 -> 1.99 ms; with the clearance rows held too
     (391 replayed re-plans): DAQP 127 -> 47 us a step. The array work is compiled
-    (planning.qp_kernels)."""
+    (planning.anytime.qp_kernels)."""
     nc, spent, g, jac, x = layout.nc, 0.0, point.g, point.jac, point.x
     value, side, rate, slope, weight, held = kernels.branches(
         g, jac, point.grad, x, lbg, frame.above, frame.below, frame.e, frame.clearance,

@@ -11,8 +11,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from planning.config import Scenario
+from planning.penalty.solver import Planner
 from planning.replanning import forecast_at, plan_segment
-from planning.solver import Planner, SegmentPlan
+from planning.types import SegmentPlan
 
 
 @dataclass(frozen=True)

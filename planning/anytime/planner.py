@@ -1,16 +1,16 @@
 """Plans and re-plans of Algorithm 2 by the anytime elastic SQP (PlannerConfig.replanner
-"sqp"): clearance as rows D >= lambda with an L1 slack of fixed weight (planning.nlp,
-elastic=True), solved by planning.sqp under a CPU budget, every accepted iterate checked on
-the whole forecast, the joint limits and the torque limits (planning.safety).
+"sqp"): clearance as rows D >= lambda with an L1 slack of fixed weight (planning.formulation.nlp,
+elastic=True), solved by planning.anytime.sqp under a CPU budget, every accepted iterate checked on
+the whole forecast, the joint limits and the torque limits (planning.anytime.safety).
 
 A plan returns the best safe iterate (least energy among those keeping the threshold within
 the penalty tolerance, the limits and the torques), else the one that misses the threshold
 least (a minimum-violation plan: its status says by how many mm); one stopped by its budget
-(planning.budget) unconverged has status ITERATE, and Algorithm 2 re-plans from it at the
+(planning.anytime.budget) unconverged has status ITERATE, and Algorithm 2 re-plans from it at the
 next sample. The NLP sees the obstacle samples screened from the check's own clearances
-(planning.screening's rule); a round re-screens where the chosen iterate dips unseen or
+(planning.formulation.screening's rule); a round re-screens where the chosen iterate dips unseen or
 leaves a limit between its constrained points; the torque rows join (a second NLP, as
-planning.solver's pair) when an iterate overdrives a motor.
+planning.penalty.solver's pair) when an iterate overdrives a motor.
 """
 
 from __future__ import annotations
@@ -22,16 +22,17 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from planning import compiled, local_model, sqp
-from planning.budget import Clock, RoundCosts
-from planning.candidates import TORQUE_TOLERANCE, Candidate, choose
-from planning.limits import LIMIT_TOLERANCE
-from planning.nlp import PlanningNLP
-from planning.realtime_iteration import ITERATE
-from planning.safety import SafetyCheck
-from planning.screening import MARGIN, near_samples, on_horizon, uncovered
-from planning.solver import ObstacleForecast, Planner, SegmentPlan
+from planning.anytime import local_model, sqp
+from planning.anytime.budget import Clock, RoundCosts
+from planning.anytime.candidates import TORQUE_TOLERANCE, Candidate, choose
+from planning.anytime.safety import SafetyCheck
+from planning.formulation import compiled
+from planning.formulation.limits import LIMIT_TOLERANCE
+from planning.formulation.nlp import PlanningNLP
+from planning.formulation.screening import MARGIN, near_samples, on_horizon, uncovered
+from planning.penalty.solver import Planner
 from planning.starts import start_points
+from planning.types import ITERATE, ObstacleForecast, SegmentPlan
 
 CONVERGED = "converged"
 MIN_VIOLATION = "minimum violation"
@@ -169,7 +170,7 @@ class Anytime:
 
     def round_ms(self, clock: Clock | None = None, problem: _Problem | None = None) -> float:
         """What a round of a plan with two iterations (of the problem's, else of any
-        problem's) is expected to cost (planning.budget.RoundCosts)."""
+        problem's) is expected to cost (planning.anytime.budget.RoundCosts)."""
         iteration = max((other.sqp.iteration_ms for other in self._problems.values()),
                         default=0.0) if problem is None else problem.sqp.iteration_ms
         return self.rounds.round_ms(clock or Clock(self.config.iteration_ms), iteration)

@@ -7,7 +7,7 @@
   degree 2N - 1 (|P| has kinks where P changes sign, so convergence there is slower).
 - "simpson": composite Simpson on N (odd) equally spaced points including both ends.
 - "split": Gauss-Legendre on each of the intervals between breakpoints where the power
-  changes sign (planning.breaks finds them on a reference motion; a solve is repeated
+  changes sign (planning.formulation.breaks finds them on a reference motion; a solve is repeated
   until they are those of its own solution): |P| is smooth inside each interval, so the
   rule converges as fast as for a polynomial. N / (breaks + 1) nodes per interval.
 Weights are dimensionless and sum to 1; s is normalized time.

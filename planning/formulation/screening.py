@@ -14,10 +14,10 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from planning.clearance import link_clearances
-from planning.kinematics import ArmGeometry
-from planning.solver import ObstacleForecast
-from planning.trajectory import PolynomialTrajectory
+from planning.formulation.clearance import link_clearances
+from planning.formulation.kinematics import ArmGeometry
+from planning.formulation.trajectory import PolynomialTrajectory
+from planning.types import ObstacleForecast
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,7 @@ COMPILER = os.environ.get("CC", "gcc")
 FLAGS = ("-O1", "-fPIC", "-shared")
 # Larger sources stay in CasADi's virtual machine: the UR5 planning NLP with its torque model
 # copied into every sample was 19.5 MB of C, which gcc -O1 took 6 min and 3.4 GB to build
-# (the Lynxmotion's: 4.0 MB); with the model called at each sample (planning.nlp) the UR5's is
+# (the Lynxmotion's: 4.0 MB); with the model called at each sample (planning.formulation.nlp) the UR5's is
 # 5.9 MB and the Panda's 7.5 MB.
 MAX_SOURCE_BYTES = 8_000_000
 

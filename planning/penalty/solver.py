@@ -1,5 +1,5 @@
-"""The planning NLP's solver (planning.backends: fatrop, sqpmethod or IPOPT): one build, many
-solves (cold or warm-started); with real-time iterations also CasADi's feasible SQP, capped,
+"""The planning NLP's solver (planning.penalty.backends: fatrop, sqpmethod or IPOPT): one
+build, many solves (cold or warm-started); with real-time iterations also CasADi's feasible SQP, capped,
 for the re-plans' warm solves."""
 
 from __future__ import annotations
@@ -13,36 +13,13 @@ import casadi as ca
 import numpy as np
 
 from identification.torque_model import TorqueModel
-from planning import backends, realtime_iteration
 from planning.config import PlannerConfig
-from planning.nlp import PlanningNLP
-from planning.problem import ObstacleForecast, ProblemNumbers, _breaks
-from planning.quadrature import splits_evenly
-from planning.trajectory import PolynomialTrajectory
-
-
-@dataclass(frozen=True)
-class SegmentPlan:
-    """One solve: the segment, its objective parts (J) and how the solve went."""
-
-    trajectory: PolynomialTrajectory
-    energy: float  # sigma/N sum |P|, J
-    penalty: float  # alpha sum of squared threshold violations, J
-    success: bool
-    status: str
-    iterations: int
-    solve_ms: float  # wall time
-    solve_cpu_ms: float  # CPU time of this thread (insensitive to other load on the machine)
-    penalty_weight: float  # alpha this solve used, J/m^2 per obstacle sample
-    x: np.ndarray  # primal solution, for warm starts
-    multipliers: tuple[np.ndarray, np.ndarray]  # (lam_g, lam_x)
-    breaks: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))  # "split" rule's
-    layout: tuple = ()  # the NLP's energy rule (Planner.layout): its multipliers fit only it
-    # the elastic SQP's (planning.anytime): the obstacle sample times of its clearance slots
-    # (its multipliers follow them to the next re-plan) and whether a clearance row bound it
-    slot_times: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
-    detour: bool = False
-
+from planning.formulation.nlp import PlanningNLP
+from planning.formulation.problem import ProblemNumbers, _breaks
+from planning.formulation.quadrature import splits_evenly
+from planning.formulation.trajectory import PolynomialTrajectory
+from planning.penalty import backends, realtime_iteration
+from planning.types import ObstacleForecast, SegmentPlan
 
 # measured on random scenarios: a warm IPOPT rescue still unconverged after 60 iterations ran
 # on to 300 (390 ms) or declared the problem infeasible; a cold restart is cheaper
@@ -127,7 +104,7 @@ class Planner(ProblemNumbers):
     @functools.cached_property
     def nlp(self) -> PlanningNLP:
         """The NLP with every goal-limit row and no torque rows, for callers that evaluate its
-        functions with `parameters` and `bounds` (planning.baselines); the solves use
+        functions with `parameters` and `bounds` (harness.paper.planning.baselines); the solves use
         the NLP for their goal (_relaxed_for)."""
         return PlanningNLP(self.model, dataclasses.replace(self.config, torque_limit=None))
 
@@ -178,7 +155,7 @@ class Planner(ProblemNumbers):
         """Plan from (q0, qd0) at t_begin to goal at t_begin + duration.
 
         reference: a motion on the same horizon whose turning points get limit constraints
-        in addition to the fixed samples (see PlanningNLP, planning.limits).
+        in addition to the fixed samples (see PlanningNLP, planning.formulation.limits).
         alpha: penalty weight (J/m^2 per sample), default config.penalty_weight.
         x0: start point of a cold solve (default: initial_guess).
         rescue: a solve the fast solver cannot finish goes on with IPOPT (see _solve); False

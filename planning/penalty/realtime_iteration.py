@@ -1,12 +1,11 @@
 """Real-time iterations (PlannerConfig.replan_iterations): a re-plan's warm solve capped at a
-few iterations of CasADi's feasible SQP (planning.backends "feasiblesqp"), whose iterate the arm
-may follow (planning.replanning decides), going on from it at the next obstacle sample."""
+few iterations of CasADi's feasible SQP (planning.penalty.backends "feasiblesqp"), whose
+iterate the arm may follow (planning.replanning decides), going on from it at the next obstacle sample."""
 
 from __future__ import annotations
 
-from planning import backends
-
-ITERATE = "feasible iterate"  # status of a re-plan's capped real-time iterate, followed
+from planning.penalty import backends
+from planning.types import ITERATE
 
 
 def step(solver, args: dict) -> tuple[dict, backends.Stats | None]:

@@ -1,0 +1,1 @@
+"""The paper's reproduction: an example of the product, built from its public pieces."""
