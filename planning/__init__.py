@@ -7,19 +7,24 @@ Sub-packages, in the order the math flows:
   distance to the obstacle (clearance, obstacle), joint limits (limits), energy, the NLP
   (nlp) and its numbers for one segment (problem), which obstacle samples a solve sees
   (screening), its functions compiled to C (compiled)
-- penalty/: the paper's exterior penalty loop: the NLP solver built once and warm-started
-  (solver, backends: fatrop, sqpmethod or IPOPT; realtime_iteration: capped feasible-SQP
-  steps) and the loop raising alpha until the plan keeps the threshold (loop)
-- anytime/: the real-time SQP: clearance as elastic rows, a trust-region SQP under a CPU
-  budget (planner, sqp, elastic_qp, qp_kernels, local_model, budget), every iterate checked
-  by compiled functions (safety, candidates)
+- penalty/: the paper's exterior penalty loop, a SegmentPlanner (planner): the NLP solver
+  built once and warm-started (solver, backends: fatrop, sqpmethod or IPOPT;
+  realtime_iteration: capped feasible-SQP steps), the loop raising alpha until the plan
+  keeps the threshold (loop) and polishing of cold plans (polish)
+- anytime/: the real-time SQP, a SegmentPlanner (planner): clearance as elastic rows, a
+  trust-region SQP under a CPU budget (solver, sqp, elastic_qp, qp_kernels, local_model,
+  budget), every iterate checked by compiled functions (safety, candidates)
 
 Modules at the top:
 
-- types: what both solvers share (SegmentPlan, ObstacleForecast, the re-plan statuses)
+- types: what both solvers share: the SegmentPlanner protocol (plan(problem, warm) ->
+  SegmentPlan) and a segment to plan (Segment), SegmentPlan, ObstacleForecast, the re-plan
+  statuses (ITERATE, DEADLINE, LATE)
+- planners: the one factory choosing the SegmentPlanner a configuration asks for
 - config: PlannerConfig and Scenario; errors: PlanningError
 - starts: the multi-start's start points and the ranking of cold plans
-- replanning: Algorithm 2, re-planning from the current state when the obstacle threatens
+- replanning: Algorithm 2, re-planning from the current state when the obstacle threatens,
+  with any SegmentPlanner
 - result: the executed trajectory, checked, and its PLAN.json payload
 - scenarios: named scenarios; timing: wall and CPU clocks of a plan
 

@@ -47,3 +47,11 @@ def random_crossing(planner, seed: int):
     case = random_scenarios(1, seed, free_motion, config.geometry, config.lower, config.upper)[0]
     t = case.obstacle.sample_times
     return case, ObstacleForecast(t, case.obstacle.position(t))
+
+
+def segments(planner):
+    """The segment planner (planning.planners) of a penalty-loop Planner's model and
+    configuration, reusing its solvers: what Algorithm 2 takes."""
+    from planning.planners import segment_planner
+
+    return segment_planner(planner.model, planner.config, planner)

@@ -13,8 +13,9 @@ import pytest
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from planning.anytime import elastic_qp, local_model, sqp
-from planning.anytime.planner import MIN_VIOLATION
+from planning.anytime.planner import MIN_VIOLATION, AnytimePlanner
 from planning.anytime.safety import SafetyCheck
+from planning.anytime.solver import Anytime
 from planning.config import Scenario, true_energy_config
 from planning.formulation.clearance import link_clearances
 from planning.formulation.energy import dense_energy
@@ -22,13 +23,12 @@ from planning.formulation.limits import limit_excess
 from planning.formulation.nlp import PlanningNLP
 from planning.formulation.obstacle import LinearObstacle
 from planning.formulation.trajectory import PolynomialTrajectory
-from planning.penalty.loop import anytime_of
 from planning.penalty.solver import Planner
 from planning.replanning import execute
 from planning.result import evaluate
 from planning.starts import start_points
-from planning.types import ITERATE, ObstacleForecast
-from tests.helpers import random_crossing
+from planning.types import ITERATE, ObstacleForecast, Segment
+from tests.helpers import random_crossing, segments
 
 IPOPT = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "ipopt.tol": 1e-10,
          "ipopt.constr_viol_tol": 1e-10}
@@ -294,9 +294,9 @@ def test_a_forecast_no_motion_can_clear_gets_the_minimum_violation_plan(planner)
     case = dataclasses.replace(Scenario(), obstacle=LinearObstacle(centre, centre, 2.0))
     times = case.obstacle.sample_times
     forecast = ObstacleForecast(times, case.obstacle.position(times))
-    anytime = anytime_of(planner)
+    anytime = Anytime(planner.model, planner.config)
     anytime.prepare(goal)
-    plan, _, _ = anytime.plan(case.start, case.start_velocity, 0.0, 2.0, goal, forecast,
+    plan, _, _ = anytime.solve(case.start, case.start_velocity, 0.0, 2.0, goal, forecast,
                               budget_ms=1e5)
     assert plan.success and MIN_VIOLATION in plan.status
     lowest = link_clearances(planner.config.geometry, plan.trajectory.position(times),
@@ -342,10 +342,10 @@ def test_iterates_whose_own_rows_miss_the_threshold_are_passed_over_soundly(plan
 
     monkeypatch.setattr(candidates, "misses", counted)
     monkeypatch.setattr(module, "choose", recorded)
-    anytime = anytime_of(planner)
+    anytime = Anytime(planner.model, planner.config)
     anytime.prepare(goal)
     calls.clear()
-    plan, _, _ = anytime.plan(Scenario().start, Scenario().start_velocity, 0.0, 2.0, goal,
+    plan, _, _ = anytime.solve(Scenario().start, Scenario().start_velocity, 0.0, 2.0, goal,
                               forecast, budget_ms=1e5)
     assert MIN_VIOLATION in plan.status and calls and any(passed)
     for chosen, full in calls:
@@ -353,15 +353,15 @@ def test_iterates_whose_own_rows_miss_the_threshold_are_passed_over_soundly(plan
 
 
 def test_no_garbage_collection_runs_inside_a_plan(planner):
-    """planning.anytime.budget.collection_deferred: with the collector set to run at nearly every
-    allocation, a cold plan and a warm re-plan (plan_segment) see no collection inside them,
+    """planning.timing.collection_deferred: with the collector set to run at nearly every
+    allocation, a cold plan and a warm re-plan (AnytimePlanner.plan) see no collection inside them,
     and the collector is on again after each (collections then run between plans)."""
     import gc
 
-    from planning.penalty.loop import plan_segment
-
     case, forecast = random_crossing(planner, seed=5)
-    anytime_of(planner).prepare(case.goal)
+    segments = AnytimePlanner(planner.model, planner.config)
+    segments.prepare(case.goal)
+    problem = Segment(case.start, case.start_velocity, 0.0, case.duration, case.goal, forecast)
     inside, collections = [False], []
 
     def watch(phase, info):
@@ -371,7 +371,7 @@ def test_no_garbage_collection_runs_inside_a_plan(planner):
     def planned(*args, **kwargs):
         inside[0] = True
         try:
-            return plan_segment(*args, **kwargs)
+            return segments.plan(*args, **kwargs)
         finally:
             inside[0] = False
 
@@ -379,12 +379,10 @@ def test_no_garbage_collection_runs_inside_a_plan(planner):
     gc.callbacks.append(watch)
     gc.set_threshold(1)
     try:
-        cold, _, _ = planned(planner, case.start, case.start_velocity, 0.0, case.duration,
-                             case.goal, forecast)
+        cold = planned(problem)
         assert gc.isenabled()
         [].append([])  # allocations between plans: collections run here
-        warm, _, _ = planned(planner, case.start, case.start_velocity, 0.0, case.duration,
-                             case.goal, forecast, warm=cold)
+        warm = planned(problem, warm=cold)
         assert gc.isenabled()
     finally:
         gc.set_threshold(*threshold)
@@ -397,10 +395,10 @@ def test_a_plan_out_of_budget_returns_its_best_iterate(planner):
     """With no CPU to spend the plan is its start (the best, and only, iterate checked),
     status ITERATE (Algorithm 2 goes on from it at the next sample)."""
     case, forecast = random_crossing(planner, seed=5)
-    anytime = anytime_of(planner)
+    anytime = Anytime(planner.model, planner.config)
     anytime.prepare(case.goal)
     x0 = planner.initial_guess(case.start, case.start_velocity, case.duration, case.goal)
-    plan, _, _ = anytime.plan(case.start, case.start_velocity, 0.0, case.duration, case.goal,
+    plan, _, _ = anytime.solve(case.start, case.start_velocity, 0.0, case.duration, case.goal,
                               forecast, x0=x0, budget_ms=0.0)
     assert plan.status.startswith(ITERATE) and plan.iterations == 0
     start = planner.trajectory(x0, case.start, case.start_velocity, 0.0, case.duration)
@@ -454,12 +452,12 @@ def test_a_budget_counted_in_iterations_gives_the_same_plan_under_any_load(basel
     config = true_energy_config(compile_code=False, torque_limit=None, iteration_ms=1.0)
     planner = Planner(baseline, config)
     case, forecast = random_crossing(planner, seed=7)
-    anytime = anytime_of(planner)
+    anytime = Anytime(planner.model, planner.config)
     anytime.prepare(case.goal)
     x0 = planner.initial_guess(case.start, case.start_velocity, case.duration, case.goal)
 
     def plan():
-        return anytime.plan(case.start, case.start_velocity, 0.0, case.duration, case.goal,
+        return anytime.solve(case.start, case.start_velocity, 0.0, case.duration, case.goal,
                             forecast, x0=x0, budget_ms=6.0)[0]
 
     quiet = plan()
@@ -485,9 +483,9 @@ def test_a_cold_start_off_the_rest_rows_is_restored(planner):
     x0 = start_points(planner, case.start, case.start_velocity, case.duration, case.goal, 2)[1]
     bumped = planner.trajectory(x0, case.start, case.start_velocity, 0.0, case.duration)
     assert np.abs(bumped.state(case.duration)[1]).max() > 1e-2
-    anytime = anytime_of(planner)
+    anytime = Anytime(planner.model, planner.config)
     anytime.prepare(case.goal)
-    plan, _, _ = anytime.plan(case.start, case.start_velocity, 0.0, case.duration, case.goal,
+    plan, _, _ = anytime.solve(case.start, case.start_velocity, 0.0, case.duration, case.goal,
                               forecast, x0=x0, budget_ms=0.0)
     assert plan.success and plan.iterations == 0
     q, qd, _ = plan.trajectory.state(case.duration)
@@ -503,7 +501,7 @@ def test_algorithm_2_with_the_anytime_sqp_keeps_the_threshold(baseline):
     planners = {name: Planner(baseline, dataclasses.replace(config, replanner=name))
                 for name in ("sqp", "fatrop")}
     case, _ = random_crossing(planners["fatrop"], seed=3)
-    results = {name: evaluate(execute(planner, case), case, baseline, planner.config)
+    results = {name: evaluate(execute(segments(planner), case), case, baseline, planner.config)
                for name, planner in planners.items()}
     assert results["sqp"].feasible, results["sqp"].problems
     assert len(results["sqp"].execution.segments) > 1  # it re-planned

@@ -17,8 +17,8 @@ from planning.formulation.breaks import power_breaks, settled, sign_changes
 from planning.formulation.energy import dense_energy, power
 from planning.formulation.quadrature import energy_nodes, split_nodes
 from planning.formulation.trajectory import PolynomialTrajectory
+from planning.penalty.loop import plan_multistart, plan_segment
 from planning.penalty.solver import Planner
-from planning.replanning import plan_multistart, plan_segment
 from planning.scenarios import paper_scenario
 from planning.starts import rank
 from tests.helpers import random_crossing

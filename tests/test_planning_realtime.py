@@ -12,7 +12,6 @@ import pytest
 from harness.paper.planning.speed import measure
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from planning import replanning
 from planning.config import PlannerConfig, Scenario
 from planning.formulation import compiled
 from planning.formulation.clearance import link_clearances
@@ -20,13 +19,15 @@ from planning.formulation.limits import LIMIT_TOLERANCE, limit_excess
 from planning.formulation.screening import screen
 from planning.formulation.trajectory import PolynomialTrajectory
 from planning.penalty import backends
+from planning.penalty.loop import plan_multistart, plan_segment
+from planning.penalty.planner import PenaltyLoop
 from planning.penalty.solver import Planner
-from planning.replanning import execute, forecast_at, plan_multistart, plan_segment
+from planning.replanning import execute, forecast_at
 from planning.result import evaluate
 from planning.scenarios import random_scenarios, swaying_scenario
 from planning.starts import start_points
 from planning.types import DEADLINE, ITERATE, LATE
-from tests.helpers import random_crossing
+from tests.helpers import random_crossing, segments
 
 
 @pytest.fixture(scope="module")
@@ -130,7 +131,7 @@ def test_a_replan_past_its_deadline_is_dropped_and_counted(baseline):
                                 forecast_at(scenario.obstacle, t), warm=first, deadline_ms=1e-6)
     assert not late.success and late.status.startswith(DEADLINE) and cpu > 1e-6
     assert late.status == DEADLINE + LATE  # its last solve converged, after the deadline
-    run = execute(planner, scenario)
+    run = execute(segments(planner), scenario)
     assert len(run.segments) == 1 and run.replan_failures  # every re-plan came too late
     assert all(status.startswith(DEADLINE) for status in run.replan_failures)
     assert len(run.solve_cpu_ms) == len(run.solve_ms) == 1 + len(run.replan_failures)
@@ -140,17 +141,18 @@ def test_a_late_but_converged_replan_is_the_next_warm_start(baseline, monkeypatc
     """The arm keeps following its last plan, but the next re-plan starts from the newest
     converged solution (Algorithm 2 in real time: late work is not thrown away)."""
     planner = Planner(baseline, PlannerConfig(replan_deadline_ms=1e-6))
-    calls, real = [], replanning.plan_segment
+    loop = PenaltyLoop(planner)
+    calls, real = [], loop.plan
 
-    def recording(*args, warm=None, **kwargs):
-        result = real(*args, warm=warm, **kwargs)
-        calls.append((warm, result[0]))
+    def recording(problem, warm=None):
+        result = real(problem, warm)
+        calls.append((warm, result))
         return result
 
     free = planner.solve(Scenario().start, (0.0,) * 3, 2.0, Scenario().goal).trajectory
     scenario = swaying_scenario(free, planner.config.geometry)  # every forecast is new
-    monkeypatch.setattr(replanning, "plan_segment", recording)
-    run = execute(planner, scenario)
+    monkeypatch.setattr(loop, "plan", recording)
+    run = execute(loop, scenario)
     replans = [(warm, result) for warm, result in calls if warm is not None]
     latest = run.segments[0]
     assert len(run.segments) == 1 and replans
@@ -338,7 +340,7 @@ def test_algorithm_2_with_real_time_iterations_follows_iterates_and_stays_feasib
     for iterations in (None, 1):
         planner = Planner(baseline, PlannerConfig(replan_iterations=iterations))
         case, _ = random_crossing(planner, 4)
-        run = execute(planner, case)
+        run = execute(segments(planner), case)
         runs[iterations] = (run, evaluate(run, case, baseline, planner.config))
     iterated, result = runs[1]
     assert result.feasible, result.problems

@@ -23,8 +23,8 @@ from planning.errors import PlanningError
 from planning.formulation.obstacle import LinearObstacle, SwayingObstacle
 from planning.formulation.quadrature import RULES, splits_evenly
 from planning.penalty.backends import SOLVERS
-from planning.penalty.loop import uses_anytime
 from planning.penalty.solver import Planner
+from planning.planners import segment_planner, uses_anytime
 from planning.replanning import execute
 from planning.result import closest_link, evaluate, to_json
 
@@ -231,8 +231,8 @@ def run(args) -> int:
     unreachable = torque_diagnosis(planner, scenario)  # before a long search that must fail
     if unreachable:
         raise PlanningError(unreachable)
-    result = evaluate(execute(planner, scenario, replan=not args.no_replan), scenario, model,
-                      config)
+    result = evaluate(execute(segment_planner(model, config, planner), scenario,
+                              replan=not args.no_replan), scenario, model, config)
     if not result.feasible:
         raise PlanningError(infeasible(result.problems, config))
     write_json(args.out, to_json(result, scenario, config, args.model))

@@ -1,7 +1,9 @@
 """The real-time SQP: clearance as elastic rows, an anytime trust-region SQP under a CPU
 budget, every accepted iterate checked.
 
-- planner: Anytime, plans and re-plans of Algorithm 2 by the SQP (rounds, screening, choice)
+- planner: AnytimePlanner, the SQP as a SegmentPlanner (planning.types): budgets, the
+  multi-start's shared budget
+- solver: Anytime, one plan or re-plan by the SQP under a budget (rounds, screening, choice)
 - sqp: the anytime trust-region SQP of the elastic NLP
 - elastic_qp, qp_kernels: the QP of one iteration (DAQP) and its array work (numba)
 - local_model: the NLP's objective, rows and derivatives at a point, in one function

@@ -48,3 +48,10 @@ def symbolic_link_clearances(geometry: ArmGeometry, q, obstacle) -> list:
     points = geometry.symbolic_points(q)
     return [symbolic_segment_distance(obstacle, points[i], points[j], length)
             for (i, j), length in zip(geometry.links, geometry.link_lengths, strict=True)]
+
+
+def predicted_clearance(geometry: ArmGeometry, trajectory, forecast) -> float:
+    """Smallest clearance (m) of a motion's links to an obstacle forecast
+    (planning.types.ObstacleForecast) at its sample times."""
+    q = trajectory.position(forecast.times)
+    return float(link_clearances(geometry, q, forecast.centres).min())

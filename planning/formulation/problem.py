@@ -83,6 +83,10 @@ class ProblemNumbers:
             cache[key] = signs
         return cache[key]
 
+    def _goal_limits(self, goal) -> tuple[int, ...]:
+        """The joints whose goal is on a limit."""
+        return tuple(int(j) for j in np.flatnonzero(self.goal_signs(goal)))
+
     def initial_guess(self, q0, qd0, duration: float, goal, bumps=None) -> np.ndarray:
         """A cubic that reaches the goal at rest, plus bumps (dof, degree - 2) in rad times
         the shapes s^(k+2) (1 - s) (k = 0..degree - 3, zero at both ends) for a multi-start;

@@ -7,4 +7,6 @@ threshold.
 - realtime_iteration: a re-plan's warm solve capped at a few feasible-SQP iterations
 - loop: one segment planned by the loop (screened solves, alpha raised, limits settled) and
   the multi-start cold plan, polished or not
+- planner: PenaltyLoop, the loop as a SegmentPlanner (planning.types)
+- polish: Polished, another SegmentPlanner's cold plans polished by the loop
 """

@@ -1,20 +1,16 @@
-"""One segment of Algorithm 2, planned: the penalty loop (paper III.G: alpha raised while the
-plan dips below the threshold, obstacle samples screened, limits at the turning points
-settled), or the anytime elastic SQP (planning.anytime) when PlannerConfig.replanner is
-"sqp"; and the multi-start cold plan, polished or not.
+"""One segment of Algorithm 2, planned by the penalty loop (paper III.G: alpha raised while
+the plan dips below the threshold, obstacle samples screened, limits at the turning points
+settled); and the multi-start cold plan, polished or not.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import time
 
 import numpy as np
 
-from planning.anytime.budget import Clock
-from planning.anytime.planner import Anytime
 from planning.formulation import breaks
-from planning.formulation.clearance import link_clearances
+from planning.formulation.clearance import predicted_clearance
 from planning.formulation.limits import LIMIT_TOLERANCE, limit_excess
 from planning.formulation.screening import screen
 from planning.penalty.solver import Planner
@@ -31,8 +27,7 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
                  forecast: ObstacleForecast | None, warm: SegmentPlan | None = None,
                  rounds: int = 4, x0: np.ndarray | None = None,
                  deadline_ms: float | None = None, settle_breaks: bool = True,
-                 iterate: bool = False, budget_ms: float | None = None
-                 ) -> tuple[SegmentPlan, float, float]:
+                 iterate: bool = False) -> tuple[SegmentPlan, float, float]:
     """Plan one segment: screened solves (see _screened), with the penalty weight raised
     while the solution still dips below the threshold (exterior penalty method).
 
@@ -42,8 +37,6 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     answer would come too late: planning.penalty.solver.Planner._solve).
     settle_breaks: re-solve until the split quadrature's breaks are the plan's own power sign
     changes (False: solved once with those of the start; plan_multistart settles the best).
-    budget_ms: CPU budget of a cold plan by the anytime SQP (config.replanner "sqp"; default
-    config.cold_budget_ms; a re-plan's is config.replan_budget_ms), which plans every segment.
     iterate: a re-plan of Algorithm 2 with real-time iterations (config.replan_iterations):
     its warm solve is capped and its iterate (status ITERATE) returned if it keeps the
     threshold and the limits; otherwise it is solved out from there as without them.
@@ -57,19 +50,6 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     the plan and the wall and CPU time (ms, planning thread) of the whole call, end to end:
     solves, screening, checks and bookkeeping.
     """
-    if uses_anytime(planner.config):
-        budget = planner.config.replan_budget_ms if warm is not None else budget_ms
-        budget = planner.config.cold_budget_ms if budget is None else budget
-        if deadline_ms is not None:
-            budget = min(budget, deadline_ms)
-        anytime = anytime_of(planner)
-        anytime.prepare(goal)  # built once: not part of a plan's time
-        if warm is not None and planner.config.replan_starts:
-            clock = Stopwatch()
-            plan = anytime.best_of(q0, qd0, t_begin, duration, goal, forecast, warm,
-                                   planner.config.replan_starts, budget)
-            return plan, *clock.read()
-        return anytime.plan(q0, qd0, t_begin, duration, goal, forecast, warm, x0, budget)
     planner.prepare(goal)  # the solvers for this goal, built once: not part of a plan's time
     clock = Stopwatch()
     config = planner.config
@@ -124,7 +104,7 @@ def _keeps_clear(planner: Planner, plan: SegmentPlan, forecast: ObstacleForecast
     if forecast is None:
         return True
     if lowest is None:
-        lowest = _predicted_clearance(planner, plan, forecast)
+        lowest = predicted_clearance(planner.config.geometry, plan.trajectory, forecast)
     return lowest >= planner.config.threshold - planner.config.penalty_tolerance
 
 
@@ -160,31 +140,13 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
     if planner.polisher is not None:
         planner.polisher.prepare(goal)  # its solvers' build is not part of a plan's time
     plans, wall, cpu = [], 0.0, 0.0
-    sqp = uses_anytime(planner.config)
-    entered, budget = time.thread_time(), Clock(planner.config.iteration_ms)
-    for i, x0 in enumerate(start_points(planner, q0, qd0, duration, goal, count)):
-        # the anytime SQP's starts share one budget: each gets an even share of what the
-        # starts before it left (their checks and bookkeeping run past their iterations'
-        # budget), and none starts without the CPU a round of a plan has recently taken;
-        # under CPU clocks what is left is net of all the CPU so far (the start points
-        # included) and of the ranking after the starts (the most of recent ones': the cold
-        # max was 25.29 ms against 25 without them, realtime study at 3c12065)
-        used = cpu
-        if sqp and budget.nominal is None:
-            used = 1e3 * (time.thread_time() - entered) + \
-                anytime_of(planner).rounds.ranking_ms(budget)
-        share = (planner.config.cold_budget_ms - used) / (count - i)
-        if sqp and plans and share < anytime_of(planner).round_ms():
-            break
+    for x0 in start_points(planner, q0, qd0, duration, goal, count):
         plan, ms, cpu_ms = plan_segment(planner, q0, qd0, t_begin, duration, goal, forecast,
-                                        x0=x0, settle_breaks=not split, budget_ms=share)
+                                        x0=x0, settle_breaks=not split)
         plans.append(plan)
         wall, cpu = wall + ms, cpu + cpu_ms
     clock = Stopwatch()  # the ranking (a dense integral per plan) and polishing are plan time
-    ranked = sorted(plans, key=anytime_of(planner).rank if sqp else
-                    (lambda plan: rank(planner, plan)))
-    if sqp:
-        anytime_of(planner).rounds.record_ranking(budget, clock.cpu_ms())
+    ranked = sorted(plans, key=lambda plan: rank(planner, plan))
     best = ranked[0]
     if split and best.success:
         settled, _, _ = plan_segment(planner, q0, qd0, t_begin, duration, goal, forecast,
@@ -262,26 +224,3 @@ def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan
         if unchanged:
             break  # the same problem again: another round would return the same plan
     return plan, None
-
-
-def _predicted_clearance(planner: Planner, plan: SegmentPlan, forecast: ObstacleForecast):
-    q = plan.trajectory.position(forecast.times)
-    return link_clearances(planner.config.geometry, q, forecast.centres).min()
-
-
-def anytime_of(planner: Planner) -> Anytime:
-    """The planner's anytime SQP (config.replanner "sqp"), built on first need and kept with
-    it (planning.penalty.solver cannot import planning.anytime, which builds on it)."""
-    found = planner.__dict__.get("_anytime")
-    if found is None:
-        found = planner.__dict__["_anytime"] = Anytime(planner)
-    return found
-
-
-def uses_anytime(config) -> bool:
-    """Whether segments are planned by the anytime SQP: config.replanner "sqp", except with
-    the split quadrature (its breaks settle over re-solves, the penalty loop's rounds) and
-    with real-time iterations (a feasible-SQP step of the penalty NLP), which keep the
-    penalty loop."""
-    return config.replanner == "sqp" and config.energy_quadrature != "split" and \
-        config.replan_iterations is None

@@ -134,10 +134,6 @@ class Planner(ProblemNumbers):
                                         "plan_torque")
         return self._limited[key]
 
-    def _goal_limits(self, goal) -> tuple[int, ...]:
-        """The joints whose goal is on a limit."""
-        return tuple(int(j) for j in np.flatnonzero(self.goal_signs(goal)))
-
     def torque_excess(self, trajectory: PolynomialTrajectory) -> float:
         """Largest |tau_i| - torque_limit_i (N m) on a dense grid of the segment (< 0: inside;
         -inf without limits)."""

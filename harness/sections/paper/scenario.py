@@ -10,7 +10,7 @@ from harness.paper.planning.variants import PAPER
 from harness.robots.arm import planner_config
 from harness.robots.baseline import PinocchioModel
 from harness.sections.base import Context, Row, SectionResult, Target
-from planning.penalty.solver import Planner
+from planning.planners import segment_planner
 from planning.replanning import execute
 from planning.result import evaluate, to_json
 from planning.scenarios import paper_scenario
@@ -27,7 +27,7 @@ def run(ctx: Context, models: dict) -> SectionResult:
     runs["default_pinocchio"] = (baseline, default)
     results, plans, checks = {}, {}, []
     for name, (model, config) in runs.items():
-        executed = evaluate(execute(Planner(model, config), scenario), scenario, model, config)
+        executed = evaluate(execute(segment_planner(model, config), scenario), scenario, model, config)
         results[name] = summary(executed, baseline, config)
         plans[name] = to_json(executed, scenario, config, name.split("_", 1)[1])
         checks += plan_checks(name, results[name], config.threshold, config.rest_at_goal)[0]

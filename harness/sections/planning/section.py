@@ -14,7 +14,7 @@ from harness.robots.registry import load_pinocchio
 from harness.sections.base import Context, Row, SectionResult, Target, check
 from harness.sections.paper import EXTRAS
 from harness.sections.planning import figures
-from planning.penalty.solver import Planner
+from planning.planners import segment_planner
 from planning.replanning import execute
 from planning.result import evaluate, to_json
 from planning.scenarios import crossing_scenario, swaying_scenario
@@ -32,7 +32,7 @@ def run(ctx: Context) -> SectionResult:
     # load); the speed is measured under the real CPU budget, the penalty loop beside
     config = reproducible(planner_config(robot, compile_code=True))
     base, link = bench_motion(robot)
-    planner = Planner(baseline, config)
+    planner = segment_planner(baseline, config)
     free = evaluate(execute(planner, base, avoid=False), base, baseline, config)
     scenario = crossing_scenario(free.execution.segments[0].trajectory, config.geometry,
                                  base=base, link=link)
@@ -56,7 +56,7 @@ def run(ctx: Context) -> SectionResult:
                     free_crossing.clearance.min() < config.threshold,
                     f"unobstructed clearance {1e3 * free_crossing.clearance.min():.1f} mm")]
     for name, model in models.items():
-        p = planner if model is baseline else Planner(model, config)
+        p = planner if model is baseline else segment_planner(model, config)
         executed[name] = evaluate(execute(p, scenario), scenario, model, config)
         results[name] = summary(executed[name], baseline, config)
         plans[f"{name}_crossing"] = to_json(executed[name], scenario, config, name)
@@ -87,7 +87,7 @@ def run(ctx: Context) -> SectionResult:
     speeds = {}
     for replanner in ("sqp", "fatrop"):
         live = dataclasses.replace(config, iteration_ms=None, replanner=replanner)
-        timings, _ = measure(Planner(baseline, live), scenario,
+        timings, _ = measure(segment_planner(baseline, live), scenario,
                              cold_repeats=2 if ctx.quick else 5, stride=10 if ctx.quick else 2)
         speeds[replanner] = {**timings.summary(),
                              "cold_cpu_max_ms": float(np.max(timings.cold_cpu_ms)),

@@ -22,7 +22,7 @@ from harness.studies.paper_planning.studies import (
 )
 from planning.config import true_energy_config
 from planning.formulation.energy import absolute_energy
-from planning.penalty.solver import Planner
+from planning.planners import segment_planner
 from planning.result import PlanResult, to_json
 from planning.scenarios import crossing_scenario, paper_scenario
 
@@ -93,7 +93,7 @@ def run(ctx: Context) -> SectionResult:
     samples["difference_pct"] = 100 * (samples["energy_N10_J"] - samples["energy_N40_J"]) \
         / samples["energy_N40_J"]
     speed = speed_study(baseline, scenario, quick, config)
-    crossing_timings, _ = measure(Planner(baseline, config), crossing, cold_repeats=3)
+    crossing_timings, _ = measure(segment_planner(baseline, config), crossing, cold_repeats=3)
     speed["crossing"] = crossing_timings.summary()
     free_trajectory = free.execution.segments[0].trajectory
     sway, sway_result, sway_scenario = swaying_study(baseline, free_trajectory, quick, config)

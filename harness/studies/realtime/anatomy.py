@@ -3,7 +3,7 @@
     .venv/bin/python -m harness.studies.realtime.anatomy [--scenarios 20] [--seed 2026]
         [--split | --polish]
 
-1. Algorithm 2 with the default planner (compiled) on the planning bench's random
+1. Algorithm 2 with the penalty loop (compiled) on the planning bench's random
    scenarios; for every warm re-plan: its solver calls, their iterations and CPU time, the
    share of the re-plan spent in them, the calls that ran to the warm iteration cap and
    the penalty weight each call solved with.
@@ -37,8 +37,10 @@ from harness.studies.realtime import options as random_scenarios
 from planning.config import true_energy_config
 from planning.formulation.screening import screen
 from planning.penalty import backends
+from planning.penalty.loop import plan_segment
+from planning.penalty.planner import PenaltyLoop
 from planning.penalty.solver import Planner
-from planning.replanning import execute, forecast_at, plan_segment
+from planning.replanning import execute, forecast_at
 from planning.scenarios import paper_scenario
 
 
@@ -68,7 +70,7 @@ def replans(baseline, config, setup: realtime.Setup) -> dict:
     plant, executed, infeasible, cold = load_mujoco(DEFAULT_ROBOT, scene=True), 0.0, 0, []
     for case in realtime.scenarios(baseline, config, setup):
         planner.groups.clear()
-        run = execute(planner, case)
+        run = execute(PenaltyLoop(planner), case)
         energy, feasible = realtime.replayed_energy(plant, baseline, run, case, config)
         if feasible:
             executed += energy

@@ -26,6 +26,7 @@ from harness.replay.simulate import replay
 from harness.studies.realtime import references
 from planning.config import PlannerConfig, Scenario, true_energy_config
 from planning.penalty.solver import Planner
+from planning.planners import segment_planner
 from planning.replanning import Execution, execute
 from planning.result import evaluate, to_json
 from planning.scenarios import random_scenarios
@@ -65,7 +66,7 @@ def scenarios(baseline, config: PlannerConfig, setup: Setup) -> list[Scenario]:
 def timing(baseline, config: PlannerConfig, cases: list[Scenario]) -> tuple[dict, list]:
     """Algorithm 2 on every case: distributions of cold and warm times (wall and CPU, ms),
     deadline misses and failures; and the executions."""
-    planner = Planner(baseline, config)
+    planner = segment_planner(baseline, config)
     runs = [execute(planner, case) for case in cases]
     cold_wall = [r.solve_ms[0] for r in runs]
     cold_cpu = [r.solve_cpu_ms[0] for r in runs]
