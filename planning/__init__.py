@@ -21,7 +21,8 @@ Modules at the top:
   SegmentPlan) and a segment to plan (Segment), SegmentPlan, ObstacleForecast, the re-plan
   statuses (ITERATE, DEADLINE, LATE)
 - planners: the one factory choosing the SegmentPlanner a configuration asks for
-- config: PlannerConfig and Scenario; errors: PlanningError
+- config: PlannerConfig (the formulation and the replanner) with its PenaltyOptions and
+  AnytimeOptions, and Scenario; errors: PlanningError
 - starts: the multi-start's start points and the ranking of cold plans
 - replanning: Algorithm 2, re-planning from the current state when the obstacle threatens,
   with any SegmentPlanner

@@ -9,10 +9,10 @@ solve would return the same plan), the arm re-plans from its current state
 deadline) leaves the arm on its last plan and is tried again at the next sample. The
 executed trajectory is the concatenation of the segments actually followed.
 
-With real-time iterations (PlannerConfig.replan_iterations) a re-plan is a capped
+With real-time iterations (PenaltyOptions.replan_iterations) a re-plan is a capped
 feasible-SQP step from the last plan; while the plan followed is such an unconverged
 iterate, the arm re-plans at every sample, going on from it until it converges. So it is
-with the anytime SQP (PlannerConfig.replanner "sqp", planning.anytime): a re-plan that
+with the anytime SQP (PlannerConfig.replanner "anytime", planning.anytime): a re-plan that
 reached its CPU budget unconverged is followed and gone on from at the next sample.
 Each segment is planned by a SegmentPlanner (planning.planners.segment_planner), whichever
 it is.

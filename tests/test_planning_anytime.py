@@ -14,9 +14,8 @@ from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from planning.anytime import elastic_qp, local_model, sqp
 from planning.anytime.planner import AnytimePlanner
-from planning.anytime.solver import MIN_VIOLATION
 from planning.anytime.safety import SafetyCheck
-from planning.anytime.solver import Anytime
+from planning.anytime.solver import MIN_VIOLATION, Anytime
 from planning.config import Scenario, true_energy_config
 from planning.formulation.clearance import link_clearances
 from planning.formulation.energy import dense_energy
@@ -42,7 +41,7 @@ def baseline():
 
 @pytest.fixture(scope="module")
 def planner(baseline):
-    return Planner(baseline, true_energy_config(replanner="sqp", compile_code=False,
+    return Planner(baseline, true_energy_config(replanner="anytime", compile_code=False,
                                                 torque_limit=None))
 
 
@@ -59,7 +58,7 @@ def _elastic_problem(planner, case, forecast):
     near = near[np.round(np.linspace(0, len(near) - 1, config.obstacle_slots)).astype(int)]
     subset = ObstacleForecast(forecast.times[near], forecast.centres[near])
     p = planner.parameters(case.start, case.start_velocity, case.duration, goal, subset, 0.0,
-                           reference, config.elastic_weight)
+                           reference, config.anytime.elastic_weight)
     lbg, ubg = planner.bounds(goal, nlp)
     start = np.concatenate([x0[: local_model.layout_of(nlp).nc], np.zeros(nlp.x.numel()
                                                                     - local_model.layout_of(nlp).nc)])
@@ -227,7 +226,7 @@ def test_the_local_derivatives_through_the_sites_are_casadis_through_the_rows(ro
     (torque sites at the energy nodes, the start and the obstacle samples)."""
     from harness.robots.arm import planner_config
 
-    config = planner_config(robot, replanner="sqp", compile_code=False)
+    config = planner_config(robot, replanner="anytime", compile_code=False)
     assert config.torque_limit is not None
     model = PinocchioModel(load_pinocchio(robot))
     nlp = PlanningNLP(model, config, (0,), elastic=True)
@@ -449,13 +448,14 @@ def test_a_solve_keeps_the_choices_cpu_for_every_iterate_it_accepts(planner, mon
     assert runs[1.5] < runs[0.0]
 
 def test_a_budget_counted_in_iterations_gives_the_same_plan_under_any_load(baseline):
-    """PlannerConfig.iteration_ms: a cold plan of a random crossing with 6 nominal ms at 1 ms
+    """AnytimeOptions.iteration_ms: a cold plan of a random crossing with 6 nominal ms at 1 ms
     an iteration (2 for the plan's round, 1 for each second-order correction) takes at most 4
     iterations, stops there unconverged, and gives the same plan again while another thread
     keeps the process busy."""
     import threading
 
-    config = true_energy_config(compile_code=False, torque_limit=None, iteration_ms=1.0)
+    config = true_energy_config(compile_code=False, torque_limit=None).with_anytime(
+        iteration_ms=1.0)
     planner = Planner(baseline, config)
     case, forecast = random_crossing(planner, seed=7)
     anytime = Anytime(planner.model, planner.config)
@@ -505,10 +505,10 @@ def test_algorithm_2_with_the_anytime_sqp_keeps_the_threshold(baseline):
     loop's (fatrop) execution of the same scenario."""
     config = true_energy_config(compile_code=False)
     planners = {name: Planner(baseline, dataclasses.replace(config, replanner=name))
-                for name in ("sqp", "fatrop")}
-    case, _ = random_crossing(planners["fatrop"], seed=3)
+                for name in ("anytime", "penalty")}
+    case, _ = random_crossing(planners["penalty"], seed=3)
     results = {name: evaluate(execute(segments(planner), case), case, baseline, planner.config)
                for name, planner in planners.items()}
-    assert results["sqp"].feasible, results["sqp"].problems
-    assert len(results["sqp"].execution.segments) > 1  # it re-planned
-    assert results["sqp"].energy <= 1.02 * results["fatrop"].energy
+    assert results["anytime"].feasible, results["anytime"].problems
+    assert len(results["anytime"].execution.segments) > 1  # it re-planned
+    assert results["anytime"].energy <= 1.02 * results["penalty"].energy

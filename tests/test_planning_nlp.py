@@ -44,11 +44,11 @@ def test_called_torque_model_is_the_inlined_one(monkeypatch):
 def test_goal_limit_rows_are_built_only_where_the_goal_is_on_a_limit():
     """A goal inside the limits is solved without the (free) goal-limit rows: the same
     optimum as the NLP with every row; a goal on a limit gets that joint's rows."""
-    from planning.config import PlannerConfig
+    from planning.config import PenaltyOptions, PlannerConfig
     from planning.penalty.solver import Planner
 
     model = PinocchioModel(load_pinocchio("lynxmotion"))
-    planner = Planner(model, PlannerConfig(solver="ipopt"))
+    planner = Planner(model, PlannerConfig(penalty=PenaltyOptions(solver="ipopt")))
     start, goal = (1.0, 0.6, -0.8), (-0.5, 1.2, -1.4)
     plan = planner.solve(start, (0.0, 0.0, 0.0), 2.0, goal)
     pruned = planner._relaxed_for(goal).nlp

@@ -12,7 +12,7 @@ import pytest
 from harness.paper.planning.speed import measure
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from planning.config import PlannerConfig, Scenario
+from planning.config import PenaltyOptions, PlannerConfig, Scenario
 from planning.formulation import compiled
 from planning.formulation.clearance import link_clearances
 from planning.formulation.limits import LIMIT_TOLERANCE, limit_excess
@@ -95,7 +95,7 @@ def test_sqpmethod_status_comes_from_the_kkt_conditions_of_its_point(capfd):
 def test_fatrop_and_ipopt_find_the_same_optimum(baseline):
     scenario = Scenario()
     args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
-    plans = {name: Planner(baseline, PlannerConfig(solver=name)).solve(*args)
+    plans = {name: Planner(baseline, PlannerConfig(penalty=PenaltyOptions(solver=name))).solve(*args)
              for name in ("fatrop", "ipopt")}
     assert all(plan.success for plan in plans.values())
     fatrop, ipopt = plans["fatrop"], plans["ipopt"]
@@ -194,7 +194,7 @@ def test_a_warm_solve_the_fast_solver_cannot_finish_is_rescued_by_ipopt(baseline
     """fatrop capped at one iteration cannot converge a re-plan; IPOPT, warm-started from the
     same point, finishes it (the same optimum as an uncapped fatrop solve)."""
     scenario = Scenario()
-    capped = Planner(baseline, PlannerConfig(warm_max_iterations=1))
+    capped = Planner(baseline, PlannerConfig(penalty=PenaltyOptions(warm_max_iterations=1)))
     full = Planner(baseline, PlannerConfig())
     first, _, _ = plan_segment(full, scenario.start, scenario.start_velocity, 0.0,
                                scenario.duration, scenario.goal, forecast_at(scenario.obstacle, 0.0))
@@ -212,7 +212,7 @@ def test_a_warm_solve_the_fast_solver_cannot_finish_is_rescued_by_ipopt(baseline
         <= 1e-5 * (reference.energy + reference.penalty)
     # ... but not a re-plan under a deadline (rescue=False), warm or from a cold start: its
     # answer would come too late; fatrop's unfinished solve is returned unsuccessful
-    late = Planner(baseline, PlannerConfig(warm_max_iterations=1, max_iterations=1))
+    late = Planner(baseline, PlannerConfig(penalty=PenaltyOptions(warm_max_iterations=1, max_iterations=1)))
     for warm in (first, None):
         dropped = late.solve(*args, warm=warm, reference=reference_path, rescue=False)
         assert not dropped.success and dropped.status != "Solve_Succeeded"
@@ -303,7 +303,7 @@ def test_a_real_time_iteration_is_followed_only_where_it_is_feasible_and_cheaper
     keeps the limits, and its objective lies between the start's and the converged re-plan's.
     The same re-plan without `iterate` is solved out."""
     scenario = Scenario()
-    planner = Planner(baseline, PlannerConfig(replan_iterations=1))
+    planner = Planner(baseline, PlannerConfig(penalty=PenaltyOptions(replan_iterations=1)))
     first, _, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0,
                                scenario.duration, scenario.goal,
                                forecast_at(scenario.obstacle, 0.0))
@@ -338,7 +338,7 @@ def test_algorithm_2_with_real_time_iterations_follows_iterates_and_stays_feasib
     segments iterates)."""
     runs = {}
     for iterations in (None, 1):
-        planner = Planner(baseline, PlannerConfig(replan_iterations=iterations))
+        planner = Planner(baseline, PlannerConfig(penalty=PenaltyOptions(replan_iterations=iterations)))
         case, _ = random_crossing(planner, 4)
         run = execute(segments(planner), case)
         runs[iterations] = (run, evaluate(run, case, baseline, planner.config))
@@ -359,13 +359,14 @@ def test_cold_plans_settling_and_polishing_never_stop_at_an_iterate(baseline):
     (rounds, penalty growth, polishing with the split rule) are solved out, and the
     polisher and the IPOPT rescuer build no feasible SQP."""
     scenario = Scenario()
-    planner = Planner(baseline, PlannerConfig(replan_iterations=1, polish=1, polish_samples=16))
+    planner = Planner(baseline, PlannerConfig(penalty=PenaltyOptions(
+        replan_iterations=1, polish=1, polish_samples=16)))
     plan, _, _, plans = plan_multistart(planner, scenario.start, scenario.start_velocity, 0.0,
                                         scenario.duration, scenario.goal,
                                         forecast_at(scenario.obstacle, 0.0))
     assert plan.success and plan.status != ITERATE
     assert all(p.status != ITERATE for p in plans)
-    assert planner.polisher.config.replan_iterations is None
+    assert planner.polisher.config.penalty.replan_iterations is None
     assert all(s.iterate is None for s in planner.polisher._relaxed.values())
     assert all(s.iterate is None for s in planner._rescue.values())
     again, _, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0,
@@ -373,6 +374,6 @@ def test_cold_plans_settling_and_polishing_never_stop_at_an_iterate(baseline):
                                forecast_at(scenario.obstacle, 0.0), warm=plan)
     assert again.status != ITERATE  # a warm plan_segment call outside Algorithm 2
     with pytest.raises(ValueError, match="replan_iterations"):
-        Planner(baseline, PlannerConfig(replan_iterations=0))
+        Planner(baseline, PlannerConfig(penalty=PenaltyOptions(replan_iterations=0)))
     with pytest.raises(ValueError, match="solver must be one of"):
-        Planner(baseline, PlannerConfig(solver="feasiblesqp"))
+        Planner(baseline, PlannerConfig(penalty=PenaltyOptions(solver="feasiblesqp")))

@@ -11,7 +11,7 @@ import pytest
 from harness.cli import main
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from planning.config import PlannerConfig, Scenario
+from planning.config import PenaltyOptions, PlannerConfig, Scenario
 from planning.errors import PlanningError
 from planning.formulation.energy import absolute_energy
 from planning.penalty.solver import Planner
@@ -90,7 +90,8 @@ def test_start_inside_threshold_is_an_error(paper):
 
 def test_solver_failure_is_flagged(baseline):
     # no solve may finish: cold and warm capped, no IPOPT rescue (it has its own warm cap)
-    config = PlannerConfig(max_iterations=2, warm_max_iterations=2, solver="ipopt")
+    config = PlannerConfig(penalty=PenaltyOptions(max_iterations=2, warm_max_iterations=2,
+                                                   solver="ipopt"))
     scenario = Scenario()
     result = evaluate(execute(segments(Planner(baseline, config)), scenario), scenario, baseline, config)
     assert not result.feasible
@@ -212,7 +213,7 @@ def test_penalty_weight_rises_until_the_threshold_holds(paper, baseline):
     crossing = crossing_scenario(free.execution.segments[0].trajectory, planner.config.geometry)
     results = {}
     for ceiling in (2.0, 2e5):
-        config = PlannerConfig(penalty_weight=2.0, max_penalty_weight=ceiling)
+        config = PlannerConfig(penalty_weight=2.0, penalty=PenaltyOptions(max_weight=ceiling))
         results[ceiling] = evaluate(execute(segments(Planner(baseline, config)), crossing), crossing,
                                     baseline, config)
     assert not results[2.0].feasible

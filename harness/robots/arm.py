@@ -97,8 +97,9 @@ def planner_config(robot: str, **changes) -> PlannerConfig:
     per re-plan)."""
     lower, upper = joint_limits(robot)
     base = dict(geometry=arm_geometry(robot), lower=lower, upper=upper,
-                torque_limit=torque_limit(robot), solver=robot_entry(robot).solver)
-    return true_energy_config(**{**base, **changes})
+                torque_limit=torque_limit(robot))
+    return true_energy_config(**{**base, **changes}).with_penalty(
+        solver=robot_entry(robot).solver)
 
 
 def bench_motion(robot: str, duration: float = 2.0) -> tuple[Scenario, int]:

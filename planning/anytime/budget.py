@@ -13,7 +13,7 @@ RECENT = 32  # iterations (or rounds) whose CPU cost predicts the next one's
 
 class Clock:
     """What a budget counts: the planning thread's CPU time (ms) since the clock was made, or,
-    for reproducible runs (PlannerConfig.iteration_ms), iteration_ms per unit of work ticked
+    for reproducible runs (AnytimeOptions.iteration_ms), iteration_ms per unit of work ticked
     whatever CPU it took: an SQP iteration (a QP and an evaluation), a second-order
     correction (another), and ROUND_ITERATIONS for each round of a plan (its screening,
     checks and bookkeeping; measured on the Lynxmotion: ~1 ms a round, ~0.45 ms an

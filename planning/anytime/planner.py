@@ -16,8 +16,8 @@ from planning.types import Segment, SegmentPlan
 
 
 class AnytimePlanner:
-    """Plans and re-plans by the anytime SQP (PlannerConfig.replanner "sqp"): a re-plan gets
-    config.replan_budget_ms of CPU, a cold plan config.cold_budget_ms for all its starts."""
+    """Plans and re-plans by the anytime SQP (PlannerConfig.replanner "anytime"): a re-plan gets
+    config.anytime.replan_budget_ms of CPU, a cold plan config.anytime.cold_budget_ms for all its starts."""
 
     def __init__(self, model: TorqueModel, config: PlannerConfig):
         self.config, self.anytime = config, Anytime(model, config)
@@ -33,16 +33,16 @@ class AnytimePlanner:
     @collection_deferred
     def plan(self, problem: Segment, warm: SegmentPlan | None = None) -> SegmentPlan:
         config = self.config
-        budget = config.replan_budget_ms if warm is not None else problem.budget_ms
-        budget = config.cold_budget_ms if budget is None else budget
+        budget = config.anytime.replan_budget_ms if warm is not None else problem.budget_ms
+        budget = config.anytime.cold_budget_ms if budget is None else budget
         if problem.deadline_ms is not None:
             budget = min(budget, problem.deadline_ms)
         self.anytime.prepare(problem.goal)  # built once: not part of a plan's time
         segment = (problem.q0, problem.qd0, problem.t_begin, problem.duration, problem.goal,
                    problem.forecast)
-        if warm is not None and config.replan_starts:
+        if warm is not None and config.anytime.replan_starts:
             clock = Stopwatch()
-            plan = self.anytime.best_of(*segment, warm, config.replan_starts, budget)
+            plan = self.anytime.best_of(*segment, warm, config.anytime.replan_starts, budget)
             wall, cpu = clock.read()
             return dataclasses.replace(plan, solve_ms=wall, solve_cpu_ms=cpu)
         return self.anytime.solve(*segment, warm, problem.x0, budget)[0]
@@ -51,7 +51,7 @@ class AnytimePlanner:
     def plan_cold(self, problem: Segment, starts: int | None = None
                   ) -> tuple[SegmentPlan, list[SegmentPlan]]:
         """The best cold plan (Anytime.rank) of `starts` start points sharing
-        config.cold_budget_ms: each gets an even share of what the starts before it left
+        config.anytime.cold_budget_ms: each gets an even share of what the starts before it left
         (their checks and bookkeeping run past their iterations' budget), and none starts
         without the CPU a round of a plan has recently taken; under CPU clocks what is left
         is net of all the CPU so far (the start points included) and of the ranking after
@@ -59,13 +59,13 @@ class AnytimePlanner:
         config, anytime = self.config, self.anytime
         count = config.starts if starts is None else starts
         plans, wall, cpu = [], 0.0, 0.0
-        entered, budget = time.thread_time(), Clock(config.iteration_ms)
+        entered, budget = time.thread_time(), Clock(config.anytime.iteration_ms)
         for i, x0 in enumerate(start_points(anytime, problem.q0, problem.qd0,
                                             problem.duration, problem.goal, count)):
             used = cpu
             if budget.nominal is None:
                 used = 1e3 * (time.thread_time() - entered) + anytime.rounds.ranking_ms(budget)
-            share = (config.cold_budget_ms - used) / (count - i)
+            share = (config.anytime.cold_budget_ms - used) / (count - i)
             if plans and share < anytime.round_ms():
                 break
             plan = self.plan(dataclasses.replace(problem, x0=x0, budget_ms=share))

@@ -106,8 +106,8 @@ class Anytime(ProblemNumbers):
         its wall and CPU time (ms, end to end)."""
         wall, cpu = time.perf_counter(), time.thread_time()
         config = self.config
-        clock = Clock(config.iteration_ms)  # what the budget counts
-        budget = config.replan_budget_ms if budget_ms is None else budget_ms
+        clock = Clock(config.anytime.iteration_ms)  # what the budget counts
+        budget = config.anytime.replan_budget_ms if budget_ms is None else budget_ms
         times, centres = on_horizon(forecast, t_begin, duration)
         if warm is None:
             x0 = self.initial_guess(q0, qd0, duration, goal) if x0 is None else x0
@@ -127,7 +127,7 @@ class Anytime(ProblemNumbers):
                                  config.obstacle_slots)
             p = self.parameters(q0, qd0, duration, goal,
                                    ObstacleForecast(times[slots], centres[slots]), t_begin,
-                                   reference, config.elastic_weight)
+                                   reference, config.anytime.elastic_weight)
             lbg, ubg = self._bounds(problem, goal, links[slots])
             start, lam_g, lam_x = self._start(problem, reference, times[slots], last)
             points: list[sqp.Point] = []
@@ -175,7 +175,7 @@ class Anytime(ProblemNumbers):
         problem's) is expected to cost (planning.anytime.budget.RoundCosts)."""
         iteration = max((other.sqp.iteration_ms for other in self._problems.values()),
                         default=0.0) if problem is None else problem.sqp.iteration_ms
-        return self.rounds.round_ms(clock or Clock(self.config.iteration_ms), iteration)
+        return self.rounds.round_ms(clock or Clock(self.config.anytime.iteration_ms), iteration)
 
     def rank(self, plan: SegmentPlan) -> tuple[bool, float]:
         """Sort key of candidate plans (as planning.starts.rank, compiled): usable first,
@@ -187,7 +187,7 @@ class Anytime(ProblemNumbers):
                 budget_ms: float) -> SegmentPlan:
         """The best (planning.starts.rank) of the plan from `warm` and of cold plans from
         `starts` start points (planning.starts), each with budget_ms of CPU: a multi-start
-        re-plan (PlannerConfig.replan_starts; the realtime study's references)."""
+        re-plan (AnytimeOptions.replan_starts; the realtime study's references)."""
         segment = (q0, qd0, t_begin, duration, goal, forecast)
         plans = [] if warm is None else [self.solve(*segment, warm, budget_ms=budget_ms)[0]]
         for x0 in start_points(self, q0, qd0, duration, goal, starts):
@@ -253,7 +253,7 @@ class Anytime(ProblemNumbers):
             trajectory=chosen.trajectory, energy=float(parts[0]), penalty=float(parts[1]),
             success=chosen.hard == 0, status=status,
             iterations=0, solve_ms=0.0, solve_cpu_ms=0.0,
-            penalty_weight=self.config.elastic_weight, x=chosen.x,
+            penalty_weight=self.config.anytime.elastic_weight, x=chosen.x,
             multipliers=(lam_g, lam_x), layout=problem.layout, slot_times=slot_times,
             detour=detour)
 

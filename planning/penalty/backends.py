@@ -11,7 +11,7 @@
 - "feasiblesqp": CasADi's feasible SQP (feasiblesqpmethod: a trust-region SQP whose every
   iterate satisfies the constraints, given a start that does), qpOASES on the QPs. It
   needs a feasible start, so it only serves warm solves: the planner's real-time
-  iterations (PlannerConfig.replan_iterations), whose capped iterate the arm can follow.
+  iterations (PenaltyOptions.replan_iterations), whose capped iterate the arm can follow.
 Measured per iteration on the paper scenario's re-plan NLP (compiled functions, CPU
 time): fatrop and sqpmethod ~0.2-0.3 ms, IPOPT ~0.9 ms, of which the NLP functions
 ~0.1 ms; the rest is the solver's own work.

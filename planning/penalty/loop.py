@@ -37,7 +37,7 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     answer would come too late: planning.penalty.solver.Planner._solve).
     settle_breaks: re-solve until the split quadrature's breaks are the plan's own power sign
     changes (False: solved once with those of the start; plan_multistart settles the best).
-    iterate: a re-plan of Algorithm 2 with real-time iterations (config.replan_iterations):
+    iterate: a re-plan of Algorithm 2 with real-time iterations (config.penalty.replan_iterations):
     its warm solve is capped and its iterate (status ITERATE) returned if it keeps the
     threshold and the limits; otherwise it is solved out from there as without them.
 
@@ -72,7 +72,7 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     else:
         seen = None
     budget = np.inf if deadline_ms is None else deadline_ms
-    iterate = iterate and replan and config.replan_iterations is not None
+    iterate = iterate and replan and config.penalty.replan_iterations is not None
     while True:
         plan, lowest = _screened(planner, q0, qd0, t_begin, duration, goal, forecast, warm,
                                  seen, alpha, rounds, lambda: clock.cpu_ms() > budget,
@@ -89,11 +89,11 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
             # broken by up to 6.6 cm on 3 of the 20 random scenarios)
             iterate, warm, seen = False, plan, None
             continue
-        if forecast is None or alpha >= config.max_penalty_weight or not plan.success:
+        if forecast is None or alpha >= config.penalty.max_weight or not plan.success:
             return _within_limits(plan, config, replan), *clock.read()
         if _keeps_clear(planner, plan, forecast, lowest):
             return _within_limits(plan, config, replan), *clock.read()
-        alpha = min(alpha * config.penalty_growth, config.max_penalty_weight)
+        alpha = min(alpha * config.penalty.growth, config.penalty.max_weight)
         warm, seen = plan, None
 
 
@@ -133,7 +133,7 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
     the cold plans. With the split quadrature only the best start's plan is re-solved until
     its breaks settle (measured on the random scenarios: settling every start's took 2-10
     times the CPU of a Gauss plan).
-    With config.polish the best distinct plans are re-solved by planner.polisher (see
+    With config.penalty.polish the best distinct plans are re-solved by planner.polisher (see
     _polished)."""
     count = planner.config.starts if count is None else count
     split = planner.config.energy_quadrature == "split"
@@ -163,13 +163,13 @@ DISTINCT = 1e-3  # rad: cold plans whose coefficients all agree this closely are
 
 def _polished(planner: Planner, best: SegmentPlan, ranked: list[SegmentPlan],
               segment: tuple) -> SegmentPlan:
-    """The plan that spends least of `best` and the config.polish best distinct converged
+    """The plan that spends least of `best` and the config.penalty.polish best distinct converged
     plans of `ranked`, each solved again, warm from its motion, by planner.polisher (the
-    split quadrature at config.polish_samples nodes, breaks settled). The many starts
+    split quadrature at config.penalty.polish_samples nodes, breaks settled). The many starts
     search on the planner's cheaper rule; the few that are polished spend what they plan."""
     picked: list[SegmentPlan] = []
     for plan in ranked:
-        if len(picked) == planner.config.polish or not plan.success:
+        if len(picked) == planner.config.penalty.polish or not plan.success:
             break
         if all(np.max(np.abs(plan.trajectory.coefficients - other.trajectory.coefficients))
                > DISTINCT for other in picked):

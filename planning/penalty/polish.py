@@ -1,4 +1,4 @@
-"""Polishing (PlannerConfig.polish) of another segment planner's cold plans: the best
+"""Polishing (PenaltyOptions.polish) of another segment planner's cold plans: the best
 distinct ones solved again, warm, by the penalty loop with the split quadrature
 (planning.penalty.loop._polished; the penalty loop's own multi-start polishes itself)."""
 

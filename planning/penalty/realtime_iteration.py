@@ -1,4 +1,4 @@
-"""Real-time iterations (PlannerConfig.replan_iterations): a re-plan's warm solve capped at a
+"""Real-time iterations (PenaltyOptions.replan_iterations): a re-plan's warm solve capped at a
 few iterations of CasADi's feasible SQP (planning.penalty.backends "feasiblesqp"), whose
 iterate the arm may follow (planning.replanning decides), going on from it at the next obstacle sample."""
 
@@ -9,7 +9,7 @@ from planning.types import ITERATE
 
 
 def step(solver, args: dict) -> tuple[dict, backends.Stats | None]:
-    """One real-time iteration: feasiblesqp capped at config.replan_iterations from the warm
+    """One real-time iteration: feasiblesqp capped at config.penalty.replan_iterations from the warm
     start. Its result, with its own status if it converged, with status ITERATE if it stopped
     at the cap; stats None (the caller solves the NLP out from the same start) if the start
     was refused as infeasible or the point it returns leaves the constraints by more than

@@ -35,21 +35,21 @@ class _Solvers:
     cold: ca.Function
     warm: ca.Function
     parts: ca.Function
-    iterate: ca.Function | None = None  # feasiblesqp capped at config.replan_iterations
+    iterate: ca.Function | None = None  # feasiblesqp capped at config.penalty.replan_iterations
 
 
 def _build(nlp: PlanningNLP, config: PlannerConfig, name: str) -> _Solvers:
     problem = {"x": nlp.x, "p": nlp.p, "f": nlp.f, "g": nlp.g}
-    common = {"equality": nlp.lbg == nlp.ubg, "hessian": config.hessian,
+    common = {"equality": nlp.lbg == nlp.ubg, "hessian": config.penalty.hessian,
               "compile_code": config.compile_code}
-    cold = backends.solver(f"{name}_cold", config.solver, problem, warm=False,
-                           max_iter=config.max_iterations, **common)
-    warm = backends.solver(f"{name}_warm", config.solver, problem, warm=True,
-                           max_iter=config.warm_max_iterations, **common)
+    cold = backends.solver(f"{name}_cold", config.penalty.solver, problem, warm=False,
+                           max_iter=config.penalty.max_iterations, **common)
+    warm = backends.solver(f"{name}_warm", config.penalty.solver, problem, warm=True,
+                           max_iter=config.penalty.warm_max_iterations, **common)
     parts = ca.Function("objective_parts", [nlp.x, nlp.p], [nlp.energy, nlp.penalty])
-    iterate = None if config.replan_iterations is None else backends.solver(
+    iterate = None if config.penalty.replan_iterations is None else backends.solver(
         f"{name}_iterate", "feasiblesqp", problem, warm=True,
-        max_iter=config.replan_iterations, **common)
+        max_iter=config.penalty.replan_iterations, **common)
     return _Solvers(nlp, cold, warm, parts, iterate)
 
 
@@ -65,12 +65,12 @@ class Planner(ProblemNumbers):
 
     def __init__(self, model: TorqueModel, config: PlannerConfig | None = None):
         self.config = config or PlannerConfig()
-        if self.config.solver not in backends.SOLVERS:  # feasiblesqp cannot solve cold
+        if self.config.penalty.solver not in backends.SOLVERS:  # feasiblesqp cannot solve cold
             raise ValueError(f"solver must be one of {backends.SOLVERS}, got "
-                             f"'{self.config.solver}'")
-        if self.config.replan_iterations is not None and self.config.replan_iterations < 1:
+                             f"'{self.config.penalty.solver}'")
+        if self.config.penalty.replan_iterations is not None and self.config.penalty.replan_iterations < 1:
             raise ValueError(f"replan_iterations must be >= 1 or None, got "
-                             f"{self.config.replan_iterations}")
+                             f"{self.config.penalty.replan_iterations}")
         self.model = model
         self._relaxed: dict[tuple[int, ...], _Solvers] = {}
         self._limited: dict[tuple[int, ...], _Solvers] = {}
@@ -80,18 +80,18 @@ class Planner(ProblemNumbers):
     @functools.cached_property
     def polisher(self) -> Planner | None:
         """The planner that re-solves the best cold plans with the split quadrature at
-        config.polish_samples nodes (None without config.polish)."""
+        config.penalty.polish_samples nodes (None without config.penalty.polish)."""
         config = self.config
-        if not config.polish:
+        if not config.penalty.polish:
             return None
-        if not splits_evenly(config.polish_samples, config.power_breaks):
-            raise ValueError(f"polish_samples ({config.polish_samples}) must be a multiple of "
-                             f"power_breaks + 1 ({config.power_breaks + 1})")
+        if not splits_evenly(config.penalty.polish_samples, config.power_breaks):
+            raise ValueError(f"polish_samples ({config.penalty.polish_samples}) must be a "
+                             f"multiple of power_breaks + 1 ({config.power_breaks + 1})")
         # polishing is part of a cold plan: no re-plan deadline keeps its IPOPT rescue away
         return Planner(self.model, dataclasses.replace(
-            config, energy_quadrature="split", energy_samples=config.polish_samples,
-            polish=0, starts=1, replan_deadline_ms=None, replan_iterations=None,
-            replanner="fatrop"))
+            config.with_penalty(polish=0, replan_iterations=None), energy_quadrature="split",
+            energy_samples=config.penalty.polish_samples, starts=1, replan_deadline_ms=None,
+            replanner="penalty"))
 
     @property
     def layout(self) -> tuple:
@@ -123,7 +123,7 @@ class Planner(ProblemNumbers):
             relaxed = dataclasses.replace(self.config, torque_limit=None)
             self._relaxed[key] = _build(PlanningNLP(self.model, relaxed, key), self.config,
                                         "plan")
-            if self.config.compile_code and self.config.solver != "ipopt":
+            if self.config.compile_code and self.config.penalty.solver != "ipopt":
                 self._rescuer(self._relaxed[key])
         return self._relaxed[key]
 
@@ -156,7 +156,7 @@ class Planner(ProblemNumbers):
         x0: start point of a cold solve (default: initial_guess).
         rescue: a solve the fast solver cannot finish goes on with IPOPT (see _solve); False
         for a re-plan under a deadline, whose answer would come too late.
-        iterate: a warm solve first takes config.replan_iterations feasible-SQP iterations
+        iterate: a warm solve first takes config.penalty.replan_iterations feasible-SQP iterations
         and returns their iterate, status ITERATE, if it has not converged (see _solve).
         """
         alpha = self.config.penalty_weight if alpha is None else float(alpha)
@@ -189,7 +189,7 @@ class Planner(ProblemNumbers):
         if stats is None:  # not iterating, or the iterate is not one to follow: solve it out
             result = solver(**args)
             stats = backends.stats(solver, args, result)
-        if not stats.success and self.config.solver != "ipopt" and rescue:
+        if not stats.success and self.config.penalty.solver != "ipopt" and rescue:
             # a solve the fast solver could not finish: IPOPT from the same start point (not
             # for a re-plan under a deadline: it would come too late, measured up to 7 s,
             # warm or cold, and a torque-limited NLP's rescuer is compiled on first need)
@@ -207,9 +207,9 @@ class Planner(ProblemNumbers):
         (paper scenario) and warm (random scenarios: 60 iterations, then a cold restart)."""
         key = id(solvers)
         if key not in self._rescue:
-            rescue = dataclasses.replace(self.config, solver="ipopt", replan_iterations=None,
-                                         warm_max_iterations=max(
-                self.config.warm_max_iterations, RESCUE_WARM_ITERATIONS))
+            rescue = self.config.with_penalty(solver="ipopt", replan_iterations=None,
+                                              warm_max_iterations=max(
+                self.config.penalty.warm_max_iterations, RESCUE_WARM_ITERATIONS))
             self._rescue[key] = _build(solvers.nlp, rescue, "plan_rescue")
         return self._rescue[key]
 
@@ -228,7 +228,7 @@ class Planner(ProblemNumbers):
         lam_g = np.zeros(rows)
         kept = min(rows, len(warm.multipliers[0]))
         lam_g[:kept] = warm.multipliers[0][:kept]
-        if not self.config.dual_warm_start or warm.layout != self.layout:
+        if not self.config.penalty.dual_warm_start or warm.layout != self.layout:
             return {"x0": x}
         return {"x0": x, "lam_g0": lam_g, "lam_x0": warm.multipliers[1]}
 

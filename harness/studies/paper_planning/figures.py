@@ -89,7 +89,7 @@ def markdown(results: dict, config) -> str:
         f"Quartic joint polynomials, energy sum |P| sigma/N (N = {config.energy_samples}) plus "
         f"alpha max(0, lambda - d)^2 (alpha = {config.penalty_weight}, lambda = "
         f"{config.threshold} m) to the link *segments* at every predicted obstacle sample, "
-        f"{config.solver} with exact CasADi derivatives; re-planning per Algorithm 2 (the "
+        f"{config.penalty.solver} with exact CasADi derivatives; re-planning per Algorithm 2 (the "
         "paper's parametrization; the row 'default' is the default planner, which integrates "
         "the true energy: see below). alpha is raised "
         "x10 while a solution dips more than 1 mm below lambda (exterior penalty method); "

@@ -15,7 +15,7 @@
    point its capped solve returned (its own solution where that converged): the floor of
    any warm start.
 --split: the planner with the split energy quadrature (random_scenarios.SPLIT); --polish:
-the default's with its cold plans polished (random_scenarios.POLISHED: the re-plans start
+the default's with its cold plans polished (random_scenarios.polished: the re-plans start
 warm from a polished plan's motion; section 2, one warm solve, is the default's). Section 1
 also prints the replayed energy of the feasible executed motions, summed, and how many were
 infeasible.
@@ -83,7 +83,7 @@ def replans(baseline, config, setup: realtime.Setup) -> dict:
     cpu = np.array([r["cpu_ms"] for r in per_replan])
     solver = np.array([sum(c[2] for c in r["calls"]) for r in per_replan])
     calls = [c for r in per_replan for c in r["calls"]]
-    capped = [c for c in calls if c[0] and c[1] >= config.warm_max_iterations]
+    capped = [c for c in calls if c[0] and c[1] >= config.penalty.warm_max_iterations]
     return {
         "executed_energy_J_sum_of_feasible": executed, "infeasible_executions": infeasible,
         "cold_cpu_ms": realtime.distribution(cold),
@@ -136,7 +136,7 @@ def call_costs(baseline, config) -> dict:
     problem = {"x": nlp.x, "p": nlp.p, "f": nlp.f, "g": nlp.g}
     out = {}
     for plugin in ("fatrop", "ipopt", "sqpmethod", "feasiblesqp"):
-        for cap in (0, 1, 5, config.warm_max_iterations):
+        for cap in (0, 1, 5, config.penalty.warm_max_iterations):
             solver = backends.solver(f"anatomy_{plugin}_{cap}", plugin, problem,
                                      nlp.lbg == nlp.ubg, warm=True, max_iter=cap,
                                      hessian="exact", compile_code=True)
@@ -171,9 +171,10 @@ def main() -> None:
     variant.add_argument("--polish", action="store_true")
     args = options.parse_args()
     baseline = PinocchioModel(load_pinocchio(DEFAULT_ROBOT))
-    config = true_energy_config(compile_code=True, **(
-        random_scenarios.SPLIT if args.split else random_scenarios.POLISHED if args.polish
-        else {}))
+    config = true_energy_config(compile_code=True, **(random_scenarios.SPLIT if args.split
+                                                      else {}))
+    if args.polish:
+        config = random_scenarios.polished(config)
     setup = random_scenarios.setup(args)
     print(json.dumps({"call_costs": call_costs(baseline, config)}, indent=1))
     print(json.dumps({"replans": replans(baseline, config, setup)}, indent=1))

@@ -8,7 +8,7 @@ N = 20) against the best of a global check: each of 8 start points alone, and th
 starts at Gauss N = 40; beside it the split quadrature (Gauss between the power's sign
 changes, planning.formulation.breaks: 7 breaks, 3 nodes each), 4 starts; and polished: 8 starts on the
 default's rule, the best 2 distinct plans solved again with the split rule at 40 nodes
-(config.polish). Printed per scenario, then how many of the default's, the split and the
+(config.penalty.polish). Printed per scenario, then how many of the default's, the split and the
 polished plans are within 0.5 % of the best of all of them.
 
     python -m harness.studies.realtime.oneshot [--scenarios 20] [--seed 2026]
@@ -54,7 +54,7 @@ def main() -> None:
               "split": segment_planner(baseline,
                                        dataclasses.replace(config, **random_scenarios.SPLIT)),
               "polished": segment_planner(baseline,
-                                          dataclasses.replace(config, **random_scenarios.POLISHED))}
+                                          random_scenarios.polished(config))}
 
     def replayed(plan, planner):
         return realtime.replayed_energy(plant, baseline, _execution(plan), case, planner.config)

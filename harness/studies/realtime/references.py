@@ -69,7 +69,7 @@ def objective(anytime, plan, t_begin: float, duration: float, goal, forecast) ->
     links = anytime.check(plan.trajectory, times[keep], forecast.centres[keep]).links
     violation = float(np.sum(np.maximum(config.threshold - links, 0.0)))
     unsafe = config.threshold - float(np.min(links, initial=np.inf)) > config.penalty_tolerance
-    return unsafe or not plan.success, plan.energy + config.elastic_weight * violation
+    return unsafe or not plan.success, plan.energy + config.anytime.elastic_weight * violation
 
 
 def _gap(ours: tuple, best: tuple) -> float:
@@ -84,8 +84,9 @@ def causal_multistart(baseline, config: PlannerConfig, cases: list[Scenario],
                       starts: int) -> list[Execution]:
     """(ii): Algorithm 2 whose every re-plan is the best of the warm start and `starts` cold
     start points, each run to convergence."""
-    reference = dataclasses.replace(config, replan_starts=starts,
-                                    replan_budget_ms=UNLIMITED_MS, replan_deadline_ms=None)
+    reference = dataclasses.replace(
+        config.with_anytime(replan_starts=starts, replan_budget_ms=UNLIMITED_MS),
+        replan_deadline_ms=None)
     planner = segment_planner(baseline, reference)
     return [execute(planner, case) for case in cases]
 
@@ -93,7 +94,7 @@ def causal_multistart(baseline, config: PlannerConfig, cases: list[Scenario],
 def one_shot(baseline, config: PlannerConfig, cases: list[Scenario],
              starts: int) -> list[Execution]:
     """(iii): one multi-start plan per case with the obstacle's whole path known, followed."""
-    planner = segment_planner(baseline, dataclasses.replace(config, cold_budget_ms=UNLIMITED_MS))
+    planner = segment_planner(baseline, config.with_anytime(cold_budget_ms=UNLIMITED_MS))
     runs = []
     for case in cases:
         times = case.obstacle.sample_times
