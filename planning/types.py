@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -72,6 +72,7 @@ class Segment:
     realtime: bool = False
 
 
+@runtime_checkable
 class SegmentPlanner(Protocol):
     """What plans one segment (the penalty loop, planning.penalty.planner; the anytime SQP,
     planning.anytime.planner): Algorithm 2 takes either and never looks inside."""
