@@ -102,9 +102,8 @@ def execute(planner: SegmentPlanner, scenario: Scenario, replan: bool = True,
             if new.status.endswith(LATE):  # too late to follow, yet the best start point
                 latest = new
             # keep following the last good plan; a re-plan that failed otherwise is tried
-            # again at the next sample: that plan never saw this forecast (measured: a
-            # re-plan refused 0.45 mrad beyond a limit, not retried while the prediction
-            # stayed the same, left the arm 2.6 cm from the obstacle)
+            # again at the next sample: that plan never saw this forecast
+            # (docs/realtime.md, 'planning.replanning')
             continue
         plan = latest = new
         planned_with = forecast
@@ -135,8 +134,7 @@ def _stale(planner: SegmentPlanner, plan: SegmentPlan, forecast: ObstacleForecas
     """True if the plan must be re-planned for this forecast: it comes within the threshold
     (Algorithm 2), or it was bent round the obstacle (a positive penalty) and now keeps more
     than the threshold everywhere: the obstacle has moved off its detour, whose energy a
-    re-plan can save (measured: a first plan made against the obstacle standing still, never
-    re-planned because it stayed clear, spent 5.06 J where a re-planned motion spent 0.23 J)."""
+    re-plan can save (docs/realtime.md, 'planning.replanning')."""
     clearance = predicted_clearance(planner.config.geometry, plan.trajectory, forecast)
     threshold = planner.config.threshold
     return clearance < threshold - TRIGGER_TOLERANCE or \

@@ -55,8 +55,8 @@ def executed_energy(model: TorqueModel, execution: Execution, t: np.ndarray) -> 
     """Integral of |P| dt (J) of the concatenated segments, each on the points of the grid t
     inside the interval it was followed plus that interval's ends, from its own polynomial.
     A re-plan keeps position and velocity but changes the acceleration, so the power jumps
-    there; a trapezoid across the jump misses by half a step times it (measured: the xArm7's
-    swaying crossing, 123 re-plans, 0.12 J below the physical bound of 107.66 J)."""
+    there; a trapezoid across the jump misses by half a step times it
+    (docs/realtime.md, 'planning.result')."""
     segments = execution.segments
     starts = [s.trajectory.t_begin for s in segments]
     total = 0.0

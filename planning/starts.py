@@ -37,9 +37,9 @@ def start_points(planner: ProblemNumbers, q0, qd0, duration: float, goal, count:
 def rank(planner: ProblemNumbers, plan: SegmentPlan) -> tuple[bool, bool, float]:
     """Sort key of candidate plans: converged first, then within the joint limits (a cold
     plan is returned unchecked when its rounds end beyond one, planning.replanning), then the
-    lower energy actually spent (planning.formulation.energy.dense_energy, not the plan's own quadrature:
-    measured on the random scenarios, split N = 24 plans' quadrature under-counted it by up to
-    6 %, enough to rank a dearer start first) plus the clearance penalty (J)."""
+    lower energy actually spent (planning.formulation.energy.dense_energy, not the plan's own
+    quadrature, which can under-count it enough to rank a dearer start first
+    (docs/realtime.md, 'planning.starts')) plus the clearance penalty (J)."""
     config = planner.config
     beyond = limit_excess(plan.trajectory, config.lower, config.upper) > LIMIT_TOLERANCE
     return (not plan.success, beyond, dense_energy(planner.model, plan.trajectory) + plan.penalty)

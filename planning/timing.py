@@ -23,9 +23,8 @@ class Stopwatch:
 
 def collection_deferred(plan):
     """`plan` with Python's cyclic garbage collector held off while it runs (and set back as
-    it was after): a collection inside a plan frees whatever cycles the process left,
-    measured in the realtime study's deadline run at 39 and 50 ms of a re-plan's CPU (earlier
-    planners' compiled functions). It runs at an allocation between plans instead."""
+    it was after): a collection inside a plan frees whatever cycles the process left, tens
+    of ms (docs/realtime.md, 'planning.timing'). It runs at an allocation between plans instead."""
 
     @functools.wraps(plan)
     def deferred(*args, **kwargs):

@@ -245,8 +245,8 @@ def run(args) -> int:
 
 def infeasible(problems, config: PlannerConfig) -> str:
     """The error line of an execution that is not feasible; with the anytime SQP it says
-    what its re-plans had: their quality is what that CPU buys on this machine (the Panda's
-    default plan measured feasible at 10 ms one day, infeasible the next, feasible at 20)."""
+    what its re-plans had: their quality is what that CPU buys on this machine
+    (docs/realtime.md, 'harness.commands.plan')."""
     message = "no feasible plan: " + "; ".join(problems)
     if uses_anytime(config):
         message += (f" (the anytime SQP re-planned within {config.anytime.replan_budget_ms:g} ms of "

@@ -16,8 +16,7 @@ class Clock:
     for reproducible runs (AnytimeOptions.iteration_ms), iteration_ms per unit of work ticked
     whatever CPU it took: an SQP iteration (a QP and an evaluation), a second-order
     correction (another), and ROUND_ITERATIONS for each round of a plan (its screening,
-    checks and bookkeeping; measured on the Lynxmotion: ~1 ms a round, ~0.45 ms an
-    iteration)."""
+    checks and bookkeeping, about two iterations' CPU: (docs/realtime.md, 'planning.anytime.budget'))."""
 
     ROUND_ITERATIONS = 2
 
@@ -63,9 +62,8 @@ class RoundCosts:
 
     def check_ms(self, clock: Clock) -> float:
         """What to keep from a solve's budget for each iterate it accepts: its check in the
-        choice after the solve (measured in the realtime study: re-plans that ran to their
-        budget accepted up to 36 iterates, and choosing among them took up to 0.9 ms, past
-        the most recent choices' CPU the budget had kept)."""
+        choice after the solve (a solve may accept many iterates:
+        (docs/realtime.md, 'planning.anytime.budget'))."""
         return max(self.check, default=0.0) if clock.nominal is None else 0.0
 
     def record_ranking(self, clock: Clock, ms: float) -> None:

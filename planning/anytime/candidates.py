@@ -45,8 +45,8 @@ def choose(points: list[Point], motion, check, config: PlannerConfig,
     slacks sit (v = max(0, lambda - D) of the rows its solve had). They are checked from the
     lowest objective up: the first that keeps the threshold and the hard limits is the best
     (any later one has a larger objective). Once a candidate within the hard limits misses
-    the threshold, a later one can only be better by keeping it (measured: 220 of 382
-    replayed re-plans ended on such a candidate, every iterate checked): one whose own rows
+    the threshold, a later one can only be better by keeping it (a common end of a re-plan,
+    (docs/realtime.md, 'planning.anytime.candidates')): one whose own rows
     already miss it is passed over unchecked, the others have their clearance alone checked
     first."""
     best, checked = None, 0

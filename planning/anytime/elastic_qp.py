@@ -27,7 +27,7 @@ SIGN_FLOOR = 1e-9  # a power sample this small (relative to the largest) keeps i
 # and one whose |P| is below HOLD x its largest linear change in the trust region
 HOLD = 0.1
 # inequality rows no step in the trust region can bring to a bound leave the QP (exact: each
-# would be inactive; on 382 replayed re-plans DAQP's rows 66 -> 52 at the median)
+# would be inactive; a smaller QP (docs/realtime.md, 'planning.anytime.elastic_qp'))
 DROP_UNREACHABLE = True
 
 
@@ -136,10 +136,8 @@ def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
     the step. A slack keeps its rows when its margin (|P|, |D - lambda|) is below HOLD
     times its largest linear change in the trust region (|grad|_1 radius); one whose
     linearized margin changes sign at the step all the same goes back, and the QP is
-    solved again. Measured on 8 random crossings' re-plans (Lynxmotion), with the power
-    samples held: DAQP 250 -> 160 us a step, 1 % of the steps solved twice (fixing every
-    sign: 40 %), re-plan CPU median 2.40 -> 1.99 ms; with the clearance rows held too
-    (391 replayed re-plans): DAQP 127 -> 47 us a step. The array work is compiled
+    solved again (fewer rows, rarely a second solve: (docs/realtime.md, 'planning.anytime.elastic_qp')).
+    The array work is compiled
     (planning.anytime.qp_kernels)."""
     nc, spent, g, jac, x = layout.nc, 0.0, point.g, point.jac, point.x
     value, side, rate, slope, weight, held = kernels.branches(

@@ -45,10 +45,8 @@ def through_sites(nlp, lam, coefficients) -> tuple[ca.SX, ca.SX, ca.SX]:
     site is differentiated in its own arguments by one call of its derivative function (value,
     Jacobian, Hessian of seed'output), the seed being d(lam'g)/dy. CasADi's AD through the
     whole rows takes one forward-over-adjoint sweep of every site per coefficient instead
-    (18 on the UR5, where a pose's distances vary in 6 joint angles). Measured, one compiled
-    evaluation: UR5 1.4-1.7 -> 0.31-0.46 ms (2.5-3.5 -> 0.59-0.76 ms with torque limits);
-    the Lynxmotion's with torque limits was over compiled.MAX_SOURCE_BYTES and ran in
-    CasADi's virtual machine at 0.76-0.81 ms, now compiled at 39 us. The sites' arguments
+    (18 on the UR5, where a pose's distances vary in 6 joint angles): several times slower
+    (docs/realtime.md, 'planning.anytime.local_model'). The sites' arguments
     must be affine in the coefficients and the lifted rows linear in y (both checked)."""
     y = ca.vertcat(*(site.output for site in nlp.sites))
     lagrangian = ca.dot(lam, nlp.lifted_g)

@@ -60,7 +60,7 @@ class SafetyCheck:
     def energy(self, trajectory: PolynomialTrajectory) -> float:
         """The integral of |P| dt (J) by the trapezoid rule at ENERGY_POINTS even points
         (planning.formulation.energy.dense_energy's rule, compiled: what ranks the starts of a cold
-        plan without ~0.7 ms of numpy torques per start)."""
+        plan without numpy torques per start: (docs/realtime.md, 'planning.anytime.safety'))."""
         (out,) = self._energy(trajectory.coefficients.ravel(order="F"), [trajectory.duration])
         return float(out[0])
 

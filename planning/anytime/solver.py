@@ -74,8 +74,8 @@ class Anytime(ProblemNumbers):
         self.problem(goal, False)
         if self.config.torque_limit is not None:
             self.problem(goal, True)
-        # a first plan pays for loading the code and the solvers' first calls (measured
-        # ~9 ms on the Lynxmotion): one throw-away plan, from the goal to itself
+        # a first plan pays for loading the code and the solvers' first calls
+        # (docs/realtime.md, 'planning.anytime.solver'): one throw-away plan, from the goal to itself
         lower, upper = np.asarray(self.config.lower), np.asarray(self.config.upper)
         start = np.clip(np.asarray(goal, float) + 0.1, lower, upper)
         far = ObstacleForecast(np.array([0.5, 1.0]), np.full((2, 3), 10.0))

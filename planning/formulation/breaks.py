@@ -1,8 +1,7 @@
 """Where a motion's power changes sign: the breakpoints of the "split" energy quadrature.
 
 |P| has a kink wherever P crosses zero, and a quadrature rule with nodes across a kink
-converges slowly (measured on the random scenarios: Gauss N = 20 plans spending
-0.5-3.2 % more than Gauss N = 40 ones on the same detour). Between consecutive sign
+converges slowly (docs/realtime.md, 'planning.formulation.breaks'). Between consecutive sign
 changes |P| is as smooth as the motion, so Gauss-Legendre on each such interval is
 accurate with few nodes. The breakpoints are found on a reference motion (a start point
 or the previous solution) and the solve is repeated until they are those of its own

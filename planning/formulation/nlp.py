@@ -62,8 +62,7 @@ class PlanningNLP:
                  goal_limits: tuple[int, ...] | None = None, elastic: bool = False):
         """goal_limits: the joints whose goal-limit quotient rows are built (default: all);
         a planner builds them only for joints whose goal is on a limit (elsewhere they are
-        free rows, which still cost the solver: measured on the UR5, warm re-plan median
-        15.2 -> 14.3 ms without them).
+        free rows, which still cost the solver (docs/realtime.md, 'planning.formulation.nlp')).
         elastic: clearance as rows D_link,k + v_link,k >= lambda with slacks v >= 0 (lbx)
         weighing alpha w_k v_link,k in the objective (an exact L1 penalty: a fixed weight
         above the rows' multipliers gives the constrained optimum, and where no motion
@@ -256,9 +255,8 @@ def _torque_function(model: TorqueModel) -> tuple[tuple, bool]:
     return (function, (q, qd, qdd), tau), inline
 
 
-# Measured (CasADi 3.8, paper quadrature N = 10, 24 obstacle slots): the Lynxmotion's RNEA
-# (184 instructions) inlined is 4.0 MB of C and solves ~10 % faster than with call nodes;
-# the UR5's (642) inlined is 19.5 MB (gcc -O1: 6 min, 3.4 GB), with call nodes 5.9 MB (1 min)
+# a small torque model is inlined (faster solves), a large one called at each sample (its C
+# would be too large to compile) (docs/realtime.md, 'planning.formulation.nlp')
 INLINE_INSTRUCTIONS = 400
 
 

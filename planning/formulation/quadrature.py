@@ -1,8 +1,7 @@
 """Where the power is sampled and how the samples are weighted: E = sigma sum_i w_i |P(s_i)|.
 
 - "paper": the right Riemann sum of eq. (18), s_i = i/N, w_i = 1/N. With N = 10 the
-  optimizer can place power peaks between the samples (measured: the N = 10 optimum
-  spends more true energy than the N = 40 one).
+  optimizer can place power peaks between the samples (docs/realtime.md, 'planning.formulation.quadrature').
 - "gauss": Gauss-Legendre nodes and weights on [0, 1]; exact for polynomial power of
   degree 2N - 1 (|P| has kinks where P changes sign, so convergence there is slower).
 - "simpson": composite Simpson on N (odd) equally spaced points including both ends.

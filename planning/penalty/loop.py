@@ -43,10 +43,8 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
 
     Without a warm start, the problem with the obstacle is solved directly from a start
     point x0 (default: the planner's initial guess), whose motion is the screening
-    reference. (Solving the unobstructed optimum first and going on from it, as before,
-    measured on the UR5: 24 iterations, then a warm obstacle solve stalling at its 60-
-    iteration cap, then a cold restart, 350 ms; directly: 18 + 6 iterations, 85-113 ms; on
-    the Lynxmotion 80-95 -> 50-66 ms.) Returns
+    reference (solving the unobstructed optimum first and going on from it was slower,
+    (docs/realtime.md, 'planning.penalty.loop')). Returns
     the plan and the wall and CPU time (ms, planning thread) of the whole call, end to end:
     solves, screening, checks and bookkeeping.
     """
@@ -58,8 +56,7 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     if warm is None and forecast is not None:
         x0 = planner.initial_guess(q0, qd0, duration, goal) if x0 is None else x0
         # each start point of its own: the obstacle problem solved from it directly (solving
-        # the unobstructed problem first would bring every start to the same optimum,
-        # measured: 8 start points, one plan on most random scenarios)
+        # the unobstructed problem first would bring every start to the same optimum)
         reference = planner.trajectory(x0, q0, qd0, t_begin, duration)
         subset = screen(forecast, reference, config.geometry, config.threshold,
                         config.obstacle_slots).subset
@@ -85,8 +82,7 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
                     _within_limits(plan, config, replan).success:
                 return plan, *clock.read()
             # it dips below the threshold or leaves a limit: solved out from it, as without
-            # real-time iterations (measured: following such iterates, the threshold was
-            # broken by up to 6.6 cm on 3 of the 20 random scenarios)
+            # real-time iterations (docs/realtime.md, 'planning.penalty.loop')
             iterate, warm, seen = False, plan, None
             continue
         if forecast is None or alpha >= config.penalty.max_weight or not plan.success:
@@ -110,8 +106,8 @@ def _keeps_clear(planner: Planner, plan: SegmentPlan, forecast: ObstacleForecast
 
 def _within_limits(plan: SegmentPlan, config, warm: bool) -> SegmentPlan:
     """The plan, unsuccessful if it leaves the joint limits by more than LIMIT_TOLERANCE: its
-    rounds (_screened) can end before the limits at its turning points settle (measured: a
-    re-plan 1.4 mrad beyond a limit followed in Algorithm 2, its executed motion infeasible).
+    rounds (_screened) can end before the limits at its turning points settle
+    (docs/realtime.md, 'planning.penalty.loop').
     Applied to warm plans (re-plans, polishing, settling), whose callers keep the plan they
     started from; a cold plan is returned as it is and the result's checks report it."""
     if not warm or not plan.success:
@@ -131,8 +127,7 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
     from each start point of planning.starts), ranked converged first, then within the joint
     limits, then by the energy they spend (planning.starts.rank); total wall and CPU ms; all
     the cold plans. With the split quadrature only the best start's plan is re-solved until
-    its breaks settle (measured on the random scenarios: settling every start's took 2-10
-    times the CPU of a Gauss plan).
+    its breaks settle (settling every start's is costly: (docs/realtime.md, 'planning.penalty.loop')).
     With config.penalty.polish the best distinct plans are re-solved by planner.polisher (see
     _polished)."""
     count = planner.config.starts if count is None else count

@@ -22,8 +22,7 @@ def step(solver, args: dict) -> tuple[dict, backends.Stats | None]:
         return result, stats
     if stats.status == "No_Feasible_Initialization":
         return result, None
-    # an iterate, or the start itself where its trust region refused the first step (as it
-    # can: 145 of 971 calls on the bench's random scenarios): the same motion then, and the
-    # next sample tries again on its own problem (solving those out instead, measured in the
-    # same 20 scenarios: re-plan CPU p95 22 -> 236 ms)
+    # an iterate, or the start itself where its trust region refused the first step: the
+    # same motion then, and the next sample tries again on its own problem (solving those
+    # out instead costs far more CPU: (docs/realtime.md, 'planning.penalty.realtime_iteration'))
     return result, backends.Stats(True, ITERATE, stats.iterations)

@@ -21,8 +21,8 @@ from planning.formulation.trajectory import PolynomialTrajectory
 from planning.penalty import backends, realtime_iteration
 from planning.types import ObstacleForecast, SegmentPlan
 
-# measured on random scenarios: a warm IPOPT rescue still unconverged after 60 iterations ran
-# on to 300 (390 ms) or declared the problem infeasible; a cold restart is cheaper
+# a warm IPOPT rescue still unconverged after this many iterations is better restarted cold
+# (docs/realtime.md, 'planning.penalty.solver')
 RESCUE_WARM_ITERATIONS = 60
 TORQUE_GRID = 65  # points of normalized time where a segment's torque is checked
 
@@ -60,7 +60,7 @@ class Planner(ProblemNumbers):
     runs the NLP without torque rows; only when that optimum's torque exceeds the limit
     on a dense grid is the NLP with torque rows (built on first need) solved. A relaxed
     optimum that respects the limits is the constrained optimum, so the common case pays
-    nothing (measured: the torque rows double a re-plan's time).
+    nothing (the torque rows are costly: (docs/realtime.md, 'planning.penalty.solver')).
     """
 
     def __init__(self, model: TorqueModel, config: PlannerConfig | None = None):
@@ -111,7 +111,7 @@ class Planner(ProblemNumbers):
     def prepare(self, goal) -> None:
         """Build the solvers for this goal ahead of the solves (planning.replanning does so
         before its clock starts): generating an NLP's code and its IPOPT rescuer's takes
-        seconds (measured 2.9 s for the rescuer on the Lynxmotion, 6 s for both), which
+        seconds (docs/realtime.md, 'planning.penalty.solver'), which
         must not land inside a plan's or a re-plan's time."""
         self._relaxed_for(goal)
 
@@ -191,8 +191,8 @@ class Planner(ProblemNumbers):
             stats = backends.stats(solver, args, result)
         if not stats.success and self.config.penalty.solver != "ipopt" and rescue:
             # a solve the fast solver could not finish: IPOPT from the same start point (not
-            # for a re-plan under a deadline: it would come too late, measured up to 7 s,
-            # warm or cold, and a torque-limited NLP's rescuer is compiled on first need)
+            # for a re-plan under a deadline: it would come too late, seconds
+            # (docs/realtime.md, 'planning.penalty.solver'))
             rescue = self._rescuer(solvers)
             solver = rescue.cold if warm is None else rescue.warm
             result = solver(**args)
@@ -202,9 +202,9 @@ class Planner(ProblemNumbers):
         return self._segment(solvers, result, stats, elapsed, segment)
 
     def _rescuer(self, solvers: _Solvers) -> _Solvers:
-        """IPOPT (built on first need, compiled like the fast solver) on the same NLP:
-        measured, fatrop at a raised penalty weight can stop short of convergence, cold
-        (paper scenario) and warm (random scenarios: 60 iterations, then a cold restart)."""
+        """IPOPT (built on first need, compiled like the fast solver) on the same NLP: fatrop
+        at a raised penalty weight can stop short of convergence
+        (docs/realtime.md, 'planning.penalty.solver')."""
         key = id(solvers)
         if key not in self._rescue:
             rescue = self.config.with_penalty(solver="ipopt", replan_iterations=None,
