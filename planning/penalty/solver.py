@@ -104,8 +104,8 @@ class Planner(ProblemNumbers):
     @functools.cached_property
     def nlp(self) -> PlanningNLP:
         """The NLP with every goal-limit row and no torque rows, for callers that evaluate its
-        functions with `parameters` and `bounds` (harness.paper.planning.baselines); the solves use
-        the NLP for their goal (_relaxed_for)."""
+        functions with `parameters` and `bounds` (the paper reproduction's trust-constr
+        baseline); the solves use the NLP for their goal (_relaxed_for)."""
         return PlanningNLP(self.model, dataclasses.replace(self.config, torque_limit=None))
 
     def prepare(self, goal) -> None:
