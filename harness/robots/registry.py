@@ -42,7 +42,7 @@ class Robot:
     # identification libraries `identify` offers for it, the first its default ("kinematic":
     # the base atoms generated from its kinematics, for any arm)
     libraries: tuple[str, ...] = ("kinematic",)
-    solver: str = "ipopt"  # the planner's NLP solver (planning.backends)
+    solver: str = "ipopt"  # the planner's NLP solver (planning.penalty.backends)
     # reproductions the bench's sections run for this robot beside their common work
     # (harness.sections.paper: "paper", the paper's Tables III-IV and planning scenario)
     extras: tuple[str, ...] = ()

@@ -1,31 +1,25 @@
-"""One segment of Algorithm 2, planned: the penalty loop (paper III.G: alpha raised while the
-plan dips below the threshold, obstacle samples screened, limits at the turning points
-settled), or the anytime elastic SQP (planning.anytime) when PlannerConfig.replanner is
-"sqp"; and the multi-start cold plan, polished or not.
+"""One segment of Algorithm 2, planned by the penalty loop (paper III.G: alpha raised while
+the plan dips below the threshold, obstacle samples screened, limits at the turning points
+settled); and the multi-start cold plan, polished or not.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import time
 
 import numpy as np
 
-from planning import breaks
-from planning.anytime import Anytime
-from planning.budget import Clock, Stopwatch, collection_deferred
-from planning.clearance import link_clearances
-from planning.limits import LIMIT_TOLERANCE, limit_excess
-from planning.realtime_iteration import ITERATE
-from planning.screening import screen
-from planning.solver import ObstacleForecast, Planner, SegmentPlan
+from planning.formulation import breaks
+from planning.formulation.clearance import predicted_clearance
+from planning.formulation.limits import LIMIT_TOLERANCE, limit_excess
+from planning.formulation.screening import screen
+from planning.penalty.solver import Planner
 from planning.starts import rank, start_points
+from planning.timing import Stopwatch, collection_deferred
+from planning.types import DEADLINE, ITERATE, LATE, ObstacleForecast, SegmentPlan
 
 LIMIT_SETTLED = 1e-8  # rad: a plan this close to its limits (dense grid) needs no re-solve
 UNCHANGED = 1e-9  # rad: a re-solve that moves no coefficient further has settled
-DEADLINE = "deadline exceeded"  # status of a re-plan abandoned at its deadline
-LATE = " (converged late)"  # ... whose last solve succeeded (converged, or a real-time
-# iterate within the constraints): the next re-plan starts from it
 
 
 @collection_deferred
@@ -33,45 +27,27 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
                  forecast: ObstacleForecast | None, warm: SegmentPlan | None = None,
                  rounds: int = 4, x0: np.ndarray | None = None,
                  deadline_ms: float | None = None, settle_breaks: bool = True,
-                 iterate: bool = False, budget_ms: float | None = None
-                 ) -> tuple[SegmentPlan, float, float]:
+                 iterate: bool = False) -> tuple[SegmentPlan, float, float]:
     """Plan one segment: screened solves (see _screened), with the penalty weight raised
     while the solution still dips below the threshold (exterior penalty method).
 
     deadline_ms: CPU time (ms) after which no further solve starts; a plan that took longer
     is returned unsuccessful with status DEADLINE (it would arrive too late to be followed).
     Under a deadline no solve goes on with IPOPT when the fast solver cannot finish it (its
-    answer would come too late: planning.solver.Planner._solve).
+    answer would come too late: planning.penalty.solver.Planner._solve).
     settle_breaks: re-solve until the split quadrature's breaks are the plan's own power sign
     changes (False: solved once with those of the start; plan_multistart settles the best).
-    budget_ms: CPU budget of a cold plan by the anytime SQP (config.replanner "sqp"; default
-    config.cold_budget_ms; a re-plan's is config.replan_budget_ms), which plans every segment.
-    iterate: a re-plan of Algorithm 2 with real-time iterations (config.replan_iterations):
+    iterate: a re-plan of Algorithm 2 with real-time iterations (config.penalty.replan_iterations):
     its warm solve is capped and its iterate (status ITERATE) returned if it keeps the
     threshold and the limits; otherwise it is solved out from there as without them.
 
     Without a warm start, the problem with the obstacle is solved directly from a start
     point x0 (default: the planner's initial guess), whose motion is the screening
-    reference. (Solving the unobstructed optimum first and going on from it, as before,
-    measured on the UR5: 24 iterations, then a warm obstacle solve stalling at its 60-
-    iteration cap, then a cold restart, 350 ms; directly: 18 + 6 iterations, 85-113 ms; on
-    the Lynxmotion 80-95 -> 50-66 ms.) Returns
+    reference (solving the unobstructed optimum first and going on from it was slower,
+    (docs/realtime.md, 'planning.penalty.loop')). Returns
     the plan and the wall and CPU time (ms, planning thread) of the whole call, end to end:
     solves, screening, checks and bookkeeping.
     """
-    if uses_anytime(planner.config):
-        budget = planner.config.replan_budget_ms if warm is not None else budget_ms
-        budget = planner.config.cold_budget_ms if budget is None else budget
-        if deadline_ms is not None:
-            budget = min(budget, deadline_ms)
-        anytime = anytime_of(planner)
-        anytime.prepare(goal)  # built once: not part of a plan's time
-        if warm is not None and planner.config.replan_starts:
-            clock = Stopwatch()
-            plan = anytime.best_of(q0, qd0, t_begin, duration, goal, forecast, warm,
-                                   planner.config.replan_starts, budget)
-            return plan, *clock.read()
-        return anytime.plan(q0, qd0, t_begin, duration, goal, forecast, warm, x0, budget)
     planner.prepare(goal)  # the solvers for this goal, built once: not part of a plan's time
     clock = Stopwatch()
     config = planner.config
@@ -80,8 +56,7 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     if warm is None and forecast is not None:
         x0 = planner.initial_guess(q0, qd0, duration, goal) if x0 is None else x0
         # each start point of its own: the obstacle problem solved from it directly (solving
-        # the unobstructed problem first would bring every start to the same optimum,
-        # measured: 8 start points, one plan on most random scenarios)
+        # the unobstructed problem first would bring every start to the same optimum)
         reference = planner.trajectory(x0, q0, qd0, t_begin, duration)
         subset = screen(forecast, reference, config.geometry, config.threshold,
                         config.obstacle_slots).subset
@@ -94,7 +69,7 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
     else:
         seen = None
     budget = np.inf if deadline_ms is None else deadline_ms
-    iterate = iterate and replan and config.replan_iterations is not None
+    iterate = iterate and replan and config.penalty.replan_iterations is not None
     while True:
         plan, lowest = _screened(planner, q0, qd0, t_begin, duration, goal, forecast, warm,
                                  seen, alpha, rounds, lambda: clock.cpu_ms() > budget,
@@ -107,15 +82,14 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
                     _within_limits(plan, config, replan).success:
                 return plan, *clock.read()
             # it dips below the threshold or leaves a limit: solved out from it, as without
-            # real-time iterations (measured: following such iterates, the threshold was
-            # broken by up to 6.6 cm on 3 of the 20 random scenarios)
+            # real-time iterations (docs/realtime.md, 'planning.penalty.loop')
             iterate, warm, seen = False, plan, None
             continue
-        if forecast is None or alpha >= config.max_penalty_weight or not plan.success:
+        if forecast is None or alpha >= config.penalty.max_weight or not plan.success:
             return _within_limits(plan, config, replan), *clock.read()
         if _keeps_clear(planner, plan, forecast, lowest):
             return _within_limits(plan, config, replan), *clock.read()
-        alpha = min(alpha * config.penalty_growth, config.max_penalty_weight)
+        alpha = min(alpha * config.penalty.growth, config.penalty.max_weight)
         warm, seen = plan, None
 
 
@@ -126,14 +100,14 @@ def _keeps_clear(planner: Planner, plan: SegmentPlan, forecast: ObstacleForecast
     if forecast is None:
         return True
     if lowest is None:
-        lowest = _predicted_clearance(planner, plan, forecast)
+        lowest = predicted_clearance(planner.config.geometry, plan.trajectory, forecast)
     return lowest >= planner.config.threshold - planner.config.penalty_tolerance
 
 
 def _within_limits(plan: SegmentPlan, config, warm: bool) -> SegmentPlan:
     """The plan, unsuccessful if it leaves the joint limits by more than LIMIT_TOLERANCE: its
-    rounds (_screened) can end before the limits at its turning points settle (measured: a
-    re-plan 1.4 mrad beyond a limit followed in Algorithm 2, its executed motion infeasible).
+    rounds (_screened) can end before the limits at its turning points settle
+    (docs/realtime.md, 'planning.penalty.loop').
     Applied to warm plans (re-plans, polishing, settling), whose callers keep the plan they
     started from; a cold plan is returned as it is and the result's checks report it."""
     if not warm or not plan.success:
@@ -153,40 +127,21 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
     from each start point of planning.starts), ranked converged first, then within the joint
     limits, then by the energy they spend (planning.starts.rank); total wall and CPU ms; all
     the cold plans. With the split quadrature only the best start's plan is re-solved until
-    its breaks settle (measured on the random scenarios: settling every start's took 2-10
-    times the CPU of a Gauss plan).
-    With config.polish the best distinct plans are re-solved by planner.polisher (see
+    its breaks settle (settling every start's is costly: (docs/realtime.md, 'planning.penalty.loop')).
+    With config.penalty.polish the best distinct plans are re-solved by planner.polisher (see
     _polished)."""
     count = planner.config.starts if count is None else count
     split = planner.config.energy_quadrature == "split"
     if planner.polisher is not None:
         planner.polisher.prepare(goal)  # its solvers' build is not part of a plan's time
     plans, wall, cpu = [], 0.0, 0.0
-    sqp = uses_anytime(planner.config)
-    entered, budget = time.thread_time(), Clock(planner.config.iteration_ms)
-    for i, x0 in enumerate(start_points(planner, q0, qd0, duration, goal, count)):
-        # the anytime SQP's starts share one budget: each gets an even share of what the
-        # starts before it left (their checks and bookkeeping run past their iterations'
-        # budget), and none starts without the CPU a round of a plan has recently taken;
-        # under CPU clocks what is left is net of all the CPU so far (the start points
-        # included) and of the ranking after the starts (the most of recent ones': the cold
-        # max was 25.29 ms against 25 without them, realtime study at 3c12065)
-        used = cpu
-        if sqp and budget.nominal is None:
-            used = 1e3 * (time.thread_time() - entered) + \
-                anytime_of(planner).rounds.ranking_ms(budget)
-        share = (planner.config.cold_budget_ms - used) / (count - i)
-        if sqp and plans and share < anytime_of(planner).round_ms():
-            break
+    for x0 in start_points(planner, q0, qd0, duration, goal, count):
         plan, ms, cpu_ms = plan_segment(planner, q0, qd0, t_begin, duration, goal, forecast,
-                                        x0=x0, settle_breaks=not split, budget_ms=share)
+                                        x0=x0, settle_breaks=not split)
         plans.append(plan)
         wall, cpu = wall + ms, cpu + cpu_ms
     clock = Stopwatch()  # the ranking (a dense integral per plan) and polishing are plan time
-    ranked = sorted(plans, key=anytime_of(planner).rank if sqp else
-                    (lambda plan: rank(planner, plan)))
-    if sqp:
-        anytime_of(planner).rounds.record_ranking(budget, clock.cpu_ms())
+    ranked = sorted(plans, key=lambda plan: rank(planner, plan))
     best = ranked[0]
     if split and best.success:
         settled, _, _ = plan_segment(planner, q0, qd0, t_begin, duration, goal, forecast,
@@ -203,13 +158,13 @@ DISTINCT = 1e-3  # rad: cold plans whose coefficients all agree this closely are
 
 def _polished(planner: Planner, best: SegmentPlan, ranked: list[SegmentPlan],
               segment: tuple) -> SegmentPlan:
-    """The plan that spends least of `best` and the config.polish best distinct converged
+    """The plan that spends least of `best` and the config.penalty.polish best distinct converged
     plans of `ranked`, each solved again, warm from its motion, by planner.polisher (the
-    split quadrature at config.polish_samples nodes, breaks settled). The many starts
+    split quadrature at config.penalty.polish_samples nodes, breaks settled). The many starts
     search on the planner's cheaper rule; the few that are polished spend what they plan."""
     picked: list[SegmentPlan] = []
     for plan in ranked:
-        if len(picked) == planner.config.polish or not plan.success:
+        if len(picked) == planner.config.penalty.polish or not plan.success:
             break
         if all(np.max(np.abs(plan.trajectory.coefficients - other.trajectory.coefficients))
                > DISTINCT for other in picked):
@@ -229,7 +184,7 @@ def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan
     """Solve with the obstacle samples screened on a reference (`plan`, re-expressed on
     this horizon) and the limits at its turning points; re-screen on the result until
     the samples where it dips were seen by its solves (Screen.covered), it keeps the
-    limits and (settle_breaks) the split quadrature's breaks are its own (planning.breaks).
+    limits and (settle_breaks) the split quadrature's breaks are its own (planning.formulation.breaks).
     seen: the obstacle sample times `plan` was solved with, if it solves this very problem
     (same horizon and alpha: then it may be settled without a further solve); None if not.
     late(): True once no further solve may start (a deadline); rescue: whether a solve the
@@ -264,26 +219,3 @@ def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan
         if unchanged:
             break  # the same problem again: another round would return the same plan
     return plan, None
-
-
-def _predicted_clearance(planner: Planner, plan: SegmentPlan, forecast: ObstacleForecast):
-    q = plan.trajectory.position(forecast.times)
-    return link_clearances(planner.config.geometry, q, forecast.centres).min()
-
-
-def anytime_of(planner: Planner) -> Anytime:
-    """The planner's anytime SQP (config.replanner "sqp"), built on first need and kept with
-    it (planning.solver cannot import planning.anytime, which builds on it)."""
-    found = planner.__dict__.get("_anytime")
-    if found is None:
-        found = planner.__dict__["_anytime"] = Anytime(planner)
-    return found
-
-
-def uses_anytime(config) -> bool:
-    """Whether segments are planned by the anytime SQP: config.replanner "sqp", except with
-    the split quadrature (its breaks settle over re-solves, the penalty loop's rounds) and
-    with real-time iterations (a feasible-SQP step of the penalty NLP), which keep the
-    penalty loop."""
-    return config.replanner == "sqp" and config.energy_quadrature != "split" and \
-        config.replan_iterations is None

@@ -1,8 +1,7 @@
 """Where a motion's power changes sign: the breakpoints of the "split" energy quadrature.
 
 |P| has a kink wherever P crosses zero, and a quadrature rule with nodes across a kink
-converges slowly (measured on the random scenarios: Gauss N = 20 plans spending
-0.5-3.2 % more than Gauss N = 40 ones on the same detour). Between consecutive sign
+converges slowly (docs/realtime.md, 'planning.formulation.breaks'). Between consecutive sign
 changes |P| is as smooth as the motion, so Gauss-Legendre on each such interval is
 accurate with few nodes. The breakpoints are found on a reference motion (a start point
 or the previous solution) and the solve is repeated until they are those of its own
@@ -14,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 
 from identification.torque_model import TorqueModel
-from planning.energy import power
-from planning.trajectory import PolynomialTrajectory
+from planning.formulation.energy import power
+from planning.formulation.trajectory import PolynomialTrajectory
 
 GRID = 129  # points of normalized time where the power's sign is read
 SETTLED = 0.005  # normalized time: a sign change this close to a break needs no re-solve

@@ -1,9 +1,9 @@
 """NLP functions compiled to machine code with the system C compiler, cached per problem.
 
 CasADi evaluates SX functions in a virtual machine; the same functions as C code,
-compiled once, evaluate ~8x faster (measured on the planning NLP's Lagrangian
-Hessian). A solver instance writes the functions it needs
-(`Function.generate_dependencies`), the C text is hashed (with the compiler and
+compiled once, evaluate several times faster
+(docs/realtime.md, 'planning.formulation.compiled'). A solver instance writes the functions
+it needs (`Function.generate_dependencies`), the C text is hashed (with the compiler and
 its flags), and the shared library is built once into a user cache directory
 ($TORQUEBENCH_CACHE, else $XDG_CACHE_HOME/torquebench, else ~/.cache/torquebench);
 `nlpsol(name, plugin, library)` then loads it. Builds are atomic (a temporary name,
@@ -23,13 +23,10 @@ import casadi as ca
 import numpy as np
 
 COMPILER = os.environ.get("CC", "gcc")
-# -O1: measured on the planning NLP, a warm fatrop solve 2.0 ms against 5.0 ms at -O0;
-# -O2 compiles ~3x longer than -O1 for no measured gain at this size
+# -O1: most of the speed for a short build (docs/realtime.md, 'planning.formulation.compiled')
 FLAGS = ("-O1", "-fPIC", "-shared")
-# Larger sources stay in CasADi's virtual machine: the UR5 planning NLP with its torque model
-# copied into every sample was 19.5 MB of C, which gcc -O1 took 6 min and 3.4 GB to build
-# (the Lynxmotion's: 4.0 MB); with the model called at each sample (planning.nlp) the UR5's is
-# 5.9 MB and the Panda's 7.5 MB.
+# Larger sources stay in CasADi's virtual machine: their build takes minutes and gigabytes
+# (docs/realtime.md, 'planning.formulation.compiled')
 MAX_SOURCE_BYTES = 8_000_000
 
 
@@ -118,9 +115,9 @@ def nlpsol(name: str, plugin: str, problem: dict, options: dict) -> ca.Function:
 
 
 class Buffered:
-    """A function of numpy vectors evaluated through a CasADi buffer (~0.1 us a call instead
-    of ~15 us, and no conversion of its outputs): inputs are copied into its arguments, the
-    output vector is its result."""
+    """A function of numpy vectors evaluated through a CasADi buffer (a much cheaper call,
+    no conversion of its outputs: docs/realtime.md, 'planning.formulation.compiled'):
+    inputs are copied into its arguments, the output vector is its result."""
 
     def __init__(self, function: ca.Function):
         self.function = function

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import BFGS, NonlinearConstraint, minimize
 
-from planning.solver import Planner
+from planning.penalty.solver import Planner
 
 
 @dataclass(frozen=True)

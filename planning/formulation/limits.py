@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planning.trajectory import PolynomialTrajectory, stationary_points_rows
+from planning.formulation.trajectory import PolynomialTrajectory, stationary_points_rows
 
 LIMIT_TOLERANCE = 1e-6  # rad: a plan beyond a limit by more is infeasible (planning.result)
 END_MARGIN = 0.02  # normalized time: q's turning points this close to a limit goal are

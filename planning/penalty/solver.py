@@ -1,5 +1,5 @@
-"""The planning NLP's solver (planning.backends: fatrop, sqpmethod or IPOPT): one build, many
-solves (cold or warm-started); with real-time iterations also CasADi's feasible SQP, capped,
+"""The planning NLP's solver (planning.penalty.backends: fatrop, sqpmethod or IPOPT): one
+build, many solves (cold or warm-started); with real-time iterations also CasADi's feasible SQP, capped,
 for the re-plans' warm solves."""
 
 from __future__ import annotations
@@ -13,39 +13,16 @@ import casadi as ca
 import numpy as np
 
 from identification.torque_model import TorqueModel
-from planning import backends, realtime_iteration
 from planning.config import PlannerConfig
-from planning.nlp import PlanningNLP
-from planning.problem import ObstacleForecast, ProblemNumbers, _breaks
-from planning.quadrature import splits_evenly
-from planning.trajectory import PolynomialTrajectory
+from planning.formulation.nlp import PlanningNLP
+from planning.formulation.problem import ProblemNumbers, _breaks
+from planning.formulation.quadrature import splits_evenly
+from planning.formulation.trajectory import PolynomialTrajectory
+from planning.penalty import backends, realtime_iteration
+from planning.types import ObstacleForecast, SegmentPlan
 
-
-@dataclass(frozen=True)
-class SegmentPlan:
-    """One solve: the segment, its objective parts (J) and how the solve went."""
-
-    trajectory: PolynomialTrajectory
-    energy: float  # sigma/N sum |P|, J
-    penalty: float  # alpha sum of squared threshold violations, J
-    success: bool
-    status: str
-    iterations: int
-    solve_ms: float  # wall time
-    solve_cpu_ms: float  # CPU time of this thread (insensitive to other load on the machine)
-    penalty_weight: float  # alpha this solve used, J/m^2 per obstacle sample
-    x: np.ndarray  # primal solution, for warm starts
-    multipliers: tuple[np.ndarray, np.ndarray]  # (lam_g, lam_x)
-    breaks: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))  # "split" rule's
-    layout: tuple = ()  # the NLP's energy rule (Planner.layout): its multipliers fit only it
-    # the elastic SQP's (planning.anytime): the obstacle sample times of its clearance slots
-    # (its multipliers follow them to the next re-plan) and whether a clearance row bound it
-    slot_times: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
-    detour: bool = False
-
-
-# measured on random scenarios: a warm IPOPT rescue still unconverged after 60 iterations ran
-# on to 300 (390 ms) or declared the problem infeasible; a cold restart is cheaper
+# a warm IPOPT rescue still unconverged after this many iterations is better restarted cold
+# (docs/realtime.md, 'planning.penalty.solver')
 RESCUE_WARM_ITERATIONS = 60
 TORQUE_GRID = 65  # points of normalized time where a segment's torque is checked
 
@@ -58,21 +35,21 @@ class _Solvers:
     cold: ca.Function
     warm: ca.Function
     parts: ca.Function
-    iterate: ca.Function | None = None  # feasiblesqp capped at config.replan_iterations
+    iterate: ca.Function | None = None  # feasiblesqp capped at config.penalty.replan_iterations
 
 
 def _build(nlp: PlanningNLP, config: PlannerConfig, name: str) -> _Solvers:
     problem = {"x": nlp.x, "p": nlp.p, "f": nlp.f, "g": nlp.g}
-    common = {"equality": nlp.lbg == nlp.ubg, "hessian": config.hessian,
+    common = {"equality": nlp.lbg == nlp.ubg, "hessian": config.penalty.hessian,
               "compile_code": config.compile_code}
-    cold = backends.solver(f"{name}_cold", config.solver, problem, warm=False,
-                           max_iter=config.max_iterations, **common)
-    warm = backends.solver(f"{name}_warm", config.solver, problem, warm=True,
-                           max_iter=config.warm_max_iterations, **common)
+    cold = backends.solver(f"{name}_cold", config.penalty.solver, problem, warm=False,
+                           max_iter=config.penalty.max_iterations, **common)
+    warm = backends.solver(f"{name}_warm", config.penalty.solver, problem, warm=True,
+                           max_iter=config.penalty.warm_max_iterations, **common)
     parts = ca.Function("objective_parts", [nlp.x, nlp.p], [nlp.energy, nlp.penalty])
-    iterate = None if config.replan_iterations is None else backends.solver(
+    iterate = None if config.penalty.replan_iterations is None else backends.solver(
         f"{name}_iterate", "feasiblesqp", problem, warm=True,
-        max_iter=config.replan_iterations, **common)
+        max_iter=config.penalty.replan_iterations, **common)
     return _Solvers(nlp, cold, warm, parts, iterate)
 
 
@@ -83,17 +60,17 @@ class Planner(ProblemNumbers):
     runs the NLP without torque rows; only when that optimum's torque exceeds the limit
     on a dense grid is the NLP with torque rows (built on first need) solved. A relaxed
     optimum that respects the limits is the constrained optimum, so the common case pays
-    nothing (measured: the torque rows double a re-plan's time).
+    nothing (the torque rows are costly: (docs/realtime.md, 'planning.penalty.solver')).
     """
 
     def __init__(self, model: TorqueModel, config: PlannerConfig | None = None):
         self.config = config or PlannerConfig()
-        if self.config.solver not in backends.SOLVERS:  # feasiblesqp cannot solve cold
+        if self.config.penalty.solver not in backends.SOLVERS:  # feasiblesqp cannot solve cold
             raise ValueError(f"solver must be one of {backends.SOLVERS}, got "
-                             f"'{self.config.solver}'")
-        if self.config.replan_iterations is not None and self.config.replan_iterations < 1:
+                             f"'{self.config.penalty.solver}'")
+        if self.config.penalty.replan_iterations is not None and self.config.penalty.replan_iterations < 1:
             raise ValueError(f"replan_iterations must be >= 1 or None, got "
-                             f"{self.config.replan_iterations}")
+                             f"{self.config.penalty.replan_iterations}")
         self.model = model
         self._relaxed: dict[tuple[int, ...], _Solvers] = {}
         self._limited: dict[tuple[int, ...], _Solvers] = {}
@@ -103,18 +80,18 @@ class Planner(ProblemNumbers):
     @functools.cached_property
     def polisher(self) -> Planner | None:
         """The planner that re-solves the best cold plans with the split quadrature at
-        config.polish_samples nodes (None without config.polish)."""
+        config.penalty.polish_samples nodes (None without config.penalty.polish)."""
         config = self.config
-        if not config.polish:
+        if not config.penalty.polish:
             return None
-        if not splits_evenly(config.polish_samples, config.power_breaks):
-            raise ValueError(f"polish_samples ({config.polish_samples}) must be a multiple of "
-                             f"power_breaks + 1 ({config.power_breaks + 1})")
+        if not splits_evenly(config.penalty.polish_samples, config.power_breaks):
+            raise ValueError(f"polish_samples ({config.penalty.polish_samples}) must be a "
+                             f"multiple of power_breaks + 1 ({config.power_breaks + 1})")
         # polishing is part of a cold plan: no re-plan deadline keeps its IPOPT rescue away
         return Planner(self.model, dataclasses.replace(
-            config, energy_quadrature="split", energy_samples=config.polish_samples,
-            polish=0, starts=1, replan_deadline_ms=None, replan_iterations=None,
-            replanner="fatrop"))
+            config.with_penalty(polish=0, replan_iterations=None), energy_quadrature="split",
+            energy_samples=config.penalty.polish_samples, starts=1, replan_deadline_ms=None,
+            replanner="penalty"))
 
     @property
     def layout(self) -> tuple:
@@ -127,14 +104,14 @@ class Planner(ProblemNumbers):
     @functools.cached_property
     def nlp(self) -> PlanningNLP:
         """The NLP with every goal-limit row and no torque rows, for callers that evaluate its
-        functions with `parameters` and `bounds` (planning.baselines); the solves use
-        the NLP for their goal (_relaxed_for)."""
+        functions with `parameters` and `bounds` (the paper reproduction's trust-constr
+        baseline); the solves use the NLP for their goal (_relaxed_for)."""
         return PlanningNLP(self.model, dataclasses.replace(self.config, torque_limit=None))
 
     def prepare(self, goal) -> None:
         """Build the solvers for this goal ahead of the solves (planning.replanning does so
         before its clock starts): generating an NLP's code and its IPOPT rescuer's takes
-        seconds (measured 2.9 s for the rescuer on the Lynxmotion, 6 s for both), which
+        seconds (docs/realtime.md, 'planning.penalty.solver'), which
         must not land inside a plan's or a re-plan's time."""
         self._relaxed_for(goal)
 
@@ -146,7 +123,7 @@ class Planner(ProblemNumbers):
             relaxed = dataclasses.replace(self.config, torque_limit=None)
             self._relaxed[key] = _build(PlanningNLP(self.model, relaxed, key), self.config,
                                         "plan")
-            if self.config.compile_code and self.config.solver != "ipopt":
+            if self.config.compile_code and self.config.penalty.solver != "ipopt":
                 self._rescuer(self._relaxed[key])
         return self._relaxed[key]
 
@@ -156,10 +133,6 @@ class Planner(ProblemNumbers):
             self._limited[key] = _build(PlanningNLP(self.model, self.config, key), self.config,
                                         "plan_torque")
         return self._limited[key]
-
-    def _goal_limits(self, goal) -> tuple[int, ...]:
-        """The joints whose goal is on a limit."""
-        return tuple(int(j) for j in np.flatnonzero(self.goal_signs(goal)))
 
     def torque_excess(self, trajectory: PolynomialTrajectory) -> float:
         """Largest |tau_i| - torque_limit_i (N m) on a dense grid of the segment (< 0: inside;
@@ -178,12 +151,12 @@ class Planner(ProblemNumbers):
         """Plan from (q0, qd0) at t_begin to goal at t_begin + duration.
 
         reference: a motion on the same horizon whose turning points get limit constraints
-        in addition to the fixed samples (see PlanningNLP, planning.limits).
+        in addition to the fixed samples (see PlanningNLP, planning.formulation.limits).
         alpha: penalty weight (J/m^2 per sample), default config.penalty_weight.
         x0: start point of a cold solve (default: initial_guess).
         rescue: a solve the fast solver cannot finish goes on with IPOPT (see _solve); False
         for a re-plan under a deadline, whose answer would come too late.
-        iterate: a warm solve first takes config.replan_iterations feasible-SQP iterations
+        iterate: a warm solve first takes config.penalty.replan_iterations feasible-SQP iterations
         and returns their iterate, status ITERATE, if it has not converged (see _solve).
         """
         alpha = self.config.penalty_weight if alpha is None else float(alpha)
@@ -216,10 +189,10 @@ class Planner(ProblemNumbers):
         if stats is None:  # not iterating, or the iterate is not one to follow: solve it out
             result = solver(**args)
             stats = backends.stats(solver, args, result)
-        if not stats.success and self.config.solver != "ipopt" and rescue:
+        if not stats.success and self.config.penalty.solver != "ipopt" and rescue:
             # a solve the fast solver could not finish: IPOPT from the same start point (not
-            # for a re-plan under a deadline: it would come too late, measured up to 7 s,
-            # warm or cold, and a torque-limited NLP's rescuer is compiled on first need)
+            # for a re-plan under a deadline: it would come too late, seconds
+            # (docs/realtime.md, 'planning.penalty.solver'))
             rescue = self._rescuer(solvers)
             solver = rescue.cold if warm is None else rescue.warm
             result = solver(**args)
@@ -229,14 +202,14 @@ class Planner(ProblemNumbers):
         return self._segment(solvers, result, stats, elapsed, segment)
 
     def _rescuer(self, solvers: _Solvers) -> _Solvers:
-        """IPOPT (built on first need, compiled like the fast solver) on the same NLP:
-        measured, fatrop at a raised penalty weight can stop short of convergence, cold
-        (paper scenario) and warm (random scenarios: 60 iterations, then a cold restart)."""
+        """IPOPT (built on first need, compiled like the fast solver) on the same NLP: fatrop
+        at a raised penalty weight can stop short of convergence
+        (docs/realtime.md, 'planning.penalty.solver')."""
         key = id(solvers)
         if key not in self._rescue:
-            rescue = dataclasses.replace(self.config, solver="ipopt", replan_iterations=None,
-                                         warm_max_iterations=max(
-                self.config.warm_max_iterations, RESCUE_WARM_ITERATIONS))
+            rescue = self.config.with_penalty(solver="ipopt", replan_iterations=None,
+                                              warm_max_iterations=max(
+                self.config.penalty.warm_max_iterations, RESCUE_WARM_ITERATIONS))
             self._rescue[key] = _build(solvers.nlp, rescue, "plan_rescue")
         return self._rescue[key]
 
@@ -255,7 +228,7 @@ class Planner(ProblemNumbers):
         lam_g = np.zeros(rows)
         kept = min(rows, len(warm.multipliers[0]))
         lam_g[:kept] = warm.multipliers[0][:kept]
-        if not self.config.dual_warm_start or warm.layout != self.layout:
+        if not self.config.penalty.dual_warm_start or warm.layout != self.layout:
             return {"x0": x}
         return {"x0": x, "lam_g0": lam_g, "lam_x0": warm.multipliers[1]}
 

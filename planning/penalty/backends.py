@@ -11,10 +11,8 @@
 - "feasiblesqp": CasADi's feasible SQP (feasiblesqpmethod: a trust-region SQP whose every
   iterate satisfies the constraints, given a start that does), qpOASES on the QPs. It
   needs a feasible start, so it only serves warm solves: the planner's real-time
-  iterations (PlannerConfig.replan_iterations), whose capped iterate the arm can follow.
-Measured per iteration on the paper scenario's re-plan NLP (compiled functions, CPU
-time): fatrop and sqpmethod ~0.2-0.3 ms, IPOPT ~0.9 ms, of which the NLP functions
-~0.1 ms; the rest is the solver's own work.
+  iterations (PenaltyOptions.replan_iterations), whose capped iterate the arm can follow.
+Their cost per iteration: docs/realtime.md, 'planning.penalty.backends'.
 """
 
 from __future__ import annotations
@@ -26,7 +24,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from planning import compiled
+from planning.formulation import compiled
 
 SOLVERS = ("fatrop", "sqpmethod", "ipopt")  # cold and warm solves; feasiblesqp: warm only
 _QUIET = {"print_time": False}
@@ -45,10 +43,8 @@ def _ipopt(max_iter: int, warm: bool, hessian: str, equality) -> dict:
     options = {"ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": 1e-8,
                "ipopt.constr_viol_tol": 1e-9, "ipopt.max_iter": max_iter,
                "ipopt.hessian_approximation": hessian}
-    # Measured on the paper scenario's 199 re-plans: a primal-dual warm start with a tiny
-    # barrier and bound pushes took a median of 6 and at most 25 iterations; a primal-only
-    # start a median of 11 and up to 81. A re-plan stops at tol 1e-6 (objective within
-    # 1e-6 relative of the tol-1e-8 one, tests/test_planning_scenario.py).
+    # a primal-dual warm start with a tiny barrier and bound pushes; a re-plan stops at tol
+    # 1e-6 (tests/test_planning_scenario.py) (docs/realtime.md, 'planning.penalty.backends')
     if warm:
         options.update({"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-7,
                         "ipopt.warm_start_bound_push": 1e-7,
@@ -57,10 +53,8 @@ def _ipopt(max_iter: int, warm: bool, hessian: str, equality) -> dict:
 
 
 def _fatrop(max_iter: int, warm: bool, hessian: str, equality) -> dict:
-    # mu_init 1e-4 measured on a warm re-plan: 10 iterations; 1e-1 (the default): 150,
-    # 1e-7: 28 (the barrier starts too close to the bounds of a point that is not optimal).
-    # tol 1e-8 measured unreachable on the paper scenario (stops "acceptable" after 39
-    # iterations, objective 2e-7 relative from IPOPT's); 1e-7: converged in 16.
+    # mu_init and tol chosen on warm re-plans and the paper scenario
+    # (docs/realtime.md, 'planning.penalty.backends')
     return {"structure_detection": "none", "equality": [bool(e) for e in equality],
             "fatrop.print_level": 0, "fatrop.mu_init": 1e-4, "fatrop.max_iter": max_iter,
             "fatrop.tol": 1e-6 if warm else 1e-7}
@@ -76,10 +70,9 @@ def _sqpmethod(max_iter: int, warm: bool, hessian: str, equality) -> dict:
 
 # feasiblesqp's feasibility tolerance, and the one its capped iterate is followed within: the
 # start must be feasible within the first, and a capped iterate may leave the constraints by a
-# little more than it (measured on the random scenarios: 1.4e-6 at 1e-6), so an iterate
-# followed, the next start, is held to the second. Warm starts from fatrop's converged plans
-# leave the Newton-corrected limit rows by up to ~1e-7 (measured): a tolerance of 1e-7 or
-# less refused them as starts ("No_Feasible_Initialization").
+# little more than it, so an iterate followed, the next start, is held to the second; a
+# tighter first one refuses fatrop's converged plans as starts
+# (docs/realtime.md, 'planning.penalty.backends').
 FEASIBLE_START, FEASIBLE_ITERATE = 1e-6, 5e-7
 
 
@@ -138,7 +131,7 @@ class Silenced:
         return getattr(self.function, name)
 
 
-# a point whose returned KKT residuals are this small is converged (planning.backends.stats):
+# a point whose returned KKT residuals are this small is converged (planning.penalty.backends.stats):
 # sqpmethod's own test is tol_pr 1e-9 and tol_du 1e-6 warm, 1e-8 cold; the check takes 1e-8
 # (room for the rounding of g) and 1e-6 for both, so a cold solve capped within 1e-6 passes
 KKT_PRIMAL, KKT_DUAL = 1e-8, 1e-6
@@ -176,9 +169,8 @@ def _kkt(function: ca.Function, args: dict, result: dict, iterations: int) -> St
     KKT point and enters the residual as it is), and complementarity (|multiplier| times the
     distance to the bound its sign points to: > 0 for the upper one; inf on a free row).
     CasADi 3.8's sqpmethod does not set its status when it converges or a QP fails:
-    Function.stats() raises, or reports an earlier call's status (measured on a warm re-plan:
-    capped at 3 iterations it reports Maximum_Iterations_Exceeded; at 4 or more it raises,
-    returning the same point; in Algorithm 2, "Solve_Succeeded" beside success False).
+    Function.stats() raises, or reports an earlier call's status
+    (docs/realtime.md, 'planning.penalty.backends').
     Reading that as a failure had sent converged solves to the IPOPT rescue. The check is
     part of the solve's time (the planner needs it to decide on the rescue)."""
     lam_g = np.asarray(result["lam_g"]).ravel()

@@ -1,57 +1,22 @@
 """What an anytime plan may spend and what its parts recently cost: the clock its budget
 counts (CPU time of the planning thread, or nominal units for reproducible runs) and the
 recent costs of a plan's rounds that keep the budget (planning.anytime; an iteration's own
-in planning.sqp)."""
+in planning.anytime.sqp)."""
 
 from __future__ import annotations
 
-import functools
-import gc
 import time
 from collections import deque
 
 RECENT = 32  # iterations (or rounds) whose CPU cost predicts the next one's
 
 
-class Stopwatch:
-    """Wall and CPU time (ms, this thread) since it was made."""
-
-    def __init__(self):
-        self.wall, self.cpu = time.perf_counter(), time.thread_time()
-
-    def cpu_ms(self) -> float:
-        return 1e3 * (time.thread_time() - self.cpu)
-
-    def read(self) -> tuple[float, float]:
-        return 1e3 * (time.perf_counter() - self.wall), self.cpu_ms()
-
-
-def collection_deferred(plan):
-    """`plan` with Python's cyclic garbage collector held off while it runs (and set back as
-    it was after): a collection inside a plan frees whatever cycles the process left,
-    measured in the realtime study's deadline run at 39 and 50 ms of a re-plan's CPU (earlier
-    planners' compiled functions). It runs at an allocation between plans instead."""
-
-    @functools.wraps(plan)
-    def deferred(*args, **kwargs):
-        enabled = gc.isenabled()
-        gc.disable()
-        try:
-            return plan(*args, **kwargs)
-        finally:
-            if enabled:
-                gc.enable()
-
-    return deferred
-
-
 class Clock:
     """What a budget counts: the planning thread's CPU time (ms) since the clock was made, or,
-    for reproducible runs (PlannerConfig.iteration_ms), iteration_ms per unit of work ticked
+    for reproducible runs (AnytimeOptions.iteration_ms), iteration_ms per unit of work ticked
     whatever CPU it took: an SQP iteration (a QP and an evaluation), a second-order
     correction (another), and ROUND_ITERATIONS for each round of a plan (its screening,
-    checks and bookkeeping; measured on the Lynxmotion: ~1 ms a round, ~0.45 ms an
-    iteration)."""
+    checks and bookkeeping, about two iterations' CPU: (docs/realtime.md, 'planning.anytime.budget'))."""
 
     ROUND_ITERATIONS = 2
 
@@ -97,9 +62,8 @@ class RoundCosts:
 
     def check_ms(self, clock: Clock) -> float:
         """What to keep from a solve's budget for each iterate it accepts: its check in the
-        choice after the solve (measured in the realtime study: re-plans that ran to their
-        budget accepted up to 36 iterates, and choosing among them took up to 0.9 ms, past
-        the most recent choices' CPU the budget had kept)."""
+        choice after the solve (a solve may accept many iterates:
+        (docs/realtime.md, 'planning.anytime.budget'))."""
         return max(self.check, default=0.0) if clock.nominal is None else 0.0
 
     def record_ranking(self, clock: Clock, ms: float) -> None:

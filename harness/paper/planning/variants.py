@@ -23,7 +23,7 @@ class Parametrization:
     samples: int = 10
     smoothing: float = 0.0
     rest_at_goal: bool = False  # the paper's free end velocity
-    replanner: str = "fatrop"  # the paper's exterior penalty loop (PlannerConfig.replanner)
+    replanner: str = "penalty"  # the paper's exterior penalty loop (PlannerConfig.replanner)
 
     def config(self, base: PlannerConfig | None = None) -> PlannerConfig:
         """`base` (default: the paper's configuration) with this parametrization."""

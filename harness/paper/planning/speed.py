@@ -11,8 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from planning.config import Scenario
-from planning.replanning import forecast_at, plan_segment
-from planning.solver import Planner, SegmentPlan
+from planning.replanning import forecast_at
+from planning.types import Segment, SegmentPlan, SegmentPlanner
 
 
 @dataclass(frozen=True)
@@ -40,25 +40,25 @@ class Timings:
                 "replan_solver_median_ms": float(np.median(self.replan_solver_ms))}
 
 
-def measure(planner: Planner, scenario: Scenario, cold_repeats: int = 5,
+def measure(planner: SegmentPlanner, scenario: Scenario, cold_repeats: int = 5,
             stride: int = 1) -> tuple[Timings, SegmentPlan]:
     """Cold plans of the whole motion, then a re-plan at every `stride`-th obstacle sample,
     each warm-started from the previous plan with the obstacle one sample further."""
     obstacle, goal, T = scenario.obstacle, scenario.goal, scenario.duration
     cold, cold_cpu, plan = [], [], None
     for _ in range(cold_repeats):
-        plan, wall, cpu = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0, T,
-                                       goal, forecast_at(obstacle, obstacle.sample_times[0]))
-        cold.append(wall)
-        cold_cpu.append(cpu)
+        plan = planner.plan(Segment(scenario.start, scenario.start_velocity, 0.0, T, goal,
+                                    forecast_at(obstacle, obstacle.sample_times[0])))
+        cold.append(plan.solve_ms)
+        cold_cpu.append(plan.solve_cpu_ms)
     walls, cpus, solver, failures = [], [], [], 0
     for t in obstacle.sample_times[:-1:stride]:
         q, qd, _ = plan.trajectory.state(t)
         before = planner.solver_ms
-        new, wall, cpu = plan_segment(planner, q[0], qd[0], t, T - t, goal, forecast_at(obstacle, t),
-                                      warm=plan)
-        walls.append(wall)
-        cpus.append(cpu)
+        new = planner.plan(Segment(q[0], qd[0], t, T - t, goal, forecast_at(obstacle, t)),
+                           warm=plan)
+        walls.append(new.solve_ms)
+        cpus.append(new.solve_cpu_ms)
         solver.append(planner.solver_ms - before)
         if new.success:
             plan = new

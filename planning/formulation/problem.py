@@ -1,27 +1,18 @@
-"""The numbers of one planning problem: the parameter vector p of the NLP (planning.nlp), its
+"""The numbers of one planning problem: the parameter vector p of the NLP (planning.formulation.nlp), its
 bounds for a goal, start points, and the motion a point x of the NLP stands for. A mixin of
-planning.solver.Planner (which needs `config`, `model` and `nlp`), shared by the penalty
+planning.penalty.solver.Planner (which needs `config`, `model` and `nlp`), shared by the penalty
 loop and the anytime SQP (planning.anytime)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from planning.breaks import even_breaks, power_breaks
-from planning.limits import END_MARGIN, goal_limit_signs, quotient_turning_points
-from planning.nlp import PlanningNLP, turning_slots
-from planning.quadrature import split_nodes
-from planning.trajectory import PolynomialTrajectory
-
-
-@dataclass(frozen=True)
-class ObstacleForecast:
-    """Predicted obstacle centres (k, 3) in m at times (k,) in s, as the planner sees them."""
-
-    times: np.ndarray
-    centres: np.ndarray
+from planning.formulation.breaks import even_breaks, power_breaks
+from planning.formulation.limits import END_MARGIN, goal_limit_signs, quotient_turning_points
+from planning.formulation.nlp import PlanningNLP, turning_slots
+from planning.formulation.quadrature import split_nodes
+from planning.formulation.trajectory import PolynomialTrajectory
+from planning.types import ObstacleForecast
 
 
 class ProblemNumbers:
@@ -40,7 +31,7 @@ class ProblemNumbers:
             s = (np.asarray(forecast.times) - t_begin) / duration
             keep = np.flatnonzero((s > 1e-12) & (s <= 1 + 1e-12))
             m = len(keep)
-            if m > k:  # pass a screened forecast (planning.screening) instead
+            if m > k:  # pass a screened forecast (planning.formulation.screening) instead
                 raise ValueError(f"{m} obstacle samples on the horizon, the NLP has {k} slots")
             centres[:m], s_obs[:m], weight[:m] = forecast.centres[keep], s[keep], 1.0
         turning, v_turning, signs = self.turning_points(goal, reference)
@@ -58,7 +49,7 @@ class ProblemNumbers:
 
     def turning_points(self, goal, reference: PolynomialTrajectory | None):
         """Where the limits are enforced beyond the fixed samples: q's turning points (dof, degree - 1)
-        and those of the goal-limit quotient (planning.limits), NaN for none; and the
+        and those of the goal-limit quotient (planning.formulation.limits), NaN for none; and the
         per-joint goal-limit signs."""
         dof, (extrema, order, slots) = self.model.dof, turning_slots(self.config)
         signs = self.goal_signs(goal)
@@ -80,7 +71,7 @@ class ProblemNumbers:
         return lbg, ubg
 
     def goal_signs(self, goal) -> np.ndarray:
-        """planning.limits.goal_limit_signs of a goal, kept per goal (read-only): a re-plan
+        """planning.formulation.limits.goal_limit_signs of a goal, kept per goal (read-only): a re-plan
         asks for them several times."""
         cache = self.__dict__.setdefault("_goal_signs", {})
         key = tuple(np.asarray(goal, float).tolist())
@@ -91,6 +82,10 @@ class ProblemNumbers:
             signs.flags.writeable = False
             cache[key] = signs
         return cache[key]
+
+    def _goal_limits(self, goal) -> tuple[int, ...]:
+        """The joints whose goal is on a limit."""
+        return tuple(int(j) for j in np.flatnonzero(self.goal_signs(goal)))
 
     def initial_guess(self, q0, qd0, duration: float, goal, bumps=None) -> np.ndarray:
         """A cubic that reaches the goal at rest, plus bumps (dof, degree - 2) in rad times

@@ -14,10 +14,10 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from planning.clearance import link_clearances
-from planning.kinematics import ArmGeometry
-from planning.solver import ObstacleForecast
-from planning.trajectory import PolynomialTrajectory
+from planning.formulation.clearance import link_clearances
+from planning.formulation.kinematics import ArmGeometry
+from planning.formulation.trajectory import PolynomialTrajectory
+from planning.types import ObstacleForecast
 
 
 @dataclass(frozen=True)
@@ -86,7 +86,8 @@ def near_samples(clearance: np.ndarray, threshold: float, slots: int) -> np.ndar
 @numba.njit("i8[:](i8, i8)", cache=True, nogil=True)
 def _thinned(count, slots):
     """`slots` of range(count) evenly: np.round(np.linspace(0, count - 1, slots)), the same
-    floating-point steps and halves to even, in a loop (~1 us instead of ~12)."""
+    floating-point steps and halves to even, in a loop
+    (docs/realtime.md, 'planning.formulation.screening')."""
     out = np.empty(max(slots, 0), np.int64)
     step = (count - 1) / (slots - 1) if slots > 1 else 0.0
     for i in range(slots):

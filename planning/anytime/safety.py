@@ -7,7 +7,7 @@ leaves the joint limits (whole motion) and the torque limits (a dense grid).
 - motion: the worst excursion beyond the joint limits (rad; < 0: inside) over a grid of
   LIMIT_GRID points, each refined by one Newton step towards the nearest turning point (a
   polynomial's peak between grid points is then found to ~1e-8 rad, far inside
-  planning.limits.LIMIT_TOLERANCE), and the worst
+  planning.formulation.limits.LIMIT_TOLERANCE), and the worst
   |tau_i| - torque_limit_i (N m) over TORQUE_GRID points (-inf without torque limits).
 """
 
@@ -20,14 +20,14 @@ import casadi as ca
 import numpy as np
 
 from identification.torque_model import TorqueModel
-from planning import compiled
-from planning.clearance import symbolic_link_clearances
 from planning.config import PlannerConfig
-from planning.trajectory import PolynomialTrajectory, power_basis
+from planning.formulation import compiled
+from planning.formulation.clearance import symbolic_link_clearances
+from planning.formulation.trajectory import PolynomialTrajectory, power_basis
 
 CHUNK = 32  # forecast samples per call of the clearance function
 LIMIT_GRID = 65
-TORQUE_GRID = 65  # as planning.solver's torque check
+TORQUE_GRID = 65  # as planning.penalty.solver's torque check
 FAR = 1e3  # m: where padding samples sit
 ENERGY_POINTS = 257  # trapezoid points of the compiled dense energy
 
@@ -59,8 +59,8 @@ class SafetyCheck:
 
     def energy(self, trajectory: PolynomialTrajectory) -> float:
         """The integral of |P| dt (J) by the trapezoid rule at ENERGY_POINTS even points
-        (planning.energy.dense_energy's rule, compiled: what ranks the starts of a cold
-        plan without ~0.7 ms of numpy torques per start)."""
+        (planning.formulation.energy.dense_energy's rule, compiled: what ranks the starts of a cold
+        plan without numpy torques per start: (docs/realtime.md, 'planning.anytime.safety'))."""
         (out,) = self._energy(trajectory.coefficients.ravel(order="F"), [trajectory.duration])
         return float(out[0])
 

@@ -135,8 +135,8 @@ def _stationary_points_rows(c):
     in (0, 1), sorted. Each derivative of the derivative, from the linear one up, is
     monotone between the roots of the next one: its roots are the sign changes there, each
     bisected to the last bit (an exact zero at a root of the next one, a multiple root,
-    counts once). Measured: 12.7 -> ~2 us for a 5-joint quartic; eigenvalues of the
-    companion matrices before, batched numpy before that (~0.12 ms of a 2.2 ms re-plan)."""
+    counts once); faster than companion-matrix eigenvalues
+    (docs/realtime.md, 'planning.formulation.trajectory')."""
     m = c.shape[1] - 2  # degree of the derivative
     out = np.full((c.shape[0], max(m, 0)), np.nan)
     chain = np.zeros((max(m, 0) + 1, max(m, 0) + 1))

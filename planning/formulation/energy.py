@@ -5,11 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 from identification.torque_model import TorqueModel
-from planning.trajectory import PolynomialTrajectory
+from planning.formulation.trajectory import PolynomialTrajectory
 
-# points of a segment where dense_energy reads the power: the trapezoid rule at 513 points
-# is within 1.3e-4 relative of an adaptive integral split at the kinks of |P| (measured on a
-# motion with three, tests/test_planning_breaks.py): ample to rank plans 0.5 % apart
+# points of a segment where dense_energy reads the power: ample to rank plans 0.5 % apart
+# (docs/realtime.md, 'planning.formulation.energy')
 DENSE_POINTS = 513
 
 

@@ -1,7 +1,7 @@
 """Distance from an obstacle centre to the arm's link segments (paper eq. 16, as segments).
 
 The paper's code measured the distance to the infinite line through a link;
-here it is the distance to the segment (each moving link of planning.kinematics: between
+here it is the distance to the segment (each moving link of planning.formulation.kinematics: between
 consecutive joint origins and to the flange; on the Lynxmotion shoulder-elbow and
 elbow-end effector),
 via the clamped projection. The distance to a segment is continuously
@@ -15,7 +15,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from planning.kinematics import ArmGeometry
+from planning.formulation.kinematics import ArmGeometry
 
 
 def segment_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -48,3 +48,10 @@ def symbolic_link_clearances(geometry: ArmGeometry, q, obstacle) -> list:
     points = geometry.symbolic_points(q)
     return [symbolic_segment_distance(obstacle, points[i], points[j], length)
             for (i, j), length in zip(geometry.links, geometry.link_lengths, strict=True)]
+
+
+def predicted_clearance(geometry: ArmGeometry, trajectory, forecast) -> float:
+    """Smallest clearance (m) of a motion's links to an obstacle forecast
+    (planning.types.ObstacleForecast) at its sample times."""
+    q = trajectory.position(forecast.times)
+    return float(link_clearances(geometry, q, forecast.centres).min())

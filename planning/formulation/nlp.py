@@ -2,13 +2,13 @@
 
 Decision variables x = [free polynomial coefficients (dof x (degree - 1), row-major),
 e (N)]: e_i >= |P(s_i)| is the epigraph of the absolute power, so the objective
-sigma sum_i w_i e_i (planning.quadrature; the paper's w_i = 1/N, s_i = i/N)
+sigma sum_i w_i e_i (planning.formulation.quadrature; the paper's w_i = 1/N, s_i = i/N)
 + alpha sum_k w_k sum_links max(0, lambda - D_link,k)^2
 is smooth enough for exact derivatives. Parameters p = [q0, qd0, sigma, q_end,
 obstacle centres (3 K), their normalized times s_k (K), weights w_k (K), the
 normalized times of each joint's turning points (dof x (degree - 1)) and 0/1 flags
 saying which of them are real, the goal-limit signs and quotient turning points
-(planning.limits), alpha, and the split quadrature's breaks (planning.breaks)], so
+(planning.formulation.limits), alpha, and the split quadrature's breaks (planning.formulation.breaks)], so
 a re-plan changes only numbers: the solver is built once and warm-started.
 
 Joint limits hold at fixed interior samples and, exactly, at the turning points
@@ -24,17 +24,17 @@ import casadi as ca
 import numpy as np
 
 from identification.torque_model import TorqueModel
-from planning.clearance import symbolic_link_clearances
 from planning.config import PlannerConfig
-from planning.limits import quotient
-from planning.quadrature import energy_nodes
-from planning.trajectory import power_basis
+from planning.formulation.clearance import symbolic_link_clearances
+from planning.formulation.limits import quotient
+from planning.formulation.quadrature import energy_nodes
+from planning.formulation.trajectory import power_basis
 
 
 def turning_slots(config: PlannerConfig) -> tuple[int, int, int]:
     """How often a joint polynomial can turn (degree - 1), the order of the goal's zero of
     q - goal at s = 1 (2 when arriving at rest) and the turning-point slots of the goal-limit
-    quotient (planning.limits)."""
+    quotient (planning.formulation.limits)."""
     extrema, order = config.degree - 1, 2 if config.rest_at_goal else 1
     return extrema, order, extrema - order
 
@@ -44,7 +44,7 @@ class Site:
     """One use of a per-sample function in the rows (the torque model at a state, the link
     distances at a pose): the function (`inputs` -> `expression`, SX), its arguments in the
     NLP (expressions of x and p) and the symbol its value is in PlanningNLP.lifted_g
-    (planning.local_model differentiates each site in its own arguments)."""
+    (planning.anytime.local_model differentiates each site in its own arguments)."""
 
     kind: str
     inputs: tuple
@@ -62,8 +62,7 @@ class PlanningNLP:
                  goal_limits: tuple[int, ...] | None = None, elastic: bool = False):
         """goal_limits: the joints whose goal-limit quotient rows are built (default: all);
         a planner builds them only for joints whose goal is on a limit (elsewhere they are
-        free rows, which still cost the solver: measured on the UR5, warm re-plan median
-        15.2 -> 14.3 ms without them).
+        free rows, which still cost the solver (docs/realtime.md, 'planning.formulation.nlp')).
         elastic: clearance as rows D_link,k + v_link,k >= lambda with slacks v >= 0 (lbx)
         weighing alpha w_k v_link,k in the objective (an exact L1 penalty: a fixed weight
         above the rows' multipliers gives the constrained optimum, and where no motion
@@ -72,7 +71,7 @@ class PlanningNLP:
         dof, n, k = model.dof, config.energy_samples, config.obstacle_slots
         if config.degree < 3:
             raise ValueError(f"polynomial degree must be >= 3, got {config.degree}")
-        # the split rule's breaks (planning.breaks) are parameters, its nodes expressions
+        # the split rule's breaks (planning.formulation.breaks) are parameters, its nodes expressions
         self.breaks = ca.SX.sym("breaks", config.power_breaks
                                 if config.energy_quadrature == "split" else 0)
         self.nodes, self.weights = energy_nodes(config.energy_quadrature, n, self.breaks)
@@ -226,7 +225,7 @@ class PlanningNLP:
                 self._add(_poly(c[j, :], at, 0), config.lower[j], config.upper[j])
 
     def _goal_limit(self, j: int, goal, sign, turning, use) -> slice:
-        """Rows v >= 0 of planning.limits' quotient for joint j (at the fixed samples, at
+        """Rows v >= 0 of planning.formulation.limits' quotient for joint j (at the fixed samples, at
         s = 1 and at its Newton-corrected turning points); bounds are set per solve
         (Planner.bounds): [0, inf] when the goal is on a limit, free otherwise."""
         v = ca.horzcat(*quotient([self.coefficients[j, p] for p in range(self.config.degree + 1)],
@@ -256,9 +255,8 @@ def _torque_function(model: TorqueModel) -> tuple[tuple, bool]:
     return (function, (q, qd, qdd), tau), inline
 
 
-# Measured (CasADi 3.8, paper quadrature N = 10, 24 obstacle slots): the Lynxmotion's RNEA
-# (184 instructions) inlined is 4.0 MB of C and solves ~10 % faster than with call nodes;
-# the UR5's (642) inlined is 19.5 MB (gcc -O1: 6 min, 3.4 GB), with call nodes 5.9 MB (1 min)
+# a small torque model is inlined (faster solves), a large one called at each sample (its C
+# would be too large to compile) (docs/realtime.md, 'planning.formulation.nlp')
 INLINE_INSTRUCTIONS = 400
 
 

@@ -1,4 +1,4 @@
-"""The anytime SQP's local model of the elastic planning NLP (planning.nlp, elastic=True):
+"""The anytime SQP's local model of the elastic planning NLP (planning.formulation.nlp, elastic=True):
 one function of (x, p, multipliers) giving the objective, its gradient, the rows, their
 Jacobian in the polynomial coefficients and the coefficient block of the Lagrangian's
 Hessian, the derivatives taken through the NLP's sites (each use of the torque model or of
@@ -9,7 +9,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from planning.elastic_qp import Layout, slack_structure
+from planning.anytime.elastic_qp import Layout, slack_structure
 
 
 def local_function(nlp, name: str) -> ca.Function:
@@ -40,15 +40,13 @@ def local_function(nlp, name: str) -> ca.Function:
 
 def through_sites(nlp, lam, coefficients) -> tuple[ca.SX, ca.SX, ca.SX]:
     """The rows g, their Jacobian in the coefficients and the coefficient block of the
-    Hessian of lam'g, by the chain rule through the NLP's sites (planning.nlp.Site): the
+    Hessian of lam'g, by the chain rule through the NLP's sites (planning.formulation.nlp.Site): the
     lifted rows are cheap expressions of the coefficients and the sites' outputs y, and each
     site is differentiated in its own arguments by one call of its derivative function (value,
     Jacobian, Hessian of seed'output), the seed being d(lam'g)/dy. CasADi's AD through the
     whole rows takes one forward-over-adjoint sweep of every site per coefficient instead
-    (18 on the UR5, where a pose's distances vary in 6 joint angles). Measured, one compiled
-    evaluation: UR5 1.4-1.7 -> 0.31-0.46 ms (2.5-3.5 -> 0.59-0.76 ms with torque limits);
-    the Lynxmotion's with torque limits was over compiled.MAX_SOURCE_BYTES and ran in
-    CasADi's virtual machine at 0.76-0.81 ms, now compiled at 39 us. The sites' arguments
+    (18 on the UR5, where a pose's distances vary in 6 joint angles): several times slower
+    (docs/realtime.md, 'planning.anytime.local_model'). The sites' arguments
     must be affine in the coefficients and the lifted rows linear in y (both checked)."""
     y = ca.vertcat(*(site.output for site in nlp.sites))
     lagrangian = ca.dot(lam, nlp.lifted_g)

@@ -1,4 +1,4 @@
-"""An anytime trust-region SQP for the elastic planning NLP (planning.nlp, elastic=True).
+"""An anytime trust-region SQP for the elastic planning NLP (planning.formulation.nlp, elastic=True).
 
 The NLP's slacks enter linearly: the power epigraph e (rows P - e <= 0, -P - e <= 0) and the
 clearance slacks v (rows D + v >= lambda, v >= 0). After every step they are reset to the
@@ -24,16 +24,15 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from planning import compiled
-from planning import qp_kernels as kernels
-from planning.budget import RECENT, Clock
-from planning.elastic_qp import VIOLATED, Frame, Layout, Point, linear_change, step
+from planning.anytime import qp_kernels as kernels
+from planning.anytime.budget import RECENT, Clock
+from planning.anytime.elastic_qp import VIOLATED, Frame, Layout, Point, linear_change, step
+from planning.formulation import compiled
 
 CONVERGED, BUDGET, STALLED, SETTLED = "converged", "budget", "stalled", "settled"
 # an accepted step that lowered the merit by less than this share of the objective ends the
-# solve unconverged (SETTLED; the next re-plan goes on from it): measured on the UR5's
-# re-plans, the ones stopped by the budget gained 0.03 % (median) in their last step and
-# 0.3 % in all, at ~3 ms an iteration
+# solve unconverged (SETTLED; the next re-plan goes on from it): such steps gain little for
+# their CPU (docs/realtime.md, 'planning.anytime.sqp')
 SETTLED_SHARE = 2e-4
 # predicted decrease (relative to the objective) below which a point is taken as optimal: the
 # energy is nearly flat along many motions, where steps of 1e-8 went on for 100+ iterations
@@ -58,7 +57,7 @@ class Solution:
 
 class AnytimeSQP:
     """The solver for one elastic NLP: local evaluations by `local` (a compiled
-    planning.local_model.local_function), the QPs by DAQP."""
+    planning.anytime.local_model.local_function), the QPs by DAQP."""
 
     def __init__(self, local: ca.Function, layout: Layout, lbx: np.ndarray, rows: int):
         self.local, self.layout, self.lbx = compiled.Buffered(local), layout, np.asarray(lbx, float)
@@ -182,8 +181,7 @@ class AnytimeSQP:
             elif ratio > 0.5 and step_size > 0.99 * radius:
                 # the energy is nearly flat along many motions (a conservative model's power
                 # keeps its sign): the model's decrease is then ~linear and the step rides the
-                # boundary, measured at ratios 0.6-0.8; growing only above 0.75 took 171
-                # iterations on a random crossing
+                # boundary at ratios below 0.75 (docs/realtime.md, 'planning.anytime.sqp')
                 radius = min(2.0 * radius, 10.0)
         self.solve_ms += 1e3 * (time.thread_time() - entered)
         return Solution(point.x, point.f, lam_g, lam_x, status, iterations,
@@ -192,8 +190,8 @@ class AnytimeSQP:
     def _restored(self, point: Point, p, lbg, ubg, lam) -> Point:
         """The point with its equality rows restored by one least-change Newton step in the
         coefficients where it leaves them (a cold start point with bumps reaches the goal but
-        not at rest: measured on the UR5, the rest rows 7 rad/s off, which the trust region
-        then took the whole budget to mend); the point as it is otherwise."""
+        not at rest, which the trust region would take the whole budget to mend,
+        (docs/realtime.md, 'planning.anytime.sqp')); the point as it is otherwise."""
         point.violation = _violation(point.g, lbg, ubg)
         equal = np.flatnonzero(lbg == ubg)
         residual = point.g[equal] - lbg[equal]
@@ -207,7 +205,7 @@ class AnytimeSQP:
         return restored if restored.violation < point.violation else point
 
     def _qp(self, point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last):
-        """planning.elastic_qp.step, its DAQP time counted in spent_ms."""
+        """planning.anytime.elastic_qp.step, its DAQP time counted in spent_ms."""
         result = step(point, lbg, ubg, frame, radius, nu, last, self.layout)
         if result is None:
             return None
@@ -218,8 +216,8 @@ class AnytimeSQP:
         """A second-order correction (Fletcher): the QP again with the rows' values at the
         trial point less their linear change, c = g(trial) - J (trial - x), so the step
         lands on the rows' curved surfaces; the corrected trial point and its multipliers,
-        or None. Measured: near a minimum-violation plan's kinks the plain steps were
-        refused and accepted in turn, halving the progress each time."""
+        or None: near a minimum-violation plan's kinks plain steps alone make slow progress
+        (docs/realtime.md, 'planning.anytime.sqp')."""
         shifted = Point(point.x, point.f,
                         trial.g - linear_change(point, trial.x - point.x, self.layout),
                         point.grad, point.jac, point.hess, point.violation)

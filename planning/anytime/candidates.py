@@ -1,5 +1,5 @@
 """The choice among a solve's accepted iterates (planning.anytime): each one checked on the
-whole forecast, the joint limits and the torques (planning.safety), ranked within the hard
+whole forecast, the joint limits and the torques (planning.anytime.safety), ranked within the hard
 limits first, then keeping the threshold, then by the objective the SQP minimizes."""
 
 from __future__ import annotations
@@ -8,11 +8,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planning.anytime.elastic_qp import Point
+from planning.anytime.safety import Safety
 from planning.config import PlannerConfig
-from planning.elastic_qp import Point
-from planning.limits import LIMIT_TOLERANCE
-from planning.safety import Safety
-from planning.trajectory import PolynomialTrajectory
+from planning.formulation.limits import LIMIT_TOLERANCE
+from planning.formulation.trajectory import PolynomialTrajectory
 
 HARD_TOLERANCE = 1e-6  # L1 violation of the goal and limit rows an iterate may keep
 TORQUE_TOLERANCE = 1e-6  # N m
@@ -45,8 +45,8 @@ def choose(points: list[Point], motion, check, config: PlannerConfig,
     slacks sit (v = max(0, lambda - D) of the rows its solve had). They are checked from the
     lowest objective up: the first that keeps the threshold and the hard limits is the best
     (any later one has a larger objective). Once a candidate within the hard limits misses
-    the threshold, a later one can only be better by keeping it (measured: 220 of 382
-    replayed re-plans ended on such a candidate, every iterate checked): one whose own rows
+    the threshold, a later one can only be better by keeping it (a common end of a re-plan,
+    (docs/realtime.md, 'planning.anytime.candidates')): one whose own rows
     already miss it is passed over unchecked, the others have their clearance alone checked
     first."""
     best, checked = None, 0

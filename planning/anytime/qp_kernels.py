@@ -1,9 +1,9 @@
-"""The array work of one anytime-SQP QP (planning.elastic_qp.step), compiled by numba: the
+"""The array work of one anytime-SQP QP (planning.anytime.elastic_qp.step), compiled by numba: the
 slacks' branches at a point, the dense QP DAQP solves, and its solution unpacked into the
-NLP's step and multipliers. Measured in numpy on 391 replayed warm re-plans (Lynxmotion)
-this was ~60 small array calls a QP, 150-170 us of Python around DAQP's ~45 us.
+NLP's step and multipliers: in numpy, many small array calls a QP cost more than DAQP
+itself (docs/realtime.md, 'planning.anytime.qp_kernels').
 
-Conventions as planning.elastic_qp: DAQP's variables are the kept columns, then one elastic
+Conventions as planning.anytime.elastic_qp: DAQP's variables are the kept columns, then one elastic
 column per violated hard row; its multipliers are < 0 where a lower bound is active. A
 slack "item" is a power sample (rows above/below, slack e) or a clearance row (row D + v,
 slack v), power samples first.
@@ -16,8 +16,8 @@ import numpy as np
 
 _JIT = {"cache": True, "nogil": True}
 # the entry points are compiled when this module loads (from numba's cache after the first
-# time), for these argument types only: a plan never pays for a compilation (measured: 5.3 s
-# inside the first cold plan when compiled on first call), and a call with other types fails
+# time), for these argument types only: a plan never pays for a compilation (seconds,
+# (docs/realtime.md, 'planning.anytime.qp_kernels')), and a call with other types fails
 # instead of compiling
 
 

@@ -1,16 +1,16 @@
 """Plans and re-plans of Algorithm 2 by the anytime elastic SQP (PlannerConfig.replanner
-"sqp"): clearance as rows D >= lambda with an L1 slack of fixed weight (planning.nlp,
-elastic=True), solved by planning.sqp under a CPU budget, every accepted iterate checked on
-the whole forecast, the joint limits and the torque limits (planning.safety).
+"sqp"): clearance as rows D >= lambda with an L1 slack of fixed weight (planning.formulation.nlp,
+elastic=True), solved by planning.anytime.sqp under a CPU budget, every accepted iterate checked on
+the whole forecast, the joint limits and the torque limits (planning.anytime.safety).
 
 A plan returns the best safe iterate (least energy among those keeping the threshold within
 the penalty tolerance, the limits and the torques), else the one that misses the threshold
 least (a minimum-violation plan: its status says by how many mm); one stopped by its budget
-(planning.budget) unconverged has status ITERATE, and Algorithm 2 re-plans from it at the
+(planning.anytime.budget) unconverged has status ITERATE, and Algorithm 2 re-plans from it at the
 next sample. The NLP sees the obstacle samples screened from the check's own clearances
-(planning.screening's rule); a round re-screens where the chosen iterate dips unseen or
+(planning.formulation.screening's rule); a round re-screens where the chosen iterate dips unseen or
 leaves a limit between its constrained points; the torque rows join (a second NLP, as
-planning.solver's pair) when an iterate overdrives a motor.
+planning.penalty.solver's pair) when an iterate overdrives a motor.
 """
 
 from __future__ import annotations
@@ -22,16 +22,19 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from planning import compiled, local_model, sqp
-from planning.budget import Clock, RoundCosts
-from planning.candidates import TORQUE_TOLERANCE, Candidate, choose
-from planning.limits import LIMIT_TOLERANCE
-from planning.nlp import PlanningNLP
-from planning.realtime_iteration import ITERATE
-from planning.safety import SafetyCheck
-from planning.screening import MARGIN, near_samples, on_horizon, uncovered
-from planning.solver import ObstacleForecast, Planner, SegmentPlan
+from identification.torque_model import TorqueModel
+from planning.anytime import local_model, sqp
+from planning.anytime.budget import Clock, RoundCosts
+from planning.anytime.candidates import TORQUE_TOLERANCE, Candidate, choose
+from planning.anytime.safety import SafetyCheck
+from planning.config import PlannerConfig
+from planning.formulation import compiled
+from planning.formulation.limits import LIMIT_TOLERANCE
+from planning.formulation.nlp import PlanningNLP
+from planning.formulation.problem import ProblemNumbers
+from planning.formulation.screening import MARGIN, near_samples, on_horizon, uncovered
 from planning.starts import start_points
+from planning.types import ITERATE, ObstacleForecast, SegmentPlan
 
 CONVERGED = "converged"
 MIN_VIOLATION = "minimum violation"
@@ -48,12 +51,12 @@ class _Problem:
     layout: tuple
 
 
-class Anytime:
-    """The anytime planner of one Planner (its model and configuration)."""
+class Anytime(ProblemNumbers):
+    """The anytime SQP's plans of one torque model and configuration."""
 
-    def __init__(self, planner: Planner):
-        self.planner, self.config = planner, planner.config
-        self.check = SafetyCheck(planner.model, self.config, self.config.compile_code)
+    def __init__(self, model: TorqueModel, config: PlannerConfig):
+        self.model, self.config = model, config
+        self.check = SafetyCheck(model, config, config.compile_code)
         self._problems: dict[tuple, _Problem] = {}
         self._prepared: set[tuple] = set()
         self.rounds = RoundCosts()
@@ -64,29 +67,29 @@ class Anytime:
     def prepare(self, goal) -> None:
         """Build (and compile) this goal's NLPs ahead of the plans, and call each once:
         seconds, not plan time."""
-        key = self.planner._goal_limits(goal)
+        key = self._goal_limits(goal)
         if key in self._prepared:
             return
         self._prepared.add(key)
         self.problem(goal, False)
         if self.config.torque_limit is not None:
             self.problem(goal, True)
-        # a first plan pays for loading the code and the solvers' first calls (measured
-        # ~9 ms on the Lynxmotion): one throw-away plan, from the goal to itself
+        # a first plan pays for loading the code and the solvers' first calls
+        # (docs/realtime.md, 'planning.anytime.solver'): one throw-away plan, from the goal to itself
         lower, upper = np.asarray(self.config.lower), np.asarray(self.config.upper)
         start = np.clip(np.asarray(goal, float) + 0.1, lower, upper)
         far = ObstacleForecast(np.array([0.5, 1.0]), np.full((2, 3), 10.0))
-        self.plan(start, np.zeros(len(start)), 0.0, 1.0, goal, far, budget_ms=5.0)
+        self.solve(start, np.zeros(len(start)), 0.0, 1.0, goal, far, budget_ms=5.0)
         for problem in self._problems.values():  # the first calls' costs predict nothing
             problem.sqp.forget()
         self.rounds.clear()
 
     def problem(self, goal, torque: bool) -> _Problem:
-        key = (self.planner._goal_limits(goal), torque)
+        key = (self._goal_limits(goal), torque)
         if key not in self._problems:
             config = self.config if torque else dataclasses.replace(self.config,
                                                                     torque_limit=None)
-            nlp = PlanningNLP(self.planner.model, config, key[0], elastic=True)
+            nlp = PlanningNLP(self.model, config, key[0], elastic=True)
             build = compiled.function if self.config.compile_code else (lambda f: f)
             local = build(local_model.local_function(nlp, "elastic_local"))
             parts = compiled.Buffered(build(ca.Function("elastic_parts", [nlp.x, nlp.p],
@@ -95,20 +98,20 @@ class Anytime:
                 local, local_model.layout_of(nlp), nlp.lbx, nlp.g.numel()), parts, ("elastic",) + key)
         return self._problems[key]
 
-    def plan(self, q0, qd0, t_begin: float, duration: float, goal,
+    def solve(self, q0, qd0, t_begin: float, duration: float, goal,
              forecast: ObstacleForecast | None, warm: SegmentPlan | None = None,
              x0: np.ndarray | None = None, budget_ms: float | None = None
              ) -> tuple[SegmentPlan, float, float]:
         """One plan (cold from x0, default the initial guess) or re-plan (warm); the plan and
         its wall and CPU time (ms, end to end)."""
         wall, cpu = time.perf_counter(), time.thread_time()
-        config, planner = self.config, self.planner
-        clock = Clock(config.iteration_ms)  # what the budget counts
-        budget = config.replan_budget_ms if budget_ms is None else budget_ms
+        config = self.config
+        clock = Clock(config.anytime.iteration_ms)  # what the budget counts
+        budget = config.anytime.replan_budget_ms if budget_ms is None else budget_ms
         times, centres = on_horizon(forecast, t_begin, duration)
         if warm is None:
-            x0 = planner.initial_guess(q0, qd0, duration, goal) if x0 is None else x0
-            reference = planner.trajectory(x0, q0, qd0, t_begin, duration)
+            x0 = self.initial_guess(q0, qd0, duration, goal) if x0 is None else x0
+            reference = self.trajectory(x0, q0, qd0, t_begin, duration)
         else:
             reference = warm.trajectory.restrict(t_begin, duration)
         torque = warm is not None and warm.layout[-1:] == (True,)
@@ -122,9 +125,9 @@ class Anytime:
             links = check.links(reference.coefficients)  # what the screening needs
             slots = near_samples(links.min(axis=1), config.threshold,
                                  config.obstacle_slots)
-            p = planner.parameters(q0, qd0, duration, goal,
+            p = self.parameters(q0, qd0, duration, goal,
                                    ObstacleForecast(times[slots], centres[slots]), t_begin,
-                                   reference, config.elastic_weight)
+                                   reference, config.anytime.elastic_weight)
             lbg, ubg = self._bounds(problem, goal, links[slots])
             start, lam_g, lam_x = self._start(problem, reference, times[slots], last)
             points: list[sqp.Point] = []
@@ -134,7 +137,7 @@ class Anytime:
                                                 per_point_ms=self.rounds.check_ms(clock))
             solved = clock.ms()
             iterations += count
-            chosen, checked = choose(points, lambda x: planner.trajectory(
+            chosen, checked = choose(points, lambda x: self.trajectory(
                 x, q0, qd0, t_begin, duration), check, config, problem.sqp.layout.v)
             chose = clock.ms()
             converged = solution.status == sqp.CONVERGED and chosen.x is solution.x
@@ -169,10 +172,10 @@ class Anytime:
 
     def round_ms(self, clock: Clock | None = None, problem: _Problem | None = None) -> float:
         """What a round of a plan with two iterations (of the problem's, else of any
-        problem's) is expected to cost (planning.budget.RoundCosts)."""
+        problem's) is expected to cost (planning.anytime.budget.RoundCosts)."""
         iteration = max((other.sqp.iteration_ms for other in self._problems.values()),
                         default=0.0) if problem is None else problem.sqp.iteration_ms
-        return self.rounds.round_ms(clock or Clock(self.config.iteration_ms), iteration)
+        return self.rounds.round_ms(clock or Clock(self.config.anytime.iteration_ms), iteration)
 
     def rank(self, plan: SegmentPlan) -> tuple[bool, float]:
         """Sort key of candidate plans (as planning.starts.rank, compiled): usable first,
@@ -184,18 +187,18 @@ class Anytime:
                 budget_ms: float) -> SegmentPlan:
         """The best (planning.starts.rank) of the plan from `warm` and of cold plans from
         `starts` start points (planning.starts), each with budget_ms of CPU: a multi-start
-        re-plan (PlannerConfig.replan_starts; the realtime study's references)."""
+        re-plan (AnytimeOptions.replan_starts; the realtime study's references)."""
         segment = (q0, qd0, t_begin, duration, goal, forecast)
-        plans = [] if warm is None else [self.plan(*segment, warm, budget_ms=budget_ms)[0]]
-        for x0 in start_points(self.planner, q0, qd0, duration, goal, starts):
-            plans.append(self.plan(*segment, None, x0=x0, budget_ms=budget_ms)[0])
+        plans = [] if warm is None else [self.solve(*segment, warm, budget_ms=budget_ms)[0]]
+        for x0 in start_points(self, q0, qd0, duration, goal, starts):
+            plans.append(self.solve(*segment, None, x0=x0, budget_ms=budget_ms)[0])
         return min(plans, key=self.rank)
 
     def _bounds(self, problem: _Problem, goal, near: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The planner's bounds; the clearance rows of empty slots and of links the reference
         keeps more than MARGIN above the threshold free (their slacks leave the QP: a step
         that brings such a link near is caught by the check and re-screened)."""
-        lbg, ubg = self.planner.bounds(goal, problem.nlp)
+        lbg, ubg = self.bounds(goal, problem.nlp)
         rows, links = problem.nlp.clearance_rows, problem.nlp.links
         used = np.zeros((self.config.obstacle_slots, links), bool)
         used[: len(near)] = near < self.config.threshold + MARGIN
@@ -250,7 +253,7 @@ class Anytime:
             trajectory=chosen.trajectory, energy=float(parts[0]), penalty=float(parts[1]),
             success=chosen.hard == 0, status=status,
             iterations=0, solve_ms=0.0, solve_cpu_ms=0.0,
-            penalty_weight=self.config.elastic_weight, x=chosen.x,
+            penalty_weight=self.config.anytime.elastic_weight, x=chosen.x,
             multipliers=(lam_g, lam_x), layout=problem.layout, slot_times=slot_times,
             detour=detour)
 

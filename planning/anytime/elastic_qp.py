@@ -1,4 +1,4 @@
-"""The QP of one anytime-SQP iteration (planning.sqp): the Sl1QP model of the elastic planning
+"""The QP of one anytime-SQP iteration (planning.anytime.sqp): the Sl1QP model of the elastic planning
 NLP at a point, in the variables that have rows (a clearance slack whose row is free stays
 0), the hard rows the point violates given elastic columns, the coefficients in a box trust
 region, the slacks under a small proximal term, the power samples whose sign the step
@@ -15,7 +15,7 @@ from functools import cache
 import daqp
 import numpy as np
 
-from planning import qp_kernels as kernels
+from planning.anytime import qp_kernels as kernels
 
 QP_PRIMAL_TOLERANCE = 1e-10  # DAQP's (its default, 1e-6, let steps leave the trust region)
 PROXIMAL = 1e-2  # weight of the slacks' proximal term in each QP (vanishes at a fixed point; e,
@@ -27,7 +27,7 @@ SIGN_FLOOR = 1e-9  # a power sample this small (relative to the largest) keeps i
 # and one whose |P| is below HOLD x its largest linear change in the trust region
 HOLD = 0.1
 # inequality rows no step in the trust region can bring to a bound leave the QP (exact: each
-# would be inactive; on 382 replayed re-plans DAQP's rows 66 -> 52 at the median)
+# would be inactive; a smaller QP (docs/realtime.md, 'planning.anytime.elastic_qp'))
 DROP_UNREACHABLE = True
 
 
@@ -136,11 +136,9 @@ def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
     the step. A slack keeps its rows when its margin (|P|, |D - lambda|) is below HOLD
     times its largest linear change in the trust region (|grad|_1 radius); one whose
     linearized margin changes sign at the step all the same goes back, and the QP is
-    solved again. Measured on 8 random crossings' re-plans (Lynxmotion), with the power
-    samples held: DAQP 250 -> 160 us a step, 1 % of the steps solved twice (fixing every
-    sign: 40 %), re-plan CPU median 2.40 -> 1.99 ms; with the clearance rows held too
-    (391 replayed re-plans): DAQP 127 -> 47 us a step. The array work is compiled
-    (planning.qp_kernels)."""
+    solved again (fewer rows, rarely a second solve: (docs/realtime.md, 'planning.anytime.elastic_qp')).
+    The array work is compiled
+    (planning.anytime.qp_kernels)."""
     nc, spent, g, jac, x = layout.nc, 0.0, point.g, point.jac, point.x
     value, side, rate, slope, weight, held = kernels.branches(
         g, jac, point.grad, x, lbg, frame.above, frame.below, frame.e, frame.clearance,

@@ -1,13 +1,12 @@
 """Where the power is sampled and how the samples are weighted: E = sigma sum_i w_i |P(s_i)|.
 
 - "paper": the right Riemann sum of eq. (18), s_i = i/N, w_i = 1/N. With N = 10 the
-  optimizer can place power peaks between the samples (measured: the N = 10 optimum
-  spends more true energy than the N = 40 one).
+  optimizer can place power peaks between the samples (docs/realtime.md, 'planning.formulation.quadrature').
 - "gauss": Gauss-Legendre nodes and weights on [0, 1]; exact for polynomial power of
   degree 2N - 1 (|P| has kinks where P changes sign, so convergence there is slower).
 - "simpson": composite Simpson on N (odd) equally spaced points including both ends.
 - "split": Gauss-Legendre on each of the intervals between breakpoints where the power
-  changes sign (planning.breaks finds them on a reference motion; a solve is repeated
+  changes sign (planning.formulation.breaks finds them on a reference motion; a solve is repeated
   until they are those of its own solution): |P| is smooth inside each interval, so the
   rule converges as fast as for a polynomial. N / (breaks + 1) nodes per interval.
 Weights are dimensionless and sum to 1; s is normalized time.
