@@ -17,8 +17,8 @@ from harness.cli import main
 from harness.closeloop.measured import rigid_library
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from identification.closeloop.effects import sigmoid_friction
 from identification.closeloop.measured import close_loop_measured
+from identification.friction import sigmoid_friction
 from identification.signals import lynxmotion_motion
 
 SIGMOID = (0.08, 15.0, 0.03)  # phi1 N m, phi2 s/rad, phi3 rad/s on joint 1
