@@ -64,7 +64,7 @@ def test_a_log_with_only_dictionary_effects_is_fully_explained():
     assert not r.unexplained
     # after: the held-out error against the measured torque is the noise's
     held = slice(r.split, None)
-    noise_only = np.linalg.norm(tau[held] - clean[held] - r.model.declared.offsets, axis=0)
+    noise_only = np.linalg.norm(tau[held] - clean[held] - r.model.declared.bias, axis=0)
     assert np.all(r.error_after <= 1.1 * noise_only / np.linalg.norm(tau[held], axis=0))
 
 

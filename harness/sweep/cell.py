@@ -29,12 +29,12 @@ import numpy as np
 from scipy.linalg import LinAlgWarning
 from threadpoolctl import threadpool_limits
 
-from harness.commands.identify import choose_library
 from harness.data.generate import generate
 from harness.errors import UserError
 from harness.experiments.identification import oracle_design
 from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_chain, load_pinocchio
+from harness.robots.registry import load_pinocchio
+from harness.robots.torque_models import robot_identification
 from harness.sweep.grid import Cell
 from identification.errors import IdentificationError, LibraryRankWarning
 from identification.identify import identify
@@ -73,9 +73,15 @@ class CellFailure:
 
 
 @cache
+def identification(robot: str):
+    """(library, regressor) `torquebench identify` uses on robot's generated data by default
+    (cached per process)."""
+    return robot_identification(robot)
+
+
 def library(robot: str):
-    """The library `torquebench identify` uses on robot by default (cached per process)."""
-    return choose_library("auto", load_chain(robot).dof, robot)
+    """The library `torquebench identify` uses on robot by default."""
+    return identification(robot)[0]
 
 
 @cache
@@ -100,7 +106,8 @@ def joint_columns(lib, q, qd, qdd) -> list[np.ndarray]:
 
 
 def _coupled(robot: str, d) -> Predictor:
-    return identify(d.q, d.qd, d.qdd, d.tau, library(robot), holdout=0.0).model.torque
+    lib, regressor = identification(robot)
+    return identify(d.q, d.qd, d.qdd, d.tau, lib, 0.0, regressor=regressor).model.torque
 
 
 def _oracle(robot: str, d) -> Predictor:

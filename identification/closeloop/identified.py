@@ -40,9 +40,10 @@ from identification.closeloop.loop import (
     trace,
 )
 from identification.closeloop.residual import noise_sigma
+from identification.feature_model import IdentifiedModel
 from identification.identify import identify
 from identification.library.base import Library
-from identification.model import IdentifiedModel, model_from_dict
+from identification.model import model_from_dict, model_to_dict
 
 
 def identified_model(library: Library, q, qd, qdd, tau) -> IdentifiedModel:
@@ -53,7 +54,7 @@ def identified_model(library: Library, q, qd, qdd, tau) -> IdentifiedModel:
 
 def term_columns(model: IdentifiedModel, q, qd, qdd) -> list[np.ndarray]:
     """Per joint, the (n, k_j) torques of its kept terms at unit coefficient (N m)."""
-    spec = model.to_dict()
+    spec = model_to_dict(model)
     dof = int(spec["dof"])
     out = []
     for j, joint in enumerate(spec["joints"]):
@@ -108,7 +109,7 @@ def refit_kept(model: IdentifiedModel, terms: tuple[EffectTerm, ...], q, qd, qdd
         return model
     target = tau - effect_torque(terms, q, qd, qdd, payload)
     touched = np.any(effect_torque(terms, q, qd, qdd, payload) != 0, axis=0)
-    spec = model.to_dict()
+    spec = model_to_dict(model)
     for j, (X, joint) in enumerate(zip(term_columns(model, q, qd, qdd), spec["joints"],
                                        strict=True)):
         if X.shape[1] and touched[j]:  # a joint no effect acts on keeps its identification
