@@ -117,8 +117,8 @@ def identify(q, qd, qdd, tau, library, holdout: float = 0.25, tau_clean=None,
     held-out errors are NaN, never a training-data error under a held-out name."""
     regressor = choose_regressor(library, method) if regressor is None else regressor
     n_features = regressor.min_samples(library)
-    # thousands of rows by tens of columns: one BLAS thread is faster (no thread contention),
-    # by 10-100x on a loaded two-core machine
+    # thousands of rows by tens of columns: one BLAS thread is faster (no thread contention;
+    # docs/identification.md, 'identification.identify')
     with threadpool_limits(limits=1, user_api="blas"):
         q, qd, qdd, tau, n = split_training(q, qd, qdd, tau, library.dof, library.name, holdout,
                                             n_features)
