@@ -105,6 +105,11 @@ class KinematicLibrary:
                                    np.asarray(qdd, float).T)
         return np.asarray(out).reshape(self.dof, n, len(self)).transpose(1, 0, 2)
 
+    def joint_designs(self, q, qd, qdd) -> list[np.ndarray]:
+        """Per joint, the (n, p_j) torques of the base atoms acting on it."""
+        design = self.evaluate(q, qd, qdd)
+        return [design[:, j][:, self.acts_on[j]] for j in range(self.dof)]
+
     def symbolic(self, q, qd, qdd):
         """(dof, p) CasADi expression of the base atoms at column vectors q, qd, qdd."""
         return self.function(q, qd, qdd)
