@@ -92,7 +92,8 @@ def robot_identification(robot: str, dof: int | None = None, library: str = "aut
     """(library, regressor) of an identification on robot, chosen by identification.choice
     from the names `identify --library/--prior/--method` take (measured: the data are a
     measured log); the robot's inputs (its libraries, its nominal inertias) made here.
-    The CLI, the sweep and the bench all identify with this."""
+    The CLI, the sweep and the bench all identify with this (the bench's perturbed prior
+    alone builds its ConsistentRegressor per draw)."""
     lib = library_named(library_name(library, prior, robot_entry(robot).libraries), robot, dof)
     regressor = choose_fit(lib, choose_prior(prior, measured, lib), method,
                            lambda: PinocchioModel(load_pinocchio(robot)).atom_parameters())
