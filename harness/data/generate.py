@@ -13,7 +13,7 @@ import mujoco
 import numpy as np
 
 from harness.data.dataset import Dataset
-from harness.data.excitation import FourierExcitation, design_excitation, normalized_condition
+from identification.excitation.fourier import FourierExcitation, design_excitation, normalized_condition
 from harness.data.sensors import SensorConfig, torque_noise
 from harness.data.tracking import simulate_measured
 from harness.errors import UserError

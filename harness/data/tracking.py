@@ -15,7 +15,7 @@ from dataclasses import replace
 import mujoco
 import numpy as np
 
-from harness.data.excitation import FourierExcitation
+from identification.excitation.fourier import FourierExcitation
 from harness.data.sensors import SensorConfig, encoder, estimate_derivatives
 from harness.errors import UserError
 from harness.robots.baseline import PinocchioModel
