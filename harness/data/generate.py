@@ -47,6 +47,14 @@ def _condition_fn(plant: Plant, rate: float, samples: int):
     return condition
 
 
+def default_excitation(p: Plant, samples: int, seed: int) -> tuple[FourierExcitation, float]:
+    """generate's own excitation for `samples` points at SAMPLE_RATE: the best-conditioned
+    of seeded random Fourier series in the joint limits and the URDF's speed limits."""
+    lo, hi = p.limits()
+    return design_excitation(lo, hi, seed, _condition_fn(p, SAMPLE_RATE, samples),
+                             velocity=p.velocity_limits())
+
+
 def _validate(samples: int, noise: float, bias: float) -> None:
     if samples < MIN_SAMPLES:
         raise UserError(f"--samples must be at least {MIN_SAMPLES}, got {samples}")
@@ -79,8 +87,7 @@ def generate(
     """One dataset of `samples` points at SAMPLE_RATE Hz; noise is a fraction of torque std."""
     _validate(samples, noise, bias)
     p = load_plant(plant)
-    lo, hi = p.limits()
-    exc, cond = design_excitation(lo, hi, seed, _condition_fn(p, SAMPLE_RATE, samples))
+    exc, cond = default_excitation(p, samples, seed)
     t = np.arange(samples) / SAMPLE_RATE
     rng = np.random.default_rng(seed + 1)
     meta = dict(plant=robot_reference(plant), mode=mode, noise=noise, bias=bias, seed=seed, dof=p.dof,
