@@ -6,7 +6,7 @@ import os
 from pathlib import Path
 
 from harness.data.excitation_file import write_trajectory
-from harness.data.excite import DEFAULT_ACCELERATION, design_for
+from harness.data.excite import DEFAULT_ACCELERATION, ITERATIONS, design_for
 from harness.errors import UserError
 
 
@@ -19,13 +19,18 @@ def register(sub) -> None:
     p.add_argument("--accel-limit", dest="accel_limit", type=float, default=DEFAULT_ACCELERATION,
                    help=f"joint acceleration limit (rad/s^2, default {DEFAULT_ACCELERATION:g})")
     p.add_argument("--seed", type=int, default=0, help="seed of the random starting candidates")
+    p.add_argument("--iterations", type=int, default=ITERATIONS,
+                   help=f"optimizer (SLSQP) iterations at most (default {ITERATIONS})")
     p.add_argument("--out", required=True, help="output TRAJ.csv: t,q1..qn,qd1..qdn,qdd1..qddn")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
     _check_writable(Path(args.out))
-    designed = design_for(args.robot, args.duration, args.rate, args.accel_limit, args.seed)
+    if args.iterations < 0:
+        raise UserError(f"--iterations must be >= 0, got {args.iterations}")
+    designed = design_for(args.robot, args.duration, args.rate, args.accel_limit, args.seed,
+                          args.iterations)
     write_trajectory(args.out, designed.trajectory)
     n = len(designed.trajectory.t)
     print(f"wrote {args.out}: {n} samples at {args.rate:g} Hz over {args.duration:g} s, at rest at "

@@ -33,6 +33,7 @@ from identification.excitation.regressor import AtomRegressor
 
 CAPSULE_FRACTION = 0.05  # of the reach: about the UR5's and the Panda's link radii
 DEFAULT_ACCELERATION = 10.0  # rad/s^2
+ITERATIONS = 60  # SLSQP's, at most: about a minute for a 7-joint arm
 CONDITION_POINTS = 200  # samples over the duration at which conditions are compared
 
 
@@ -89,7 +90,7 @@ def excitation_limits(plant: Plant, acceleration: float) -> ExcitationLimits:
 
 
 def design_for(robot: str, duration: float, rate: float, acceleration: float = DEFAULT_ACCELERATION,
-               seed: int = 0, iterations: int = 60) -> DesignedExcitation:
+               seed: int = 0, iterations: int = ITERATIONS) -> DesignedExcitation:
     """The robot's designed excitation sampled at rate (Hz) over [0, duration] s, ends
     included (both at rest); UserError on bad input or if it cannot be made collision-free."""
     for name, value in (("--duration", duration), ("--rate", rate), ("--accel-limit", acceleration)):

@@ -24,7 +24,7 @@ from scipy.optimize import minimize
 from identification.excitation.fourier import FourierExcitation
 
 CLEARANCE = 0.005  # m kept on the design grid: the closest approach may fall between its points
-TIGHTEN = 0.99  # of each bound on the optimization grid: the peak may fall between its points
+TIGHTEN = 0.985  # of each bound on the limit grid: 5 harmonics peak <= 1.2 % above 100 points
 HALVINGS = 12  # bisection steps walking a colliding optimum back towards its start
 SHRINK, SHRINKS = 0.8, 10  # a colliding candidate's swing shrinks about its centre pose
 
@@ -194,7 +194,7 @@ def optimize_excitation(
     candidates: int = 8,
     iterations: int = 60,
     design_points: int = 100,
-    limit_points: int = 200,
+    limit_points: int = 100,
     check_points: int = 1000,
 ) -> ExcitationDesign:
     """The designed excitation (see the module docstring), `duration` s long; clearance(q)
