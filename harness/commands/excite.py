@@ -18,6 +18,8 @@ def register(sub) -> None:
     p.add_argument("--rate", type=float, required=True, help="sample rate of the file (Hz)")
     p.add_argument("--accel-limit", dest="accel_limit", type=float, default=DEFAULT_ACCELERATION,
                    help=f"joint acceleration limit (rad/s^2, default {DEFAULT_ACCELERATION:g})")
+    p.add_argument("--harmonics", type=int, default=None,
+                   help="harmonics per joint (default: the highest near 0.5 Hz, 5 to 10)")
     p.add_argument("--seed", type=int, default=0, help="seed of the random starting candidates")
     p.add_argument("--iterations", type=int, default=ITERATIONS,
                    help=f"optimizer (SLSQP) iterations at most (default {ITERATIONS})")
@@ -30,7 +32,7 @@ def run(args) -> int:
     if args.iterations < 0:
         raise UserError(f"--iterations must be >= 0, got {args.iterations}")
     designed = design_for(args.robot, args.duration, args.rate, args.accel_limit, args.seed,
-                          args.iterations)
+                          args.iterations, args.harmonics)
     write_trajectory(args.out, designed.trajectory)
     n = len(designed.trajectory.t)
     print(f"wrote {args.out}: {n} samples at {args.rate:g} Hz over {args.duration:g} s, at rest at "

@@ -34,6 +34,9 @@ from identification.excitation.regressor import AtomRegressor
 CAPSULE_FRACTION = 0.05  # of the reach: about the UR5's and the Panda's link radii
 DEFAULT_ACCELERATION = 10.0  # rad/s^2
 ITERATIONS = 60  # SLSQP's, at most: about a minute for a 7-joint arm
+# the highest harmonic near 0.5 Hz: slower excitations left inertia weak against torque noise
+# scaled to the torque (docs/identification.md, 'Designed excitation')
+TOP_FREQUENCY, HARMONICS, MAX_HARMONICS = 0.5, (5, 10), 20  # Hz, default range, most allowed
 CONDITION_POINTS = 200  # samples over the duration at which conditions are compared
 
 
@@ -84,27 +87,39 @@ def _segment_distance(points: np.ndarray, a, b) -> np.ndarray:
     return np.linalg.norm(p + d1 * s[:, None] - q - d2 * t[:, None], axis=1)
 
 
+def default_harmonics(duration: float) -> int:
+    """Harmonics whose highest is near TOP_FREQUENCY over a period of duration s, within
+    HARMONICS."""
+    return int(np.clip(round(duration * TOP_FREQUENCY), *HARMONICS))
+
+
 def excitation_limits(plant: Plant, acceleration: float) -> ExcitationLimits:
     lo, hi = plant.limits()
     return ExcitationLimits(lo, hi, plant.velocity_limits(), np.full(plant.dof, acceleration))
 
 
 def design_for(robot: str, duration: float, rate: float, acceleration: float = DEFAULT_ACCELERATION,
-               seed: int = 0, iterations: int = ITERATIONS) -> DesignedExcitation:
+               seed: int = 0, iterations: int = ITERATIONS,
+               harmonics: int | None = None) -> DesignedExcitation:
     """The robot's designed excitation sampled at rate (Hz) over [0, duration] s, ends
-    included (both at rest); UserError on bad input or if it cannot be made collision-free."""
+    included (both at rest), with `harmonics` (default default_harmonics(duration)); UserError
+    on bad input or if it cannot be made collision-free."""
     for name, value in (("--duration", duration), ("--rate", rate), ("--accel-limit", acceleration)):
         if not np.isfinite(value) or value <= 0:
             raise UserError(f"{name} must be a finite number > 0, got {value:g}")
     if duration * rate < 2:
         raise UserError(f"--duration x --rate must give at least 2 samples, got {duration * rate:g}")
+    harmonics = default_harmonics(duration) if harmonics is None else harmonics
+    if not 1 <= harmonics <= MAX_HARMONICS:
+        raise UserError(f"--harmonics must be between 1 and {MAX_HARMONICS}, got {harmonics}")
     plant = load_plant(robot)
     limits = excitation_limits(plant, acceleration)
     regressor = AtomRegressor(robot_library(robot))
     clearance = capsule_clearance(robot)
     try:
         design = optimize_excitation(limits, duration, regressor, clearance, seed,
-                                     iterations=iterations)
+                                     harmonics=harmonics, iterations=iterations,
+                                     limit_points=20 * harmonics)
     except ValueError as exc:
         raise UserError(f"robot {robot}: {exc}") from None
     t = np.arange(int(round(duration * rate)) + 1) / rate
