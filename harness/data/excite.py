@@ -118,8 +118,7 @@ def design_for(robot: str, duration: float, rate: float, acceleration: float = D
     clearance = capsule_clearance(robot)
     try:
         design = optimize_excitation(limits, duration, regressor, clearance, seed,
-                                     harmonics=harmonics, iterations=iterations,
-                                     limit_points=20 * harmonics)
+                                     harmonics=harmonics, iterations=iterations)
     except ValueError as exc:
         raise UserError(f"robot {robot}: {exc}") from None
     t = np.arange(int(round(duration * rate)) + 1) / rate
