@@ -7,9 +7,10 @@ Position (inside a margin), velocity and acceleration limits are linear in the c
 on a dense time grid. The objective is the log condition number of the column-normalized
 regressor (passed in: any columns, e.g. identification's atoms and offsets) on a coarse grid,
 its gradient from the regressor's vector-Jacobian product; SLSQP from the best of seeded
-random candidates that meet the limits. A collision check passed in is not differentiable:
-an optimum that collides is walked back towards its start (every point of the segment meets
-the linear limits) until it does not.
+random candidates that meet the limits. A clearance passed in (the robot's distance to itself
+and the floor) is a constraint on the coarse grid, its gradient by finite differences; an
+optimum that still touches on a dense grid between those points is walked back towards its
+start (every point of the segment meets the linear limits) until it does not.
 """
 
 from __future__ import annotations
