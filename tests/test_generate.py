@@ -7,10 +7,10 @@ import sys
 import numpy as np
 import pytest
 
-from harness.data.excitation import random_excitation
 from harness.data.generate import generate
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
+from identification.excitation.fourier import random_excitation
 
 
 def run_cli(*args, cwd=None):

@@ -4,28 +4,41 @@ from __future__ import annotations
 
 import sys
 
+from harness.data.excitation_file import read_trajectory
 from harness.data.generate import generate
 from harness.io import write_npz
+from harness.robots.plant import load_plant
+
+SAMPLES = 4000  # without --excitation
 
 
 def register(sub) -> None:
     p = sub.add_parser("generate", help="torque data from MuJoCo (inverse dynamics or measured)")
     p.add_argument("--plant", "--robot", dest="plant", default="lynxmotion",
                    help="robot name (lynxmotion, double_pendulum, ur5, panda) or URDF/MJCF path")
-    p.add_argument("--samples", type=int, default=4000)
+    p.add_argument("--samples", type=int, default=None,
+                   help="samples (default 4000, or every row of --excitation)")
     p.add_argument("--noise", type=float, default=0.05, help="torque noise std / torque std")
     p.add_argument("--bias", type=float, default=0.2, help="noise mean in units of its std")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--mode", choices=["inverse", "measured"], default="inverse")
+    p.add_argument("--excitation", default=None, metavar="TRAJ.csv",
+                   help="generate along this excitation (from `torquebench excite`; inverse mode)")
     p.add_argument("--out", required=True, help="output .npz")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    ds = generate(args.plant, args.samples, args.noise, args.seed, args.mode, args.bias)
+    excitation = None
+    if args.excitation is not None:
+        excitation = read_trajectory(args.excitation, load_plant(args.plant).dof)
+    samples = args.samples if args.samples is not None else (
+        SAMPLES if excitation is None else len(excitation.t))
+    ds = generate(args.plant, samples, args.noise, args.seed, args.mode, args.bias,
+                  excitation=excitation)
     write_npz(args.out, **ds.arrays())
     meta = ds.meta
-    line = (f"wrote {args.out}: {args.samples} samples, mode {args.mode}, "
+    line = (f"wrote {args.out}: {samples} samples, mode {args.mode}, "
             f"noise {args.noise:g}, {_library(meta)}, "
             f"excitation design condition {meta['excitation_condition']:.3g}")
     print(line)

@@ -13,13 +13,14 @@ import mujoco
 import numpy as np
 
 from harness.data.dataset import Dataset
-from harness.data.excitation import FourierExcitation, design_excitation, normalized_condition
+from harness.data.excitation_file import Trajectory
 from harness.data.sensors import SensorConfig, torque_noise
 from harness.data.tracking import simulate_measured
 from harness.errors import UserError
 from harness.robots.baseline import PinocchioModel
 from harness.robots.plant import Plant, load_plant
 from harness.robots.registry import robot_reference
+from identification.excitation.fourier import FourierExcitation, design_excitation, normalized_condition
 from identification.regression.oracle import base_columns
 
 MIN_SAMPLES = 10
@@ -45,6 +46,31 @@ def _condition_fn(plant: Plant, rate: float, samples: int):
         return max(conds)
 
     return condition
+
+
+def default_excitation(p: Plant, samples: int, seed: int) -> tuple[FourierExcitation, float]:
+    """generate's own excitation for `samples` points at SAMPLE_RATE: the best-conditioned
+    of seeded random Fourier series in the joint limits and the URDF's speed limits."""
+    lo, hi = p.limits()
+    return design_excitation(lo, hi, seed, _condition_fn(p, SAMPLE_RATE, samples),
+                             velocity=p.velocity_limits())
+
+
+def _along(excitation: Trajectory, dof: int, samples: int, mode: str) -> tuple[np.ndarray, float]:
+    """The times of a given excitation's first `samples` states and its rate (Hz); UserError
+    unless it fits the plant and inverse mode (measured mode tracks generate's own)."""
+    if mode != "inverse":
+        raise UserError("--excitation needs --mode inverse: measured mode tracks generate's own "
+                        "excitation")
+    if excitation.q.shape[1] != dof:
+        raise UserError(f"the excitation has {excitation.q.shape[1]} joints, the robot {dof}")
+    if samples > len(excitation.t):
+        raise UserError(f"--samples {samples} exceeds the excitation's {len(excitation.t)} rows")
+    t = excitation.t[:samples]
+    step = np.diff(t)
+    if np.ptp(step) > 1e-6 * np.mean(step):
+        raise UserError("the excitation's samples must be evenly spaced in t")
+    return t, float(1.0 / np.mean(step))
 
 
 def _validate(samples: int, noise: float, bias: float) -> None:
@@ -75,16 +101,23 @@ def generate(
     mode: str = "inverse",
     bias: float = 0.2,
     sensors: SensorConfig | None = None,
+    excitation: Trajectory | None = None,
 ) -> Dataset:
-    """One dataset of `samples` points at SAMPLE_RATE Hz; noise is a fraction of torque std."""
+    """One dataset of `samples` points at SAMPLE_RATE Hz; noise is a fraction of torque std.
+    With an excitation (inverse mode only): along its first `samples` states, at its rate."""
     _validate(samples, noise, bias)
     p = load_plant(plant)
-    lo, hi = p.limits()
-    exc, cond = design_excitation(lo, hi, seed, _condition_fn(p, SAMPLE_RATE, samples))
-    t = np.arange(samples) / SAMPLE_RATE
+    rate = SAMPLE_RATE
+    if excitation is None:
+        exc, cond = default_excitation(p, samples, seed)
+        t = np.arange(samples) / SAMPLE_RATE
+    else:
+        exc = excitation
+        t, rate = _along(excitation, p.dof, samples, mode)
+        cond = _condition_fn(p, rate, samples)(exc)
     rng = np.random.default_rng(seed + 1)
     meta = dict(plant=robot_reference(plant), mode=mode, noise=noise, bias=bias, seed=seed, dof=p.dof,
-                samples=samples, rate=SAMPLE_RATE, excitation_condition=cond)
+                samples=samples, rate=rate, excitation_condition=cond)
     if mode == "inverse":
         q, qd, qdd = exc.evaluate(t)
         tau_clean = inverse_torques(p.model, q, qd, qdd)

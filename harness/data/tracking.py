@@ -15,11 +15,11 @@ from dataclasses import replace
 import mujoco
 import numpy as np
 
-from harness.data.excitation import FourierExcitation
 from harness.data.sensors import SensorConfig, encoder, estimate_derivatives
 from harness.errors import UserError
 from harness.robots.baseline import PinocchioModel
 from harness.robots.plant import Plant
+from identification.excitation.fourier import FourierExcitation
 from identification.metrics import rel_error
 
 OMEGA, ZETA = 30.0, 1.0  # rad/s, closed-loop bandwidth and damping of the tracking error

@@ -32,6 +32,12 @@ class Plant:
         hi = np.where(limited, self.model.jnt_range[ids, 1], np.pi)
         return lo, hi
 
+    def velocity_limits(self) -> np.ndarray:
+        """Joint speed limits (rad/s) from the URDF's <limit velocity> (Pinocchio's
+        velocityLimit); inf where none is declared (0, non-finite or huge)."""
+        v = np.asarray(self.pinocchio().velocityLimit, float)
+        return np.where(np.isfinite(v) & (v > 0) & (v < 1e10), v, np.inf)
+
     def pinocchio(self) -> pin.Model:
         """The plant's rigid-body model in Pinocchio (registry URDF or parsed MJCF); UserError
         if Pinocchio cannot read it: the excitation design, the estimated-state report and every

@@ -19,6 +19,8 @@ from __future__ import annotations
 import numpy as np
 
 from harness.data.generate import generate
+from harness.experiments.excitation import excitation_comparison
+from harness.experiments.excitation import markdown as excitation_markdown
 from harness.experiments.identification import (
     HOLDOUT,
     NOISE,
@@ -105,6 +107,9 @@ def run(ctx: Context) -> SectionResult:
                timing=True)]
     runs = [next_run(robot, seed) for seed in (QUICK_NEXT_RUNS if ctx.quick else NEXT_RUNS)]
     targets += rule_targets(runs)
+    excitation_targets, excitation = excitation_comparison(
+        robot, fits[default], default, baseline, judges[1], draws[0], ctx.quick)
+    targets += excitation_targets
     errors = np.median([d[default]["sines"] for d in draws], axis=0)
     oracle = np.median([d["oracle"]["sines"] for d in draws], axis=0)
     headline = [Row(f"Identified torque model ({default} library, {100 * NOISE:g} % noise, {SAMPLES} "
@@ -118,8 +123,9 @@ def run(ctx: Context) -> SectionResult:
                "oracle_parameters": draws[0]["oracle_parameters"],
                "draws": {f"{level:g}": [{k: v for k, v in d.items() if k != "models"} for d in ds]
                          for level, ds in by_level.items()},
-               "summary": summary, "next_run": runs}
-    md = "\n".join([_markdown(results, fits), "", *next_run_markdown(runs)])
+               "summary": summary, "next_run": runs, "excitation": excitation}
+    md = "\n".join([_markdown(results, fits), "", *next_run_markdown(runs), "",
+                    *excitation_markdown(excitation)])
     out = SectionResult(md, results, checks, targets, headline,
                         outputs={"model": model, "draws": draws})
     for extra in ctx.robot.extras:

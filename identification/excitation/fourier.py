@@ -64,6 +64,22 @@ def random_excitation(
     return FourierExcitation(centre, sin_coef * scale[:, None], cos_coef * scale[:, None], f0)
 
 
+def within_velocity(exc: FourierExcitation, velocity: np.ndarray | None,
+                    grid: int = 4001) -> FourierExcitation:
+    """exc with the swing of every joint whose speed exceeds velocity (rad/s, inf: none)
+    shrunk about the middle of its sweep until it does not; exc itself if none exceeds."""
+    if velocity is None:
+        return exc
+    q, qd, _ = exc.evaluate(np.linspace(0.0, exc.period, grid))
+    # 0.1 % under the limit: the grid may miss the true peak between its points
+    factor = np.minimum(1.0, 0.999 * np.asarray(velocity, float) / np.abs(qd).max(axis=0))
+    if np.all(factor >= 1.0):
+        return exc
+    middle = 0.5 * (q.min(axis=0) + q.max(axis=0))
+    return FourierExcitation(middle + factor * (exc.centre - middle), exc.sin_coef * factor[:, None],
+                             exc.cos_coef * factor[:, None], exc.f0)
+
+
 def normalized_condition(features: np.ndarray) -> float:
     """Condition number of a feature matrix with columns scaled to unit norm."""
     norms = np.linalg.norm(features, axis=0)
@@ -79,13 +95,15 @@ def design_excitation(
     seed: int,
     condition: Callable[[FourierExcitation], float],
     candidates: int = 16,
+    velocity: np.ndarray | None = None,
     **kwargs,
 ) -> tuple[FourierExcitation, float]:
-    """The best-conditioned of `candidates` seeded random excitations, with its condition."""
+    """The best-conditioned of `candidates` seeded random excitations, with its condition;
+    each held within the joint speeds `velocity` (rad/s) when given (within_velocity)."""
     rng = np.random.default_rng(seed)
     best, best_cond = None, np.inf
     for _ in range(candidates):
-        exc = random_excitation(lower, upper, rng, **kwargs)
+        exc = within_velocity(random_excitation(lower, upper, rng, **kwargs), velocity)
         cond = condition(exc)
         if best is None or cond < best_cond:
             best, best_cond = exc, cond

@@ -1,0 +1,134 @@
+"""A robot's designed excitation (identification.excitation.design) and its CSV file.
+
+The glue the design needs from the robot: its joint limits (MuJoCo's positions, the URDF's
+speeds, the user's acceleration limit), the identification's columns (the robot's kinematic
+base atoms with armature, viscous and Coulomb atoms, plus an offset per joint) and a
+collision check. Collisions are checked on capsules along the planner's links (joint origin
+to joint origin; the registry's robots lose their meshes when loaded): radius
+CAPSULE_FRACTION of the arm's reach (at least the Lynxmotion's LINK_RADIUS), between links
+that share no joint and do not touch at q = 0, and against the floor z = 0 for every link
+end a joint moves.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from harness.data.excitation_file import Trajectory
+from harness.data.generate import SAMPLE_RATE, default_excitation
+from harness.errors import UserError
+from harness.robots.arm import arm_geometry
+from harness.robots.plant import Plant, load_plant
+from harness.robots.scene import LINK_RADIUS
+from harness.robots.torque_models import robot_library
+from identification.excitation.design import (
+    ExcitationDesign,
+    ExcitationLimits,
+    log_condition,
+    optimize_excitation,
+)
+from identification.excitation.regressor import AtomRegressor
+
+CAPSULE_FRACTION = 0.05  # of the reach: about the UR5's and the Panda's link radii
+DEFAULT_ACCELERATION = 10.0  # rad/s^2
+ITERATIONS = 60  # SLSQP's, at most: about a minute for a 7-joint arm
+# the highest harmonic near 0.5 Hz: slower excitations left inertia weak against torque noise
+# scaled to the torque (docs/identification.md, 'Designed excitation')
+TOP_FREQUENCY, HARMONICS, MAX_HARMONICS = 0.5, (5, 10), 20  # Hz, default range, most allowed
+CONDITION_POINTS = 200  # samples over the duration at which conditions are compared
+
+
+@dataclass(frozen=True)
+class DesignedExcitation:
+    """A robot's design, its written samples, and the conditions of the designed and of
+    generate's default excitation on the same columns and duration."""
+
+    design: ExcitationDesign
+    trajectory: Trajectory
+    condition: float
+    default_condition: float
+    limits: ExcitationLimits
+
+
+def capsule_clearance(robot: str):
+    """clearance(q (n, dof)) -> (n,): the smallest distance (m) between the robot's capsules
+    and between them and the floor (see the module docstring); <= 0: touching."""
+    geometry = arm_geometry(robot)
+    links = np.array(geometry.links)
+    radius = max(LINK_RADIUS, CAPSULE_FRACTION * float(sum(geometry.link_lengths)))
+    home = geometry.points(np.zeros(geometry.dof))
+    pairs = [(a, b) for a in range(len(links)) for b in range(a + 1, len(links))
+             if not set(links[a]) & set(links[b])
+             and _segment_distance(home, links[a], links[b])[0] > 2 * radius]
+    moving = sorted(set(links.ravel()) - set(geometry.fixed_points))
+
+    def clearance(q: np.ndarray) -> np.ndarray:
+        points = geometry.points(q)
+        gap = np.min(points[:, moving, 2], axis=1) - radius
+        for a, b in pairs:
+            gap = np.minimum(gap, _segment_distance(points, links[a], links[b]) - 2 * radius)
+        return gap
+
+    return clearance
+
+
+def _segment_distance(points: np.ndarray, a, b) -> np.ndarray:
+    """Distance (n,) between the segments points[:, a[0]]-points[:, a[1]] and likewise b."""
+    p, q = points[:, a[0]], points[:, b[0]]
+    d1, d2, r = points[:, a[1]] - p, points[:, b[1]] - q, p - q
+    aa, ee = np.sum(d1 * d1, 1), np.sum(d2 * d2, 1)
+    bb, c, f = np.sum(d1 * d2, 1), np.sum(d1 * r, 1), np.sum(d2 * r, 1)
+    denom = np.maximum(aa * ee - bb * bb, 1e-18)
+    s = np.clip((bb * f - c * ee) / denom, 0, 1)
+    t = np.clip((bb * s + f) / np.maximum(ee, 1e-18), 0, 1)
+    s = np.clip((bb * t - c) / np.maximum(aa, 1e-18), 0, 1)
+    return np.linalg.norm(p + d1 * s[:, None] - q - d2 * t[:, None], axis=1)
+
+
+def default_harmonics(duration: float) -> int:
+    """Harmonics whose highest is near TOP_FREQUENCY over a period of duration s, within
+    HARMONICS."""
+    return int(np.clip(round(duration * TOP_FREQUENCY), *HARMONICS))
+
+
+def excitation_limits(plant: Plant, acceleration: float) -> ExcitationLimits:
+    lo, hi = plant.limits()
+    return ExcitationLimits(lo, hi, plant.velocity_limits(), np.full(plant.dof, acceleration))
+
+
+def design_for(robot: str, duration: float, rate: float, acceleration: float = DEFAULT_ACCELERATION,
+               seed: int = 0, iterations: int = ITERATIONS,
+               harmonics: int | None = None) -> DesignedExcitation:
+    """The robot's designed excitation sampled at rate (Hz) over [0, duration] s, ends
+    included (both at rest), with `harmonics` (default default_harmonics(duration)); UserError
+    on bad input or if it cannot be made collision-free."""
+    for name, value in (("--duration", duration), ("--rate", rate), ("--accel-limit", acceleration)):
+        if not np.isfinite(value) or value <= 0:
+            raise UserError(f"{name} must be a finite number > 0, got {value:g}")
+    if duration * rate < 2:
+        raise UserError(f"--duration x --rate must give at least 2 samples, got {duration * rate:g}")
+    harmonics = default_harmonics(duration) if harmonics is None else harmonics
+    if not 1 <= harmonics <= MAX_HARMONICS:
+        raise UserError(f"--harmonics must be between 1 and {MAX_HARMONICS}, got {harmonics}")
+    plant = load_plant(robot)
+    limits = excitation_limits(plant, acceleration)
+    regressor = AtomRegressor(robot_library(robot))
+    clearance = capsule_clearance(robot)
+    try:
+        design = optimize_excitation(limits, duration, regressor, clearance, seed,
+                                     harmonics=harmonics, iterations=iterations)
+    except ValueError as exc:
+        raise UserError(f"robot {robot}: {exc}") from None
+    t = np.arange(int(round(duration * rate)) + 1) / rate
+    trajectory = Trajectory(t, *design.excitation.evaluate(t))
+    states = (trajectory.q, trajectory.qd, trajectory.qdd)
+    if np.any(clearance(trajectory.q) <= 0) or limits.violation(*states) > 1e-9:
+        raise UserError(f"robot {robot}: the designed excitation touches a link or a limit at "
+                        "the written samples; try another --seed or a longer --duration")
+    grid = np.linspace(0.0, duration, CONDITION_POINTS, endpoint=False)
+    default, _ = default_excitation(plant, max(int(round(duration * SAMPLE_RATE)), 10), seed)
+    return DesignedExcitation(design, trajectory,
+                              float(np.exp(log_condition(regressor, *design.excitation.evaluate(grid)))),
+                              float(np.exp(log_condition(regressor, *default.evaluate(grid)))), limits)

@@ -1,0 +1,1 @@
+"""Excitation trajectories for identification: Fourier series and their design."""

@@ -1,0 +1,143 @@
+"""`torquebench excite` and `generate --excitation`: the designed excitation's file, its limits,
+rest at both ends, consistent derivatives, collision-free, better conditioned than generate's
+own; data along it match Pinocchio's RNEA; bad input is one line and exit 2."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+
+import numpy as np
+import pytest
+
+from harness.cli import main
+from harness.data.excitation_file import header, read_trajectory, write_trajectory
+from harness.data.excite import capsule_clearance, design_for
+from harness.data.generate import default_excitation, generate
+from harness.robots.baseline import PinocchioModel
+from harness.robots.plant import load_plant
+from harness.robots.torque_models import robot_library
+from identification.excitation.design import log_condition
+from identification.excitation.fourier import design_excitation
+from identification.excitation.regressor import AtomRegressor
+
+DURATION, RATE, ACCEL = 4.0, 50.0, 10.0  # short and coarse: the file stays fast
+ITERATIONS = 30
+
+
+@pytest.fixture(scope="module")
+def ur5_file(tmp_path_factory):
+    out = tmp_path_factory.mktemp("excite") / "ur5.csv"
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        code = main(["excite", "--robot", "ur5", "--duration", str(DURATION), "--rate", str(RATE),
+                     "--accel-limit", str(ACCEL), "--iterations", str(ITERATIONS),
+                     "--out", str(out)])
+    assert code == 0
+    return out, printed.getvalue()
+
+
+def test_csv_contract(ur5_file):
+    out, printed = ur5_file
+    lines = out.read_text().splitlines()
+    assert lines[0] == ",".join(header(6))
+    assert lines[0].startswith("t,q1,") and lines[0].endswith(",qdd6")
+    traj = read_trajectory(out, 6)
+    assert len(traj.t) == int(DURATION * RATE) + 1
+    assert np.allclose(np.diff(traj.t), 1 / RATE) and traj.t[0] == 0 and traj.t[-1] == DURATION
+    assert "condition number" in printed and "default excitation" in printed
+
+
+def test_limits_rest_and_derivatives(ur5_file):
+    traj = read_trajectory(ur5_file[0], 6)
+    plant = load_plant("ur5")
+    lo, hi = plant.limits()
+    pad = 0.05 * (hi - lo)
+    assert np.all(traj.q >= lo + pad) and np.all(traj.q <= hi - pad)
+    assert np.all(np.abs(traj.qd) <= plant.velocity_limits())
+    assert np.all(np.abs(traj.qdd) <= ACCEL)
+    for x in (traj.qd, traj.qdd):  # at rest at both ends
+        assert np.max(np.abs(x[[0, -1]])) < 1e-9
+    assert np.allclose(traj.q[0], traj.q[-1])
+    for x, dx in ((traj.q, traj.qd), (traj.qd, traj.qdd)):
+        fd = np.gradient(x, traj.t, axis=0)[1:-1]
+        assert np.max(np.abs(fd - dx[1:-1])) < 0.02 * np.max(np.abs(dx)) + 1e-9
+    assert np.all(capsule_clearance("ur5")(traj.q) > 0)
+
+
+def test_designed_better_conditioned_than_default_ur5(ur5_file):
+    traj = read_trajectory(ur5_file[0], 6)
+    plant = load_plant("ur5")
+    regressor = AtomRegressor(robot_library("ur5"))
+    default, _ = default_excitation(plant, int(DURATION * 200), 0)
+    grid = np.linspace(0, DURATION, 200, endpoint=False)
+    assert log_condition(regressor, *traj.evaluate(grid)) < log_condition(regressor, *default.evaluate(grid))
+
+
+def test_designed_better_conditioned_than_default_panda():
+    designed = design_for("panda", DURATION, RATE, ACCEL, seed=0, iterations=ITERATIONS)
+    assert designed.condition < designed.default_condition
+
+
+def test_generate_along_the_file_matches_rnea(ur5_file, tmp_path):
+    traj = read_trajectory(ur5_file[0], 6)
+    data = generate("ur5", len(traj.t), 0.0, 1, "inverse", excitation=traj)
+    assert np.array_equal(data.q, traj.q) and np.array_equal(data.qdd, traj.qdd)
+    assert data.meta["rate"] == pytest.approx(RATE)
+    tau = PinocchioModel(load_plant("ur5").pinocchio()).torque(data.q, data.qd, data.qdd)
+    assert np.max(np.abs(tau - data.tau_clean)) <= 1e-9 * np.max(np.abs(data.tau_clean))
+    out = tmp_path / "d.npz"
+    assert main(["generate", "--robot", "ur5", "--excitation", str(ur5_file[0]), "--samples", "100",
+                 "--out", str(out)]) == 0 and out.is_file()
+
+
+def test_default_excitation_holds_the_velocity_limits():
+    plant = load_plant("ur5")
+    exc, _ = default_excitation(plant, 400, 0)
+    _, qd, _ = exc.evaluate(np.arange(4000) / 200.0)
+    assert np.all(np.abs(qd) <= plant.velocity_limits())
+    lynx = load_plant("lynxmotion")  # within its limits: the excitation it always had
+    lo, hi = lynx.limits()
+    same, _ = design_excitation(lo, hi, 3, lambda exc: float(np.sum(exc.sin_coef)), candidates=4)
+    held, _ = design_excitation(lo, hi, 3, lambda exc: float(np.sum(exc.sin_coef)), candidates=4,
+                                velocity=lynx.velocity_limits())
+    assert np.array_equal(same.sin_coef, held.sin_coef) and np.array_equal(same.centre, held.centre)
+
+
+def _fails(capsys, args, out) -> None:
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "error" in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("change", [
+    {"--robot": "nosuchrobot"}, {"--duration": "0"}, {"--rate": "-1"}, {"--accel-limit": "0"},
+    {"--duration": "nan"}])
+def test_excite_bad_input(capsys, tmp_path, change):
+    out = tmp_path / "x.csv"
+    options = {"--robot": "ur5", "--duration": "4", "--rate": "50", "--accel-limit": "10", **change}
+    _fails(capsys, ["excite", *[x for kv in options.items() for x in kv], "--out", str(out)], out)
+
+
+def test_excite_unwritable_path(capsys, tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    out = blocker / "x.csv"
+    _fails(capsys, ["excite", "--robot", "ur5", "--duration", "4", "--rate", "50", "--out", str(out)],
+           out)
+
+
+def test_generate_excitation_bad_input(capsys, tmp_path, ur5_file):
+    out = tmp_path / "d.npz"
+    _fails(capsys, ["generate", "--robot", "panda", "--excitation", str(ur5_file[0]), "--out",
+                    str(out)], out)  # 6 joints for a 7-joint robot
+    _fails(capsys, ["generate", "--robot", "ur5", "--excitation", str(ur5_file[0]), "--mode",
+                    "measured", "--out", str(out)], out)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("time,a,b\n0,1,2\n")
+    _fails(capsys, ["generate", "--robot", "ur5", "--excitation", str(bad), "--out", str(out)], out)
+    traj = read_trajectory(ur5_file[0], 6)
+    write_trajectory(bad, traj)
+    _fails(capsys, ["generate", "--robot", "ur5", "--excitation", str(bad), "--samples", "100000",
+                    "--out", str(out)], out)
