@@ -6,14 +6,15 @@ MODEL.json) and the training runs:
 
 1. Target: tau - D(q, qd, qdd) on every training run; the base refitted beside the effects
    is a constant sensor offset per joint. Rows of joint j weigh 1 / (RMS of its target).
-2. Candidates, per joint: identification.closeloop.measured's (`viscous`, `coulomb`,
-   `sigmoid`, `armature`, `spring`, nonlinear shapes fitted by variable projection), and,
+2. Candidates, per joint: `viscous`, `coulomb`, `armature`, `spring` (the Coulomb shape
+   fitted by variable projection, identification.closeloop.measured.candidates), and,
    when given, `inertial`: the rigid-body correction of the consistent fit pulled toward
    the declared model (identification.consistent), one column acting on every joint, its
    coefficient a scale (1 = the consistent fit's correction).
 3. Forward selection, validated run by run (leave one run out; one run alone: contiguous
    blocks of it). A candidate is named when it cuts its joint's validation error power by
-   >= MIN_GAIN in total and on no held-out run makes it worse, its coefficient is not
+   >= MIN_GAIN in total and on no held-out run makes it worse (one run alone: in total
+   only, its blocks are too short to each decide), its coefficient is not
    negative, its coefficient fitted on each run alone agrees with every other run's within
    AGREE combined standard errors (a run's error from the spread over RUN_BLOCKS blocks of
    it: coloured residuals make the white-noise formula far too small), and, if it has no
@@ -29,7 +30,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from identification.closeloop.crossval import BlockValidation, weighted_fit
-from identification.closeloop.effects import MEASURED_EFFECTS, EffectTerm, effect_torque
+from identification.closeloop.effects import EffectTerm, effect_torque
 from identification.closeloop.extended import ExtendedModel
 from identification.closeloop.measured import VALIDATION_BLOCKS, _Projector, candidates
 from identification.errors import IdentificationError
@@ -40,6 +41,8 @@ STRONG_GAIN = 0.2  # ... by >= 20 % when its coefficient has no physical reading
 AGREE = 3.0  # combined standard errors within which two runs' coefficients agree
 RUN_BLOCKS = 4  # blocks of a run whose coefficients' spread gives the run's uncertainty
 ARMATURE_PLAUSIBLE = 1.0  # kg m^2: a reflected rotor inertia above it has no physical reading
+RUNS_EFFECTS = ("viscous", "coulomb", "armature", "spring")  # the contract's joint effects (the
+# offset is refitted as the base): one dry-friction name, so runs cannot split it between shapes
 MIN_RUN = 40  # samples: a run shorter than that cannot be validated on
 
 
@@ -147,7 +150,7 @@ def _agree(coef: np.ndarray, std: np.ndarray) -> bool:
 
 def _verdict(term, gain, fold_gains, coef, per_run, per_run_std, several) -> str:
     """Why a candidate that improves validation is not named ('' if it is)."""
-    if np.min(fold_gains) < 0:
+    if several and np.min(fold_gains) < 0:
         worse = int(np.argmin(fold_gains)) + 1
         return f"makes held-out {'run' if several else 'block'} {worse} worse"
     if coef < 0:
@@ -164,7 +167,7 @@ def _verdict(term, gain, fold_gains, coef, per_run, per_run_std, several) -> str
 
 def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
                     inertial: TorqueModel | None = None,
-                    effects=MEASURED_EFFECTS) -> RunsLoop:
+                    effects=RUNS_EFFECTS) -> RunsLoop:
     """Name the effects the declared model lacks on training runs [(q, qd, qdd, tau)] of one
     robot ((n_r, dof) each, rad, rad/s, rad/s^2, N m); inertial: the rigid-body correction
     candidate (a TorqueModel of the torque to add to declared), or None."""
