@@ -4,7 +4,7 @@
 robot's nominal URDF/MJCF model) or the declared MODEL.json's content, "inertial": the
 rigid-body correction (a MODEL.json on the robot's base atoms) or null, "offsets": per
 joint (N m), "effects": [{"joint", "effect", "coefficient", "unit", shape...}]}: read by
-`predict`, `plan` and `replay` through harness.robots.torque_models.load_torque_model.
+`predict` and `plan` through harness.robots.torque_models.load_torque_model.
 """
 
 from __future__ import annotations
@@ -32,9 +32,9 @@ def model_payload(robot: str, declared: dict | str, inertial: KinematicModel | N
             "offsets": [float(o) for o in offsets], "effects": [t.to_json() for t in terms]}
 
 
-def declared_model(spec: dict | str, robot: str):
-    """The declared model of a payload: 'pinocchio' or a MODEL.json's content."""
-    from harness.robots.torque_models import robot_library
+def declared_model(spec: dict | str, robot: str, robot_library):
+    """The declared model of a payload: 'pinocchio' or a MODEL.json's content;
+    robot_library(robot): its base atoms (harness.robots.torque_models, which reads us)."""
     from identification.model import model_from_dict
 
     if spec == "pinocchio":
@@ -42,7 +42,7 @@ def declared_model(spec: dict | str, robot: str):
     if not isinstance(spec, dict):
         raise IdentificationError("'declared' must be 'pinocchio' or a model")
     if spec.get("kind") == KIND:  # a closed loop's model declared for another loop
-        return closeloop_model(spec, robot, Path("declared"))
+        return closeloop_model(spec, robot, Path("declared"), robot_library)
     if spec.get("library") == LIBRARY:
         return KinematicModel.from_dict(spec, robot_library(robot))
     return model_from_dict(spec)
@@ -58,10 +58,9 @@ def _term(entry: dict) -> EffectTerm:
         raise IdentificationError(f"malformed effect {str(entry):.60}: {exc}") from None
 
 
-def closeloop_model(payload: dict, robot: str | None, path: Path):
-    """The model a closeloop model.json describes, for robot (default: the one it records)."""
-    from harness.robots.torque_models import robot_library
-
+def closeloop_model(payload: dict, robot: str | None, path: Path, robot_library):
+    """The model a closeloop model.json describes, for robot (default: the one it records);
+    robot_library(robot): its base atoms."""
     recorded = payload.get("robot") if isinstance(payload.get("robot"), dict) else {}
     robot = robot or recorded.get("name")
     if not robot or (robot not in ROBOTS and not Path(robot).is_file()):
@@ -72,7 +71,7 @@ def closeloop_model(payload: dict, robot: str | None, path: Path):
         raise IdentificationError(f"model was identified for robot '{recorded.get('name')}' "
                                   f"(kinematics {recorded.get('hash')}), not '{chain.name}' "
                                   f"({chain.digest()})")
-    declared = declared_model(payload.get("declared"), robot)
+    declared = declared_model(payload.get("declared"), robot, robot_library)
     inertial = payload.get("inertial")
     inertial = None if inertial is None else KinematicModel.from_dict(inertial,
                                                                       robot_library(robot))
