@@ -89,6 +89,7 @@ def test_cli_closeloop_data_writes_the_contract(tmp_path, capsys):
     (["--plant", "x.xml", "--data", "d.npz"], "exactly one of"),
     ([], "exactly one of"),
     (["--data", "missing.npz"], "not found"),
+    (["--plant", "x.xml", "--validate", "d.npz"], "--validate applies to --data"),
     (["--data", "d.npz", "--robot", "panda"], "robot panda has 7"),
     (["--data", "d.npz", "--validate", "d.npz", "--declared", "identified"],
      "takes one --data log"),
