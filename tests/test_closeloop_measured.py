@@ -79,7 +79,9 @@ def test_cli_closeloop_data_writes_the_contract(tmp_path, capsys):
     for key in ("effects", "error_before", "error_after", "unexplained"):
         assert key in payload
     assert payload["unexplained"] is True and payload["unexplained_joints"] == [3]
-    assert {(e["effect"], e["joint"]) for e in payload["effects"]} == {("sigmoid", 1), ("viscous", 2)}
+    # against the declared (nominal) model, dry friction goes by the contract's one name
+    assert {(e["effect"], e["joint"]) for e in payload["effects"]} == {("coulomb", 1), ("viscous", 2)}
+    assert (out / "model.json").is_file() and "heldout" not in payload
     assert len(payload["error_before"]) == 3 and "error_before_clean" not in payload
 
 
@@ -87,8 +89,10 @@ def test_cli_closeloop_data_writes_the_contract(tmp_path, capsys):
     (["--plant", "x.xml", "--data", "d.npz"], "exactly one of"),
     ([], "exactly one of"),
     (["--data", "missing.npz"], "not found"),
+    (["--plant", "x.xml", "--validate", "d.npz"], "--validate applies to --data"),
     (["--data", "d.npz", "--robot", "panda"], "robot panda has 7"),
-    (["--data", "d.npz", "--declared", "identified"], "--declared applies to --plant"),
+    (["--data", "d.npz", "--validate", "d.npz", "--declared", "identified"],
+     "takes one --data log"),
 ])
 def test_closeloop_data_errors_are_one_line(tmp_path, capsys, monkeypatch, args, message):
     monkeypatch.chdir(tmp_path)
@@ -132,3 +136,100 @@ def test_the_extended_model_symbolic_form_equals_its_torque(loop):
     f = ca.Function("tau", sym, [loop.model.symbolic_torque(*sym)])
     symbolic = np.array([np.asarray(f(*(s[i] for s in states))).ravel() for i in range(5)])
     np.testing.assert_allclose(symbolic, loop.model.torque(*states), atol=1e-10)
+
+
+# --- several runs against the declared model (closeloop --data A,B --validate C) ---------
+
+def _run_file(path, seed: int, viscous: float = VISCOUS, samples: int = 1200, robot="lynxmotion"):
+    m = lynxmotion_motion(samples, seed=seed)
+    tau = PinocchioModel(load_pinocchio("lynxmotion")).torque(m.q, m.qd, m.qdd)
+    tau[:, 1] += viscous * m.qd[:, 1]
+    tau += 0.005 * np.random.default_rng(seed).normal(size=tau.shape) + np.array([0.01, 0, 0])
+    np.savez(path, t=m.t, q=m.q, qd=m.qd, qdd=m.qdd, tau=tau,
+             meta=np.array(json.dumps({"robot": robot})))
+    return m, tau
+
+
+def test_runs_and_validate_write_heldout_and_a_model_predict_reads(tmp_path, capsys):
+    files = [tmp_path / f"r{i}.npz" for i in range(3)]
+    for i, f in enumerate(files):
+        _run_file(f, seed=10 + i)
+    out = tmp_path / "cl"
+    assert main(["closeloop", "--data", f"{files[0]},{files[1]}", "--validate", str(files[2]),
+                 "--out", str(out)]) == 0
+    payload = json.loads((out / "closeloop.json").read_text())
+    assert payload["heldout"]["files"] == [str(files[2])]
+    assert payload["heldout"]["after"] == payload["error_after"]
+    named = {(e["effect"], e["joint"]): e for e in payload["effects"]}
+    assert set(named) == {("viscous", 2)}, named
+    assert named["viscous", 2]["unit"] == "N m s/rad" and len(named["viscous", 2]["per_run"]) == 2
+    assert named["viscous", 2]["coefficient"] == pytest.approx(VISCOUS, rel=0.05)
+    assert all(a <= b for a, b in zip(payload["error_after"], payload["error_before"],
+                                      strict=True))
+    assert main(["predict", "--model", str(out / "model.json"), "--data", str(files[2]),
+                 "--out", str(tmp_path / "p.npz")]) == 0
+    predicted = np.load(tmp_path / "p.npz")["tau"]
+    measured = np.load(files[2])["tau"]
+    np.testing.assert_allclose(np.linalg.norm(predicted - measured, axis=0)
+                               / np.linalg.norm(measured, axis=0),
+                               payload["heldout"]["after"], rtol=1e-9)
+
+
+def test_an_effect_of_one_run_only_is_not_named_with_two():
+    from identification.closeloop.runs import close_loop_runs
+
+    declared = PinocchioModel(load_pinocchio("lynxmotion"))
+    runs = []
+    for seed, viscous in ((20, 0.05), (21, 0.0)):
+        m = lynxmotion_motion(1200, seed=seed)
+        tau = declared.torque(m.q, m.qd, m.qdd)
+        tau[:, 1] += viscous * m.qd[:, 1]
+        runs.append((m.q, m.qd, m.qdd, tau + 0.005 * np.random.default_rng(seed).normal(
+            size=tau.shape)))
+    assert ("viscous", 2) in {(t.effect, t.joint) for t in close_loop_runs(declared,
+                                                                           runs[:1]).terms}
+    assert close_loop_runs(declared, runs).terms == ()
+
+
+def test_a_mujoco_friction_plant_at_two_seeds_names_its_effects_on_both():
+    """The Lynxmotion friction plant (damping on joints 1 and 3, frictionloss on joint 2)
+    generated at two seeds: each run alone and both together name exactly those, within 10 %."""
+    from harness.closeloop.plants import true_effects
+    from harness.closeloop.run import declared_mujoco
+    from harness.data.generate import generate
+    from harness.robots.plant import load_plant
+    from identification.closeloop.runs import close_loop_runs
+    from models import MODELS
+
+    plant = MODELS / "lynxmotion" / "lynxmotion_friction.xml"
+    runs = [generate(str(plant), 3000, 0.05, seed, "measured", 0.0) for seed in (0, 1)]
+    runs = [(d.q, d.qd, d.qdd, d.tau) for d in runs]
+    truth = {(t.effect, t.joint): t.coefficient
+             for t in true_effects(load_plant(plant).model, declared_mujoco("lynxmotion"))[0]}
+    declared = PinocchioModel(load_pinocchio("lynxmotion"))
+    for subset in (runs[:1], runs[1:], runs):
+        named = {(t.effect, t.joint): t.coefficient
+                 for t in close_loop_runs(declared, subset).terms}
+        assert set(named) == set(truth), named
+        for key, value in truth.items():
+            assert named[key] == pytest.approx(value, rel=0.1), key
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--data", "a.npz,missing.npz"], "not found"),
+    (["--data", "a.npz,b.npz"], "different robots"),
+    (["--data", "a.npz", "--validate", "b.npz"], "of another robot"),
+    (["--data", "a.npz", "--declared", "other.json"], "identified for robot"),
+    (["--data", "a.npz,a.npz", "--declared", "identified"], "takes one --data log"),
+])
+def test_closeloop_runs_errors_are_one_line(tmp_path, capsys, monkeypatch, args, message):
+    monkeypatch.chdir(tmp_path)
+    _run_file(tmp_path / "a.npz", 1, samples=200)
+    _run_file(tmp_path / "b.npz", 2, samples=200, robot="panda")
+    (tmp_path / "other.json").write_text(json.dumps(
+        {"kind": "closeloop", "dof": 3, "robot": {"name": "panda", "hash": "x"},
+         "declared": "pinocchio", "inertial": None, "offsets": [0, 0, 0], "effects": []}))
+    assert main(["closeloop", *args, "--out", "cl"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0], err
+    assert not (tmp_path / "cl" / "closeloop.json").exists()

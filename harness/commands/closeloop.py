@@ -14,8 +14,13 @@ def register(sub) -> None:
     p = sub.add_parser("closeloop", help="residual -> missing effect -> add it -> error before/after")
     p.add_argument("--plant", help="MJCF of the arm (may carry undeclared effects): measured "
                    "data are simulated on it")
-    p.add_argument("--data", help="a dataset .npz instead (a measured log from `ingest`): the "
-                   "loop on the robot's rigid-body identification, scored against its torque")
+    p.add_argument("--data", help="dataset .npz files instead, comma-separated runs of one "
+                   "robot (measured logs from `ingest`): the loop on the declared model, "
+                   "effects named only if they hold from one run to the next; writes "
+                   "DIR/model.json (the declared model with the named effects)")
+    p.add_argument("--validate", help="with --data: comma-separated held-out runs the errors "
+                   "are scored on (closeloop.json 'heldout'); default: the last --holdout of "
+                   "every --data run")
     p.add_argument("--out", required=True, help="output directory (closeloop.json)")
     p.add_argument("--samples", type=int, default=4000)
     p.add_argument("--noise", type=float, default=0.05, help="torque noise std / torque std")
@@ -30,7 +35,9 @@ def register(sub) -> None:
     p.add_argument("--declared", default="pinocchio",
                    help="declared model of the contract keys: 'pinocchio', 'identified' (fitted "
                    "on the training part, refitted jointly with the effects) or MODEL.json; "
-                   "'declared_models' in closeloop.json reports both built-in ones")
+                   "'declared_models' in closeloop.json reports both built-in ones; with "
+                   "--data: 'pinocchio' (the robot's nominal URDF/MJCF model), MODEL.json, or "
+                   "'identified' (one log: the rigid-body identification on its first part)")
     p.set_defaults(func=run)
 
 
@@ -59,6 +66,24 @@ def _print_measured(run) -> None:
     print(f"    unexplained joints: {list(r.unexplained_joints) or 'none'}")
 
 
+def _run_runs(args) -> int:
+    from harness.closeloop.runs import run_runs
+
+    r = run_runs(args.data, args.robot, args.declared, args.validate, args.holdout)
+    out = Path(args.out)
+    write_json(out / "model.json", r.model_json)
+    write_json(out / "closeloop.json", r.to_json())
+    fmt = ", ".join
+    named = fmt(f"joint {n.term.joint} {n.term.effect} {n.term.coefficient:.4g} "
+                f"{n.term.to_json()['unit']}" for n in r.loop.named) or "none"
+    print(f"  robot {r.robot}, declared {r.declared}; named [{named}]")
+    print(f"    error (relative) before [{fmt(f'{e:.3f}' for e in r.error_before)}] "
+          f"after [{fmt(f'{e:.3f}' for e in r.error_after)}]")
+    print(f"    unexplained joints: {list(r.left.unexplained_joints) or 'none'}")
+    print(f"wrote {out / 'closeloop.json'}, {out / 'model.json'}")
+    return 0
+
+
 def run(args) -> int:
     if not 0.0 < args.holdout < 1.0:
         raise UserError(f"--holdout must be in (0, 1), got {args.holdout}")
@@ -68,16 +93,18 @@ def run(args) -> int:
     if args.data is not None:
         from harness.closeloop.measured import run_measured
 
-        if args.declared != "pinocchio":
-            raise UserError("--declared applies to --plant; with --data the declared model is "
-                            "the robot's rigid-body identification on the data")
-
-        measured = run_measured(args.data, args.robot, args.holdout)
-        out = Path(args.out) / "closeloop.json"
-        write_json(out, measured.to_json())
-        _print_measured(measured)
-        print(f"wrote {out}")
-        return 0
+        if args.declared == "identified":
+            if "," in args.data or args.validate:
+                raise UserError("--declared identified takes one --data log and no --validate")
+            measured = run_measured(args.data, args.robot, args.holdout)
+            out = Path(args.out) / "closeloop.json"
+            write_json(out, measured.to_json())
+            _print_measured(measured)
+            print(f"wrote {out}")
+            return 0
+        return _run_runs(args)
+    if args.validate:
+        raise UserError("--validate applies to --data")
     loop = run_closeloop(args.plant, args.samples, args.noise, args.seed, args.bias,
                          args.holdout, args.declared, compare=True,
                          robot=args.robot or DEFAULT_ROBOT)

@@ -49,6 +49,10 @@ def load_torque_model(spec: str, robot: str | None = None) -> TorqueModel:
         raise UserError(f"model file not found: {path} (or use 'pinocchio')")
     payload = read_json(path, "model")
     try:
+        if payload.get("kind") == "closeloop":  # closeloop --data's DIR/model.json
+            from harness.closeloop.model_file import closeloop_model
+
+            return closeloop_model(payload, robot, path, robot_library)
         recorded = _recorded(payload)
         if recorded is None:
             return model_from_dict(payload)

@@ -52,13 +52,14 @@ class BlockValidation:
 
     @classmethod
     def build(cls, base: np.ndarray, target: np.ndarray, effects: np.ndarray,
-              weights: np.ndarray, blocks: int) -> BlockValidation:
-        """base (n, dof, p), target (n, dof), effects (n, dof, m), weights (dof,) per joint."""
+              weights: np.ndarray, blocks: int | list[np.ndarray]) -> BlockValidation:
+        """base (n, dof, p), target (n, dof), effects (n, dof, m), weights (dof,) per joint;
+        blocks: how many contiguous blocks, or the sample indices of each (one run each)."""
         w = np.asarray(weights, float)
         base, target, effects = base * w[None, :, None], target * w, effects * w[None, :, None]
         n = len(target)
         folds = []
-        for block in np.array_split(np.arange(n), blocks):
+        for block in (np.array_split(np.arange(n), blocks) if isinstance(blocks, int) else blocks):
             held = np.zeros(n, bool)
             held[block] = True
             folds.append(_fold(base, target, effects, ~held, held))
@@ -66,13 +67,17 @@ class BlockValidation:
 
     def sse(self, subset: list[int]) -> np.ndarray:
         """Per-joint weighted sum of squared validation errors with the effects in subset."""
-        out = np.zeros(self.dof)
-        for f in self.folds:
+        return np.sum(self.sse_folds(subset), axis=0)
+
+    def sse_folds(self, subset: list[int]) -> np.ndarray:
+        """(blocks, dof): the same per validation block."""
+        out = np.zeros((len(self.folds), self.dof))
+        for k, f in enumerate(self.folds):
             resid = f.held_target
             if subset:
                 c, *_ = np.linalg.lstsq(f.train_effects[:, subset], f.train_target, rcond=None)
                 resid = resid - f.held_effects[:, :, subset] @ c
-            out += np.sum(resid**2, axis=0)
+            out[k] = np.sum(resid**2, axis=0)
         return out
 
 

@@ -58,7 +58,8 @@ JOINT_EFFECTS = ("viscous", "coulomb", "armature", "offset", "spring")
 # friction beside viscous and Coulomb; the offset is part of the declared model there
 MEASURED_EFFECTS = ("viscous", "coulomb", "sigmoid", "armature", "spring")
 UNITS = {"viscous": "N m s/rad", "coulomb": "N m", "armature": "kg m^2", "offset": "N m",
-         "spring": "N m/rad", "payload": "kg", "sigmoid": "N m"}
+         "spring": "N m/rad", "payload": "kg", "sigmoid": "N m",
+         "inertial": "1 (x the consistent fit's rigid-body correction)"}
 SIGMOID_STEEPNESS = 10.0  # s/rad, default phi2 of the sigmoid friction
 COULOMB_EPS = 0.01  # rad/s, default half-width of the linear zone
 COULOMB_LEAD = 0.01  # s, default lead of the switching velocity

@@ -1,0 +1,153 @@
+"""`closeloop --data A.npz[,B.npz...] [--validate C.npz[,...]] --robot R [--declared ...]`:
+the loop on runs of one robot against the model the user declared.
+
+The declared model is the robot's nominal model (`pinocchio`: its URDF/MJCF) or a
+MODEL.json; with the nominal model the inertial candidate is the rigid-body correction
+of the physically consistent fit pulled toward it (identification.consistent): a payload,
+a wrong mass or centre of mass, named as such rather than absorbed by springs and friction.
+Effects are chosen by identification.closeloop.runs; scores are on the --validate runs, or
+without them on the last --holdout of every run (the rest trains).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from harness.closeloop.model_file import model_payload
+from harness.data.dataset import load_arrays
+from harness.data.runs import KEYS, load_runs, split_files
+from harness.errors import UserError
+from harness.io import read_json
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import data_robot, load_chain, load_pinocchio
+from harness.robots.torque_models import load_torque_model, robot_library
+from identification.closeloop.leftover import LEFT, Leftover, leftover
+from identification.closeloop.runs import (
+    AGREE,
+    MIN_GAIN,
+    STRONG_GAIN,
+    RunsLoop,
+    close_loop_runs,
+)
+from identification.consistent import identify_consistent
+from identification.errors import IdentificationError
+from identification.kinematic_model import KinematicModel
+from identification.metrics import rel_error
+
+JOINT_ATOMS = ("armature", "viscous", "coulomb")
+
+
+def inertial_correction(robot: str, runs: list[tuple]) -> KinematicModel:
+    """The consistent fit's rigid body pulled toward robot's nominal model, minus the nominal
+    rigid body: the torque to add to the nominal model (its joint atoms left out)."""
+    library = robot_library(robot)
+    nominal = PinocchioModel(load_pinocchio(robot)).atom_parameters()
+    q, qd, qdd, tau = (np.concatenate([r[i] for r in runs]) for i in range(4))
+    fit = identify_consistent(q, qd, qdd, tau, library, nominal, holdout=0.0).model
+    delta = fit.coefficients - library.fold @ nominal
+    delta[[k for k, n in enumerate(library.names) if n.startswith(JOINT_ATOMS)]] = 0.0
+    return KinematicModel(library, delta, np.zeros(library.dof), "consistent")
+
+
+def _read(spec: str, option: str) -> tuple[list[tuple], list[dict], list[str]]:
+    files = split_files(spec, option)
+    load_runs(files)  # one robot, one joint count (UserError otherwise)
+    loaded = [load_arrays(f, KEYS) for f in files]
+    return [tuple(a[k] for k in KEYS) for a, _ in loaded], [m for _, m in loaded], files
+
+
+def _recorded(meta: dict) -> str:
+    return str(meta.get("robot") or meta.get("plant") or "")
+
+
+@dataclass(frozen=True)
+class RunsRun:
+    """The loop on the runs, its scores and what it was run on."""
+
+    robot: str
+    declared: str
+    train_files: list[str]
+    validate_files: list[str]  # empty: the last holdout of every run scored
+    holdout: float
+    loop: RunsLoop
+    error_before: np.ndarray
+    error_after: np.ndarray
+    left: Leftover
+    model_json: dict
+
+    def to_json(self) -> dict:
+        r, left = self.loop, self.left
+        out = {"effects": [n.to_json() for n in r.named],
+               "error_before": self.error_before.tolist(),
+               "error_after": self.error_after.tolist(),
+               "unexplained": bool(left.unexplained_joints),
+               "unexplained_joints": list(left.unexplained_joints),
+               "unexplained_detail": left.to_json(),
+               "declared": self.declared, "robot": self.robot,
+               "sensor_offsets": r.offsets.tolist(),
+               "data": {"files": self.train_files},
+               "selection": {"folds": r.folds, "path": [list(p) for p in r.path],
+                             "not_named": [{"joint": j, "effect": e, "validation_gain": g,
+                                            "reason": why} for j, e, g, why in r.not_named],
+                             "rule": f"forward selection validated leaving one {r.folds[:-1]} "
+                                     f"out: named if it cuts its joint's validation error "
+                                     f"power by >= {MIN_GAIN:.0%} ({STRONG_GAIN:.0%} without "
+                                     "a physical reading: a spring, an armature far above a "
+                                     "motor's), on no held-out run makes it worse, is not "
+                                     f"negative and agrees between runs within {AGREE:g} "
+                                     "standard errors; a joint is unexplained when its "
+                                     f"held-out residual is > {LEFT:g} noise sigma RMS above "
+                                     "the noise"},
+               "error_definition": "relative error ||tau_hat - tau|| / ||tau|| per joint "
+                                   "against the measured torque, on " + (
+                                       "the --validate runs" if self.validate_files else
+                                       f"the last {self.holdout:.0%} of every run"),
+               "model": "model.json"}
+        if self.validate_files:
+            out["heldout"] = {"files": self.validate_files, "before": out["error_before"],
+                              "after": out["error_after"]}
+        return out
+
+
+def run_runs(data: str, robot: str | None, declared: str = "pinocchio",
+             validate: str | None = None, holdout: float = 0.25) -> RunsRun:
+    """Close the loop on the runs in data (comma list) of robot (default: the one they
+    record), scored on validate (comma list) or the last holdout of every run."""
+    runs, metas, files = _read(data, "--data")
+    robot = data_robot(metas[0], robot)
+    dof = load_chain(robot).dof
+    if runs[0][0].shape[1] != dof:
+        raise UserError(f"data have {runs[0][0].shape[1]} joints, robot {robot} has {dof}")
+    if validate:
+        held, vmetas, vfiles = _read(validate, "--validate")
+        recorded = {_recorded(m) for m in metas + vmetas} - {""}
+        if len(recorded) > 1 or held[0][0].shape[1] != dof:
+            raise UserError(f"--validate logs are of another robot than the --data logs "
+                            f"({', '.join(sorted(recorded)) or 'joint counts differ'})")
+        train = runs
+    else:
+        vfiles, cut = [], [int(round(len(r[0]) * (1.0 - holdout))) for r in runs]
+        train = [tuple(a[:c] for a in r) for r, c in zip(runs, cut, strict=True)]
+        held = [tuple(a[c:] for a in r) for r, c in zip(runs, cut, strict=True)]
+    if declared == "pinocchio":
+        spec, model = "pinocchio", PinocchioModel(load_pinocchio(robot))
+    else:
+        model = load_torque_model(declared, robot)
+        spec = read_json(Path(declared), "model")
+        if model.dof != dof:
+            raise UserError(f"--declared {declared} has {model.dof} joints, robot {robot} {dof}")
+    try:
+        inertial = inertial_correction(robot, train) if declared == "pinocchio" else None
+        loop = close_loop_runs(model, train, inertial)
+    except IdentificationError as exc:
+        raise UserError(f"{data}: {exc}") from None
+    states = [np.concatenate([r[i] for r in held]) for i in range(4)]
+    before = rel_error(model.torque(*states[:3]), states[3])
+    after = rel_error(loop.model.torque(*states[:3]), states[3])
+    payload = model_payload(robot, spec, inertial, loop.offsets, loop.terms)
+    name = "the robot's nominal model (URDF/MJCF)" if declared == "pinocchio" else declared
+    return RunsRun(robot, name, files, vfiles, holdout, loop, before, after,
+                   leftover(loop.model, held), payload)

@@ -1,0 +1,253 @@
+"""Closing the loop on several runs of one robot, against the model the user declared.
+
+A real effect does not change from one run of a robot to the next; the residual of
+something else does. So, with the declared model D (the robot's nominal model, or a
+MODEL.json) and the training runs:
+
+1. Target: tau - D(q, qd, qdd) on every training run; the base refitted beside the effects
+   is a constant sensor offset per joint. Rows of joint j weigh 1 / (RMS of its target).
+2. Candidates, per joint: `viscous`, `coulomb`, `armature`, `spring` (the Coulomb shape
+   fitted by variable projection, identification.closeloop.measured.candidates), and,
+   when given, `inertial`: the rigid-body correction of the consistent fit pulled toward
+   the declared model (identification.consistent), one column acting on every joint, its
+   coefficient a scale (1 = the consistent fit's correction).
+3. Forward selection, validated run by run (leave one run out; one run alone: contiguous
+   blocks of it). A candidate is named when it cuts its joint's validation error power by
+   >= MIN_GAIN in total and on no held-out run makes it worse (one run alone: in total
+   only, its blocks are too short to each decide), its coefficient is not
+   negative, its coefficient fitted on each run alone agrees with every other run's within
+   AGREE combined standard errors (a run's error from the spread over RUN_BLOCKS blocks of
+   it: coloured residuals make the white-noise formula far too small), and, if it has no
+   physical reading (a spring: an arm's joints have none; an armature above
+   ARMATURE_PLAUSIBLE), it cuts the error power by >= STRONG_GAIN.
+4. The model: D + the named effects + the offsets, refitted jointly on all training runs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from identification.closeloop.crossval import BlockValidation, weighted_fit
+from identification.closeloop.effects import EffectTerm, effect_torque
+from identification.closeloop.extended import ExtendedModel
+from identification.closeloop.measured import VALIDATION_BLOCKS, _Projector, candidates
+from identification.errors import IdentificationError
+from identification.torque_model import TorqueModel, as_states
+
+MIN_GAIN = 0.02  # an effect must cut its joint's validation error power by >= 2 %
+STRONG_GAIN = 0.2  # ... by >= 20 % when its coefficient has no physical reading
+AGREE = 3.0  # combined standard errors within which two runs' coefficients agree
+RUN_BLOCKS = 4  # blocks of a run whose coefficients' spread gives the run's uncertainty
+ARMATURE_PLAUSIBLE = 1.0  # kg m^2: a reflected rotor inertia above it has no physical reading
+RUNS_EFFECTS = ("viscous", "coulomb", "armature", "spring")  # the contract's joint effects (the
+# offset is refitted as the base): one dry-friction name, so runs cannot split it between shapes
+MIN_RUN = 40  # samples: a run shorter than that cannot be validated on
+
+
+class Summed:
+    """Sum of torque models plus a constant torque per joint (offsets, N m)."""
+
+    def __init__(self, models: tuple[TorqueModel, ...], offsets: np.ndarray):
+        self.models, self.offsets, self.dof = models, np.asarray(offsets, float), models[0].dof
+
+    def torque(self, q, qd, qdd) -> np.ndarray:
+        q, qd, qdd = as_states(q, qd, qdd, self.dof)
+        return sum(m.torque(q, qd, qdd) for m in self.models) + self.offsets
+
+    def symbolic_torque(self, q, qd, qdd):
+        return sum(m.symbolic_torque(q, qd, qdd) for m in self.models) + self.offsets
+
+
+class Scaled:
+    """A torque model times a constant (the named inertial correction's scale)."""
+
+    def __init__(self, model: TorqueModel, scale: float):
+        self.model, self.scale, self.dof = model, float(scale), model.dof
+
+    def torque(self, q, qd, qdd) -> np.ndarray:
+        return self.scale * self.model.torque(q, qd, qdd)
+
+    def symbolic_torque(self, q, qd, qdd):
+        return self.scale * self.model.symbolic_torque(q, qd, qdd)
+
+
+def closed_model(declared: TorqueModel, offsets, terms: tuple[EffectTerm, ...],
+                 inertial: TorqueModel | None = None) -> ExtendedModel:
+    """The declared model with the named terms (an `inertial` term scales inertial) and the
+    offsets: what model.json holds."""
+    parts = [declared]
+    for t in terms:
+        if t.effect == "inertial":
+            parts.append(Scaled(inertial, t.coefficient))
+    return ExtendedModel(Summed(tuple(parts), offsets),
+                         tuple(t for t in terms if t.effect != "inertial"))
+
+
+@dataclass(frozen=True)
+class Named:
+    """A named effect: coefficient of the joint fit on all runs, and on each run alone."""
+
+    term: EffectTerm
+    per_run: tuple[float, ...]
+    per_run_std: tuple[float, ...]  # standard error of each run's coefficient
+    gain: float  # fraction of its joint's validation error power it removes
+    physical: bool  # has a physical reading (see module docstring)
+
+    def to_json(self) -> dict:
+        return {**self.term.to_json(), "per_run": list(self.per_run),
+                "per_run_std": list(self.per_run_std), "validation_gain": self.gain,
+                "physical_reading": self.physical,
+                **({"joints": "all"} if self.term.effect == "inertial" else {})}
+
+
+@dataclass(frozen=True)
+class RunsLoop:
+    """Outcome of the loop on training runs (scores are the caller's, on held-out runs)."""
+
+    model: ExtendedModel  # declared + named effects + offsets
+    named: tuple[Named, ...]
+    offsets: np.ndarray  # (dof,) N m
+    folds: str  # "runs" (leave one run out) or "blocks" (one run: contiguous blocks)
+    path: tuple[tuple[str, float], ...]  # (label added, weighted validation power after)
+    not_named: tuple[tuple[int, str, float, str], ...]  # per joint: best left, gain, why
+
+    @property
+    def terms(self) -> tuple[EffectTerm, ...]:
+        return tuple(n.term for n in self.named)
+
+
+def physical_reading(term: EffectTerm) -> bool:
+    """Whether a coefficient reads as a physical property of an arm's joint."""
+    if term.effect == "spring":
+        return False
+    if term.effect == "armature":
+        return term.coefficient <= ARMATURE_PLAUSIBLE
+    return True
+
+
+def _rows(term: EffectTerm, dof: int) -> list[int]:
+    return list(range(dof)) if term.effect == "inertial" else [term.joint - 1]
+
+
+def _per_run(base, target, cols, w, runs: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Each run's coefficients of the last column (joint fit on the run alone) and their
+    standard errors from the spread over RUN_BLOCKS blocks of the run."""
+    coef, std = [], []
+    for rows in runs:
+        coef.append(weighted_fit(base[rows], target[rows], cols[rows], w)[1][-1])
+        blocks = [weighted_fit(base[b], target[b], cols[b], w)[1][-1]
+                  for b in np.array_split(rows, RUN_BLOCKS)]
+        std.append(np.std(blocks, ddof=1) / np.sqrt(RUN_BLOCKS))
+    return np.array(coef), np.array(std)
+
+
+def _agree(coef: np.ndarray, std: np.ndarray) -> bool:
+    diff = np.abs(coef[:, None] - coef[None, :])
+    return bool(np.all(diff <= AGREE * np.hypot(std[:, None], std[None, :]) + 1e-12))
+
+
+def _verdict(term, gain, fold_gains, coef, per_run, per_run_std, several) -> str:
+    """Why a candidate that improves validation is not named ('' if it is)."""
+    if several and np.min(fold_gains) < 0:
+        worse = int(np.argmin(fold_gains)) + 1
+        return f"makes held-out {'run' if several else 'block'} {worse} worse"
+    if coef < 0:
+        return "its coefficient would be negative (non-physical)"
+    if not physical_reading(replace(term, coefficient=coef)) and gain < STRONG_GAIN:
+        return (f"no physical reading ({coef:.3g}): needs >= {STRONG_GAIN:.0%} of the "
+                f"validation error power, cuts {gain:.1%}")
+    if several and not _agree(per_run, per_run_std):
+        return ("coefficients differ between runs beyond their uncertainty: "
+                + ", ".join(f"{c:.3g} +- {s:.2g}" for c, s in zip(per_run, per_run_std,
+                                                                strict=True)))
+    return ""
+
+
+def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
+                    inertial: TorqueModel | None = None,
+                    effects=RUNS_EFFECTS) -> RunsLoop:
+    """Name the effects the declared model lacks on training runs [(q, qd, qdd, tau)] of one
+    robot ((n_r, dof) each, rad, rad/s, rad/s^2, N m); inertial: the rigid-body correction
+    candidate (a TorqueModel of the torque to add to declared), or None."""
+    dof = declared.dof
+    if not runs or any(len(r[0]) < MIN_RUN for r in runs):
+        raise IdentificationError(f"every run needs at least {MIN_RUN} samples")
+    q, qd, qdd, tau = (np.concatenate([r[i] for r in runs]) for i in range(4))
+    q, qd, qdd = as_states(q, qd, qdd, dof)
+    lengths = np.cumsum([0] + [len(r[0]) for r in runs])
+    run_rows = [np.arange(a, b) for a, b in zip(lengths[:-1], lengths[1:], strict=True)]
+    states = (q, qd, qdd)
+    target = tau - declared.torque(*states)
+    n = len(q)
+    base = np.broadcast_to(np.eye(dof), (n, dof, dof))
+    w = 1.0 / np.maximum(np.std(target, axis=0), 1e-12)
+    project = _Projector(base, w)
+    terms = candidates(project, project(target), states, dof, effects)
+    cols = [effect_torque((t,), *states) for t in terms]
+    if inertial is not None:
+        terms.append(EffectTerm("inertial", dof, 1.0))
+        cols.append(inertial.torque(*states))
+    cols = np.stack(cols, axis=2)
+    several = len(runs) > 1
+    cv = BlockValidation.build(base, target, cols, w, run_rows if several else VALIDATION_BLOCKS)
+    chosen: list[int] = []
+    sse = cv.sse_folds([])
+    path = [("", float(np.sum(sse)))]
+    found: list[tuple] = []
+    rejected: dict[int, tuple] = {}
+    while True:
+        trials = []
+        for i, t in enumerate(terms):
+            if i not in chosen:
+                new = cv.sse_folds(chosen + [i])
+                rows = _rows(t, dof)
+                before = np.maximum(np.sum(sse[:, rows], axis=1), 1e-300)
+                fold_gains = 1.0 - np.sum(new[:, rows], axis=1) / before
+                gain = 1.0 - np.sum(new[:, rows]) / max(np.sum(before), 1e-300)
+                trials.append((float(np.sum(new)), float(gain), i, new, fold_gains))
+        step = None
+        for total, gain, i, new, fold_gains in sorted(trials, key=lambda tr: tr[0]):
+            if gain < MIN_GAIN:
+                continue
+            subset = chosen + [i]
+            coef = weighted_fit(base, target, cols[:, :, subset], w)[1][-1]
+            per_run, per_std = (_per_run(base, target, cols[:, :, subset], w, run_rows)
+                                if several else (np.array([coef]), np.array([0.0])))
+            why = _verdict(terms[i], gain, fold_gains, coef, per_run, per_std, several)
+            if why:
+                rejected[i] = (gain, why)
+                continue
+            step = (total, gain, i, new, per_run, per_std)
+            break
+        if step is None:
+            break
+        total, gain, i, sse, per_run, per_std = step
+        chosen.append(i)
+        found.append((gain, per_run, per_std))
+        path.append((f"{terms[i].effect}@{terms[i].joint}", total))
+    coef_base, coef = weighted_fit(base, target, cols[:, :, chosen], w)
+    named = tuple(
+        Named(replace(terms[i], coefficient=float(c)), tuple(map(float, pr)),
+              tuple(map(float, ps)), g, physical_reading(replace(terms[i], coefficient=float(c))))
+        for i, c, (g, pr, ps) in zip(chosen, coef, found, strict=True))
+    model = closed_model(declared, coef_base, tuple(x.term for x in named), inertial)
+    return RunsLoop(model, named, coef_base, "runs" if several else "blocks", tuple(path),
+                    _not_named(terms, chosen, rejected, trials))
+
+
+def _not_named(terms, chosen, rejected, trials) -> tuple[tuple[int, str, float, str], ...]:
+    """Per joint, the best candidate left when selection stopped, its gain and why."""
+    best: dict[int, tuple] = {}
+    for _, gain, i, _, _ in trials:
+        j = terms[i].joint
+        if j not in best or gain > best[j][1]:
+            best[j] = (i, gain)
+    out = []
+    for j in sorted(best):
+        i, gain = best[j]
+        why = rejected[i][1] if i in rejected and gain >= MIN_GAIN else (
+            f"cuts the validation error power by {gain:.1%} < {MIN_GAIN:.0%}")
+        out.append((j, terms[i].effect, float(gain), why))
+    return tuple(out)
