@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from identification.consistent import identify_consistent
 
 from harness.closeloop.model_file import model_payload
 from harness.data.dataset import load_arrays
@@ -32,7 +33,6 @@ from identification.closeloop.runs import (
     RunsLoop,
     close_loop_runs,
 )
-from identification.consistent import identify_consistent
 from identification.errors import IdentificationError
 from identification.kinematic_model import KinematicModel
 from identification.metrics import rel_error
