@@ -17,7 +17,8 @@ from harness.robots.registry import ROBOTS, load_chain, load_pinocchio
 from identification.closeloop.effects import UNITS, EffectTerm
 from identification.closeloop.runs import closed_model
 from identification.errors import IdentificationError
-from identification.kinematic_model import LIBRARY, KinematicModel
+from identification.kinematic_model import KinematicModel
+from identification.model import model_from_dict, model_to_dict
 
 KIND = "closeloop"
 SHAPE = ("lead", "eps", "steepness", "shift")
@@ -28,24 +29,20 @@ def model_payload(robot: str, declared: dict | str, inertial: KinematicModel | N
     """The content of model.json (declared: 'pinocchio' or a MODEL.json's content)."""
     chain = load_chain(robot)
     return {"kind": KIND, "dof": chain.dof, "robot": {"name": chain.name, "hash": chain.digest()},
-            "declared": declared, "inertial": None if inertial is None else inertial.to_dict(),
+            "declared": declared, "inertial": None if inertial is None else model_to_dict(inertial),
             "offsets": [float(o) for o in offsets], "effects": [t.to_json() for t in terms]}
 
 
 def declared_model(spec: dict | str, robot: str, robot_library):
     """The declared model of a payload: 'pinocchio' or a MODEL.json's content;
     robot_library(robot): its base atoms (harness.robots.torque_models, which reads us)."""
-    from identification.model import model_from_dict
-
     if spec == "pinocchio":
         return PinocchioModel(load_pinocchio(robot))
     if not isinstance(spec, dict):
         raise IdentificationError("'declared' must be 'pinocchio' or a model")
     if spec.get("kind") == KIND:  # a closed loop's model declared for another loop
         return closeloop_model(spec, robot, Path("declared"), robot_library)
-    if spec.get("library") == LIBRARY:
-        return KinematicModel.from_dict(spec, robot_library(robot))
-    return model_from_dict(spec)
+    return model_from_dict(spec, lambda: robot_library(robot))
 
 
 def _term(entry: dict) -> EffectTerm:
@@ -73,8 +70,8 @@ def closeloop_model(payload: dict, robot: str | None, path: Path, robot_library)
                                   f"({chain.digest()})")
     declared = declared_model(payload.get("declared"), robot, robot_library)
     inertial = payload.get("inertial")
-    inertial = None if inertial is None else KinematicModel.from_dict(inertial,
-                                                                      robot_library(robot))
+    inertial = None if inertial is None else model_from_dict(inertial,
+                                                             lambda: robot_library(robot))
     terms = tuple(_term(e) for e in payload.get("effects", []))
     offsets = payload.get("offsets", [0.0] * chain.dof)
     if len(offsets) != chain.dof or any(t.joint < 1 or t.joint > chain.dof for t in terms):

@@ -3,7 +3,7 @@ the loop on runs of one robot against the model the user declared.
 
 The declared model is the robot's nominal model (`pinocchio`: its URDF/MJCF) or a
 MODEL.json; with the nominal model the inertial candidate is the rigid-body correction
-of the physically consistent fit pulled toward it (identification.consistent): a payload,
+of the physically consistent fit pulled toward it (identification.regression.consistent): a payload,
 a wrong mass or centre of mass, named as such rather than absorbed by springs and friction.
 Effects are chosen by identification.closeloop.runs; scores are on the --validate runs, or
 without them on the last --holdout of every run (the rest trains).
@@ -15,7 +15,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from identification.consistent import identify_consistent
 
 from harness.closeloop.model_file import model_payload
 from harness.data.dataset import load_arrays
@@ -34,8 +33,10 @@ from identification.closeloop.runs import (
     close_loop_runs,
 )
 from identification.errors import IdentificationError
+from identification.identify import identify
 from identification.kinematic_model import KinematicModel
 from identification.metrics import rel_error
+from identification.regression.consistent import ConsistentRegressor
 
 JOINT_ATOMS = ("armature", "viscous", "coulomb")
 
@@ -46,7 +47,7 @@ def inertial_correction(robot: str, runs: list[tuple]) -> KinematicModel:
     library = robot_library(robot)
     nominal = PinocchioModel(load_pinocchio(robot)).atom_parameters()
     q, qd, qdd, tau = (np.concatenate([r[i] for r in runs]) for i in range(4))
-    fit = identify_consistent(q, qd, qdd, tau, library, nominal, holdout=0.0).model
+    fit = identify(q, qd, qdd, tau, library, 0.0, regressor=ConsistentRegressor(nominal)).model
     delta = fit.coefficients - library.fold @ nominal
     delta[[k for k, n in enumerate(library.names) if n.startswith(JOINT_ATOMS)]] = 0.0
     return KinematicModel(library, delta, np.zeros(library.dof), "consistent")

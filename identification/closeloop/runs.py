@@ -9,7 +9,7 @@ MODEL.json) and the training runs:
 2. Candidates, per joint: `viscous`, `coulomb`, `armature`, `spring` (the Coulomb shape
    fitted by variable projection, identification.closeloop.measured.candidates), and,
    when given, `inertial`: the rigid-body correction of the consistent fit pulled toward
-   the declared model (identification.consistent), one column acting on every joint, its
+   the declared model (identification.regression.consistent), one column acting on every joint, its
    coefficient a scale (1 = the consistent fit's correction).
 3. Forward selection, validated run by run (leave one run out; one run alone: contiguous
    blocks of it). A candidate is named when it cuts its joint's validation error power by
