@@ -132,7 +132,8 @@ def speed_study(baseline, scenario, quick: bool, config: PlannerConfig | None = 
     """Cold and warm timings, and scipy trust-constr on the same cold problem."""
     planner = Planner(baseline, config)
     # one obstacle sample apart, over the whole motion, also in quick mode (about 2 s)
-    timings, _ = measure(planner, scenario, cold_repeats=3 if quick else 5)
+    timings, _ = measure(segment_planner(baseline, planner.config, planner), scenario,
+                         cold_repeats=3 if quick else 5)
     out = timings.summary()
     obstacle = scenario.obstacle
     forecast = ObstacleForecast(obstacle.sample_times, obstacle.position(obstacle.sample_times))
