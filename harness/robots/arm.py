@@ -87,6 +87,15 @@ def torque_limit(robot: str) -> tuple[float, ...] | None:
     return tuple(float(v) for v in effort)
 
 
+def velocity_limit(robot: str) -> tuple[float, ...] | None:
+    """|qd_i| bound (rad/s) of each joint from the URDF's <limit velocity>; None unless every
+    joint has a finite positive one (an MJCF has none)."""
+    velocity = np.asarray(load_pinocchio(robot).velocityLimit, float)
+    if not np.all(np.isfinite(velocity) & (velocity > 0)):
+        return None
+    return tuple(float(v) for v in velocity)
+
+
 def planner_config(robot: str, **changes) -> PlannerConfig:
     """The default planner configuration on robot, what `plan` and the bench plan with: the
     true energy, several starts and the arrival at rest of planning.config.true_energy_config
