@@ -159,6 +159,7 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
         "duration": scenario.duration, "start": scenario.start, "goal": scenario.goal,
         "start_velocity": scenario.start_velocity, "rest_at_goal": config.rest_at_goal,
         "model": model_name, "robot": config.geometry.name,
+        "link_radii": config.geometry.link_radii,
     }
 
 

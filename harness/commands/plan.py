@@ -13,10 +13,11 @@ import math
 import re
 from pathlib import Path
 
+from harness.commands.plan_limits import link_radii, rate_limits, torque_limit, vector
 from harness.commands.plan_messages import BuildNotice, infeasible, torque_diagnosis
 from harness.errors import UserError
 from harness.io import write_json
-from harness.robots.arm import planner_config, torque_limit, velocity_limit
+from harness.robots.arm import planner_config
 from harness.robots.registry import DEFAULT_ROBOT, robot_entry
 from harness.robots.torque_models import load_torque_model
 from harness.trajectory import DEFAULT_RATE, write_trajectory
@@ -35,16 +36,6 @@ from planning.result import closest_link, evaluate, to_json
 DEFAULT = Scenario()
 PLANNER = true_energy_config()
 SAMPLES = {"paper": 10, "gauss": PLANNER.energy_samples, "simpson": 21}  # split: 3 per interval
-
-
-def _vector(text: str, name: str, length: int = 3) -> tuple[float, ...]:
-    try:
-        values = tuple(float(x) for x in text.split(","))
-    except ValueError:
-        raise UserError(f"--{name} must be {length} comma-separated numbers, got '{text}'") from None
-    if len(values) != length or not all(math.isfinite(v) for v in values):
-        raise UserError(f"--{name} must be {length} finite comma-separated numbers, got '{text}'")
-    return values
 
 
 def _csv(values) -> str:
@@ -101,6 +92,10 @@ def register(sub) -> None:
     p.add_argument("--accel-limit", default=None,
                    help="acceleration limit (rad/s^2): one for every joint or one per joint "
                         "(default: none)")
+    p.add_argument("--link-radius", default="0",
+                   help="capsule radius around every link (m; clearance is to its surface), or "
+                        "'collision': capsules fitted to the URDF's collision geometry (0 on "
+                        "links without); default 0: the links' centre lines (the paper's)")
     p.add_argument("--trajectory", default=None,
                    help="also write the executed motion at the control rate to this CSV: "
                         "t,q1..qn,qd1..qdn,qdd1..qddn,tau1..taun (s, rad, rad/s, rad/s^2, "
@@ -156,34 +151,6 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _torque_limit(args, dof: int) -> tuple[float, ...] | None:
-    if args.torque_limit is None:
-        return torque_limit(args.robot)
-    if args.torque_limit.strip().lower() == "none":
-        return None
-    limit = _vector(args.torque_limit, "torque-limit", dof)
-    if not all(v > 0 for v in limit):
-        raise UserError(f"--torque-limit must be positive, got '{args.torque_limit}'")
-    return limit
-
-
-def _rate_limits(args, dof: int) -> dict:
-    """velocity_limit and acceleration_limit of the configuration (rad/s, rad/s^2)."""
-    limits = {"velocity_limit": velocity_limit(args.robot), "acceleration_limit": None}
-    for name, key in (("velocity-limit", "velocity_limit"), ("accel-limit", "acceleration_limit")):
-        text = getattr(args, key if name == "velocity-limit" else "accel_limit")
-        if text is None:
-            continue
-        if text.strip().lower() == "none":
-            limits[key] = None
-            continue
-        values = _vector(text, name, 1 if "," not in text else dof)
-        if not all(v > 0 for v in values):
-            raise UserError(f"--{name} must be positive, got '{text}'")
-        limits[key] = values * dof if len(values) == 1 else values
-    return limits
-
-
 def _angles(args, name: str, dof: int) -> tuple[float, ...]:
     """--start or --goal, else the robot's registered motion (the Lynxmotion's: the paper's)."""
     text = getattr(args, name)
@@ -193,7 +160,7 @@ def _angles(args, name: str, dof: int) -> tuple[float, ...]:
             raise UserError(f"--{name} is needed on robot {args.robot}: {dof} comma-separated "
                             "joint angles (rad)")
         return tuple(motion[0 if name == "start" else 1])
-    return _vector(text, name, dof)
+    return vector(text, name, dof)
 
 
 def _setup(args) -> tuple[PlannerConfig, Scenario]:
@@ -235,8 +202,10 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  power_breaks=args.power_breaks,
                                  torque_limit=None)
     dof = config.geometry.dof
-    config = dataclasses.replace(config, torque_limit=_torque_limit(args, dof),
-                                 **_rate_limits(args, dof))
+    config = dataclasses.replace(config, geometry=dataclasses.replace(
+        config.geometry, radii=link_radii(args, len(config.geometry.links))))
+    config = dataclasses.replace(config, torque_limit=torque_limit(args, dof),
+                                 **rate_limits(args, dof))
     if args.rate is not None and not (math.isfinite(args.rate) and args.rate > 0):
         raise UserError(f"--rate must be a finite number > 0 Hz, got {args.rate}")
     if args.rate is not None and args.trajectory is None:
@@ -249,9 +218,9 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  replan_deadline_ms=args.deadline_ms or None,
                                  replanner=args.replanner or ("penalty" if args.free_end
                                                               else PLANNER.replanner))
-    path = (_vector(args.obstacle_from, "obstacle-from"),
-            _vector(args.obstacle_to, "obstacle-to"), args.duration, args.samples)
-    sway = _vector(args.obstacle_sway, "obstacle-sway")
+    path = (vector(args.obstacle_from, "obstacle-from"),
+            vector(args.obstacle_to, "obstacle-to"), args.duration, args.samples)
+    sway = vector(args.obstacle_sway, "obstacle-sway")
     obstacle = (SwayingObstacle(*path, sway=sway, periods=args.sway_periods) if any(sway)
                 else LinearObstacle(*path))
     scenario = Scenario(_angles(args, "start", dof), _angles(args, "goal", dof),

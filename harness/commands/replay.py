@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import asdict
 from pathlib import Path
@@ -61,9 +62,12 @@ def run(args) -> int:
     plan = read_plan(args.plan)
     reference = plan_reference(plan)
     robot = data_robot(plan if isinstance(plan, dict) else {}, args.robot)
-    plant = replay_plant(args.plant, robot)
-    model = plant.model
     geometry = arm_geometry(robot)
+    radii = plan.get("link_radii")
+    if isinstance(radii, list) and len(radii) == len(geometry.links) and any(radii):
+        geometry = dataclasses.replace(geometry, radii=tuple(float(r) for r in radii))
+    plant = replay_plant(args.plant, robot, geometry.radii)
+    model = plant.model
     if geometry.dof != reference.dof:
         raise UserError(f"the plan has {reference.dof} joints, robot {robot} has {geometry.dof}")
     if args.video:  # a video asked for and impossible: said before anything is written
@@ -88,8 +92,7 @@ def summary(plan: str, plant: str, result) -> str:
     """The line `replay` prints: energy against the plan's, clearance, tracking."""
     change = (f", {100 * result.energy_error:+.1f} %" if math.isfinite(result.energy_error)
               else "")
-    clearance = result.surface_clearance if result.surface_clearance is not None \
-        else result.min_clearance
+    clearance = result.min_clearance  # to the links' surfaces, as the plan measures it
     return (f"replayed {plan} on {plant}: energy {result.energy:.4f} J (plan "
             f"{result.energy_planned:.4f} J{change}), min clearance {1000 * clearance:.1f} mm, "
             f"tracking rms {result.tracking_rms:.2e} rad")

@@ -33,28 +33,28 @@ class ReplayPlant:
     feedforward_label: str
 
 
-def replay_plant(plant: str | None, robot: str) -> ReplayPlant:
-    """The plant `replay --plant` names (None: the robot's replay scene); UserError in one
-    line when it cannot be one."""
+def replay_plant(plant: str | None, robot: str, radii: tuple[float, ...] = ()) -> ReplayPlant:
+    """The plant `replay --plant` names (None: the robot's replay scene), link capsules of
+    these radii (m) where a scene is built; UserError in one line when it cannot be one."""
     if plant is None:
-        return ReplayPlant(replay_scene(robot), PinocchioModel(load_pinocchio(robot)), robot,
+        return ReplayPlant(replay_scene(robot, tuple(radii)), PinocchioModel(load_pinocchio(robot)), robot,
                            "pinocchio")
     path = Path(plant)
     if not path.is_file():
         raise UserError(f"plant file not found: {path}")
     if path.suffix.lower() == ".json":
-        return _identified(path, robot)
+        return _identified(path, robot, radii)
     if path.suffix.lower() == ".urdf":
-        return ReplayPlant(build_scene(str(path)).compile(),
+        return ReplayPlant(build_scene(str(path), radii).compile(),
                            PinocchioModel(load_pinocchio(path)), str(path), f"pinocchio {path}")
     model = load_mujoco(path, scene=True)
     if model.nu:  # an MJCF scene with its own motors (and obstacle), simulated as it is
         return ReplayPlant(model, PinocchioModel(load_pinocchio(robot)), str(path), "pinocchio")
-    return ReplayPlant(build_scene(str(path)).compile(), PinocchioModel(load_pinocchio(path)),
+    return ReplayPlant(build_scene(str(path), radii).compile(), PinocchioModel(load_pinocchio(path)),
                        str(path), f"pinocchio {path}")
 
 
-def _identified(path: Path, robot: str) -> ReplayPlant:
+def _identified(path: Path, robot: str, radii: tuple[float, ...]) -> ReplayPlant:
     """The robot's scene with the bodies a MODEL.json identified, its own torque the
     feed-forward."""
     payload = read_json(path, "model")
@@ -63,5 +63,5 @@ def _identified(path: Path, robot: str) -> ReplayPlant:
         raise UserError(f"model {path} has no per-body inertial parameters to simulate ('"
                         f"{PARAMETERS_KEY}'): a model in the robot's base atoms has no bodies; "
                         "pass a URDF or MJCF with the identified inertials as --plant")
-    model = set_standard_parameters(build_scene(robot).compile(), parameters)
+    model = set_standard_parameters(build_scene(robot, radii).compile(), parameters)
     return ReplayPlant(model, load_torque_model(str(path), robot), str(path), str(path))

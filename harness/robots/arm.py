@@ -19,6 +19,7 @@ import pinocchio as pin
 from harness.robots.plant import load_plant
 from harness.robots.registry import (
     ROBOTS,
+    erd_robots_dir,
     flange_frame,
     get_robot,
     load_chain,
@@ -54,6 +55,19 @@ def arm_geometry(robot: str) -> ArmGeometry:
         bodies.append(names[0] if names else model.names[j])
     return ArmGeometry.of(chain.rotations, chain.translations, chain.axes, flange,
                           robot_label(robot), bodies)
+
+
+def link_radii(robot: str, default: float = 0.0) -> tuple[float, ...]:
+    """Each planner link's capsule radius (m) fitted to the robot's URDF collision geometry
+    (harness.robots.collision); default for links without any (and for an MJCF)."""
+    from harness.robots.collision import link_radii as fitted
+
+    geometry, entry = arm_geometry(robot), robot_entry(robot)
+    if entry.urdf is None:
+        return (default,) * len(geometry.links)
+    packages = (erd_robots_dir().parent.parent,) if entry.source == "example-robot-data" else ()
+    radii = fitted(Path(entry.urdf), load_pinocchio(robot), geometry, packages)
+    return tuple(default if r is None else r for r in radii)
 
 
 def joint_limits(robot: str) -> tuple[tuple[float, ...], tuple[float, ...]]:

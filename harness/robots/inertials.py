@@ -5,7 +5,8 @@ consistent fit identifies and PinocchioModel.atom_parameters gives of a URDF): p
 its joint's frame, m, m c (kg m) and the rotational inertia about the frame's origin
 (kg m^2: Ixx, Ixy, Iyy, Ixz, Iyz, Izz, Pinocchio's toDynamicParameters order); then per
 joint armature (kg m^2), viscous damping (N m s/rad) and Coulomb friction (N m). A MuJoCo
-body of a URDF arm has its joint's frame (the URDF link frame), so they map one to one.
+body of a URDF arm has its joint's frame (the URDF link frame), so they map one to one; the
+bodies welded to it (a hand, held fingers) are in its parameters and left massless.
 """
 
 from __future__ import annotations
@@ -47,6 +48,8 @@ def set_standard_parameters(model: mujoco.MjModel, parameters) -> mujoco.MjModel
         mass, c, moments, quat = body_inertials(parameters[10 * j:10 * j + 10])
         model.body_mass[body], model.body_ipos[body] = mass, c
         model.body_inertia[body], model.body_iquat[body] = moments, quat
+        for child in _fixed_children(model, body):  # their inertia is in the joint's body
+            model.body_mass[child], model.body_inertia[child] = MIN_MASS, MIN_MASS
         dof_address = model.jnt_dofadr[j]
         armature, viscous, coulomb = parameters[10 * dof + j::dof][:3]
         model.dof_armature[dof_address] = armature
@@ -54,3 +57,12 @@ def set_standard_parameters(model: mujoco.MjModel, parameters) -> mujoco.MjModel
         model.dof_frictionloss[dof_address] = coulomb
     mujoco.mj_setConst(model, mujoco.MjData(model))
     return model
+
+
+def _fixed_children(model: mujoco.MjModel, body: int) -> list[int]:
+    """The bodies welded to body (no joint between them: a URDF's fixed links)."""
+    out = []
+    for child in range(model.nbody):
+        if model.body_parentid[child] == body and child != body and model.body_jntnum[child] == 0:
+            out += [child, *_fixed_children(model, child)]
+    return out

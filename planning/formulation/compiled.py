@@ -96,6 +96,8 @@ def _shared_library(functions: list[ca.Function], what: str) -> Path | None:
             with ThreadPoolExecutor(max_workers=min(len(sources), os.cpu_count() or 1)) as pool:
                 list(pool.map(lambda i: _run([COMPILER, *_flags(len(texts[i])), "-c",
                                               str(sources[i]), "-o", str(objects[i])]), order))
+            log.debug("built %s", ", ".join(f"{f.name()} {len(t) // 1000} kB"
+                                            for f, t in zip(functions, texts, strict=True)))
             built = Path(tmp) / "library.so"
             _run([COMPILER, "-shared", *map(str, objects), "-o", str(built), "-lm"])
             os.replace(built, target)
