@@ -49,14 +49,15 @@ def torque_diagnosis(planner: Planner, scenario: Scenario) -> str | None:
 
 class BuildNotice(logging.Handler):
     """Says once on stderr that the planning problem is being compiled (it can take a while
-    on a new robot; planning.formulation.compiled logs each build)."""
+    on a new robot; planning.formulation.compiled logs each build), when stderr is a terminal
+    (a script reading stderr gets the one-line errors only)."""
 
     def __init__(self, robot: str):
         super().__init__(logging.INFO)
         self.robot, self.said = robot, False
 
     def emit(self, record) -> None:
-        if not self.said:
+        if not self.said and sys.stderr.isatty():
             self.said = True
             print(f"torquebench: compiling the planning problem for {self.robot} (first time "
                   "only)...", file=sys.stderr, flush=True)
