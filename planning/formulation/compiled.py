@@ -26,9 +26,11 @@ import casadi as ca
 import numpy as np
 
 COMPILER = os.environ.get("CC", "gcc")
-# -O1: most of the speed for a short build; a function whose C is over O0_SOURCE_BYTES is
-# built at -O0 instead: gcc's time at -O1 grows faster than the function's size, and the
-# plans came out the same (docs/realtime.md, 'planning.formulation.compiled')
+# -O1: most of the speed for a short build. An NLP solver's function whose C is over
+# O0_SOURCE_BYTES is built at -O0 instead: gcc's time at -O1 grows faster than the
+# function's size, and a solve is a few % slower. The anytime SQP's functions (`function`,
+# `functions`) stay at -O1: at -O0 its re-plans did less within their CPU budget and missed
+# the threshold (docs/realtime.md, 'planning.formulation.compiled')
 FLAGS = ("-O1", "-fPIC")
 O0_SOURCE_BYTES = 500_000
 # Larger sources stay in CasADi's virtual machine: their build takes minutes and gigabytes
@@ -57,14 +59,16 @@ def available() -> bool:
     return shutil.which(COMPILER) is not None
 
 
-def _flags(size: int) -> tuple[str, ...]:
-    return ("-O0", *FLAGS[1:]) if size > O0_SOURCE_BYTES else FLAGS
-
-
-def _shared_library(functions: list[ca.Function], what: str) -> Path | None:
+def _shared_library(functions: list[ca.Function], what: str, quick: bool = False
+                    ) -> Path | None:
     """One shared library exporting each of functions under its name (cached by the hash of
     their C and the build's flags); each function's C is a unit of its own, the units built in
-    parallel. None if their C is over MAX_SOURCE_BYTES in all."""
+    parallel (quick: -O0 for a unit over O0_SOURCE_BYTES). None if their C is over
+    MAX_SOURCE_BYTES in all."""
+
+    def _flags(size: int) -> tuple[str, ...]:
+        return ("-O0", *FLAGS[1:]) if quick and size > O0_SOURCE_BYTES else FLAGS
+
     folder = cache_dir()
     with tempfile.TemporaryDirectory(dir=folder) as tmp:
         sources = []
@@ -113,7 +117,7 @@ def library(solver: ca.Function) -> Path | None:
     if not available():
         raise CompilerMissing(f"C compiler '{COMPILER}' not found")
     functions = [solver.oracle()] + [solver.get_function(name) for name in solver.get_function()]
-    return _shared_library(functions, "the planning problem")
+    return _shared_library(functions, "the planning problem", quick=True)
 
 
 def function(f: ca.Function) -> ca.Function:
@@ -123,6 +127,15 @@ def function(f: ca.Function) -> ca.Function:
         return f
     target = _shared_library([f], f.name())
     return f if target is None else ca.external(f.name(), str(target))
+
+
+def functions(fs: list[ca.Function]) -> list[ca.Function]:
+    """Each of fs compiled to C as `function` does, in one library (their units built in
+    parallel)."""
+    if not available():
+        return list(fs)
+    target = _shared_library(list(fs), ", ".join(f.name() for f in fs))
+    return list(fs) if target is None else [ca.external(f.name(), str(target)) for f in fs]
 
 
 def nlpsol(name: str, plugin: str, problem: dict, options: dict) -> ca.Function:
