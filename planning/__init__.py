@@ -27,6 +27,7 @@ Modules at the top:
 - replanning: Algorithm 2, re-planning from the current state when the obstacle threatens,
   with any SegmentPlanner
 - result: the executed trajectory, checked, and its PLAN.json payload
+- control: the executed trajectory at a controller's rate with its feed-forward torque
 - scenarios: named scenarios; timing: wall and CPU clocks of a plan
 
 The planner takes any `identification.torque_model.TorqueModel` (identified or closed form).

@@ -13,6 +13,7 @@ from planning.formulation.kinematics import ArmGeometry, paper_arm
 from planning.formulation.obstacle import LinearObstacle
 
 REPLANNERS = ("penalty", "anytime")
+RATE_MARGIN = 0.98  # velocity and acceleration rows bound at this fraction of the limits
 # the replanners' earlier names, still accepted (`plan --replanner fatrop`); PLAN.json keeps them
 ALIASES = {"fatrop": "penalty", "sqp": "anytime"}
 JSON_NAMES = {"penalty": "fatrop", "anytime": "sqp"}
@@ -73,6 +74,7 @@ class PlannerConfig:
     obstacle_slots: how many obstacle samples one solve sees (the
     ones that can come within the threshold, see planning.formulation.screening);
     limits in rad, enforced at limit_samples interior points of every segment;
+    velocity_limit, acceleration_limit: per joint (rad/s, rad/s^2), None: unconstrained;
     torque_limit: |tau_i| <= torque_limit[i] (N m, planning model's torque) at s = 0, the
     energy samples and the obstacle samples of every segment (None: unconstrained). The
     default is the Lynxmotion MJCF motors' ctrlrange (gear 1); callers that know the
@@ -99,6 +101,12 @@ class PlannerConfig:
     upper: tuple[float, ...] = (pi / 2, pi, 0.0)
     limit_samples: int = 8
     torque_limit: tuple[float, ...] | None = (10.0, 10.0, 10.0)
+    # |qd_i| <= velocity_limit[i] (rad/s) and |qdd_i| <= acceleration_limit[i] (rad/s^2) at
+    # rate_samples interior points of every segment, each within RATE_MARGIN of its bound so
+    # the motion between the points keeps it (None: unconstrained)
+    velocity_limit: tuple[float, ...] | None = None
+    acceleration_limit: tuple[float, ...] | None = None
+    rate_samples: int = 24
     geometry: ArmGeometry = field(default_factory=paper_arm)  # links for clearance
     power_smoothing: float = 0.0  # W; 0: exact epigraph of |P|, > 0: sqrt(P^2 + eps^2) - eps
     compile_code: bool = False  # NLP functions as C compiled once (planning.formulation.compiled)

@@ -35,6 +35,7 @@ class PlanResult(Motion):
     execution: Execution
     feasible: bool
     problems: tuple[str, ...]
+    peak_velocity: np.ndarray | None = None  # (dof,) rad/s, max |qd_i| on t
 
 
 def sample_execution(execution: Execution, t: np.ndarray):
@@ -86,12 +87,16 @@ def evaluate(execution: Execution, scenario: Scenario, model: TorqueModel,
         problems.append(f"joint limits exceeded by {limit:.2e} rad")
     peak_torque = np.abs(model.torque(q, qd, qdd)).max(axis=0)
     problems += _torque_problems(peak_torque, config.torque_limit)
+    peak_velocity = np.abs(qd).max(axis=0)
+    problems += _rate_problems(peak_velocity, config.velocity_limit, "velocity", "rad/s")
+    problems += _rate_problems(np.abs(qdd).max(axis=0), config.acceleration_limit,
+                               "acceleration", "rad/s^2")
     if sample_clearance.min() < config.threshold - CLEARANCE_TOLERANCE:
         problems.append(f"clearance {sample_clearance.min():.4f} m < threshold "
                         f"{config.threshold} m - {CLEARANCE_TOLERANCE} m")
     return PlanResult(t, q, qd, qdd, obstacle, clearance, sample_clearance,
                       executed_energy(model, execution, t), end_error, limit, peak_torque,
-                      execution, not problems, tuple(problems))
+                      execution, not problems, tuple(problems), peak_velocity)
 
 
 def _torque_problems(peak: np.ndarray, limit) -> list[str]:
@@ -100,6 +105,14 @@ def _torque_problems(peak: np.ndarray, limit) -> list[str]:
         return []
     return [f"joint {j + 1} torque {peak[j]:.3g} N m exceeds the limit {limit[j]:g} N m"
             for j in range(len(peak)) if peak[j] > limit[j] * (1 + TORQUE_TOLERANCE)]
+
+
+def _rate_problems(peak: np.ndarray, limit, what: str, unit: str) -> list[str]:
+    """One line per joint whose peak velocity or acceleration exceeds its limit."""
+    if limit is None:
+        return []
+    return [f"joint {j + 1} {what} {peak[j]:.3g} {unit} exceeds the limit {limit[j]:g} {unit}"
+            for j in range(len(peak)) if peak[j] > limit[j]]
 
 
 def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
@@ -140,10 +153,13 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
         "iteration_ms": config.anytime.iteration_ms,
         "end_error": result.end_error, "limit_violation": result.limit_violation,
         "peak_torque": result.peak_torque, "torque_limit": config.torque_limit,
+        "peak_velocity": result.peak_velocity, "velocity_limit": config.velocity_limit,
+        "acceleration_limit": config.acceleration_limit,
         "feasible": result.feasible, "problems": result.problems,
         "duration": scenario.duration, "start": scenario.start, "goal": scenario.goal,
         "start_velocity": scenario.start_velocity, "rest_at_goal": config.rest_at_goal,
         "model": model_name, "robot": config.geometry.name,
+        "link_radii": config.geometry.link_radii,
     }
 
 

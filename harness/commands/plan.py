@@ -8,39 +8,34 @@ command names the problem and exits 2 without writing.
 from __future__ import annotations
 
 import dataclasses
+import logging
 import math
 import re
+from pathlib import Path
 
-import numpy as np
-
+from harness.commands.plan_limits import link_radii, rate_limits, torque_limit, vector
+from harness.commands.plan_messages import BuildNotice, infeasible, torque_diagnosis
 from harness.errors import UserError
 from harness.io import write_json
-from harness.robots.arm import planner_config, torque_limit
+from harness.robots.arm import planner_config
 from harness.robots.registry import DEFAULT_ROBOT, robot_entry
 from harness.robots.torque_models import load_torque_model
+from harness.trajectory import DEFAULT_RATE, write_trajectory
 from planning.config import ALIASES, REPLANNERS, PlannerConfig, Scenario, true_energy_config
+from planning.control import control_trajectory
 from planning.errors import PlanningError
+from planning.formulation import compiled
 from planning.formulation.obstacle import LinearObstacle, SwayingObstacle
 from planning.formulation.quadrature import RULES, splits_evenly
 from planning.penalty.backends import SOLVERS
 from planning.penalty.solver import Planner
-from planning.planners import segment_planner, uses_anytime
+from planning.planners import segment_planner
 from planning.replanning import execute
 from planning.result import closest_link, evaluate, to_json
 
 DEFAULT = Scenario()
 PLANNER = true_energy_config()
 SAMPLES = {"paper": 10, "gauss": PLANNER.energy_samples, "simpson": 21}  # split: 3 per interval
-
-
-def _vector(text: str, name: str, length: int = 3) -> tuple[float, ...]:
-    try:
-        values = tuple(float(x) for x in text.split(","))
-    except ValueError:
-        raise UserError(f"--{name} must be {length} comma-separated numbers, got '{text}'") from None
-    if len(values) != length or not all(math.isfinite(v) for v in values):
-        raise UserError(f"--{name} must be {length} finite comma-separated numbers, got '{text}'")
-    return values
 
 
 def _csv(values) -> str:
@@ -91,6 +86,23 @@ def register(sub) -> None:
     p.add_argument("--torque-limit", default=None,
                    help="per-joint torque limits (N m, one per joint), or 'none'; default: the "
                         "robot MJCF's motor ctrlrange times gear, else the URDF effort limits")
+    p.add_argument("--velocity-limit", default=None,
+                   help="per-joint velocity limits (rad/s, one per joint), or 'none'; default: "
+                        "the URDF's <limit velocity>")
+    p.add_argument("--accel-limit", default=None,
+                   help="acceleration limit (rad/s^2): one for every joint or one per joint "
+                        "(default: none)")
+    p.add_argument("--link-radius", default="0",
+                   help="capsule radius around every link (m; clearance is to its surface), or "
+                        "'collision': capsules fitted to the URDF's collision geometry (0 on "
+                        "links without); default 0: the links' centre lines (the paper's)")
+    p.add_argument("--trajectory", default=None,
+                   help="also write the executed motion at the control rate to this CSV: "
+                        "t,q1..qn,qd1..qdn,qdd1..qddn,tau1..taun (s, rad, rad/s, rad/s^2, "
+                        "N m: the planning model's feed-forward torque), ending at rest at the "
+                        "goal")
+    p.add_argument("--rate", type=float, default=None,
+                   help="control rate of --trajectory (Hz, default 500)")
     p.add_argument("--solver", choices=SOLVERS, default=None,
                    help="NLP solver (CasADi plugin); ipopt is the paper's (default: fatrop on "
                         "the Lynxmotion, ipopt on other arms)")
@@ -139,17 +151,6 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _torque_limit(args, dof: int) -> tuple[float, ...] | None:
-    if args.torque_limit is None:
-        return torque_limit(args.robot)
-    if args.torque_limit.strip().lower() == "none":
-        return None
-    limit = _vector(args.torque_limit, "torque-limit", dof)
-    if not all(v > 0 for v in limit):
-        raise UserError(f"--torque-limit must be positive, got '{args.torque_limit}'")
-    return limit
-
-
 def _angles(args, name: str, dof: int) -> tuple[float, ...]:
     """--start or --goal, else the robot's registered motion (the Lynxmotion's: the paper's)."""
     text = getattr(args, name)
@@ -159,7 +160,7 @@ def _angles(args, name: str, dof: int) -> tuple[float, ...]:
             raise UserError(f"--{name} is needed on robot {args.robot}: {dof} comma-separated "
                             "joint angles (rad)")
         return tuple(motion[0 if name == "start" else 1])
-    return _vector(text, name, dof)
+    return vector(text, name, dof)
 
 
 def _setup(args) -> tuple[PlannerConfig, Scenario]:
@@ -201,7 +202,14 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  power_breaks=args.power_breaks,
                                  torque_limit=None)
     dof = config.geometry.dof
-    config = dataclasses.replace(config, torque_limit=_torque_limit(args, dof))
+    config = dataclasses.replace(config, geometry=dataclasses.replace(
+        config.geometry, radii=link_radii(args, len(config.geometry.links))))
+    config = dataclasses.replace(config, torque_limit=torque_limit(args, dof),
+                                 **rate_limits(args, dof))
+    if args.rate is not None and not (math.isfinite(args.rate) and args.rate > 0):
+        raise UserError(f"--rate must be a finite number > 0 Hz, got {args.rate}")
+    if args.rate is not None and args.trajectory is None:
+        raise UserError("--rate needs --trajectory (the CSV it samples)")
     config = config.with_penalty(solver=args.solver or config.penalty.solver,
                                  polish=args.polish, polish_samples=args.polish_samples,
                                  replan_iterations=args.replan_iterations or None)
@@ -210,9 +218,9 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  replan_deadline_ms=args.deadline_ms or None,
                                  replanner=args.replanner or ("penalty" if args.free_end
                                                               else PLANNER.replanner))
-    path = (_vector(args.obstacle_from, "obstacle-from"),
-            _vector(args.obstacle_to, "obstacle-to"), args.duration, args.samples)
-    sway = _vector(args.obstacle_sway, "obstacle-sway")
+    path = (vector(args.obstacle_from, "obstacle-from"),
+            vector(args.obstacle_to, "obstacle-to"), args.duration, args.samples)
+    sway = vector(args.obstacle_sway, "obstacle-sway")
     obstacle = (SwayingObstacle(*path, sway=sway, periods=args.sway_periods) if any(sway)
                 else LinearObstacle(*path))
     scenario = Scenario(_angles(args, "start", dof), _angles(args, "goal", dof),
@@ -222,6 +230,17 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
 
 
 def run(args) -> int:
+    logger = logging.getLogger(compiled.__name__)
+    notice = BuildNotice(Path(str(args.robot)).name)
+    logger.addHandler(notice)
+    logger.setLevel(logging.INFO)
+    try:
+        return _run(args)
+    finally:
+        logger.removeHandler(notice)
+
+
+def _run(args) -> int:
     config, scenario = _setup(args)
     model = load_torque_model(args.model, args.robot)
     if model.dof != config.geometry.dof:
@@ -236,41 +255,11 @@ def run(args) -> int:
     if not result.feasible:
         raise PlanningError(infeasible(result.problems, config))
     write_json(args.out, to_json(result, scenario, config, args.model))
+    if args.trajectory:
+        write_trajectory(args.trajectory, control_trajectory(
+            result.execution, model, scenario.duration, args.rate or DEFAULT_RATE))
     print(f"wrote {args.out}: energy {result.energy:.4f} J, min clearance "
           f"{result.sample_clearance.min():.4f} m (closest: "
           f"{closest_link(result, config)['closest_link']}), "
           f"{len(result.execution.segments) - 1} re-plans")
     return 0
-
-
-def infeasible(problems, config: PlannerConfig) -> str:
-    """The error line of an execution that is not feasible; with the anytime SQP it says
-    what its re-plans had: their quality is what that CPU buys on this machine
-    (docs/realtime.md, 'harness.commands.plan')."""
-    message = "no feasible plan: " + "; ".join(problems)
-    if uses_anytime(config):
-        message += (f" (the anytime SQP re-planned within {config.anytime.replan_budget_ms:g} ms of "
-                    "CPU: a larger --replan-budget-ms or --replanner fatrop may find one)")
-    return message
-
-
-def torque_diagnosis(planner: Planner, scenario: Scenario) -> str | None:
-    """A one-line reason when the torque limits are what make the goal unreachable: the
-    torque-limited problem has no solution and the unobstructed optimum without limits
-    needs more torque than a motor has."""
-    config, model = planner.config, planner.model
-    if config.torque_limit is None:
-        return None
-    args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
-    limited = planner.solve(*args)
-    if limited.success and planner.torque_excess(limited.trajectory) <= 0:
-        return None
-    free = Planner(model, dataclasses.replace(config, torque_limit=None)).solve(*args)
-    t = np.linspace(0.0, scenario.duration, 201)
-    peak = np.abs(model.torque(*free.trajectory.state(t))).max(axis=0)
-    limit = np.asarray(config.torque_limit)
-    j = int(np.argmax(peak / limit))
-    if peak[j] <= limit[j]:
-        return None
-    return (f"goal not reachable in {scenario.duration:g} s within the torque limits: the "
-            f"best motion needs {peak[j]:.3g} N m on joint {j + 1} (limit {limit[j]:g} N m)")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import asdict
 from pathlib import Path
@@ -26,7 +27,11 @@ def register(subparsers) -> None:
                         "records, else lynxmotion): its scene, built around it if it has none, "
                         "and its Pinocchio feedforward")
     p.add_argument("--plant", default=None,
-                   help="plant MJCF (default: the robot's scene with floor, light, obstacle)")
+                   help="what is simulated: an MJCF scene with its motors (as it is), a URDF or "
+                        "MJCF of the robot with other dynamics (a scene built around it, its "
+                        "Pinocchio model the feedforward), or a MODEL.json with per-body "
+                        "parameters (the identified dynamics, its torque the feedforward); "
+                        "default: the robot's scene with floor, light, obstacle")
     p.add_argument("--out", required=True, help="REPLAY.json to write")
     p.add_argument("--video", default=None, help="also render the replay to this mp4")
     p.set_defaults(func=run)
@@ -37,30 +42,32 @@ def read_plan(path: str | Path) -> dict:
     return read_json(path, "plan")
 
 
-def result_json(result, plant: str) -> dict:
+def result_json(result, plant: str, feedforward: str = FEEDFORWARD) -> dict:
     """REPLAY.json payload: the measured numbers plus how they were measured."""
     return {
         **asdict(result),
         "energy_error": result.energy_error if math.isfinite(result.energy_error) else None,
         "plant": plant,
-        "feedforward": FEEDFORWARD,
+        "feedforward": feedforward,
         "units": {"energy": "J", "clearance": "m", "tracking": "rad", "torque": "N m"},
     }
 
 
 def run(args) -> int:
+    from harness.replay.plants import replay_plant
     from harness.replay.reference import plan_reference
     from harness.replay.simulate import replay
     from harness.robots.arm import arm_geometry
-    from harness.robots.baseline import PinocchioModel
-    from harness.robots.registry import load_mujoco, load_pinocchio
-    from harness.robots.scene import replay_scene
 
     plan = read_plan(args.plan)
     reference = plan_reference(plan)
     robot = data_robot(plan if isinstance(plan, dict) else {}, args.robot)
-    model = load_mujoco(args.plant, scene=True) if args.plant else replay_scene(robot)
     geometry = arm_geometry(robot)
+    radii = plan.get("link_radii")
+    if isinstance(radii, list) and len(radii) == len(geometry.links) and any(radii):
+        geometry = dataclasses.replace(geometry, radii=tuple(float(r) for r in radii))
+    plant = replay_plant(args.plant, robot, geometry.radii)
+    model = plant.model
     if geometry.dof != reference.dof:
         raise UserError(f"the plan has {reference.dof} joints, robot {robot} has {geometry.dof}")
     if args.video:  # a video asked for and impossible: said before anything is written
@@ -69,13 +76,23 @@ def run(args) -> int:
         problem = rendering_problem(model)
         if problem:
             raise UserError(f"cannot render the video {args.video}: {problem}")
-    result, trace = replay(model, reference, PinocchioModel(load_pinocchio(robot)),
-                           geometry=geometry)
-    write_json(args.out, {**result_json(result, str(args.plant or robot)), "robot": robot,
-                          "links": geometry.link_names,
+    result, trace = replay(model, reference, plant.feedforward, geometry=geometry)
+    write_json(args.out, {**result_json(result, plant.label, plant.feedforward_label),
+                          "robot": robot, "links": geometry.link_names,
                           "link_min_clearance": trace.clearance.min(axis=0)})
     if args.video:
         from harness.replay.video import render_video
 
         render_video(model, trace, args.video, required=True)
+    print(summary(args.plan, plant.label, result))
     return 0
+
+
+def summary(plan: str, plant: str, result) -> str:
+    """The line `replay` prints: energy against the plan's, clearance, tracking."""
+    change = (f", {100 * result.energy_error:+.1f} %" if math.isfinite(result.energy_error)
+              else "")
+    clearance = result.min_clearance  # to the links' surfaces, as the plan measures it
+    return (f"replayed {plan} on {plant}: energy {result.energy:.4f} J (plan "
+            f"{result.energy_planned:.4f} J{change}), min clearance {1000 * clearance:.1f} mm, "
+            f"tracking rms {result.tracking_rms:.2e} rad")

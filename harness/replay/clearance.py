@@ -41,6 +41,7 @@ class ClearanceProbe:
     link_geoms: tuple[int, ...]  # capsule geom ids ('link<j>'), may be empty
     obstacle_geom: int  # -1 if the plant has no obstacle sphere
     obstacle_mocap: int  # -1 if the plant has no mocap obstacle body
+    radii: tuple[float, ...] = ()  # m, each link's capsule (the planner's): none, lines
 
     @classmethod
     def of(cls, model: mujoco.MjModel, geometry: ArmGeometry | None = None) -> ClearanceProbe:
@@ -59,7 +60,7 @@ class ClearanceProbe:
         body = _id(model, mujoco.mjtObj.mjOBJ_BODY, OBSTACLE)
         mocap = int(model.body_mocapid[body]) if body >= 0 else -1
         return cls(joints, flange, tuple(geometry.links),
-                   geoms if min(geoms) >= 0 else (), obstacle_geom, mocap)
+                   geoms if min(geoms) >= 0 else (), obstacle_geom, mocap, tuple(geometry.radii))
 
     def points(self, data: mujoco.MjData) -> np.ndarray:
         """Link points (dof + 1, 3) in m at the current kinematics."""
@@ -75,11 +76,13 @@ class ClearanceProbe:
             data.mocap_pos[self.obstacle_mocap] = centre
 
     def centre_distances(self, data: mujoco.MjData, centre: np.ndarray) -> np.ndarray:
-        """Distance (m) from centre to each link segment at the current kinematics."""
+        """Distance (m) from centre to each link segment (to its capsule's surface where the
+        planner's links have radii) at the current kinematics."""
         points = self.points(data)
         a = points[[i for i, _ in self.segments]]
         b = points[[j for _, j in self.segments]]
-        return segment_distance(np.broadcast_to(centre, a.shape), a, b)
+        distance = segment_distance(np.broadcast_to(centre, a.shape), a, b)
+        return distance - np.asarray(self.radii) if self.radii else distance
 
     def surface_distances(self, model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
         """Signed surface distance (m) from each link capsule to the obstacle sphere."""

@@ -19,6 +19,7 @@ import pinocchio as pin
 from harness.robots.plant import load_plant
 from harness.robots.registry import (
     ROBOTS,
+    erd_robots_dir,
     flange_frame,
     get_robot,
     load_chain,
@@ -56,6 +57,19 @@ def arm_geometry(robot: str) -> ArmGeometry:
                           robot_label(robot), bodies)
 
 
+def link_radii(robot: str, default: float = 0.0) -> tuple[float, ...]:
+    """Each planner link's capsule radius (m) fitted to the robot's URDF collision geometry
+    (harness.robots.collision); default for links without any (and for an MJCF)."""
+    from harness.robots.collision import link_radii as fitted
+
+    geometry, entry = arm_geometry(robot), robot_entry(robot)
+    if entry.urdf is None:
+        return (default,) * len(geometry.links)
+    packages = (erd_robots_dir().parent.parent,) if entry.source == "example-robot-data" else ()
+    radii = fitted(Path(entry.urdf), load_pinocchio(robot), geometry, packages)
+    return tuple(default if r is None else r for r in radii)
+
+
 def joint_limits(robot: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """Lower and upper joint limits (rad) from the robot's MuJoCo model."""
     lower, upper = load_plant(robot).limits()
@@ -85,6 +99,15 @@ def torque_limit(robot: str) -> tuple[float, ...] | None:
     if not np.all(np.isfinite(effort) & (effort > 0)):
         return None
     return tuple(float(v) for v in effort)
+
+
+def velocity_limit(robot: str) -> tuple[float, ...] | None:
+    """|qd_i| bound (rad/s) of each joint from the URDF's <limit velocity>; None unless every
+    joint has a finite positive one (an MJCF has none)."""
+    velocity = np.asarray(load_pinocchio(robot).velocityLimit, float)
+    if not np.all(np.isfinite(velocity) & (velocity > 0)):
+        return None
+    return tuple(float(v) for v in velocity)
 
 
 def planner_config(robot: str, **changes) -> PlannerConfig:

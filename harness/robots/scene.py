@@ -11,6 +11,7 @@ Lynxmotion's (0.5 ms, implicitfast), so every arm is tracked at the same rate.
 
 from __future__ import annotations
 
+import dataclasses
 from functools import cache
 from pathlib import Path
 
@@ -25,7 +26,7 @@ from planning.formulation.kinematics import ArmGeometry
 
 TIMESTEP = 0.0005  # s
 OBSTACLE_RADIUS = 0.02  # m, drawn only: clearance is measured to the centre
-LINK_RADIUS = 0.012  # m, the Lynxmotion's link capsules
+LINK_RADIUS = 0.012  # m, the Lynxmotion's link capsules; drawn where the planner's links are lines
 FLANGE_SITE = "end_effector"
 
 
@@ -44,18 +45,21 @@ def robot_spec(robot: str) -> mujoco.MjSpec:
 
 
 @cache
-def replay_scene(robot: str) -> mujoco.MjModel:
+def replay_scene(robot: str, radii: tuple[float, ...] = ()) -> mujoco.MjModel:
     """The robot's replay scene: its own scene MJCF when registered with one (the
-    Lynxmotion's), else one built around it (build_scene)."""
+    Lynxmotion's), else one built around it (build_scene) with link capsules of these radii
+    (m, the plan's)."""
     if robot in ROBOTS and get_robot(robot).scene is not None:
         return load_mujoco(robot, scene=True)
-    return build_scene(robot).compile()
+    return build_scene(robot, radii).compile()
 
 
-def build_scene(robot: str) -> mujoco.MjSpec:
+def build_scene(robot: str, radii: tuple[float, ...] = ()) -> mujoco.MjSpec:
     """The robot's spec with floor, light, camera, mocap obstacle, motors, flange site and
-    link capsules added (see the module docstring)."""
+    link capsules (radii in m, the planner's; none or 0: LINK_RADIUS, drawn) added (see the
+    module docstring)."""
     spec, geometry = robot_spec(robot), arm_geometry(robot)
+    geometry = dataclasses.replace(geometry, radii=tuple(radii))
     hinges = [j for j in spec.joints if j.type == mujoco.mjtJoint.mjJNT_HINGE]
     if len(hinges) != geometry.dof or len(spec.joints) != geometry.dof:
         raise UserError(f"robot {robot}: {len(spec.joints)} MuJoCo joints, the arm has "
@@ -101,7 +105,7 @@ def _add_links(spec: mujoco.MjSpec, hinges, geometry: ArmGeometry) -> None:
         last = spec.body(model.body(bodies[-1]).name)
         last.add_site(name=FLANGE_SITE, pos=local(bodies[-1], home[-1]), size=[0.005, 0, 0])
     geoms = {g.name for g in spec.geoms}
-    for i, j in geometry.links:
+    for (i, j), radius in zip(geometry.links, geometry.link_radii, strict=True):
         name = f"link{i + 1}"
         if name in geoms:
             continue
@@ -109,7 +113,7 @@ def _add_links(spec: mujoco.MjSpec, hinges, geometry: ArmGeometry) -> None:
         body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_CAPSULE,
                       fromto=np.concatenate([local(bodies[i], home[i]),
                                              local(bodies[i], home[j])]),
-                      size=[LINK_RADIUS, 0, 0], contype=0, conaffinity=0, mass=0,
+                      size=[radius or LINK_RADIUS, 0, 0], contype=0, conaffinity=0, mass=0,
                       rgba=[0.8, 0.3, 0.2, 0.6])
 
 

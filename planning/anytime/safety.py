@@ -52,10 +52,10 @@ class SafetyCheck:
 
     def __init__(self, model: TorqueModel, config: PlannerConfig, compile_code: bool = True):
         self.config, self.dof, self.degree = config, model.dof, config.degree
-        build = compiled.function if compile_code else (lambda f: f)
-        self._clearance = compiled.Buffered(build(self._clearance_function()))
-        self._motion = compiled.Buffered(build(self._motion_function(model)))
-        self._energy = compiled.Buffered(build(self._energy_function(model)))
+        checks = [self._clearance_function(), self._motion_function(model),
+                  self._energy_function(model)]
+        checks = compiled.functions(checks) if compile_code else checks  # built together
+        self._clearance, self._motion, self._energy = map(compiled.Buffered, checks)
 
     def energy(self, trajectory: PolynomialTrajectory) -> float:
         """The integral of |P| dt (J) by the trapezoid rule at ENERGY_POINTS even points

@@ -36,18 +36,22 @@ def symbolic_segment_distance(point, a, b, length: float):
 
 def link_clearances(geometry: ArmGeometry, q: np.ndarray, obstacle: np.ndarray) -> np.ndarray:
     """Distances (n, links) of obstacle centres (n, 3) or (3,) to each link of the arm
-    (geometry.links) at joint angles q (n, dof)."""
+    (geometry.links: to its capsule's surface, geometry.radii) at joint angles q (n, dof)."""
     points = geometry.points(q)
     first, second = (np.asarray(index) for index in zip(*geometry.links, strict=True))
     centres = np.reshape(obstacle, (-1, 1, 3))  # (n or 1, 1, 3): one centre per row of q
-    return segment_distance(centres, points[:, first], points[:, second])
+    distance = segment_distance(centres, points[:, first], points[:, second])
+    return distance - geometry.link_radii if geometry.radii else distance
 
 
 def symbolic_link_clearances(geometry: ArmGeometry, q, obstacle) -> list:
-    """CasADi distances of an obstacle centre to each link at joint vector q."""
+    """CasADi distances of an obstacle centre to each link (its capsule's surface) at joint
+    vector q."""
     points = geometry.symbolic_points(q)
-    return [symbolic_segment_distance(obstacle, points[i], points[j], length)
-            for (i, j), length in zip(geometry.links, geometry.link_lengths, strict=True)]
+    return [symbolic_segment_distance(obstacle, points[i], points[j], length) - radius
+            if radius else symbolic_segment_distance(obstacle, points[i], points[j], length)
+            for (i, j), length, radius in zip(geometry.links, geometry.link_lengths,
+                                              geometry.link_radii, strict=True)]
 
 
 def predicted_clearance(geometry: ArmGeometry, trajectory, forecast) -> float:

@@ -2,9 +2,10 @@
 
 CasADi evaluates SX functions in a virtual machine; the same functions as C code,
 compiled once, evaluate several times faster
-(docs/realtime.md, 'planning.formulation.compiled'). A solver instance writes the functions
-it needs (`Function.generate_dependencies`), the C text is hashed (with the compiler and
-its flags), and the shared library is built once into a user cache directory
+(docs/realtime.md, 'planning.formulation.compiled'). Each function a solver instance needs
+(its oracle and the derivatives it asks for) is written as C of its own, the texts are
+hashed (with the compiler and its flags), and one shared library of them is built once,
+the units in parallel, into a user cache directory
 ($TORQUEBENCH_CACHE, else $XDG_CACHE_HOME/torquebench, else ~/.cache/torquebench);
 `nlpsol(name, plugin, library)` then loads it. Builds are atomic (a temporary name,
 then a rename), so concurrent processes never load a half-written library.
@@ -13,21 +14,29 @@ then a rename), so concurrent processes never load a half-written library.
 from __future__ import annotations
 
 import hashlib
+import logging
 import os
 import shutil
 import subprocess
 import tempfile
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
 COMPILER = os.environ.get("CC", "gcc")
-# -O1: most of the speed for a short build (docs/realtime.md, 'planning.formulation.compiled')
-FLAGS = ("-O1", "-fPIC", "-shared")
+# -O1: most of the speed for a short build. An NLP solver's function whose C is over
+# O0_SOURCE_BYTES is built at -O0 instead: gcc's time at -O1 grows faster than the
+# function's size, and a solve is a few % slower. The anytime SQP's functions (`function`,
+# `functions`) stay at -O1: at -O0 its re-plans did less within their CPU budget and missed
+# the threshold (docs/realtime.md, 'planning.formulation.compiled')
+FLAGS = ("-O1", "-fPIC")
+O0_SOURCE_BYTES = 500_000
 # Larger sources stay in CasADi's virtual machine: their build takes minutes and gigabytes
 # (docs/realtime.md, 'planning.formulation.compiled')
 MAX_SOURCE_BYTES = 8_000_000
+log = logging.getLogger(__name__)  # a build is announced here (INFO): it can take a while
 
 
 class CompilerMissing(RuntimeError):
@@ -50,31 +59,65 @@ def available() -> bool:
     return shutil.which(COMPILER) is not None
 
 
+def _shared_library(functions: list[ca.Function], what: str, quick: bool = False
+                    ) -> Path | None:
+    """One shared library exporting each of functions under its name (cached by the hash of
+    their C and the build's flags); each function's C is a unit of its own, the units built in
+    parallel (quick: -O0 for a unit over O0_SOURCE_BYTES). None if their C is over
+    MAX_SOURCE_BYTES in all."""
+
+    def _flags(size: int) -> tuple[str, ...]:
+        return ("-O0", *FLAGS[1:]) if quick and size > O0_SOURCE_BYTES else FLAGS
+
+    folder = cache_dir()
+    with tempfile.TemporaryDirectory(dir=folder) as tmp:
+        sources = []
+        for f in functions:
+            source = Path(tmp) / f"{f.name()}.c"
+            generator = ca.CodeGenerator(source.name, {"with_header": False})
+            generator.add(f)
+            cwd = os.getcwd()
+            os.chdir(tmp)  # the code generator writes into the working directory
+            try:
+                generator.generate()
+            finally:
+                os.chdir(cwd)
+            sources.append(source)
+        texts = [source.read_bytes() for source in sources]
+        if sum(map(len, texts)) > MAX_SOURCE_BYTES:
+            return None
+        key = hashlib.sha256()
+        for text in texts:
+            key.update(text + " ".join((COMPILER, *_flags(len(text)))).encode())
+        key.update(ca.__version__.encode())
+        target = folder / f"{key.hexdigest()[:20]}.so"
+        if not target.exists():
+            log.info("compiling %s (%d kB of C)", what, sum(map(len, texts)) // 1000)
+            objects = [source.with_suffix(".o") for source in sources]
+            # largest first: the longest build starts at once
+            order = sorted(range(len(sources)), key=lambda i: -len(texts[i]))
+            with ThreadPoolExecutor(max_workers=min(len(sources), os.cpu_count() or 1)) as pool:
+                list(pool.map(lambda i: _run([COMPILER, *_flags(len(texts[i])), "-c",
+                                              str(sources[i]), "-o", str(objects[i])]), order))
+            log.debug("built %s", ", ".join(f"{f.name()} {len(t) // 1000} kB"
+                                            for f, t in zip(functions, texts, strict=True)))
+            built = Path(tmp) / "library.so"
+            _run([COMPILER, "-shared", *map(str, objects), "-o", str(built), "-lm"])
+            os.replace(built, target)
+    return target
+
+
+def _run(command: list[str]) -> None:
+    subprocess.run(command, check=True, capture_output=True)
+
+
 def library(solver: ca.Function) -> Path | None:
     """The compiled shared library of `solver`'s NLP functions (built on first need); None if
     their C source is over MAX_SOURCE_BYTES (too long to build: they stay interpreted)."""
     if not available():
         raise CompilerMissing(f"C compiler '{COMPILER}' not found")
-    folder = cache_dir()
-    with tempfile.TemporaryDirectory(dir=folder) as tmp:
-        source = Path(tmp) / "nlp.c"
-        cwd = os.getcwd()
-        os.chdir(tmp)  # generate_dependencies writes into the working directory
-        try:
-            solver.generate_dependencies(source.name)
-        finally:
-            os.chdir(cwd)
-        text = source.read_bytes()
-        if len(text) > MAX_SOURCE_BYTES:
-            return None
-        key = hashlib.sha256(text + " ".join((COMPILER, *FLAGS, ca.__version__)).encode())
-        target = folder / f"{key.hexdigest()[:20]}.so"
-        if not target.exists():
-            built = Path(tmp) / "nlp.so"
-            subprocess.run([COMPILER, *FLAGS, str(source), "-o", str(built), "-lm"],
-                           check=True, capture_output=True)
-            os.replace(built, target)
-    return target
+    functions = [solver.oracle()] + [solver.get_function(name) for name in solver.get_function()]
+    return _shared_library(functions, "the planning problem", quick=True)
 
 
 def function(f: ca.Function) -> ca.Function:
@@ -82,26 +125,17 @@ def function(f: ca.Function) -> ca.Function:
     C compiler is found or its source is over MAX_SOURCE_BYTES."""
     if not available():
         return f
-    folder = cache_dir()
-    with tempfile.TemporaryDirectory(dir=folder) as tmp:
-        source = Path(tmp) / f"{f.name()}.c"
-        cwd = os.getcwd()
-        os.chdir(tmp)
-        try:
-            f.generate(source.name)
-        finally:
-            os.chdir(cwd)
-        text = source.read_bytes()
-        if len(text) > MAX_SOURCE_BYTES:
-            return f
-        key = hashlib.sha256(text + " ".join((COMPILER, *FLAGS, ca.__version__)).encode())
-        target = folder / f"{key.hexdigest()[:20]}.so"
-        if not target.exists():
-            built = Path(tmp) / "function.so"
-            subprocess.run([COMPILER, *FLAGS, str(source), "-o", str(built), "-lm"],
-                           check=True, capture_output=True)
-            os.replace(built, target)
-    return ca.external(f.name(), str(target))
+    target = _shared_library([f], f.name())
+    return f if target is None else ca.external(f.name(), str(target))
+
+
+def functions(fs: list[ca.Function]) -> list[ca.Function]:
+    """Each of fs compiled to C as `function` does, in one library (their units built in
+    parallel)."""
+    if not available():
+        return list(fs)
+    target = _shared_library(list(fs), ", ".join(f.name() for f in fs))
+    return list(fs) if target is None else [ca.external(f.name(), str(target)) for f in fs]
 
 
 def nlpsol(name: str, plugin: str, problem: dict, options: dict) -> ca.Function:

@@ -35,7 +35,7 @@ class ArmGeometry:
     rotations (dof, 3, 3) and translations (dof, 3): joint j's frame in joint j-1's frame
     (joint 1: in the world) at q = 0; axes (dof, 3): unit joint axes in their own frames;
     flange (3,): the flange point in the last joint's frame; bodies: the name of the body
-    each joint moves (for reports).
+    each joint moves (for reports); radii: each link's capsule (m).
     """
 
     rotations: tuple
@@ -44,6 +44,9 @@ class ArmGeometry:
     flange: tuple
     name: str = "arm"
     bodies: tuple[str, ...] = ()
+    # radius (m) of the capsule around each link (links order; empty: every link a line):
+    # clearance is measured to the capsules' surfaces (planning.formulation.clearance)
+    radii: tuple[float, ...] = ()
 
     @classmethod
     def of(cls, rotations, translations, axes, flange, name: str = "arm",
@@ -106,6 +109,11 @@ class ArmGeometry:
         """Length (m) of each link (constant: the chain is rigid between joints)."""
         home = self.points(np.zeros(self.dof))[0]
         return tuple(float(np.linalg.norm(home[j] - home[i])) for i, j in self.links)
+
+    @property
+    def link_radii(self) -> np.ndarray:
+        """Capsule radius (m) of each link, zeros when none is given."""
+        return np.asarray(self.radii, float) if self.radii else np.zeros(len(self.links))
 
     @property
     def link_names(self) -> tuple[str, ...]:

@@ -24,7 +24,7 @@ import casadi as ca
 import numpy as np
 
 from identification.torque_model import TorqueModel
-from planning.config import PlannerConfig
+from planning.config import RATE_MARGIN, PlannerConfig
 from planning.formulation.clearance import symbolic_link_clearances
 from planning.formulation.limits import quotient
 from planning.formulation.quadrature import energy_nodes
@@ -223,6 +223,16 @@ class PlanningNLP:
             for m in range(self.extrema):
                 at = _newton(c[j, :], extremum[j, m], newton[j, m])
                 self._add(_poly(c[j, :], at, 0), config.lower[j], config.upper[j])
+        # the velocity at s = 0 is given (a row of parameters only), the acceleration is not
+        inner = np.arange(1, config.rate_samples + 1) / (config.rate_samples + 1)
+        for derivative, limit in ((1, config.velocity_limit), (2, config.acceleration_limit)):
+            if limit is None:
+                continue
+            if len(limit) != self.dof:
+                raise ValueError(f"rate limits need {self.dof} values, got {len(limit)}")
+            bound = RATE_MARGIN * np.asarray(limit, float)
+            for s in (inner if derivative == 1 else np.concatenate([[0.0], inner, [1.0]])):
+                self._add(_poly(c, float(s), derivative) / self.sigma**derivative, -bound, bound)
 
     def _goal_limit(self, j: int, goal, sign, turning, use) -> slice:
         """Rows v >= 0 of planning.formulation.limits' quotient for joint j (at the fixed samples, at

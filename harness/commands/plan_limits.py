@@ -1,0 +1,57 @@
+"""The limits and link capsules `torquebench plan` keeps, from its options."""
+
+from __future__ import annotations
+
+import math
+
+from harness.errors import UserError
+from harness.robots import arm
+
+
+def vector(text: str, name: str, length: int = 3) -> tuple[float, ...]:
+    try:
+        values = tuple(float(x) for x in text.split(","))
+    except ValueError:
+        raise UserError(f"--{name} must be {length} comma-separated numbers, got '{text}'") from None
+    if len(values) != length or not all(math.isfinite(v) for v in values):
+        raise UserError(f"--{name} must be {length} finite comma-separated numbers, got '{text}'")
+    return values
+
+
+def torque_limit(args, dof: int) -> tuple[float, ...] | None:
+    """--torque-limit (N m), else the robot's."""
+    if args.torque_limit is None:
+        return arm.torque_limit(args.robot)
+    if args.torque_limit.strip().lower() == "none":
+        return None
+    limit = vector(args.torque_limit, "torque-limit", dof)
+    if not all(v > 0 for v in limit):
+        raise UserError(f"--torque-limit must be positive, got '{args.torque_limit}'")
+    return limit
+
+
+def link_radii(args, links: int) -> tuple[float, ...]:
+    """--link-radius: every link's capsule radius (m); () for the centre lines."""
+    if args.link_radius.strip().lower() == "collision":
+        return arm.link_radii(args.robot)
+    radius = vector(args.link_radius, "link-radius", 1)[0]
+    if radius < 0:
+        raise UserError(f"--link-radius must be >= 0 m or 'collision', got '{args.link_radius}'")
+    return (radius,) * links if radius else ()
+
+
+def rate_limits(args, dof: int) -> dict:
+    """velocity_limit and acceleration_limit of the configuration (rad/s, rad/s^2)."""
+    limits = {"velocity_limit": arm.velocity_limit(args.robot), "acceleration_limit": None}
+    for name, key in (("velocity-limit", "velocity_limit"), ("accel-limit", "acceleration_limit")):
+        text = getattr(args, key if name == "velocity-limit" else "accel_limit")
+        if text is None:
+            continue
+        if text.strip().lower() == "none":
+            limits[key] = None
+            continue
+        values = vector(text, name, 1 if "," not in text else dof)
+        if not all(v > 0 for v in values):
+            raise UserError(f"--{name} must be positive, got '{text}'")
+        limits[key] = values * dof if len(values) == 1 else values
+    return limits
