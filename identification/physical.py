@@ -22,6 +22,7 @@ model. lam and each joint's friction law are chosen by validation inside the tra
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import cvxpy as cp
@@ -102,7 +103,8 @@ def ridge_scale(nominal: np.ndarray, dof: int) -> np.ndarray:
     return np.concatenate([per_body.ravel(), mass * rho2, np.ones(2 * dof)])
 
 
-def _solve(A, tau, law_cols, laws, scale, nominal, lam: float):
+def _solve(A, tau, law_cols, laws, scale, nominal, lam: float, used: list[str]):
+    """The fit at ridge weight lam; the solver it took appended to used."""
     n, dof, p = A.shape
     x, off, g = cp.Variable(p), cp.Variable(dof), cp.Variable(dof)
     eye = np.broadcast_to(np.eye(dof), (n, dof, dof))
@@ -129,8 +131,14 @@ def _solve(A, tau, law_cols, laws, scale, nominal, lam: float):
     problem = cp.Problem(cp.Minimize(cost), constraints)
     try:
         problem.solve(solver=cp.CLARABEL)
-    except cp.SolverError:
+        used.append("CLARABEL")
+    except cp.SolverError as exc:
+        # SCS is first order: looser than Clarabel's interior point, so never silently
+        warnings.warn(f"the consistent fit's Clarabel solve failed ({' '.join(str(exc).split())[:80]});"
+                      " solved by SCS instead (first order, looser tolerances)", RuntimeWarning,
+                      stacklevel=3)
         problem.solve(solver=cp.SCS)
+        used.append("SCS")
     if x.value is None:
         raise ValueError(f"the consistent fit did not solve ({problem.status})")
     return np.asarray(x.value), np.asarray(off.value), np.asarray(g.value)
@@ -150,12 +158,12 @@ def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np
     A, qd, tau, nominal = (np.asarray(x, float) for x in (atoms, qd, tau, nominal))
     n, dof, _ = A.shape
     scale = np.maximum(tau.std(axis=0), 1e-9)
-    split = int(round(n * (1 - validation)))
+    split, used = int(round(n * (1 - validation))), []
     laws = (FrictionLaw(),) * dof
     cols = law_columns(laws, qd)
     errors = []
     for lam in lambdas:
-        fitted = _solve(A[:split], tau[:split], cols[:split], laws, scale, nominal, lam)
+        fitted = _solve(A[:split], tau[:split], cols[:split], laws, scale, nominal, lam, used)
         pred = _predict(A[split:], cols[split:], fitted)
         errors.append(float(np.mean(((pred - tau[split:]) / scale) ** 2)))
     # the smallest weight within TIE of the best: where validation cannot tell, the data
@@ -163,7 +171,7 @@ def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np
     lam = float(min(w for w, e in zip(lambdas, errors, strict=True) if e <= (1 + TIE) * min(errors)))
     chosen = {}
     if choose_friction:
-        x = _solve(A[:split], tau[:split], cols[:split], laws, scale, nominal, lam)[0]
+        x = _solve(A[:split], tau[:split], cols[:split], laws, scale, nominal, lam, used)[0]
         rigid = A[:, :, :11 * dof] @ x[:11 * dof]  # the rigid body and the armature
         coulomb = A[:, :, 12 * dof:].diagonal(axis1=1, axis2=2)
         picks = [choose_law(tau[:, j] - rigid[:, j], qd[:, j], coulomb[:, j])
@@ -172,6 +180,7 @@ def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np
         chosen = {"friction_errors": [{law.name: min(e for other, e in p[1] if other.name == law.name)
                                        for law, _ in p[1]} for p in picks]}
         cols = law_columns(laws, qd)
-    x, off, g = _solve(A, tau, cols, laws, scale, nominal, lam)
+    x, off, g = _solve(A, tau, cols, laws, scale, nominal, lam, used)
     return PhysicalFit(x, off, laws, g, lam, min_pseudo_eigenvalues(x[:10 * dof]),
-                       {"lambdas": list(lambdas), "lambda_errors": errors, **chosen})
+                       {"lambdas": list(lambdas), "lambda_errors": errors, **chosen,
+                        "solver": "SCS" if "SCS" in used else "CLARABEL"})

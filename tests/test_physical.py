@@ -117,3 +117,28 @@ def test_consistent_model_reads_back_from_model_json(lynx):
     np.testing.assert_allclose(back.torque(judge.q, judge.qd, judge.qdd),
                                model.torque(judge.q, judge.qd, judge.qdd), rtol=1e-12, atol=1e-12)
     assert back.laws == model.laws and back.method == "consistent"
+
+
+def test_a_fallback_to_scs_is_warned_and_recorded(lynx, monkeypatch):
+    """When Clarabel fails, the fit says so (a warning the CLI prints) and records the solver
+    it took; a normal fit records Clarabel."""
+    import cvxpy as cp
+
+    library, _, _ = lynx
+    data = generate("lynxmotion", 600, 0.01, 3, "inverse")
+    atoms = library.evaluate_every(data.q, data.qd, data.qdd)
+    fit = fit_physical(atoms, data.qd, data.tau, np.zeros(39), lambdas=(1e-6,),
+                       choose_friction=False)
+    assert fit.validation["solver"] == "CLARABEL"
+    solve = cp.Problem.solve
+
+    def clarabel_fails(self, *args, solver=None, **kwargs):
+        if solver == cp.CLARABEL:
+            raise cp.SolverError("forced for the test")
+        return solve(self, *args, solver=solver, **kwargs)
+
+    monkeypatch.setattr(cp.Problem, "solve", clarabel_fails)
+    with pytest.warns(RuntimeWarning, match="solved by SCS"):
+        fit = fit_physical(atoms, data.qd, data.tau, np.zeros(39), lambdas=(1e-6,),
+                           choose_friction=False)
+    assert fit.validation["solver"] == "SCS"
