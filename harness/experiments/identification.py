@@ -2,7 +2,9 @@
 
 The oracle is two-step weighted least squares on Pinocchio's joint-torque regressor reduced
 to base parameters, plus per-joint viscous and armature columns (the joint terms MuJoCo's
-inverse dynamics adds): the best a model knowing the structure can do on the same samples.
+inverse dynamics adds): unbiased weighted least squares on the true structure, with no
+prior. It is a reference, not a bound: a fit that uses prior knowledge (the consistency LMI,
+a nominal model) can have a lower error, and that is not an error.
 Models are judged on two motions never used in fitting: a fresh run of `generate`'s own
 excitation family (another seed), and a motion of another family (`sines_motion`: a few
 sines of random frequency, amplitude and phase per joint), so that no figure rests on the
