@@ -12,9 +12,8 @@ from harness.sections.base import Check, Target, check
 from planning.result import CLEARANCE_TOLERANCE, END_TOLERANCE, closest_link, executed_energy
 
 # the bench's executed plans count each iteration of the anytime SQP as this many ms of its
-# budgets (AnytimeOptions.iteration_ms: the same plans on a loaded machine; measured on the
-# Lynxmotion's bench scenarios, a re-plan costs ~1 ms plus ~0.45 ms per iteration of CPU
-# here); the planning section reports their real CPU beside, against the budget
+# budgets (AnytimeOptions.iteration_ms): the same plans on a loaded machine, their real CPU
+# reported beside against the budget (the cost it stands for: docs/realtime.md, 'Nominal clock')
 REPLAY_ITERATION_MS = 0.5
 REST_TOLERANCE = 1e-6  # rad/s at the goal
 ENERGY_TOLERANCE = 1e-3  # J below the physical bound still counted (quadrature)

@@ -71,8 +71,8 @@ ROBOTS = {
         mjcf=MODELS / "lynxmotion" / "lynxmotion.xml",
         scene=MODELS / "lynxmotion" / "scene.xml",
         source="paper (see models/lynxmotion/README.md)",
-        # the paper's 3-DOF arm: its prior-knowledge library; fatrop (measured faster than
-        # IPOPT on its compiled NLP; harness.robots.arm.planner_config)
+        # the paper's 3-DOF arm: its prior-knowledge library; fatrop, faster than IPOPT on
+        # its compiled NLP (docs/realtime.md, 'Nominal clock')
         # the paper scenario's start and goal; the obstacle crosses the forearm
         motion=((pi / 2, pi / 5, -pi / 4), (-pi / 2, 2 * pi / 5, -pi / 3), "link3"),
         libraries=("prior", "kinematic", "prior-general", "paper"), solver="fatrop",

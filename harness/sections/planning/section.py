@@ -77,8 +77,8 @@ def run(ctx: Context) -> SectionResult:
     replanning.append(("swaying_replans_repeatedly", results["swaying"]["replans"], SWAY_REPLANS))
     for name, replans, least in replanning:
         # a registered motion's crossing is designed to force re-plans; on one derived from
-        # a user's joint limits the first plan may already clear the whole path (measured:
-        # the Kinova's, 104 mm), and how often the arm re-plans is then a target
+        # a user's joint limits the first plan may already clear the whole path, and how
+        # often the arm re-plans is then a target (docs/realtime.md, 'Nominal clock')
         if clearable:
             checks.append(check(name, replans >= least, f"{replans} re-plans (at least {least})"))
         else:
