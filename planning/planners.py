@@ -3,9 +3,12 @@ once: Algorithm 2 and its callers take what this returns and never look inside."
 
 from __future__ import annotations
 
+import dataclasses
+
 from identification.torque_model import TorqueModel
 from planning.anytime.planner import AnytimePlanner
 from planning.config import PlannerConfig
+from planning.offline import Offline
 from planning.penalty.planner import PenaltyLoop
 from planning.penalty.polish import Polished
 from planning.penalty.solver import Planner
@@ -33,3 +36,25 @@ def segment_planner(model: TorqueModel, config: PlannerConfig | None = None,
         return PenaltyLoop(solver)
     planner = AnytimePlanner(model, config)
     return Polished(planner, solver) if config.penalty.polish else planner
+
+
+def other_method(config: PlannerConfig) -> PlannerConfig | None:
+    """The configuration planning by the other method (the penalty loop for the anytime SQP
+    and back), None if there is none: the anytime SQP is no fallback with the split quadrature
+    (its breaks settle in the penalty loop only)."""
+    if uses_anytime(config):
+        return dataclasses.replace(config, replanner="penalty")
+    if config.energy_quadrature == "split":
+        return None
+    return dataclasses.replace(config, replanner="anytime").with_penalty(replan_iterations=None)
+
+
+def offline_planner(model: TorqueModel, config: PlannerConfig | None = None,
+                    solver: Planner | None = None) -> Offline:
+    """segment_planner's planner whose cold plans run to convergence and fall back to the
+    other method's (other_method; planning.offline): for a plan that need not be real time."""
+    config = config or PlannerConfig()
+    solver = Planner(model, config) if solver is None else solver
+    other = other_method(config)
+    return Offline(segment_planner(model, config, solver),
+                   None if other is None else segment_planner(model, other, solver))

@@ -18,13 +18,20 @@ from harness.io import write_json
 from harness.robots.arm import planner_config, torque_limit
 from harness.robots.registry import DEFAULT_ROBOT, robot_entry
 from harness.robots.torque_models import load_torque_model
-from planning.config import ALIASES, REPLANNERS, PlannerConfig, Scenario, true_energy_config
+from planning.config import (
+    ALIASES,
+    REPLANNERS,
+    PlannerConfig,
+    Scenario,
+    nominal_iteration_ms,
+    true_energy_config,
+)
 from planning.errors import PlanningError
 from planning.formulation.obstacle import LinearObstacle, SwayingObstacle
 from planning.formulation.quadrature import RULES, splits_evenly
 from planning.penalty.backends import SOLVERS
 from planning.penalty.solver import Planner
-from planning.planners import segment_planner, uses_anytime
+from planning.planners import offline_planner, other_method, segment_planner, uses_anytime
 from planning.replanning import execute
 from planning.result import closest_link, evaluate, to_json
 
@@ -103,8 +110,9 @@ def register(sub) -> None:
     p.add_argument("--polish-samples", type=int, default=PLANNER.penalty.polish_samples,
                    help="nodes of the polishing quadrature: a multiple of --power-breaks + 1")
     p.add_argument("--deadline-ms", type=float, default=0.0,
-                   help="CPU ms a re-plan may take; a later one is dropped and the last plan "
-                        "kept, as on a real-time controller (0, the default: no deadline; "
+                   help="ms a re-plan may take (nominal; CPU with --realtime); a later one is "
+                        "dropped and the last plan kept, as on a real-time controller (0, the "
+                        "default: no deadline; "
                         "the obstacle's sample period is 10 ms)")
     p.add_argument("--replanner", choices=REPLANNERS + tuple(ALIASES), default=None,
                    help="how plans and re-plans are solved: anytime (alias sqp: clearance as "
@@ -115,7 +123,16 @@ def register(sub) -> None:
                         f"{PLANNER.replanner}, penalty with --free-end (it keeps the threshold "
                         "more often there: docs/realtime.md, 'harness.commands.plan')")
     p.add_argument("--replan-budget-ms", type=float, default=PLANNER.anytime.replan_budget_ms,
-                   help="anytime: CPU ms a re-plan may take (it returns its best iterate then)")
+                   help="anytime: ms a re-plan may take (it returns its best iterate then): "
+                        "counted in SQP iterations of a fixed nominal cost per robot (the same "
+                        "plan on any machine and load; PLAN.json reports the real CPU beside), "
+                        "or CPU ms with --realtime")
+    p.add_argument("--realtime", action="store_true",
+                   help="real CPU clocks, as on a robot: budgets and --deadline-ms count the "
+                        "planning thread's CPU, a re-plan past its deadline is dropped (the arm "
+                        "follows its last plan; deadline_misses in PLAN.json) and the first "
+                        "plan shares the cold budget; default: nominal clocks, and the first "
+                        "plan solved to convergence, by the other method if need be")
     p.add_argument("--replan-iterations", type=int, default=0,
                    help="real-time iterations: each re-plan first takes this many iterations "
                         "of CasADi's feasible SQP from the last plan and the arm follows the "
@@ -210,6 +227,8 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  replan_deadline_ms=args.deadline_ms or None,
                                  replanner=args.replanner or ("penalty" if args.free_end
                                                               else PLANNER.replanner))
+    config = config.with_anytime(iteration_ms=None if args.realtime
+                                 else nominal_iteration_ms(dof))
     path = (_vector(args.obstacle_from, "obstacle-from"),
             _vector(args.obstacle_to, "obstacle-to"), args.duration, args.samples)
     sway = _vector(args.obstacle_sway, "obstacle-sway")
@@ -231,8 +250,17 @@ def run(args) -> int:
     unreachable = torque_diagnosis(planner, scenario)  # before a long search that must fail
     if unreachable:
         raise PlanningError(unreachable)
-    result = evaluate(execute(segment_planner(model, config, planner), scenario,
+    # the first plan need not be real time unless --realtime (planning.offline)
+    make = segment_planner if args.realtime else offline_planner
+    result = evaluate(execute(make(model, config, planner), scenario,
                               replan=not args.no_replan), scenario, model, config)
+    other = other_method(config)
+    if not result.feasible and args.no_replan and not args.realtime and other is not None:
+        # a plan followed throughout: found wherever either method finds one
+        fallback = evaluate(execute(offline_planner(model, other, planner), scenario,
+                                    replan=False), scenario, model, other)
+        if fallback.feasible:
+            config, result = other, fallback
     if not result.feasible:
         raise PlanningError(infeasible(result.problems, config))
     write_json(args.out, to_json(result, scenario, config, args.model))
@@ -249,8 +277,9 @@ def infeasible(problems, config: PlannerConfig) -> str:
     (docs/realtime.md, 'harness.commands.plan')."""
     message = "no feasible plan: " + "; ".join(problems)
     if uses_anytime(config):
+        clock = "CPU" if config.anytime.iteration_ms is None else "nominal time"
         message += (f" (the anytime SQP re-planned within {config.anytime.replan_budget_ms:g} ms of "
-                    "CPU: a larger --replan-budget-ms or --replanner fatrop may find one)")
+                    f"{clock}: a larger --replan-budget-ms or --replanner fatrop may find one)")
     return message
 
 
