@@ -7,11 +7,13 @@ import dataclasses
 
 from identification.torque_model import TorqueModel
 from planning.anytime.planner import AnytimePlanner
-from planning.config import PlannerConfig
+from planning.config import PlannerConfig, Scenario, nominal_iteration_ms
 from planning.offline import Offline
 from planning.penalty.planner import PenaltyLoop
 from planning.penalty.polish import Polished
 from planning.penalty.solver import Planner
+from planning.replanning import execute
+from planning.result import PlanResult, evaluate
 from planning.types import SegmentPlanner
 
 
@@ -58,3 +60,26 @@ def offline_planner(model: TorqueModel, config: PlannerConfig | None = None,
     other = other_method(config)
     return Offline(segment_planner(model, config, solver),
                    None if other is None else segment_planner(model, other, solver))
+
+
+def executed(model: TorqueModel, config: PlannerConfig, scenario: Scenario,
+             solver: Planner | None = None, replan: bool = True, realtime: bool = False
+             ) -> tuple[PlannerConfig, PlanResult]:
+    """Algorithm 2 on the scenario, checked (planning.result.evaluate), and the configuration
+    that planned it. Unless realtime the first plan is offline (offline_planner), and a plan
+    followed throughout (replan False) that is not feasible is planned by the other method
+    too and kept if that one is: found wherever either method finds one (its forecast at
+    t = 0, the obstacle standing still, can hide what the motion meets). The budgets count
+    CPU if realtime, else SQP iterations of the arm's nominal cost (nominal_iteration_ms)."""
+    config = config.with_anytime(iteration_ms=None if realtime else
+                                 nominal_iteration_ms(config.geometry.dof))
+    solver = Planner(model, config) if solver is None else solver
+    make = segment_planner if realtime else offline_planner
+    result = evaluate(execute(make(model, config, solver), scenario, replan=replan), scenario,
+                      model, config)
+    other = other_method(config)
+    if result.feasible or replan or realtime or other is None:
+        return config, result
+    fallback = evaluate(execute(offline_planner(model, other, solver), scenario, replan=False),
+                        scenario, model, other)
+    return (other, fallback) if fallback.feasible else (config, result)

@@ -18,22 +18,14 @@ from harness.io import write_json
 from harness.robots.arm import planner_config, torque_limit
 from harness.robots.registry import DEFAULT_ROBOT, robot_entry
 from harness.robots.torque_models import load_torque_model
-from planning.config import (
-    ALIASES,
-    REPLANNERS,
-    PlannerConfig,
-    Scenario,
-    nominal_iteration_ms,
-    true_energy_config,
-)
+from planning.config import ALIASES, REPLANNERS, PlannerConfig, Scenario, true_energy_config
 from planning.errors import PlanningError
 from planning.formulation.obstacle import LinearObstacle, SwayingObstacle
 from planning.formulation.quadrature import RULES, splits_evenly
 from planning.penalty.backends import SOLVERS
 from planning.penalty.solver import Planner
-from planning.planners import offline_planner, other_method, segment_planner, uses_anytime
-from planning.replanning import execute
-from planning.result import closest_link, evaluate, to_json
+from planning.planners import executed, uses_anytime
+from planning.result import closest_link, to_json
 
 DEFAULT = Scenario()
 PLANNER = true_energy_config()
@@ -227,8 +219,6 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  replan_deadline_ms=args.deadline_ms or None,
                                  replanner=args.replanner or ("penalty" if args.free_end
                                                               else PLANNER.replanner))
-    config = config.with_anytime(iteration_ms=None if args.realtime
-                                 else nominal_iteration_ms(dof))
     path = (_vector(args.obstacle_from, "obstacle-from"),
             _vector(args.obstacle_to, "obstacle-to"), args.duration, args.samples)
     sway = _vector(args.obstacle_sway, "obstacle-sway")
@@ -250,17 +240,8 @@ def run(args) -> int:
     unreachable = torque_diagnosis(planner, scenario)  # before a long search that must fail
     if unreachable:
         raise PlanningError(unreachable)
-    # the first plan need not be real time unless --realtime (planning.offline)
-    make = segment_planner if args.realtime else offline_planner
-    result = evaluate(execute(make(model, config, planner), scenario,
-                              replan=not args.no_replan), scenario, model, config)
-    other = other_method(config)
-    if not result.feasible and args.no_replan and not args.realtime and other is not None:
-        # a plan followed throughout: found wherever either method finds one
-        fallback = evaluate(execute(offline_planner(model, other, planner), scenario,
-                                    replan=False), scenario, model, other)
-        if fallback.feasible:
-            config, result = other, fallback
+    config, result = executed(model, config, scenario, planner, replan=not args.no_replan,
+                              realtime=args.realtime)
     if not result.feasible:
         raise PlanningError(infeasible(result.problems, config))
     write_json(args.out, to_json(result, scenario, config, args.model))
