@@ -72,7 +72,10 @@ class FrictionLaw:
             slope, shift = self.shape
             if lib is np:
                 return sigmoid_friction(qd, slope, shift)
-            return 1 / (1 + lib.exp(-slope * (qd + shift))) - 1 / (1 + np.exp(-slope * shift))
+            # the logistic as tanh: 1 / (1 + exp(-x)) overflows at large |x| and its
+            # derivative, inf / inf, is NaN (a plan's NLP evaluated there fails)
+            return 0.5 * lib.tanh(0.5 * slope * (qd + shift)) + 0.5 \
+                - 1 / (1 + np.exp(-slope * shift))
         raise IdentificationError("the viscous-coulomb law has no column of its own")
 
     def term(self, joint: int) -> str:

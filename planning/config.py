@@ -63,6 +63,15 @@ class AnytimeOptions:
     replan_starts: int = 0  # a re-plan also solves from this many cold start points
 
 
+def nominal_iteration_ms(dof: int) -> float:
+    """What one anytime-SQP iteration counts on the deterministic clock (AnytimeOptions.
+    iteration_ms, ms) on an arm of `dof` joints: 0.5 ms at 3 joints, growing as dof^1.5 (the
+    QP and the site evaluations grow with the coefficients), so that a CPU budget's
+    iterations about fit it on a reference machine; fixed, not measured per machine, so
+    that a command gives the same plan anywhere (docs/realtime.md, 'Deterministic budgets')."""
+    return round(0.5 * (dof / 3) ** 1.5, 3)
+
+
 @dataclass(frozen=True)
 class PlannerConfig:
     """How trajectories are scored and constrained (the formulation), which segment planner

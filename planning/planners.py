@@ -3,12 +3,17 @@ once: Algorithm 2 and its callers take what this returns and never look inside."
 
 from __future__ import annotations
 
+import dataclasses
+
 from identification.torque_model import TorqueModel
 from planning.anytime.planner import AnytimePlanner
-from planning.config import PlannerConfig
+from planning.config import PlannerConfig, Scenario, nominal_iteration_ms
+from planning.offline import Offline
 from planning.penalty.planner import PenaltyLoop
 from planning.penalty.polish import Polished
 from planning.penalty.solver import Planner
+from planning.replanning import execute
+from planning.result import PlanResult, evaluate
 from planning.types import SegmentPlanner
 
 
@@ -33,3 +38,48 @@ def segment_planner(model: TorqueModel, config: PlannerConfig | None = None,
         return PenaltyLoop(solver)
     planner = AnytimePlanner(model, config)
     return Polished(planner, solver) if config.penalty.polish else planner
+
+
+def other_method(config: PlannerConfig) -> PlannerConfig | None:
+    """The configuration planning by the other method (the penalty loop for the anytime SQP
+    and back), None if there is none: the anytime SQP is no fallback with the split quadrature
+    (its breaks settle in the penalty loop only)."""
+    if uses_anytime(config):
+        return dataclasses.replace(config, replanner="penalty")
+    if config.energy_quadrature == "split":
+        return None
+    return dataclasses.replace(config, replanner="anytime").with_penalty(replan_iterations=None)
+
+
+def offline_planner(model: TorqueModel, config: PlannerConfig | None = None,
+                    solver: Planner | None = None) -> Offline:
+    """segment_planner's planner whose cold plans run to convergence and fall back to the
+    other method's (other_method; planning.offline): for a plan that need not be real time."""
+    config = config or PlannerConfig()
+    solver = Planner(model, config) if solver is None else solver
+    other = other_method(config)
+    return Offline(segment_planner(model, config, solver),
+                   None if other is None else segment_planner(model, other, solver))
+
+
+def executed(model: TorqueModel, config: PlannerConfig, scenario: Scenario,
+             solver: Planner | None = None, replan: bool = True, realtime: bool = False
+             ) -> tuple[PlannerConfig, PlanResult]:
+    """Algorithm 2 on the scenario, checked (planning.result.evaluate), and the configuration
+    that planned it. Unless realtime the first plan is offline (offline_planner), and a plan
+    followed throughout (replan False) that is not feasible is planned by the other method
+    too and kept if that one is: found wherever either method finds one (its forecast at
+    t = 0, the obstacle standing still, can hide what the motion meets). The budgets count
+    CPU if realtime, else SQP iterations of the arm's nominal cost (nominal_iteration_ms)."""
+    config = config.with_anytime(iteration_ms=None if realtime else
+                                 nominal_iteration_ms(config.geometry.dof))
+    solver = Planner(model, config) if solver is None else solver
+    make = segment_planner if realtime else offline_planner
+    result = evaluate(execute(make(model, config, solver), scenario, replan=replan), scenario,
+                      model, config)
+    other = other_method(config)
+    if result.feasible or replan or realtime or other is None:
+        return config, result
+    fallback = evaluate(execute(offline_planner(model, other, solver), scenario, replan=False),
+                        scenario, model, other)
+    return (other, fallback) if fallback.feasible else (config, result)

@@ -44,6 +44,7 @@ class Execution:
     failures: tuple[str, ...]  # IPOPT status of a failed first plan (the result is unusable)
     replan_failures: tuple[str, ...] = ()  # failed re-plans: the arm kept its last plan
     solve_cpu_ms: tuple[float, ...] = ()  # CPU time of the planning thread, per solve_ms entry
+    clock_ms: tuple[float, ...] = ()  # on the budget's clock (SegmentPlan.clock_ms), per entry
 
 
 def check_start(planner: SegmentPlanner, scenario: Scenario) -> None:
@@ -75,11 +76,11 @@ def execute(planner: SegmentPlanner, scenario: Scenario, replan: bool = True,
                     x0=first_start)
     plan = planner.plan_cold(first, starts)[0] if first_start is None else planner.plan(first)
     segments, times = [plan], [0.0]
-    solve_ms, solve_cpu = [plan.solve_ms], [plan.solve_cpu_ms]
+    solve_ms, solve_cpu, clock_ms = [plan.solve_ms], [plan.solve_cpu_ms], [plan.clock_ms]
     failures, replan_failures = ([] if plan.success else [plan.status]), []
     if obstacle is None or not replan:
         return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures),
-                         (), tuple(solve_cpu))
+                         (), tuple(solve_cpu), tuple(clock_ms))
     planned_with, latest = forecast, plan  # latest: the newest successful solve (converged
     # or a real-time iterate, planning.penalty.realtime_iteration.ITERATE), the next re-plan's warm start
     for t in obstacle.sample_times[:-1]:
@@ -93,6 +94,7 @@ def execute(planner: SegmentPlanner, scenario: Scenario, replan: bool = True,
                                    deadline_ms=planner.config.replan_deadline_ms), warm=latest)
         solve_ms.append(new.solve_ms)
         solve_cpu.append(new.solve_cpu_ms)
+        clock_ms.append(new.clock_ms)
         if not new.success:
             replan_failures.append(new.status)
             if new.status.startswith(DEADLINE):
@@ -110,7 +112,7 @@ def execute(planner: SegmentPlanner, scenario: Scenario, replan: bool = True,
         segments.append(plan)
         times.append(float(t))
     return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures),
-                     tuple(replan_failures), tuple(solve_cpu))
+                     tuple(replan_failures), tuple(solve_cpu), tuple(clock_ms))
 
 
 def forecast_at(obstacle, t: float) -> ObstacleForecast:

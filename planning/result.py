@@ -12,6 +12,7 @@ from planning.formulation.clearance import link_clearances
 from planning.formulation.energy import absolute_energy
 from planning.formulation.limits import LIMIT_TOLERANCE
 from planning.replanning import Execution
+from planning.types import DEADLINE
 
 CLEARANCE_TOLERANCE = 2e-3  # m below the threshold still counted as avoided (penalty is soft)
 END_TOLERANCE = 1e-6  # rad
@@ -151,6 +152,11 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
         "replan_budget_ms": config.anytime.replan_budget_ms,
         "cold_budget_ms": config.anytime.cold_budget_ms,
         "iteration_ms": config.anytime.iteration_ms,
+        # the budgets' clock: "nominal" (iteration_ms per SQP iteration: the same plan on any
+        # machine and load) or "cpu" (plan --realtime)
+        "clock": "cpu" if config.anytime.iteration_ms is None else "nominal",
+        "deadline_misses": sum(f.startswith(DEADLINE) for f in result.execution.replan_failures),
+        "timing": timing(result.execution, config),
         "end_error": result.end_error, "limit_violation": result.limit_violation,
         "peak_torque": result.peak_torque, "torque_limit": config.torque_limit,
         "peak_velocity": result.peak_velocity, "velocity_limit": config.velocity_limit,
@@ -161,6 +167,20 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
         "model": model_name, "robot": config.geometry.name,
         "link_radii": config.geometry.link_radii,
     }
+
+
+TIMING_KEYS = ("solve_ms", "solve_cpu_ms", "timing")  # PLAN.json keys that vary run to run
+
+
+def timing(execution, config: PlannerConfig) -> dict:
+    """Every re-plan's real CPU (ms) against its budget, and what it spent on the budget's
+    clock (nominal ms, or CPU under --realtime): whether the iteration budget fits the CPU
+    budget on this machine."""
+    cpu, clock = execution.solve_cpu_ms[1:], execution.clock_ms[1:]
+    budget = config.anytime.replan_budget_ms
+    return {"replan_cpu_ms": cpu, "replan_clock_ms": clock, "replan_budget_ms": budget,
+            "replan_cpu_max_ms": max(cpu, default=None),
+            "replans_over_budget": sum(ms > budget for ms in cpu)}
 
 
 def closest_link(result: PlanResult, config: PlannerConfig) -> dict:

@@ -52,6 +52,9 @@ class SegmentPlan:
     # (its multipliers follow them to the next re-plan) and whether a clearance row bound it
     slot_times: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     detour: bool = False
+    # what the plan spent on its budget's clock (ms): nominal iterations (AnytimeOptions.
+    # iteration_ms) or CPU; the anytime SQP's (0 for the penalty loop, which has no budget)
+    clock_ms: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -66,8 +69,10 @@ class Segment:
     goal: np.ndarray
     forecast: ObstacleForecast | None = None
     x0: np.ndarray | None = None  # a cold plan's start point (default: the initial guess)
-    budget_ms: float | None = None  # CPU a cold plan may spend (default: the config's)
-    deadline_ms: float | None = None  # CPU after which a re-plan is abandoned (status DEADLINE)
+    # what a cold plan may spend on the budget's clock (ms; default: the config's; inf: an
+    # offline plan, solved to convergence)
+    budget_ms: float | None = None
+    deadline_ms: float | None = None  # ms after which a re-plan is abandoned (status DEADLINE)
     # a re-plan of Algorithm 2, which may follow an iterate short of convergence (ITERATE)
     realtime: bool = False
 

@@ -145,7 +145,7 @@ def test_an_infeasible_anytime_plan_says_what_its_re_plans_had(tmp_path, capsys)
     no file, one error line that names the budget and what may find a plan."""
     out = tmp_path / "plan.json"
     assert main(["plan", "--no-compile", "--model", "pinocchio", "--replanner", "sqp",
-                 "--replan-budget-ms", "0.01", "--out", str(out)]) == 2
+                 "--realtime", "--replan-budget-ms", "0.01", "--out", str(out)]) == 2
     assert not out.exists()
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "no feasible plan: clearance" in err

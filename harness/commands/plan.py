@@ -29,9 +29,8 @@ from planning.formulation.obstacle import LinearObstacle, SwayingObstacle
 from planning.formulation.quadrature import RULES, splits_evenly
 from planning.penalty.backends import SOLVERS
 from planning.penalty.solver import Planner
-from planning.planners import segment_planner
-from planning.replanning import execute
-from planning.result import closest_link, evaluate, to_json
+from planning.planners import executed
+from planning.result import closest_link, to_json
 
 DEFAULT = Scenario()
 PLANNER = true_energy_config()
@@ -115,8 +114,9 @@ def register(sub) -> None:
     p.add_argument("--polish-samples", type=int, default=PLANNER.penalty.polish_samples,
                    help="nodes of the polishing quadrature: a multiple of --power-breaks + 1")
     p.add_argument("--deadline-ms", type=float, default=0.0,
-                   help="CPU ms a re-plan may take; a later one is dropped and the last plan "
-                        "kept, as on a real-time controller (0, the default: no deadline; "
+                   help="ms a re-plan may take (nominal; CPU with --realtime); a later one is "
+                        "dropped and the last plan kept, as on a real-time controller (0, the "
+                        "default: no deadline; "
                         "the obstacle's sample period is 10 ms)")
     p.add_argument("--replanner", choices=REPLANNERS + tuple(ALIASES), default=None,
                    help="how plans and re-plans are solved: anytime (alias sqp: clearance as "
@@ -127,7 +127,16 @@ def register(sub) -> None:
                         f"{PLANNER.replanner}, penalty with --free-end (it keeps the threshold "
                         "more often there: docs/realtime.md, 'harness.commands.plan')")
     p.add_argument("--replan-budget-ms", type=float, default=PLANNER.anytime.replan_budget_ms,
-                   help="anytime: CPU ms a re-plan may take (it returns its best iterate then)")
+                   help="anytime: ms a re-plan may take (it returns its best iterate then): "
+                        "counted in SQP iterations of a fixed nominal cost per robot (the same "
+                        "plan on any machine and load; PLAN.json reports the real CPU beside), "
+                        "or CPU ms with --realtime")
+    p.add_argument("--realtime", action="store_true",
+                   help="real CPU clocks, as on a robot: budgets and --deadline-ms count the "
+                        "planning thread's CPU, a re-plan past its deadline is dropped (the arm "
+                        "follows its last plan; deadline_misses in PLAN.json) and the first "
+                        "plan shares the cold budget; default: nominal clocks, and the first "
+                        "plan solved to convergence, by the other method if need be")
     p.add_argument("--replan-iterations", type=int, default=0,
                    help="real-time iterations: each re-plan first takes this many iterations "
                         "of CasADi's feasible SQP from the last plan and the arm follows the "
@@ -250,8 +259,8 @@ def _run(args) -> int:
     unreachable = torque_diagnosis(planner, scenario)  # before a long search that must fail
     if unreachable:
         raise PlanningError(unreachable)
-    result = evaluate(execute(segment_planner(model, config, planner), scenario,
-                              replan=not args.no_replan), scenario, model, config)
+    config, result = executed(model, config, scenario, planner, replan=not args.no_replan,
+                              realtime=args.realtime)
     if not result.feasible:
         raise PlanningError(infeasible(result.problems, config))
     write_json(args.out, to_json(result, scenario, config, args.model))

@@ -20,8 +20,9 @@ def infeasible(problems, config: PlannerConfig) -> str:
     (docs/realtime.md, 'harness.commands.plan')."""
     message = "no feasible plan: " + "; ".join(problems)
     if uses_anytime(config):
+        clock = "CPU" if config.anytime.iteration_ms is None else "nominal time"
         message += (f" (the anytime SQP re-planned within {config.anytime.replan_budget_ms:g} ms of "
-                    "CPU: a larger --replan-budget-ms or --replanner fatrop may find one)")
+                    f"{clock}: a larger --replan-budget-ms or --replanner fatrop may find one)")
     return message
 
 

@@ -36,6 +36,14 @@ class Clock:
         the nominal cost."""
         return measured_ms if self.nominal is None else self.nominal
 
+    def correction_fits(self, began: float, budget_ms: float) -> bool:
+        """Whether a second-order correction fits the budget in an iteration that began at
+        `began` (ms on this clock): under CPU clocks it costs about what the iteration cost
+        so far; nominally one tick, and the iteration's own tick still follows it."""
+        if self.nominal is None:
+            return 2.0 * self.ms() - began <= budget_ms
+        return self.ms() + 2.0 * self.nominal <= budget_ms
+
 
 class RoundCosts:
     """The CPU recent rounds of plans spent outside their iterations: after their solve

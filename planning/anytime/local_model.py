@@ -20,22 +20,38 @@ def local_function(nlp, name: str) -> ca.Function:
     lam = ca.SX.sym("lam", nlp.g.numel())
     layout = layout_of(nlp)
     coefficients = nlp.x[: layout.nc]
-    rows, sign, _ = slack_structure(layout)  # the slacks' columns, which stay out
-    expected = np.zeros((nlp.g.numel(), nlp.x.numel() - layout.nc))
-    for column, (pair, value) in enumerate(zip(rows, sign, strict=True)):
-        expected[pair[pair >= 0], column] = value
-    slacks = ca.Function("slack_columns", [nlp.x, nlp.p], [ca.jacobian(nlp.g, nlp.x[layout.nc:])])
-    rng = np.random.default_rng(0)  # numerically: called models leave symbolic zeros
-    for _ in range(2):
-        at = slacks(rng.uniform(-1, 1, nlp.x.numel()), rng.uniform(0.1, 1, nlp.p.numel()))
-        if not np.array_equal(np.asarray(at), expected):
-            raise ValueError("the NLP's slacks do not enter its rows as "
-                             "elastic_qp.slack_structure")
+    _check_slacks(nlp, layout)
     g, jacobian, hessian = through_sites(nlp, lam, coefficients)  # every NLP has torque sites
     hessian += ca.hessian(nlp.f, coefficients)[0]
     column = ca.vertcat(nlp.f, ca.gradient(nlp.f, nlp.x), g, ca.vec(jacobian.T),
                         ca.vec(hessian))  # row-major
     return ca.Function(name, [nlp.x, nlp.p, lam], [ca.densify(column)])
+
+
+def _check_slacks(nlp, layout: Layout) -> None:
+    """Raise ValueError unless the slacks enter the rows as elastic_qp.slack_structure says
+    (constant columns). Checked on the lifted rows, the sites' outputs symbols of their own:
+    no site's arguments hold a slack, and the rows' slack columns, evaluated at random points
+    (called functions leave symbolic zeros), are the expected constants; through the sites'
+    calls a model whose derivatives overflow there (a steep friction law) would turn those
+    zeros into NaN."""
+    rows, sign, _ = slack_structure(layout)  # the slacks' columns, which stay out
+    expected = np.zeros((nlp.g.numel(), nlp.x.numel() - layout.nc))
+    for column, (pair, value) in enumerate(zip(rows, sign, strict=True)):
+        expected[pair[pair >= 0], column] = value
+    slack = nlp.x[layout.nc:]
+    outputs = ca.vertcat(*(site.output for site in nlp.sites))
+    if any(ca.depends_on(ca.vertcat(*site.args), slack) for site in nlp.sites):
+        raise ValueError("a site of the NLP takes its slacks")
+    slacks = ca.Function("slack_columns", [nlp.x, nlp.p, outputs],
+                         [ca.jacobian(nlp.lifted_g, slack)])
+    rng = np.random.default_rng(0)
+    for _ in range(2):
+        at = slacks(rng.uniform(-1, 1, nlp.x.numel()), rng.uniform(0.1, 1, nlp.p.numel()),
+                    rng.uniform(-1, 1, outputs.numel()))
+        if not np.array_equal(np.asarray(at), expected):
+            raise ValueError("the NLP's slacks do not enter its rows as "
+                             "elastic_qp.slack_structure")
 
 
 def through_sites(nlp, lam, coefficients) -> tuple[ca.SX, ca.SX, ca.SX]:

@@ -12,7 +12,7 @@ from planning.anytime.solver import Anytime
 from planning.config import PlannerConfig
 from planning.starts import start_points
 from planning.timing import Stopwatch, collection_deferred
-from planning.types import Segment, SegmentPlan
+from planning.types import DEADLINE, LATE, Segment, SegmentPlan
 
 
 class AnytimePlanner:
@@ -44,35 +44,51 @@ class AnytimePlanner:
             clock = Stopwatch()
             plan = self.anytime.best_of(*segment, warm, config.anytime.replan_starts, budget)
             wall, cpu = clock.read()
-            return dataclasses.replace(plan, solve_ms=wall, solve_cpu_ms=cpu)
-        return self.anytime.solve(*segment, warm, problem.x0, budget)[0]
+            plan = dataclasses.replace(plan, solve_ms=wall, solve_cpu_ms=cpu)
+        else:
+            plan = self.anytime.solve(*segment, warm, problem.x0, budget)[0]
+        return self._in_time(plan, problem.deadline_ms)
+
+    def _in_time(self, plan: SegmentPlan, deadline_ms: float | None) -> SegmentPlan:
+        """The plan, or, if it took longer than deadline_ms (CPU under real-time clocks, else
+        on the nominal clock), the plan dropped: unsuccessful with status DEADLINE (LATE if
+        it was usable: the next re-plan starts from it), the arm keeps its last plan."""
+        spent = plan.solve_cpu_ms if self.config.anytime.iteration_ms is None else plan.clock_ms
+        if deadline_ms is None or spent <= deadline_ms:
+            return plan
+        return dataclasses.replace(plan, success=False,
+                                   status=DEADLINE + (LATE if plan.success else ""))
 
     @collection_deferred
     def plan_cold(self, problem: Segment, starts: int | None = None
                   ) -> tuple[SegmentPlan, list[SegmentPlan]]:
         """The best cold plan (Anytime.rank) of `starts` start points sharing
-        config.anytime.cold_budget_ms: each gets an even share of what the starts before it left
-        (their checks and bookkeeping run past their iterations' budget), and none starts
-        without the CPU a round of a plan has recently taken; under CPU clocks what is left
-        is net of all the CPU so far (the start points included) and of the ranking after
-        the starts (docs/realtime.md, 'planning.anytime.planner')."""
+        config.anytime.cold_budget_ms (or problem.budget_ms; inf: each solved to convergence):
+        each gets an even share of what the starts before it left (their checks and
+        bookkeeping run past their iterations' budget), and none starts without what a round
+        of a plan costs; on the nominal clock what the starts before spent is their nominal
+        time, under CPU clocks all the CPU so far (the start points included) and the ranking
+        after the starts (docs/realtime.md, 'planning.anytime.planner')."""
         config, anytime = self.config, self.anytime
         count = config.starts if starts is None else starts
-        plans, wall, cpu = [], 0.0, 0.0
+        total = config.anytime.cold_budget_ms if problem.budget_ms is None else problem.budget_ms
+        plans, wall, cpu, nominal = [], 0.0, 0.0, 0.0
         entered, budget = time.thread_time(), Clock(config.anytime.iteration_ms)
         for i, x0 in enumerate(start_points(anytime, problem.q0, problem.qd0,
                                             problem.duration, problem.goal, count)):
-            used = cpu
+            used = nominal
             if budget.nominal is None:
                 used = 1e3 * (time.thread_time() - entered) + anytime.rounds.ranking_ms(budget)
-            share = (config.anytime.cold_budget_ms - used) / (count - i)
+            share = (total - used) / (count - i)
             if plans and share < anytime.round_ms():
                 break
             plan = self.plan(dataclasses.replace(problem, x0=x0, budget_ms=share))
             plans.append(plan)
             wall, cpu = wall + plan.solve_ms, cpu + plan.solve_cpu_ms
+            nominal += plan.clock_ms
         clock = Stopwatch()  # the ranking (a dense integral per plan) is plan time
         best = min(plans, key=anytime.rank)
         anytime.rounds.record_ranking(budget, clock.cpu_ms())
         ms, cpu_ms = clock.read()
-        return dataclasses.replace(best, solve_ms=wall + ms, solve_cpu_ms=cpu + cpu_ms), plans
+        return dataclasses.replace(best, solve_ms=wall + ms, solve_cpu_ms=cpu + cpu_ms,
+                                   clock_ms=nominal), plans

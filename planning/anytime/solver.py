@@ -157,7 +157,7 @@ class Anytime(ProblemNumbers):
             reference = segment.trajectory
         elapsed = (1e3 * (time.perf_counter() - wall), 1e3 * (time.thread_time() - cpu))
         plan = dataclasses.replace(plan, iterations=iterations, solve_ms=elapsed[0],
-                                   solve_cpu_ms=elapsed[1])
+                                   solve_cpu_ms=elapsed[1], clock_ms=clock.ms())
         if self.record is not None and warm is not None:
             solver, solves = self._solver_ms() - spent
             self.record.append(((q0, qd0, t_begin, duration, goal, forecast, warm), plan,

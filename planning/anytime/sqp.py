@@ -149,7 +149,7 @@ class AnytimeSQP:
             step_size = float(np.max(np.abs(d[: self.layout.nc]), initial=0.0))
             # the rows' curvature spoiled the step (Maratos): correct it, if the correction
             # (a QP and an evaluation, about what the iteration cost so far) fits the budget
-            if ratio < 1e-4 and 2.0 * clock.ms() - began <= budget_ms:
+            if ratio < 1e-4 and clock.correction_fits(began, budget_ms):
                 corrected = self._corrected(point, trial, p, lbg, ubg, frame, radius, nu,
                                             (lam_rows, lam_vars))
                 clock.tick()
