@@ -1,22 +1,11 @@
-"""Work a robot's registry entry can declare beside the common sections (Robot.extras).
-
-Each extra names one function per stage section it adds to: `identification(ctx)` and
-`planning(ctx, models)`, each returning a SectionResult the section takes in under the
-extra's name (SectionResult.extend). "paper": the paper's reproduction on its arm (Table IV
-and the published library; the paper's planning scenario and formulation).
-"""
+"""The "paper" extra the Lynxmotion's registry entry declares (Robot.extras), loaded by name
+through harness.robots.extras: the paper's reproduction on its arm beside the bench's common
+sections. `identification(ctx)`: Table IV and the published library (tables);
+`planning(ctx, models)`: the paper's planning scenario and formulation (scenario)."""
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from harness.paper.sections.scenario import run as planning
+from harness.paper.sections.tables import run as identification
 
-from harness.sections.paper.scenario import run as scenario_run
-from harness.sections.paper.tables import run as tables_run
-
-
-class Extra(NamedTuple):
-    identification: object
-    planning: object
-
-
-EXTRAS = {"paper": Extra(tables_run, scenario_run)}
+__all__ = ["identification", "planning"]
