@@ -1,4 +1,4 @@
-"""The planning section's comparisons: minimum jerk, parametrizations against dense quadrature,
+"""The paper_planning study's comparisons: minimum jerk, parametrizations against dense quadrature,
 the swaying obstacle, and the solver timings (cold plans, warm re-plans, per scenario)."""
 
 from __future__ import annotations
