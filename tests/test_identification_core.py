@@ -19,7 +19,7 @@ from identification.library.generic import generic_library
 from identification.library.prior_knowledge import prior_knowledge_library
 from identification.model import load_model
 from identification.regression.oracle import fit_base_parameters
-from identification.signals import lynxmotion_motion
+from tests.helpers import lynxmotion_motion
 
 
 @pytest.fixture(scope="module")

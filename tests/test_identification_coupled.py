@@ -19,7 +19,7 @@ from identification.library.prior_knowledge import absolute_chain_atoms, arm_ato
 from identification.model import load_model
 from identification.regression.coupled import AtomBasis, CoupledRegression, base_atoms
 from identification.regression.oracle import fit_base_parameters
-from identification.signals import lynxmotion_motion
+from tests.helpers import lynxmotion_motion
 
 
 @pytest.fixture(scope="module")
