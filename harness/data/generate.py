@@ -18,8 +18,9 @@ from harness.data.sensors import SensorConfig, torque_noise
 from harness.data.tracking import simulate_measured
 from harness.errors import UserError
 from harness.robots.baseline import PinocchioModel
+from harness.robots.extras import published_library
 from harness.robots.plant import Plant, load_plant
-from harness.robots.registry import robot_reference
+from harness.robots.registry import robot_entry, robot_reference
 from identification.regression.oracle import base_columns
 
 MIN_SAMPLES = 10
@@ -29,15 +30,17 @@ SAMPLE_RATE = 200.0  # Hz, rate of the data handed to identification
 
 def _condition_fn(plant: Plant, rate: float, samples: int):
     """Excitation quality: the worse of the normalized conditions of the plant's
-    base regressor (Pinocchio) and of the paper's feature library (3-DOF)."""
+    base regressor (Pinocchio) and of the library its registry entry declares for it
+    (Robot.excitation_library), if any."""
     pmodel = plant.pinocchio()
+    declared = declared_library(plant.name)
     t = np.linspace(0.0, samples / rate, min(samples, 400), endpoint=False)
     baseline = PinocchioModel(pmodel)
     base: list[np.ndarray] = []  # base-parameter columns: structural, found on the first candidate
 
     def condition(exc: FourierExcitation) -> float:
         states = exc.evaluate(t)
-        conds = [library_report(*states)["library_condition"]] if plant.dof == 3 else []
+        conds = [library_condition(declared, *states).condition] if declared else []
         Y = baseline.regressor(*states).reshape(-1, 10 * (pmodel.njoints - 1))
         if not base:
             base.append(base_columns(Y))
@@ -95,24 +98,31 @@ def generate(
         meta.update(stats)
     else:
         raise UserError(f"--mode must be 'inverse' or 'measured', got '{mode}'")
-    meta.update(library_report(q, qd, qdd, p.pinocchio()))
+    meta.update(library_report(plant, q, qd, qdd, p.pinocchio()))
     tau = tau_clean + torque_noise(tau_clean, noise, bias, rng)
     return Dataset(t, q, qd, qdd, tau, tau_clean, meta, truth)
 
 
-def report_library(dof: int, pmodel=None):
-    """The library whose conditioning is reported for a dof-joint dataset.
+def declared_library(robot: str):
+    """The library robot's registry entry declares for its data (Robot.excitation_library:
+    the Lynxmotion's is the paper's published 75 features), or None."""
+    name = robot_entry(robot).excitation_library
+    return published_library(name) if name else None
 
-    3 joints: the paper's published 75 features (the paper's arm). Otherwise the base atoms
-    generated from the plant's kinematics (identification.library.kinematic), or, with no
-    Pinocchio model of the plant, the generic polynomial x trig library.
+
+def report_library(robot: str, dof: int, pmodel=None):
+    """The library whose conditioning is reported for robot's data: the one its registry
+    entry declares (declared_library); otherwise the base atoms generated from the plant's
+    kinematics (identification.library.kinematic), or, with no Pinocchio model of the plant,
+    the generic polynomial x trig library.
     """
     from identification.library.chain import ChainError, KinematicChain
+    from identification.library.generic import generic_library
     from identification.library.kinematic import KinematicLibrary
-    from identification.library.published import generic_library, paper_library
 
-    if dof == 3:
-        return paper_library()
+    declared = declared_library(robot)
+    if declared is not None:
+        return declared
     if pmodel is not None and pmodel.nv == dof:
         try:
             return KinematicLibrary.generate(KinematicChain.from_pinocchio(pmodel))
@@ -121,12 +131,17 @@ def report_library(dof: int, pmodel=None):
     return generic_library(dof) if dof <= 2 else generic_library(dof, trig_joints=(1, 2))
 
 
-def library_report(q, qd, qdd, pmodel=None) -> dict:
-    """Rank and normalized condition of the report library on this data."""
+def library_condition(library, q, qd, qdd):
+    """Rank and normalized condition of library's columns on this motion."""
     from identification.library.base import conditioning
 
-    library = report_library(q.shape[1], pmodel)
     columns = library.evaluate(q, qd, qdd)
-    cond = conditioning(columns.reshape(-1, columns.shape[-1]), library.names)
+    return conditioning(columns.reshape(-1, columns.shape[-1]), library.names)
+
+
+def library_report(robot: str, q, qd, qdd, pmodel=None) -> dict:
+    """Rank and normalized condition of robot's report library on this data."""
+    library = report_library(robot, q.shape[1], pmodel)
+    cond = library_condition(library, q, qd, qdd)
     return {"library": library.name, "library_rank": cond.rank, "library_size": cond.size,
             "library_condition": cond.condition}
