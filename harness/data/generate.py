@@ -28,12 +28,12 @@ SAMPLE_RATE = 200.0  # Hz, rate of the data handed to identification
 
 
 
-def _condition_fn(plant: Plant, rate: float, samples: int):
+def _condition_fn(plant: Plant, robot: str, rate: float, samples: int):
     """Excitation quality: the worse of the normalized conditions of the plant's
-    base regressor (Pinocchio) and of the library its registry entry declares for it
-    (Robot.excitation_library), if any."""
+    base regressor (Pinocchio) and of the library robot's registry entry declares for its
+    data (Robot.excitation_library), if any."""
     pmodel = plant.pinocchio()
-    declared = declared_library(plant.name)
+    declared = declared_library(robot)
     t = np.linspace(0.0, samples / rate, min(samples, 400), endpoint=False)
     baseline = PinocchioModel(pmodel)
     base: list[np.ndarray] = []  # base-parameter columns: structural, found on the first candidate
@@ -78,12 +78,15 @@ def generate(
     mode: str = "inverse",
     bias: float = 0.2,
     sensors: SensorConfig | None = None,
+    robot: str | None = None,
 ) -> Dataset:
-    """One dataset of `samples` points at SAMPLE_RATE Hz; noise is a fraction of torque std."""
+    """One dataset of `samples` points at SAMPLE_RATE Hz; noise is a fraction of torque std.
+    robot: the registered robot plant is a variant of, whose entry's declared library the
+    excitation and the report use (default: plant's own entry)."""
     _validate(samples, noise, bias)
     p = load_plant(plant)
     lo, hi = p.limits()
-    exc, cond = design_excitation(lo, hi, seed, _condition_fn(p, SAMPLE_RATE, samples))
+    exc, cond = design_excitation(lo, hi, seed, _condition_fn(p, robot or plant, SAMPLE_RATE, samples))
     t = np.arange(samples) / SAMPLE_RATE
     rng = np.random.default_rng(seed + 1)
     meta = dict(plant=robot_reference(plant), mode=mode, noise=noise, bias=bias, seed=seed, dof=p.dof,
@@ -98,7 +101,7 @@ def generate(
         meta.update(stats)
     else:
         raise UserError(f"--mode must be 'inverse' or 'measured', got '{mode}'")
-    meta.update(library_report(plant, q, qd, qdd, p.pinocchio()))
+    meta.update(library_report(robot or plant, q, qd, qdd, p.pinocchio()))
     tau = tau_clean + torque_noise(tau_clean, noise, bias, rng)
     return Dataset(t, q, qd, qdd, tau, tau_clean, meta, truth)
 
