@@ -21,8 +21,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import expit
 
-from identification.closeloop.effects import sigmoid_friction
 from identification.errors import IdentificationError
 from identification.library.kinematic import COULOMB_WIDTH
 
@@ -30,6 +30,11 @@ STRIBECK_SPEEDS = (0.01, 0.03, 0.1)  # rad/s
 SIGMOID_SLOPES = (3.0, 10.0, 30.0, 100.0)  # s/rad
 SIGMOID_SHIFTS = (-0.03, 0.0, 0.03)  # rad/s
 LAWS = ("viscous-coulomb", "stribeck", "sigmoid")
+
+
+def sigmoid_friction(qd: np.ndarray, steepness: float, shift: float) -> np.ndarray:
+    """Gaz et al.'s friction at unit phi1: s(phi2 (qd + phi3)) - s(phi2 phi3), 0 at rest."""
+    return expit(steepness * (qd + shift)) - expit(steepness * shift)
 
 
 @dataclass(frozen=True)

@@ -1,79 +1,29 @@
-"""The identified torque model: per joint, named terms and coefficients.
+"""MODEL.json: read and written here, for both model kinds.
 
-Implements TorqueModel. The fitted intercept (a constant sensor bias in the
-data) is stored as `offset` but is NOT part of the torque: the model predicts
-the torque the robot needs, not what a biased sensor reads. MODEL.json
-follows the CLI contract: {"dof", "joints": [{"terms", "coefficients",
-"offset"}], "metrics", "library", "method"} (+ "lagrangian" for the coupled method).
+A model on a feature library (identification.feature_model.IdentifiedModel) and a model on
+a robot's base atoms (identification.kinematic_model.KinematicModel, `"library":
+"kinematic"`) share the CLI contract: {"dof", "joints": [{"terms", "coefficients",
+"offset"}], "library", "method"}; a kinematic model also records the robot it was identified
+for (`robot`: name and a hash of its kinematics), the base atoms (`atoms`) and, when chosen,
+each joint's friction law (`friction`). Reading a kinematic model needs that robot's
+KinematicLibrary (another robot is an error). `model_payload` adds what `identify` measured.
 """
 
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from identification.errors import IdentificationError
-from identification.library.features import Feature, parse_feature
-from identification.torque_model import as_states
+from identification.feature_model import IdentifiedModel, JointModel
+from identification.friction import FrictionLaw
+from identification.kinematic_model import KinematicModel
+from identification.library.kinematic import KinematicLibrary
 
-
-@dataclass(frozen=True)
-class JointModel:
-    """tau_j = sum_k coefficients[k] * terms[k](q, qd, qdd)  (N m)."""
-
-    terms: tuple[str, ...]
-    coefficients: tuple[float, ...]
-    offset: float = 0.0  # fitted sensor bias, N m (not in the torque)
-
-    def equation(self, joint: int, digits: int = 6) -> str:
-        body = " + ".join(f"{c:.{digits}g}*{t}" for c, t in zip(self.coefficients, self.terms,
-                                                                 strict=True))
-        return f"tau{joint} = {body or '0'}".replace("+ -", "- ")
-
-
-@dataclass(frozen=True)
-class IdentifiedModel:
-    """A sparse torque model; `torque` on arrays, `symbolic_torque` on CasADi vectors."""
-
-    dof: int
-    joints: tuple[JointModel, ...]
-    library: str = ""
-    method: str = ""  # "coupled" (one Lagrangian, shared atoms) or "per-joint" (the paper)
-
-    def _features(self, j: int) -> list[Feature]:
-        return [parse_feature(t, self.dof) for t in self.joints[j].terms]
-
-    def torque(self, q, qd, qdd) -> np.ndarray:
-        """Torques (n, dof) in N m at states of shape (n, dof)."""
-        q, qd, qdd = as_states(q, qd, qdd, self.dof)
-        tau = np.zeros_like(q)
-        for j, joint in enumerate(self.joints):
-            for f, c in zip(self._features(j), joint.coefficients, strict=True):
-                tau[:, j] += c * f.evaluate(q, qd, qdd)
-        return tau
-
-    def symbolic_torque(self, q, qd, qdd):
-        """CasADi (dof, 1) expression of the same model (SX or MX inputs)."""
-        import casadi
-
-        rows = []
-        for j, joint in enumerate(self.joints):
-            expr = 0
-            for f, c in zip(self._features(j), joint.coefficients, strict=True):
-                expr = expr + c * f.evaluate(q, qd, qdd, lib=casadi)
-            rows.append(expr)
-        return casadi.vertcat(*rows)
-
-    def equations(self) -> list[str]:
-        return [jm.equation(j + 1) for j, jm in enumerate(self.joints)]
-
-    def to_dict(self) -> dict:
-        return {"dof": self.dof, "library": self.library, "method": self.method,
-                "joints": [{"terms": list(jm.terms), "coefficients": list(jm.coefficients),
-                            "offset": jm.offset} for jm in self.joints]}
+KINEMATIC = "kinematic"  # the "library" of a model on a robot's base atoms
 
 
 MAX_DOF = 64
@@ -123,9 +73,72 @@ def joint_entries(payload: dict, dof: int | None = None) -> list[dict]:
     return joints
 
 
-def model_from_dict(payload: dict) -> IdentifiedModel:
-    """Inverse of IdentifiedModel.to_dict (extra keys such as metrics are ignored);
+def _feature_dict(model: IdentifiedModel) -> dict:
+    return {"dof": model.dof, "library": model.library, "method": model.method,
+            "joints": [{"terms": list(jm.terms), "coefficients": list(jm.coefficients),
+                        "offset": jm.offset} for jm in model.joints]}
+
+
+def _kinematic_dict(model: KinematicModel) -> dict:
+    chain = model.library.chain
+    return {"dof": model.dof, "library": KINEMATIC, "method": model.method,
+            "robot": {"name": chain.name, "hash": chain.digest()},
+            "atoms": model.library.names,
+            **({"friction": [law.to_dict() for law in model.laws]} if model.laws else {}),
+            "joints": [{"terms": [n for n, _ in model.joint_terms(j)],
+                        "coefficients": [c for _, c in model.joint_terms(j)],
+                        "offset": float(model.offsets[j])} for j in range(model.dof)]}
+
+
+_WRITERS = {IdentifiedModel: _feature_dict, KinematicModel: _kinematic_dict}
+
+
+def model_to_dict(model) -> dict:
+    """The MODEL.json entries of an identified model (either kind)."""
+    return _WRITERS[type(model)](model)
+
+
+def model_payload(result, robot: dict, heldout: dict, scored_against: str) -> dict:
+    """The whole MODEL.json of an Identification (identification.identify): the robot record
+    (name, hash), the model, its metrics with how it was held out and what it was scored
+    against, and the Lagrangian of a coupled fit."""
+    payload = {"robot": robot, **model_to_dict(result.model),
+               "metrics": {**result.metrics(), "heldout": heldout,
+                           "scored_against": scored_against}}
+    if result.lagrangian():
+        payload["lagrangian"] = result.lagrangian()
+    return payload
+
+
+def model_from_dict(payload: dict, library: Callable[[], KinematicLibrary] | None = None):
+    """Inverse of model_to_dict (extra keys such as metrics are ignored); a kinematic model
+    is read on library() (the robot's base atoms, computed only then).
     IdentificationError naming what is malformed."""
+    if isinstance(payload, dict) and payload.get("library") == KINEMATIC:
+        if library is None:
+            raise IdentificationError("a model on a robot's base atoms needs that robot's "
+                                      "kinematic library to be read")
+        return _kinematic_from_dict(payload, library())
+    return _feature_from_dict(payload)
+
+
+def load_model(path: str | Path, library: Callable[[], KinematicLibrary] | None = None):
+    """Read a MODEL.json written by `torquebench identify`."""
+    try:
+        payload = json.loads(Path(path).read_text())
+    except (OSError, ValueError) as exc:
+        raise IdentificationError(f"cannot read model {path}: {exc}") from None
+    return model_from_dict(payload, library)
+
+
+def sensor_offsets(model) -> np.ndarray:
+    """The fitted per-joint intercepts (sensor offsets, N m) of a model, which its torque
+    leaves out; zeros for a model that fits none (the closed form)."""
+    offsets = getattr(model, "offsets", None)
+    return np.zeros(model.dof) if offsets is None else np.asarray(offsets, float)
+
+
+def _feature_from_dict(payload: dict) -> IdentifiedModel:
     joints = joint_entries(payload)
     dof = len(joints)
     model = IdentifiedModel(dof, tuple(JointModel(tuple(j["terms"]), tuple(float(c) for c in
@@ -134,16 +147,40 @@ def model_from_dict(payload: dict) -> IdentifiedModel:
                             str(payload.get("library", "")), str(payload.get("method", "")))
     for j in range(dof):
         try:
-            model._features(j)
+            model.features(j)
         except ValueError as exc:
             raise IdentificationError(f"malformed model: joint {j + 1}: {exc}") from None
     return model
 
 
-def load_model(path: str | Path) -> IdentifiedModel:
-    """Read a MODEL.json written by `torquebench identify`."""
-    try:
-        payload = json.loads(Path(path).read_text())
-    except (OSError, ValueError) as exc:
-        raise IdentificationError(f"cannot read model {path}: {exc}") from None
-    return model_from_dict(payload)
+def _kinematic_from_dict(payload: dict, library: KinematicLibrary) -> KinematicModel:
+    """IdentificationError if the model was identified for another robot or is malformed."""
+    robot = payload.get("robot") if isinstance(payload.get("robot"), dict) else {}
+    chain = library.chain
+    if robot.get("hash") != chain.digest():
+        raise IdentificationError(
+            f"model was identified for robot '{robot.get('name')}' (kinematics "
+            f"{robot.get('hash')}), not '{chain.name}' ({chain.digest()})")
+    if payload.get("atoms") != library.names:
+        raise IdentificationError("model atoms differ from this robot's base atoms "
+                                  "(generated by another version?)")
+    index = {n: k for k, n in enumerate(library.names)}
+    laws = payload.get("friction", [])
+    if not isinstance(laws, list) or laws and len(laws) != library.dof:
+        raise IdentificationError(f"malformed model: 'friction' must list {library.dof} laws")
+    laws = tuple(FrictionLaw.from_dict(law) for law in laws)
+    own = {law.term(j + 1): j for j, law in enumerate(laws) if law.has_column}
+    coef, offsets = np.zeros(len(library)), np.zeros(library.dof)
+    law_coef = np.zeros(library.dof)
+    for j, joint in enumerate(joint_entries(payload, library.dof)):
+        offsets[j] = float(joint.get("offset", 0.0))
+        for name, c in zip(joint["terms"], joint["coefficients"], strict=True):
+            if own.get(name) == j:
+                law_coef[j] = float(c)
+            elif name in index:
+                coef[index[name]] = float(c)
+            else:
+                raise IdentificationError(f"malformed model: joint {j + 1} term '{name:.40}' "
+                                          "is not one of the robot's base atoms")
+    return KinematicModel(library, coef, offsets, str(payload.get("method", "coupled")), laws,
+                          law_coef if laws else None)

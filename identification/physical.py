@@ -31,9 +31,7 @@ from identification.friction import FrictionLaw, choose_law
 
 LAMBDAS = (1e-6, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)  # ridge weights tried toward the nominal
 TIE = 0.02  # a larger weight must predict the validation block this much better (relative
-# mean square): at 1e-3 the bench's perturbed URDF prior won the validation block by 0.1-1.6 %
-# on some draws and then missed another motion by 1.5-2.8x the oracle on light wrist joints
-# (xArm7, SO-101: `bench --robot PATH --sections identification`); at 2 % none does
+# mean square), or a prior wins it by chance (docs/identification.md, 'identification.physical')
 CONSISTENT_TOL = 1e-8  # smallest pseudo-inertia eigenvalue still consistent (solver accuracy)
 
 

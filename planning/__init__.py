@@ -1,21 +1,33 @@
 """Energy-optimal, obstacle-avoiding trajectory planning (paper III.B, III.G, Algorithm 2).
 
-Modules, in the order the math flows:
+Sub-packages, in the order the math flows:
 
-- trajectory: joint polynomials in normalized time (eqs. 11, 12), quartic by default
-- quadrature: where the power is sampled for the energy (eq. 18 or a dense rule)
-- kinematics, clearance: link points of any serial arm (data from the harness; the
-  Lynxmotion's eqs. 9, 10 as one chain) and the obstacle-to-link-segment distance
-- obstacle: the moving obstacle, its K samples and its constant-velocity prediction
-- nlp, limits: energy sigma/N sum |P| + alpha max(0, lambda - d)^2 with joint limits
-- solver: IPOPT through CasADi (exact derivatives), built once, warm-started
-- screening: which obstacle samples a solve must see
-- segments, replanning: one segment planned (penalty loop or anytime SQP); Algorithm 2,
-  re-planning from the current state when the obstacle threatens
-- anytime, sqp, elastic_qp, safety: clearance as elastic rows, an anytime trust-region SQP
-  under a CPU budget (DAQP on its QPs), every iterate checked by compiled functions
+- formulation/: the problem, whichever solver solves it: joint polynomials (trajectory),
+  where the power is sampled (quadrature, breaks), the arm's links (kinematics) and their
+  distance to the obstacle (clearance, obstacle), joint limits (limits), energy, the NLP
+  (nlp) and its numbers for one segment (problem), which obstacle samples a solve sees
+  (screening), its functions compiled to C (compiled)
+- penalty/: the paper's exterior penalty loop, a SegmentPlanner (planner): the NLP solver
+  built once and warm-started (solver, backends: fatrop, sqpmethod or IPOPT;
+  realtime_iteration: capped feasible-SQP steps), the loop raising alpha until the plan
+  keeps the threshold (loop) and polishing of cold plans (polish)
+- anytime/: the real-time SQP, a SegmentPlanner (planner): clearance as elastic rows, a
+  trust-region SQP under a CPU budget (solver, sqp, elastic_qp, qp_kernels, local_model,
+  budget), every iterate checked by compiled functions (safety, candidates)
+
+Modules at the top:
+
+- types: what both solvers share: the SegmentPlanner protocol (plan(problem, warm) ->
+  SegmentPlan) and a segment to plan (Segment), SegmentPlan, ObstacleForecast, the re-plan
+  statuses (ITERATE, DEADLINE, LATE)
+- planners: the one factory choosing the SegmentPlanner a configuration asks for
+- config: PlannerConfig (the formulation and the replanner) with its PenaltyOptions and
+  AnytimeOptions, and Scenario; errors: PlanningError
+- starts: the multi-start's start points and the ranking of cold plans
+- replanning: Algorithm 2, re-planning from the current state when the obstacle threatens,
+  with any SegmentPlanner
 - result: the executed trajectory, checked, and its PLAN.json payload
-- baselines, speed, scenarios: minimum jerk, scipy trust-constr, timings, named scenarios
+- scenarios: named scenarios; timing: wall and CPU clocks of a plan
 
-The planner takes any `identification.TorqueModel` (identified or closed form).
+The planner takes any `identification.torque_model.TorqueModel` (identified or closed form).
 """

@@ -9,36 +9,85 @@ from math import pi
 import numpy as np
 
 from planning.errors import PlanningError
-from planning.kinematics import ArmGeometry, paper_arm
-from planning.obstacle import LinearObstacle
+from planning.formulation.kinematics import ArmGeometry, paper_arm
+from planning.formulation.obstacle import LinearObstacle
+
+REPLANNERS = ("penalty", "anytime")
+# the replanners' earlier names, still accepted (`plan --replanner fatrop`); PLAN.json keeps them
+ALIASES = {"fatrop": "penalty", "sqp": "anytime"}
+JSON_NAMES = {"penalty": "fatrop", "anytime": "sqp"}
+
+
+@dataclass(frozen=True)
+class PenaltyOptions:
+    """The paper's exterior penalty loop (planning.penalty; paper III.G): while a solution dips
+    more than PlannerConfig.penalty_tolerance (m) below the threshold, alpha is multiplied by
+    growth, up to max_weight (J/m^2 per obstacle sample); each solve by one NLP solver."""
+
+    growth: float = 10.0
+    max_weight: float = 2e5
+    solver: str = "fatrop"  # planning.penalty.backends: "fatrop", "sqpmethod" or "ipopt"
+    hessian: str = "exact"  # or "limited-memory" (IPOPT, sqpmethod)
+    dual_warm_start: bool = True  # warm re-plans also start from the last multipliers
+    max_iterations: int = 300
+    warm_max_iterations: int = 60  # a warm solve that needs more restarts cold
+    # real-time iterations: a warm re-plan of Algorithm 2 first takes this many iterations of
+    # CasADi's feasible SQP from the last plan (planning.penalty.backends "feasiblesqp": every
+    # iterate satisfies the constraints) and the arm follows the iterate if it keeps the
+    # threshold and the limits; the next obstacle samples go on from it until it converges.
+    # An iterate that dips or leaves a limit is solved on to convergence as without them.
+    # None: every re-plan is solved to convergence.
+    replan_iterations: int | None = None
+    # the best `polish` distinct cold plans are solved again, warm, with the split quadrature
+    # at polish_samples nodes (planning.formulation.breaks; the sample count a multiple of
+    # power_breaks + 1) and the plan that spends least kept: the many-start search runs on
+    # the cheap rule (the anytime SQP's cold plans too: planning.penalty.polish)
+    polish: int = 0
+    polish_samples: int = 40
+
+
+@dataclass(frozen=True)
+class AnytimeOptions:
+    """The anytime SQP (planning.anytime): clearance as elastic rows, every plan under a CPU
+    budget (ms)."""
+
+    replan_budget_ms: float = 10.0  # CPU per re-plan (one obstacle sample period)
+    cold_budget_ms: float = 25.0  # CPU for a first plan, all its starts together
+    # reproducible runs: each SQP iteration counts this many ms of the budgets above whatever
+    # CPU it took, as do a second-order correction and each half of a plan's round
+    # (planning.anytime.budget.Clock): the same plans on a loaded machine (the bench's
+    # executed plans). None: the budgets are CPU time of the planning thread (real time)
+    iteration_ms: float | None = None
+    elastic_weight: float = 1e3  # J per m of clearance missed, per sample and link
+    replan_starts: int = 0  # a re-plan also solves from this many cold start points
 
 
 @dataclass(frozen=True)
 class PlannerConfig:
-    """How trajectories are scored and constrained.
+    """How trajectories are scored and constrained (the formulation), which segment planner
+    plans them (replanner) and each planner's options.
 
     threshold: lambda (m); penalty_weight: alpha (J/m^2 per obstacle sample);
+    penalty_tolerance: m a plan may dip below the threshold and still keep it;
     energy_samples: N, weighted by energy_quadrature; degree: of the joint polynomials;
     obstacle_slots: how many obstacle samples one solve sees (the
-    ones that can come within the threshold, see planning.screening);
+    ones that can come within the threshold, see planning.formulation.screening);
     limits in rad, enforced at limit_samples interior points of every segment;
     torque_limit: |tau_i| <= torque_limit[i] (N m, planning model's torque) at s = 0, the
     energy samples and the obstacle samples of every segment (None: unconstrained). The
     default is the Lynxmotion MJCF motors' ctrlrange (gear 1); callers that know the
     plant pass its own (planning does not read models).
+    replanner: "penalty" (the paper's exterior penalty loop, planning.penalty; alias
+    "fatrop") or "anytime" (the anytime SQP, planning.anytime; alias "sqp").
     """
 
     threshold: float = 0.08
     penalty_weight: float = 200.0
-    # Exterior penalty method (paper III.G: alpha increases until the penalty converges):
-    # while a solution dips more than penalty_tolerance (m) below the threshold, alpha is
-    # multiplied by penalty_growth, up to max_penalty_weight.
     penalty_tolerance: float = 1e-3
-    penalty_growth: float = 10.0
-    max_penalty_weight: float = 2e5
     # the paper's (eq. 18, N = 10); `plan` and the bench default to true_energy_config()
     energy_samples: int = 10
-    energy_quadrature: str = "paper"  # planning.quadrature: "paper" (eq. 18), "gauss", "simpson", "split"
+    # planning.formulation.quadrature: "paper" (eq. 18), "gauss", "simpson", "split"
+    energy_quadrature: str = "paper"
     power_breaks: int = 7  # "split": intervals of the quadrature = power_breaks + 1
     degree: int = 4  # of the joint polynomials (paper: 4); degree - 1 free coefficients per joint
     obstacle_slots: int = 24
@@ -51,42 +100,31 @@ class PlannerConfig:
     limit_samples: int = 8
     torque_limit: tuple[float, ...] | None = (10.0, 10.0, 10.0)
     geometry: ArmGeometry = field(default_factory=paper_arm)  # links for clearance
-    hessian: str = "exact"  # or "limited-memory" (IPOPT, sqpmethod)
-    solver: str = "fatrop"  # planning.backends: "fatrop", "sqpmethod" or "ipopt"
-    compile_code: bool = False  # NLP functions as C compiled once (planning.compiled)
-    dual_warm_start: bool = True  # warm re-plans also start from the last multipliers
+    power_smoothing: float = 0.0  # W; 0: exact epigraph of |P|, > 0: sqrt(P^2 + eps^2) - eps
+    compile_code: bool = False  # NLP functions as C compiled once (planning.formulation.compiled)
     starts: int = 1  # cold plans solve from this many start points (planning.starts)
-    # the best `polish` distinct cold plans are solved again, warm, with the split quadrature
-    # at polish_samples nodes (planning.breaks; the sample count a multiple of power_breaks
-    # + 1) and the plan that spends least kept: the many-start search runs on the cheap rule
-    polish: int = 0
-    polish_samples: int = 40
     # a re-plan still unfinished after this much CPU time of the planning thread (ms) is
     # abandoned and the arm keeps its last plan (Algorithm 2); None: no deadline
     replan_deadline_ms: float | None = None
-    # real-time iterations: a warm re-plan of Algorithm 2 first takes this many iterations of
-    # CasADi's feasible SQP from the last plan (planning.backends "feasiblesqp": every iterate
-    # satisfies the constraints) and the arm follows the iterate if it keeps the threshold
-    # and the limits; the next obstacle samples go on from it until it converges. An iterate
-    # that dips or leaves a limit is solved on to convergence as without them. None: every
-    # re-plan is solved to convergence.
-    replan_iterations: int | None = None
-    # how Algorithm 2 plans and re-plans: "sqp" (planning.anytime: clearance as elastic rows,
-    # an anytime trust-region SQP under a CPU budget) or "fatrop" (the penalty loop of
-    # planning.replanning with config.solver, alpha raised until the plan keeps the threshold)
-    replanner: str = "fatrop"
-    replan_budget_ms: float = 10.0  # "sqp": CPU per re-plan (one obstacle sample period)
-    cold_budget_ms: float = 25.0  # "sqp": CPU for a first plan, all its starts together
-    # "sqp", reproducible runs: each SQP iteration counts this many ms of the budgets above
-    # whatever CPU it took, as do a second-order correction and each half of a plan's round
-    # (planning.budget.Clock): the same plans on a loaded machine (the bench's executed
-    # plans). None: the budgets are CPU time of the planning thread (real time)
-    iteration_ms: float | None = None
-    elastic_weight: float = 1e3  # "sqp": J per m of clearance missed, per sample and link
-    replan_starts: int = 0  # "sqp": a re-plan also solves from this many cold start points
-    max_iterations: int = 300
-    warm_max_iterations: int = 60  # a warm solve that needs more restarts cold
-    power_smoothing: float = 0.0  # W; 0: exact epigraph of |P|, > 0: sqrt(P^2 + eps^2) - eps
+    # how Algorithm 2 plans and re-plans (planning.planners.segment_planner)
+    replanner: str = "penalty"
+    penalty: PenaltyOptions = field(default_factory=PenaltyOptions)
+    anytime: AnytimeOptions = field(default_factory=AnytimeOptions)
+
+    def __post_init__(self):
+        name = ALIASES.get(self.replanner, self.replanner)
+        if name not in REPLANNERS:
+            raise ValueError(f"replanner must be one of {REPLANNERS + tuple(ALIASES)}, got "
+                             f"'{self.replanner}'")
+        object.__setattr__(self, "replanner", name)
+
+    def with_penalty(self, **changes) -> PlannerConfig:
+        """This configuration with these penalty-loop options changed."""
+        return dataclasses.replace(self, penalty=dataclasses.replace(self.penalty, **changes))
+
+    def with_anytime(self, **changes) -> PlannerConfig:
+        """This configuration with these anytime-SQP options changed."""
+        return dataclasses.replace(self, anytime=dataclasses.replace(self.anytime, **changes))
 
 
 def true_energy_config(**changes) -> PlannerConfig:
@@ -94,9 +132,9 @@ def true_energy_config(**changes) -> PlannerConfig:
     Legendre, N = 20; eq. 18 with N = 10 lets the optimizer hide negative power between its
     samples), the best of 4 cold starts (the landscape has local optima), at rest at the
     goal, planned and re-planned by the anytime SQP under a CPU budget (the paper's penalty
-    loop: replanner "fatrop")."""
+    loop: replanner "penalty")."""
     return dataclasses.replace(PlannerConfig(energy_quadrature="gauss", energy_samples=20,
-                                             starts=4, rest_at_goal=True, replanner="sqp"),
+                                             starts=4, rest_at_goal=True, replanner="anytime"),
                                **changes)
 
 

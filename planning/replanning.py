@@ -9,12 +9,13 @@ solve would return the same plan), the arm re-plans from its current state
 deadline) leaves the arm on its last plan and is tried again at the next sample. The
 executed trajectory is the concatenation of the segments actually followed.
 
-With real-time iterations (PlannerConfig.replan_iterations) a re-plan is a capped
+With real-time iterations (PenaltyOptions.replan_iterations) a re-plan is a capped
 feasible-SQP step from the last plan; while the plan followed is such an unconverged
 iterate, the arm re-plans at every sample, going on from it until it converges. So it is
-with the anytime SQP (PlannerConfig.replanner "sqp", planning.anytime): a re-plan that
+with the anytime SQP (PlannerConfig.replanner "anytime", planning.anytime): a re-plan that
 reached its CPU budget unconverged is followed and gone on from at the next sample.
-Each segment is planned by planning.segments.
+Each segment is planned by a SegmentPlanner (planning.planners.segment_planner), whichever
+it is.
 """
 
 from __future__ import annotations
@@ -23,13 +24,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planning.clearance import link_clearances
 from planning.config import Scenario
 from planning.errors import PlanningError
-from planning.obstacle import predict_linear
-from planning.realtime_iteration import ITERATE
-from planning.segments import DEADLINE, LATE, _predicted_clearance, plan_multistart, plan_segment  # noqa: F401 (re-exported: Algorithm 2's vocabulary)
-from planning.solver import ObstacleForecast, Planner, SegmentPlan
+from planning.formulation.clearance import link_clearances, predicted_clearance
+from planning.formulation.obstacle import predict_linear
+from planning.types import DEADLINE, ITERATE, LATE, ObstacleForecast, Segment, SegmentPlan, SegmentPlanner
 
 TRIGGER_TOLERANCE = 1e-3  # m: predicted dips smaller than this do not trigger a re-plan
 PREDICTION_TOLERANCE = 1e-3  # m: a forecast this close to the last one brings nothing new
@@ -41,13 +40,13 @@ class Execution:
 
     segments: tuple[SegmentPlan, ...]
     replan_times: tuple[float, ...]
-    solve_ms: tuple[float, ...]  # wall time of every plan and re-plan, end to end (plan_segment)
+    solve_ms: tuple[float, ...]  # wall time of every plan and re-plan, end to end
     failures: tuple[str, ...]  # IPOPT status of a failed first plan (the result is unusable)
     replan_failures: tuple[str, ...] = ()  # failed re-plans: the arm kept its last plan
     solve_cpu_ms: tuple[float, ...] = ()  # CPU time of the planning thread, per solve_ms entry
 
 
-def check_start(planner: Planner, scenario: Scenario) -> None:
+def check_start(planner: SegmentPlanner, scenario: Scenario) -> None:
     """Raise PlanningError if the arm starts within the threshold of the obstacle."""
     if scenario.obstacle is None:
         return
@@ -58,7 +57,7 @@ def check_start(planner: Planner, scenario: Scenario) -> None:
                             f"{clearance:.4f} m < {planner.config.threshold} m")
 
 
-def execute(planner: Planner, scenario: Scenario, replan: bool = True,
+def execute(planner: SegmentPlanner, scenario: Scenario, replan: bool = True,
             avoid: bool = True, starts: int | None = None,
             first_start: np.ndarray | None = None) -> Execution:
     """Run Algorithm 2 on the scenario.
@@ -72,19 +71,17 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
     if avoid:
         check_start(planner, scenario)
     forecast = None if obstacle is None else forecast_at(obstacle, 0.0)
-    if first_start is None:
-        plan, ms, cpu, _ = plan_multistart(planner, scenario.start, scenario.start_velocity,
-                                           0.0, T, goal, forecast, starts)
-    else:
-        plan, ms, cpu = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0, T,
-                                     goal, forecast, x0=first_start)
-    segments, times, solve_ms, solve_cpu = [plan], [0.0], [ms], [cpu]
+    first = Segment(scenario.start, scenario.start_velocity, 0.0, T, goal, forecast,
+                    x0=first_start)
+    plan = planner.plan_cold(first, starts)[0] if first_start is None else planner.plan(first)
+    segments, times = [plan], [0.0]
+    solve_ms, solve_cpu = [plan.solve_ms], [plan.solve_cpu_ms]
     failures, replan_failures = ([] if plan.success else [plan.status]), []
     if obstacle is None or not replan:
         return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures),
                          (), tuple(solve_cpu))
     planned_with, latest = forecast, plan  # latest: the newest successful solve (converged
-    # or a real-time iterate, planning.realtime_iteration.ITERATE), the next re-plan's warm start
+    # or a real-time iterate, planning.penalty.realtime_iteration.ITERATE), the next re-plan's warm start
     for t in obstacle.sample_times[:-1]:
         forecast = forecast_at(obstacle, t)
         iterating = plan.status.startswith(ITERATE)  # it stopped short: go on from it
@@ -92,11 +89,10 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
                               or _same_prediction(planned_with, forecast)):
             continue  # safe, or nothing new to plan with: the last plan already saw this
         q, qd, _ = plan.trajectory.state(t)
-        new, ms, cpu = plan_segment(planner, q[0], qd[0], t, T - t, goal, forecast,
-                                    warm=latest, deadline_ms=planner.config.replan_deadline_ms,
-                                    iterate=True)
-        solve_ms.append(ms)
-        solve_cpu.append(cpu)
+        new = planner.plan(Segment(q[0], qd[0], t, T - t, goal, forecast, realtime=True,
+                                   deadline_ms=planner.config.replan_deadline_ms), warm=latest)
+        solve_ms.append(new.solve_ms)
+        solve_cpu.append(new.solve_cpu_ms)
         if not new.success:
             replan_failures.append(new.status)
             if new.status.startswith(DEADLINE):
@@ -106,9 +102,8 @@ def execute(planner: Planner, scenario: Scenario, replan: bool = True,
             if new.status.endswith(LATE):  # too late to follow, yet the best start point
                 latest = new
             # keep following the last good plan; a re-plan that failed otherwise is tried
-            # again at the next sample: that plan never saw this forecast (measured: a
-            # re-plan refused 0.45 mrad beyond a limit, not retried while the prediction
-            # stayed the same, left the arm 2.6 cm from the obstacle)
+            # again at the next sample: that plan never saw this forecast
+            # (docs/realtime.md, 'planning.replanning')
             continue
         plan = latest = new
         planned_with = forecast
@@ -135,13 +130,12 @@ def _same_prediction(old: ObstacleForecast, new: ObstacleForecast) -> bool:
                 <= PREDICTION_TOLERANCE)
 
 
-def _stale(planner: Planner, plan: SegmentPlan, forecast: ObstacleForecast) -> bool:
+def _stale(planner: SegmentPlanner, plan: SegmentPlan, forecast: ObstacleForecast) -> bool:
     """True if the plan must be re-planned for this forecast: it comes within the threshold
     (Algorithm 2), or it was bent round the obstacle (a positive penalty) and now keeps more
     than the threshold everywhere: the obstacle has moved off its detour, whose energy a
-    re-plan can save (measured: a first plan made against the obstacle standing still, never
-    re-planned because it stayed clear, spent 5.06 J where a re-planned motion spent 0.23 J)."""
-    clearance = _predicted_clearance(planner, plan, forecast)
+    re-plan can save (docs/realtime.md, 'planning.replanning')."""
+    clearance = predicted_clearance(planner.config.geometry, plan.trajectory, forecast)
     threshold = planner.config.threshold
     return clearance < threshold - TRIGGER_TOLERANCE or \
         ((plan.penalty > 0.0 or plan.detour) and clearance > threshold + TRIGGER_TOLERANCE)

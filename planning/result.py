@@ -7,10 +7,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from identification.torque_model import Motion, TorqueModel
-from planning.clearance import link_clearances
-from planning.config import PlannerConfig, Scenario
-from planning.energy import absolute_energy
-from planning.limits import LIMIT_TOLERANCE
+from planning.config import JSON_NAMES, PlannerConfig, Scenario
+from planning.formulation.clearance import link_clearances
+from planning.formulation.energy import absolute_energy
+from planning.formulation.limits import LIMIT_TOLERANCE
 from planning.replanning import Execution
 
 CLEARANCE_TOLERANCE = 2e-3  # m below the threshold still counted as avoided (penalty is soft)
@@ -55,8 +55,8 @@ def executed_energy(model: TorqueModel, execution: Execution, t: np.ndarray) -> 
     """Integral of |P| dt (J) of the concatenated segments, each on the points of the grid t
     inside the interval it was followed plus that interval's ends, from its own polynomial.
     A re-plan keeps position and velocity but changes the acceleration, so the power jumps
-    there; a trapezoid across the jump misses by half a step times it (measured: the xArm7's
-    swaying crossing, 123 re-plans, 0.12 J below the physical bound of 107.66 J)."""
+    there; a trapezoid across the jump misses by half a step times it
+    (docs/realtime.md, 'planning.result')."""
     segments = execution.segments
     starts = [s.trajectory.t_begin for s in segments]
     total = 0.0
@@ -130,12 +130,14 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
         "solve_ms": result.execution.solve_ms,
         "solve_cpu_ms": result.execution.solve_cpu_ms,
         "replan_failures": result.execution.replan_failures,
-        "solver": config.solver, "starts": config.starts, "polish": config.polish,
-        "polish_samples": config.polish_samples,
+        "solver": config.penalty.solver, "starts": config.starts,
+        "polish": config.penalty.polish, "polish_samples": config.penalty.polish_samples,
         "replan_deadline_ms": config.replan_deadline_ms,
-        "replan_iterations": config.replan_iterations, "replanner": config.replanner,
-        "replan_budget_ms": config.replan_budget_ms, "cold_budget_ms": config.cold_budget_ms,
-        "iteration_ms": config.iteration_ms,
+        "replan_iterations": config.penalty.replan_iterations,
+        "replanner": JSON_NAMES[config.replanner],  # PLAN.json's names: "fatrop", "sqp"
+        "replan_budget_ms": config.anytime.replan_budget_ms,
+        "cold_budget_ms": config.anytime.cold_budget_ms,
+        "iteration_ms": config.anytime.iteration_ms,
         "end_error": result.end_error, "limit_violation": result.limit_violation,
         "peak_torque": result.peak_torque, "torque_limit": config.torque_limit,
         "feasible": result.feasible, "problems": result.problems,

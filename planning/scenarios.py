@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from planning.clearance import link_clearances
 from planning.config import Scenario
-from planning.kinematics import ArmGeometry
-from planning.obstacle import LinearObstacle, SwayingObstacle
-from planning.trajectory import PolynomialTrajectory
+from planning.formulation.clearance import link_clearances
+from planning.formulation.kinematics import ArmGeometry
+from planning.formulation.obstacle import LinearObstacle, SwayingObstacle
+from planning.formulation.trajectory import PolynomialTrajectory
 
 
 def paper_scenario() -> Scenario:

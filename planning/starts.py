@@ -5,22 +5,23 @@ solves from several start points and keeps the best.
 Start 0 is the planner's initial guess (a cubic to the goal); start i > 0 adds to it bumps
 that vanish at both ends, drawn from a fixed seed (the same problem always gets the same
 starts), with amplitudes of half each joint's range. Every start solves the obstacle problem
-from itself (planning.replanning.plan_segment): the unobstructed optimum is nearly always
-unique, so passing through it would bring every start to the same detour.
+from itself (planning.penalty.loop.plan_segment, planning.anytime.planner): the unobstructed
+optimum is nearly always unique, so passing through it would bring every start to the same detour.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from planning.energy import dense_energy
-from planning.limits import LIMIT_TOLERANCE, limit_excess
-from planning.solver import Planner, SegmentPlan
+from planning.formulation.energy import dense_energy
+from planning.formulation.limits import LIMIT_TOLERANCE, limit_excess
+from planning.formulation.problem import ProblemNumbers
+from planning.types import SegmentPlan
 
 SEED = 20240515
 
 
-def start_points(planner: Planner, q0, qd0, duration: float, goal, count: int,
+def start_points(planner: ProblemNumbers, q0, qd0, duration: float, goal, count: int,
                  seed: int = SEED) -> list[np.ndarray]:
     """`count` cold start points x0 of the planning NLP (the first: the initial guess)."""
     config = planner.config
@@ -33,12 +34,12 @@ def start_points(planner: Planner, q0, qd0, duration: float, goal, count: int,
     return points
 
 
-def rank(planner: Planner, plan: SegmentPlan) -> tuple[bool, bool, float]:
+def rank(planner: ProblemNumbers, plan: SegmentPlan) -> tuple[bool, bool, float]:
     """Sort key of candidate plans: converged first, then within the joint limits (a cold
     plan is returned unchecked when its rounds end beyond one, planning.replanning), then the
-    lower energy actually spent (planning.energy.dense_energy, not the plan's own quadrature:
-    measured on the random scenarios, split N = 24 plans' quadrature under-counted it by up to
-    6 %, enough to rank a dearer start first) plus the clearance penalty (J)."""
+    lower energy actually spent (planning.formulation.energy.dense_energy, not the plan's own
+    quadrature, which can under-count it enough to rank a dearer start first
+    (docs/realtime.md, 'planning.starts')) plus the clearance penalty (J)."""
     config = planner.config
     beyond = limit_excess(plan.trajectory, config.lower, config.upper) > LIMIT_TOLERANCE
     return (not plan.success, beyond, dense_energy(planner.model, plan.trajectory) + plan.penalty)

@@ -39,7 +39,7 @@ def random_crossing(planner, seed: int):
     """One random scenario of planning.scenarios (the obstacle crossing the planner's
     unobstructed optimum) and its obstacle forecast with the whole path known."""
     from planning.scenarios import random_scenarios
-    from planning.solver import ObstacleForecast
+    from planning.types import ObstacleForecast
 
     config = planner.config
 
@@ -49,6 +49,14 @@ def random_crossing(planner, seed: int):
     case = random_scenarios(1, seed, free_motion, config.geometry, config.lower, config.upper)[0]
     t = case.obstacle.sample_times
     return case, ObstacleForecast(t, case.obstacle.position(t))
+
+
+def segments(planner):
+    """The segment planner (planning.planners) of a penalty-loop Planner's model and
+    configuration, reusing its solvers: what Algorithm 2 takes."""
+    from planning.planners import segment_planner
+
+    return segment_planner(planner.model, planner.config, planner)
 
 
 def lynxmotion_motion(n: int = 4000, seed: int = 0, duration: float = 20.0) -> Motion:

@@ -1,4 +1,4 @@
-"""The planner's forward kinematics of any arm (planning.kinematics) against independent
+"""The planner's forward kinematics of any arm (planning.formulation.kinematics) against independent
 implementations: the paper's eqs. (9)-(10), Pinocchio's frames, MuJoCo's joint anchors and
 sites in the scene built around the arm, finite differences of its CasADi form."""
 
@@ -13,8 +13,8 @@ import pytest
 from harness.robots.arm import arm_geometry, joint_limits, torque_limit
 from harness.robots.registry import flange_frame, load_pinocchio
 from harness.robots.scene import replay_scene
-from planning.clearance import link_clearances, symbolic_link_clearances
-from planning.kinematics import paper_arm
+from planning.formulation.clearance import link_clearances, symbolic_link_clearances
+from planning.formulation.kinematics import paper_arm
 from tests.helpers import central_difference
 
 RNG = np.random.default_rng(12)

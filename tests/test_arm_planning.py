@@ -17,10 +17,11 @@ from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import get_robot, load_pinocchio
 from harness.sections import replay
 from harness.sections.base import Context, SectionResult
-from planning.clearance import link_clearances
+from planning.formulation.clearance import link_clearances
+from planning.penalty.solver import Planner
 from planning.replanning import execute
 from planning.scenarios import crossing_scenario
-from planning.solver import Planner
+from tests.helpers import segments
 
 ROBOT = "ur5"
 
@@ -34,7 +35,7 @@ def crossing():
     """The bench's UR5 motion and an obstacle through the middle of its forearm at t = 1 s."""
     base, link = bench_motion(ROBOT)
     config = planner_config(ROBOT)
-    free = execute(Planner(PinocchioModel(load_pinocchio(ROBOT)), config), base, avoid=False)
+    free = execute(segments(Planner(PinocchioModel(load_pinocchio(ROBOT)), config)), base, avoid=False)
     return crossing_scenario(free.segments[0].trajectory, config.geometry, base=base, link=link)
 
 

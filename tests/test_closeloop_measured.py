@@ -17,8 +17,8 @@ from harness.cli import main
 from harness.closeloop.measured import rigid_library
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from identification.closeloop.effects import sigmoid_friction
 from identification.closeloop.measured import close_loop_measured
+from identification.friction import sigmoid_friction
 from tests.helpers import lynxmotion_motion
 
 SIGMOID = (0.08, 15.0, 0.03)  # phi1 N m, phi2 s/rad, phi3 rad/s on joint 1
@@ -64,7 +64,7 @@ def test_a_log_with_only_dictionary_effects_is_fully_explained():
     assert not r.unexplained
     # after: the held-out error against the measured torque is the noise's
     held = slice(r.split, None)
-    noise_only = np.linalg.norm(tau[held] - clean[held] - r.model.declared.offsets, axis=0)
+    noise_only = np.linalg.norm(tau[held] - clean[held] - r.model.declared.bias, axis=0)
     assert np.all(r.error_after <= 1.1 * noise_only / np.linalg.norm(tau[held], axis=0))
 
 

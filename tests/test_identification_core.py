@@ -17,7 +17,7 @@ from identification.identify import identify
 from identification.library.features import parse_feature
 from identification.library.generic import generic_library
 from identification.library.prior_knowledge import prior_knowledge_library
-from identification.model import load_model
+from identification.model import load_model, model_to_dict
 from identification.regression.oracle import fit_base_parameters
 from tests.helpers import lynxmotion_motion
 
@@ -71,7 +71,7 @@ def test_symbolic_torque_matches_numeric_and_pinocchio(clean, tmp_path):
     m, tau, pm = clean
     result = identify(m.q, m.qd, m.qdd, tau, prior_knowledge_library(3), holdout=0.25)
     path = tmp_path / "model.json"
-    path.write_text(json.dumps(result.model.to_dict()))
+    path.write_text(json.dumps(model_to_dict(result.model)))
     model = load_model(path)
     q, qd, qdd = (casadi.SX.sym(n, 3) for n in ("q", "qd", "qdd"))
     f = casadi.Function("f", [q, qd, qdd], [model.symbolic_torque(q, qd, qdd)])

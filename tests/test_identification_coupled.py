@@ -16,7 +16,7 @@ from harness.robots.registry import load_pinocchio
 from identification.errors import IdentificationError
 from identification.identify import identify
 from identification.library.prior_knowledge import absolute_chain_atoms, arm_atoms, prior_knowledge_library
-from identification.model import load_model
+from identification.model import load_model, model_to_dict
 from identification.regression.coupled import AtomBasis, CoupledRegression, base_atoms
 from identification.regression.oracle import fit_base_parameters
 from tests.helpers import lynxmotion_motion
@@ -113,7 +113,7 @@ def test_coupled_model_round_trips_through_model_json(clean, tmp_path):
     m, tau, _ = clean
     result = identify(m.q, m.qd, m.qdd, tau, prior_knowledge_library(3), holdout=0.25)
     path = tmp_path / "model.json"
-    path.write_text(json.dumps(result.model.to_dict()))
+    path.write_text(json.dumps(model_to_dict(result.model)))
     model = load_model(path)
     assert model.method == "coupled"
     np.testing.assert_allclose(model.torque(m.q, m.qd, m.qdd), tau, atol=1e-9)

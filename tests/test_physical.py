@@ -17,11 +17,12 @@ from harness.experiments.identification import perturbed_nominal, sines_motion
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from harness.robots.torque_models import robot_library
-from identification.consistent import identify_consistent
 from identification.friction import FrictionLaw, choose_law
-from identification.kinematic_model import KinematicModel
+from identification.identify import identify
 from identification.metrics import rel_error
+from identification.model import model_from_dict, model_to_dict
 from identification.physical import fit_physical, min_pseudo_eigenvalues
+from identification.regression.consistent import ConsistentRegressor
 
 
 def test_pseudo_inertia_says_which_bodies_are_physical():
@@ -60,8 +61,8 @@ def test_a_wrong_nominal_is_not_followed_where_the_data_speak(lynx):
     library, base, judge = lynx
     data = generate("lynxmotion", 1500, 0.05, 3, "inverse")
     wrong = base.atom_parameters() * 1.3
-    result = identify_consistent(data.q, data.qd, data.qdd, data.tau, library, wrong, 0.25,
-                                 data.tau_clean)
+    result = identify(data.q, data.qd, data.qdd, data.tau, library, 0.25, data.tau_clean,
+                      ConsistentRegressor(wrong))
     assert result.physical["consistent"] and result.physical["prior"] == "nominal"
     judged = library.evaluate_every(judge.q, judge.qd, judge.qdd)
     ours = result.model.torque(judge.q, judge.qd, judge.qdd)
@@ -110,9 +111,9 @@ def test_friction_law_columns_agree_in_casadi_and_round_trip():
 def test_consistent_model_reads_back_from_model_json(lynx):
     library, base, judge = lynx
     data = generate("lynxmotion", 1500, 0.02, 5, "inverse")
-    model = identify_consistent(data.q, data.qd, data.qdd, data.tau, library,
-                                perturbed_nominal(base, 2), 0.25, data.tau_clean).model
-    back = KinematicModel.from_dict(model.to_dict(), library)
+    model = identify(data.q, data.qd, data.qdd, data.tau, library, 0.25, data.tau_clean,
+                     ConsistentRegressor(perturbed_nominal(base, 2))).model
+    back = model_from_dict(model_to_dict(model), lambda: library)
     np.testing.assert_allclose(back.torque(judge.q, judge.qd, judge.qdd),
                                model.torque(judge.q, judge.qd, judge.qdd), rtol=1e-12, atol=1e-12)
     assert back.laws == model.laws and back.method == "consistent"

@@ -8,13 +8,14 @@ import pytest
 
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_mujoco, load_pinocchio
-from planning.clearance import link_clearances, segment_distance
 from planning.config import PlannerConfig
-from planning.kinematics import paper_arm
-from planning.nlp import PlanningNLP
-from planning.obstacle import LinearObstacle, predict_linear
-from planning.solver import ObstacleForecast, Planner
-from planning.trajectory import QuarticTrajectory
+from planning.formulation.clearance import link_clearances, segment_distance
+from planning.formulation.kinematics import paper_arm
+from planning.formulation.nlp import PlanningNLP
+from planning.formulation.obstacle import LinearObstacle, predict_linear
+from planning.formulation.trajectory import QuarticTrajectory
+from planning.penalty.solver import Planner
+from planning.types import ObstacleForecast
 from tests.helpers import central_difference as _central_difference
 
 RNG = np.random.default_rng(7)
@@ -112,7 +113,7 @@ def test_constraint_jacobian_matches_finite_differences(nlp_functions):
 
 @pytest.mark.parametrize("order", [1, 2])
 def test_goal_limit_quotient_is_polynomial_division(order):
-    from planning.limits import quotient
+    from planning.formulation.limits import quotient
 
     c = RNG.normal(size=5)
     if order == 2:  # arrive at rest: q'(1) = 0

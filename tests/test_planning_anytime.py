@@ -1,4 +1,4 @@
-"""The anytime elastic SQP (planning.sqp, planning.anytime) against IPOPT on the very same NLP,
+"""The anytime elastic SQP (planning.anytime.sqp, planning.anytime) against IPOPT on the very same NLP,
 its compiled safety checks against the numpy ones, its minimum-violation answer, its budget,
 and Algorithm 2 planned with it (speed is measured by the realtime study, never here)."""
 
@@ -12,23 +12,23 @@ import pytest
 
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from planning import elastic_qp, local_model, sqp
-from planning.anytime import MIN_VIOLATION
-from planning.clearance import link_clearances
+from planning.anytime import elastic_qp, local_model, sqp
+from planning.anytime.planner import AnytimePlanner
+from planning.anytime.safety import SafetyCheck
+from planning.anytime.solver import MIN_VIOLATION, Anytime
 from planning.config import Scenario, true_energy_config
-from planning.energy import dense_energy
-from planning.limits import limit_excess
-from planning.nlp import PlanningNLP
-from planning.obstacle import LinearObstacle
-from planning.realtime_iteration import ITERATE
+from planning.formulation.clearance import link_clearances
+from planning.formulation.energy import dense_energy
+from planning.formulation.limits import limit_excess
+from planning.formulation.nlp import PlanningNLP
+from planning.formulation.obstacle import LinearObstacle
+from planning.formulation.trajectory import PolynomialTrajectory
+from planning.penalty.solver import Planner
 from planning.replanning import execute
 from planning.result import evaluate
-from planning.safety import SafetyCheck
-from planning.segments import anytime_of
-from planning.solver import ObstacleForecast, Planner
 from planning.starts import start_points
-from planning.trajectory import PolynomialTrajectory
-from tests.helpers import random_crossing
+from planning.types import ITERATE, ObstacleForecast, Segment
+from tests.helpers import random_crossing, segments
 
 IPOPT = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "ipopt.tol": 1e-10,
          "ipopt.constr_viol_tol": 1e-10}
@@ -41,7 +41,7 @@ def baseline():
 
 @pytest.fixture(scope="module")
 def planner(baseline):
-    return Planner(baseline, true_energy_config(replanner="sqp", compile_code=False,
+    return Planner(baseline, true_energy_config(replanner="anytime", compile_code=False,
                                                 torque_limit=None))
 
 
@@ -58,7 +58,7 @@ def _elastic_problem(planner, case, forecast):
     near = near[np.round(np.linspace(0, len(near) - 1, config.obstacle_slots)).astype(int)]
     subset = ObstacleForecast(forecast.times[near], forecast.centres[near])
     p = planner.parameters(case.start, case.start_velocity, case.duration, goal, subset, 0.0,
-                           reference, config.elastic_weight)
+                           reference, config.anytime.elastic_weight)
     lbg, ubg = planner.bounds(goal, nlp)
     start = np.concatenate([x0[: local_model.layout_of(nlp).nc], np.zeros(nlp.x.numel()
                                                                     - local_model.layout_of(nlp).nc)])
@@ -93,7 +93,7 @@ def test_the_anytime_sqp_reaches_ipopts_optimum_of_the_same_nlp(planner, monkeyp
 
 @pytest.mark.parametrize("radius", [0.05, 0.5, 5.0])
 def test_the_qp_with_slacks_held_is_the_full_elastic_qp(planner, monkeypatch, radius):
-    """planning.elastic_qp.step with the slacks whose branch the step cannot change out of
+    """planning.anytime.elastic_qp.step with the slacks whose branch the step cannot change out of
     the QP (power samples' |P| linearized by their signs, clearance rows that stay clear
     dropped, those that stay violated linearized) gives the step, the multipliers of rows
     and variables and the model decrease of the QP with every slack and row in it (HOLD so
@@ -226,7 +226,7 @@ def test_the_local_derivatives_through_the_sites_are_casadis_through_the_rows(ro
     (torque sites at the energy nodes, the start and the obstacle samples)."""
     from harness.robots.arm import planner_config
 
-    config = planner_config(robot, replanner="sqp", compile_code=False)
+    config = planner_config(robot, replanner="anytime", compile_code=False)
     assert config.torque_limit is not None
     model = PinocchioModel(load_pinocchio(robot))
     nlp = PlanningNLP(model, config, (0,), elastic=True)
@@ -264,9 +264,9 @@ def test_the_local_derivatives_through_the_sites_are_casadis_through_the_rows(ro
 
 
 def test_compiled_safety_checks_match_the_numpy_ones(baseline):
-    """Clearance at each sample (planning.clearance), the limit excess with its turning
-    points (planning.limits), the torque excess (Planner.torque_excess) and the dense energy
-    (planning.energy, same trapezoid points) on random motions."""
+    """Clearance at each sample (planning.formulation.clearance), the limit excess with its turning
+    points (planning.formulation.limits), the torque excess (Planner.torque_excess) and the dense energy
+    (planning.formulation.energy, same trapezoid points) on random motions."""
     config = true_energy_config()
     check, planner = SafetyCheck(baseline, config, compile_code=False), Planner(baseline, config)
     rng = np.random.default_rng(4)
@@ -294,9 +294,9 @@ def test_a_forecast_no_motion_can_clear_gets_the_minimum_violation_plan(planner)
     case = dataclasses.replace(Scenario(), obstacle=LinearObstacle(centre, centre, 2.0))
     times = case.obstacle.sample_times
     forecast = ObstacleForecast(times, case.obstacle.position(times))
-    anytime = anytime_of(planner)
+    anytime = Anytime(planner.model, planner.config)
     anytime.prepare(goal)
-    plan, _, _ = anytime.plan(case.start, case.start_velocity, 0.0, 2.0, goal, forecast,
+    plan, _, _ = anytime.solve(case.start, case.start_velocity, 0.0, 2.0, goal, forecast,
                               budget_ms=1e5)
     assert plan.success and MIN_VIOLATION in plan.status
     lowest = link_clearances(planner.config.geometry, plan.trajectory.position(times),
@@ -312,11 +312,11 @@ def test_a_forecast_no_motion_can_clear_gets_the_minimum_violation_plan(planner)
 def test_iterates_whose_own_rows_miss_the_threshold_are_passed_over_soundly(planner,
                                                                            monkeypatch):
     """The choice passes over an iterate whose clearance slacks already miss the threshold
-    (planning.candidates.misses) once the best so far is within the hard limits: on the
+    (planning.anytime.candidates.misses) once the best so far is within the hard limits: on the
     minimum-violation plan of an obstacle no motion can clear, every choice is the one that
     checks every iterate in full, and some iterates were passed over."""
-    from planning import anytime as module
-    from planning import candidates
+    from planning.anytime import candidates
+    from planning.anytime import solver as module
 
     goal = Scenario().goal
     end = planner.config.geometry.points(np.asarray([goal]))[0]
@@ -342,10 +342,10 @@ def test_iterates_whose_own_rows_miss_the_threshold_are_passed_over_soundly(plan
 
     monkeypatch.setattr(candidates, "misses", counted)
     monkeypatch.setattr(module, "choose", recorded)
-    anytime = anytime_of(planner)
+    anytime = Anytime(planner.model, planner.config)
     anytime.prepare(goal)
     calls.clear()
-    plan, _, _ = anytime.plan(Scenario().start, Scenario().start_velocity, 0.0, 2.0, goal,
+    plan, _, _ = anytime.solve(Scenario().start, Scenario().start_velocity, 0.0, 2.0, goal,
                               forecast, budget_ms=1e5)
     assert MIN_VIOLATION in plan.status and calls and any(passed)
     for chosen, full in calls:
@@ -353,38 +353,41 @@ def test_iterates_whose_own_rows_miss_the_threshold_are_passed_over_soundly(plan
 
 
 def test_no_garbage_collection_runs_inside_a_plan(planner):
-    """planning.budget.collection_deferred: with the collector set to run at nearly every
-    allocation, a cold plan and a warm re-plan (plan_segment) see no collection inside them,
-    and the collector is on again after each (collections then run between plans)."""
+    """planning.timing.collection_deferred: with the collector set to run at nearly every
+    allocation, a cold plan and a warm re-plan (AnytimePlanner.plan) see no collection in
+    their solves, and the collector is on again after each (collections then run between
+    plans)."""
     import gc
 
-    from planning.segments import plan_segment
-
     case, forecast = random_crossing(planner, seed=5)
-    anytime_of(planner).prepare(case.goal)
+    segments = AnytimePlanner(planner.model, planner.config)
+    segments.prepare(case.goal)
+    problem = Segment(case.start, case.start_velocity, 0.0, case.duration, case.goal, forecast)
     inside, collections = [False], []
 
     def watch(phase, info):
         if phase == "start":
             collections.append(inside[0])
 
-    def planned(*args, **kwargs):
+    solve = segments.anytime.solve  # a plan's work: inside the plan, past its entry
+
+    def solving(*args, **kwargs):
         inside[0] = True
         try:
-            return plan_segment(*args, **kwargs)
+            return solve(*args, **kwargs)
         finally:
             inside[0] = False
+
+    segments.anytime.solve = solving
 
     threshold = gc.get_threshold()
     gc.callbacks.append(watch)
     gc.set_threshold(1)
     try:
-        cold, _, _ = planned(planner, case.start, case.start_velocity, 0.0, case.duration,
-                             case.goal, forecast)
+        cold = segments.plan(problem)
         assert gc.isenabled()
-        [].append([])  # allocations between plans: collections run here
-        warm, _, _ = planned(planner, case.start, case.start_velocity, 0.0, case.duration,
-                             case.goal, forecast, warm=cold)
+        _ = [[] for _ in range(1000)]  # allocations between plans: collections run here
+        warm = segments.plan(problem, warm=cold)
         assert gc.isenabled()
     finally:
         gc.set_threshold(*threshold)
@@ -397,10 +400,10 @@ def test_a_plan_out_of_budget_returns_its_best_iterate(planner):
     """With no CPU to spend the plan is its start (the best, and only, iterate checked),
     status ITERATE (Algorithm 2 goes on from it at the next sample)."""
     case, forecast = random_crossing(planner, seed=5)
-    anytime = anytime_of(planner)
+    anytime = Anytime(planner.model, planner.config)
     anytime.prepare(case.goal)
     x0 = planner.initial_guess(case.start, case.start_velocity, case.duration, case.goal)
-    plan, _, _ = anytime.plan(case.start, case.start_velocity, 0.0, case.duration, case.goal,
+    plan, _, _ = anytime.solve(case.start, case.start_velocity, 0.0, case.duration, case.goal,
                               forecast, x0=x0, budget_ms=0.0)
     assert plan.status.startswith(ITERATE) and plan.iterations == 0
     start = planner.trajectory(x0, case.start, case.start_velocity, 0.0, case.duration)
@@ -413,7 +416,7 @@ def test_a_solve_keeps_the_choices_cpu_for_every_iterate_it_accepts(planner, mon
     1.5 ms for each accepted iterate (and the one an iteration may add) stops before the
     solve that keeps none, and no iteration of it began without room for its own tick and
     the reserve of every point accepted so far plus one."""
-    from planning.budget import Clock
+    from planning.anytime.budget import Clock
 
     case, forecast = random_crossing(planner, seed=7)
     nlp, p, lbg, ubg, start = _elastic_problem(planner, case, forecast)
@@ -445,21 +448,22 @@ def test_a_solve_keeps_the_choices_cpu_for_every_iterate_it_accepts(planner, mon
     assert runs[1.5] < runs[0.0]
 
 def test_a_budget_counted_in_iterations_gives_the_same_plan_under_any_load(baseline):
-    """PlannerConfig.iteration_ms: a cold plan of a random crossing with 6 nominal ms at 1 ms
+    """AnytimeOptions.iteration_ms: a cold plan of a random crossing with 6 nominal ms at 1 ms
     an iteration (2 for the plan's round, 1 for each second-order correction) takes at most 4
     iterations, stops there unconverged, and gives the same plan again while another thread
     keeps the process busy."""
     import threading
 
-    config = true_energy_config(compile_code=False, torque_limit=None, iteration_ms=1.0)
+    config = true_energy_config(compile_code=False, torque_limit=None).with_anytime(
+        iteration_ms=1.0)
     planner = Planner(baseline, config)
     case, forecast = random_crossing(planner, seed=7)
-    anytime = anytime_of(planner)
+    anytime = Anytime(planner.model, planner.config)
     anytime.prepare(case.goal)
     x0 = planner.initial_guess(case.start, case.start_velocity, case.duration, case.goal)
 
     def plan():
-        return anytime.plan(case.start, case.start_velocity, 0.0, case.duration, case.goal,
+        return anytime.solve(case.start, case.start_velocity, 0.0, case.duration, case.goal,
                             forecast, x0=x0, budget_ms=6.0)[0]
 
     quiet = plan()
@@ -485,9 +489,9 @@ def test_a_cold_start_off_the_rest_rows_is_restored(planner):
     x0 = start_points(planner, case.start, case.start_velocity, case.duration, case.goal, 2)[1]
     bumped = planner.trajectory(x0, case.start, case.start_velocity, 0.0, case.duration)
     assert np.abs(bumped.state(case.duration)[1]).max() > 1e-2
-    anytime = anytime_of(planner)
+    anytime = Anytime(planner.model, planner.config)
     anytime.prepare(case.goal)
-    plan, _, _ = anytime.plan(case.start, case.start_velocity, 0.0, case.duration, case.goal,
+    plan, _, _ = anytime.solve(case.start, case.start_velocity, 0.0, case.duration, case.goal,
                               forecast, x0=x0, budget_ms=0.0)
     assert plan.success and plan.iterations == 0
     q, qd, _ = plan.trajectory.state(case.duration)
@@ -501,10 +505,10 @@ def test_algorithm_2_with_the_anytime_sqp_keeps_the_threshold(baseline):
     loop's (fatrop) execution of the same scenario."""
     config = true_energy_config(compile_code=False)
     planners = {name: Planner(baseline, dataclasses.replace(config, replanner=name))
-                for name in ("sqp", "fatrop")}
-    case, _ = random_crossing(planners["fatrop"], seed=3)
-    results = {name: evaluate(execute(planner, case), case, baseline, planner.config)
+                for name in ("anytime", "penalty")}
+    case, _ = random_crossing(planners["penalty"], seed=3)
+    results = {name: evaluate(execute(segments(planner), case), case, baseline, planner.config)
                for name, planner in planners.items()}
-    assert results["sqp"].feasible, results["sqp"].problems
-    assert len(results["sqp"].execution.segments) > 1  # it re-planned
-    assert results["sqp"].energy <= 1.02 * results["fatrop"].energy
+    assert results["anytime"].feasible, results["anytime"].problems
+    assert len(results["anytime"].execution.segments) > 1  # it re-planned
+    assert results["anytime"].energy <= 1.02 * results["penalty"].energy

@@ -12,15 +12,15 @@ from scipy.optimize import brentq
 
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from planning.breaks import power_breaks, settled, sign_changes
-from planning.config import PlannerConfig
-from planning.energy import dense_energy, power
-from planning.quadrature import energy_nodes, split_nodes
-from planning.replanning import plan_multistart, plan_segment
+from planning.config import PenaltyOptions, PlannerConfig
+from planning.formulation.breaks import power_breaks, settled, sign_changes
+from planning.formulation.energy import dense_energy, power
+from planning.formulation.quadrature import energy_nodes, split_nodes
+from planning.formulation.trajectory import PolynomialTrajectory
+from planning.penalty.loop import plan_multistart, plan_segment
+from planning.penalty.solver import Planner
 from planning.scenarios import paper_scenario
-from planning.solver import Planner
 from planning.starts import rank
-from planning.trajectory import PolynomialTrajectory
 from tests.helpers import random_crossing
 
 
@@ -111,7 +111,7 @@ def test_plan_command_with_the_split_quadrature(tmp_path, capsys):
 
 
 def test_dense_energy_matches_an_adaptive_integral_across_the_kinks(baseline):
-    """planning.energy.dense_energy (513 even points) against scipy's adaptive quad split
+    """planning.formulation.energy.dense_energy (513 even points) against scipy's adaptive quad split
     at brentq roots of the power: within 2e-4 relative on a motion with three kinks (1.2e-4
     measured), far finer than the 0.5 % that separate the plans it ranks."""
     motion = _motion()
@@ -131,12 +131,13 @@ def test_dense_energy_matches_an_adaptive_integral_across_the_kinks(baseline):
 
 
 def test_polished_cold_plan_spends_less_and_replans_warm_from_it(baseline):
-    """config.polish: the best cold plan re-solved with the split rule at 40 nodes. On a
+    """config.penalty.polish: the best cold plan re-solved with the split rule at 40 nodes. On a
     random crossing (seed 2, the obstacle's path known) the kept plan is the polished one,
     it spends less than the best unpolished plan (dense integral, 0.4 % measured) and
     prices its own energy; a re-plan of the Gauss planner starts warm from it (from its
     motion: the multipliers are another NLP's)."""
-    config = PlannerConfig(energy_quadrature="gauss", energy_samples=20, starts=2, polish=1)
+    config = PlannerConfig(energy_quadrature="gauss", energy_samples=20, starts=2,
+                           penalty=PenaltyOptions(polish=1))
     planner = Planner(baseline, config)
     case, forecast = random_crossing(planner, 2)
     args = (case.start, case.start_velocity, 0.0, case.duration, case.goal)

@@ -9,7 +9,7 @@ import numpy as np
 from harness.cli import main
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from planning.energy import absolute_energy
+from planning.formulation.energy import absolute_energy
 
 
 def test_identified_plan_energy_matches_pinocchio_plan(tmp_path):

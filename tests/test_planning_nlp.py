@@ -6,11 +6,11 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-import planning.nlp as nlp_module
+import planning.formulation.nlp as nlp_module
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from planning.config import true_energy_config
-from planning.nlp import PlanningNLP
+from planning.formulation.nlp import PlanningNLP
 
 
 def _derivatives(nlp: PlanningNLP) -> ca.Function:
@@ -44,11 +44,11 @@ def test_called_torque_model_is_the_inlined_one(monkeypatch):
 def test_goal_limit_rows_are_built_only_where_the_goal_is_on_a_limit():
     """A goal inside the limits is solved without the (free) goal-limit rows: the same
     optimum as the NLP with every row; a goal on a limit gets that joint's rows."""
-    from planning.config import PlannerConfig
-    from planning.solver import Planner
+    from planning.config import PenaltyOptions, PlannerConfig
+    from planning.penalty.solver import Planner
 
     model = PinocchioModel(load_pinocchio("lynxmotion"))
-    planner = Planner(model, PlannerConfig(solver="ipopt"))
+    planner = Planner(model, PlannerConfig(penalty=PenaltyOptions(solver="ipopt")))
     start, goal = (1.0, 0.6, -0.8), (-0.5, 1.2, -1.4)
     plan = planner.solve(start, (0.0, 0.0, 0.0), 2.0, goal)
     pruned = planner._relaxed_for(goal).nlp

@@ -10,16 +10,22 @@ import pinocchio as pin
 import pytest
 from scipy.integrate import quad
 
+from harness.paper.planning.baselines import MinimumJerk
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from planning.baselines import MinimumJerk
 from planning.config import PlannerConfig
-from planning.energy import absolute_energy, net_work, power
-from planning.obstacle import SwayingObstacle, predict_linear
-from planning.quadrature import energy_nodes
+from planning.formulation.energy import absolute_energy, net_work, power
+from planning.formulation.obstacle import SwayingObstacle, predict_linear
+from planning.formulation.quadrature import energy_nodes
+from planning.formulation.trajectory import (
+    PolynomialTrajectory,
+    hermite,
+    stationary_points,
+    stationary_points_rows,
+)
+from planning.penalty.solver import Planner
 from planning.result import executed_energy, sample_execution
-from planning.solver import ObstacleForecast, Planner
-from planning.trajectory import PolynomialTrajectory, hermite, stationary_points, stationary_points_rows
+from planning.types import ObstacleForecast
 from tests.helpers import central_difference as _central_difference
 
 RNG = np.random.default_rng(7)

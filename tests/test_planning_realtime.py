@@ -9,22 +9,25 @@ import casadi as ca
 import numpy as np
 import pytest
 
+from harness.paper.planning.speed import measure
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from planning import backends, compiled, replanning
-from planning.clearance import link_clearances
-from planning.config import PlannerConfig, Scenario
-from planning.limits import LIMIT_TOLERANCE, limit_excess
-from planning.realtime_iteration import ITERATE
-from planning.replanning import DEADLINE, LATE, execute, forecast_at, plan_multistart, plan_segment
+from planning.config import PenaltyOptions, PlannerConfig, Scenario
+from planning.formulation import compiled
+from planning.formulation.clearance import link_clearances
+from planning.formulation.limits import LIMIT_TOLERANCE, limit_excess
+from planning.formulation.screening import screen
+from planning.formulation.trajectory import PolynomialTrajectory
+from planning.penalty import backends
+from planning.penalty.loop import plan_multistart, plan_segment
+from planning.penalty.planner import PenaltyLoop
+from planning.penalty.solver import Planner
+from planning.replanning import execute, forecast_at
 from planning.result import evaluate
 from planning.scenarios import random_scenarios, swaying_scenario
-from planning.screening import screen
-from planning.solver import Planner
-from planning.speed import measure
 from planning.starts import start_points
-from planning.trajectory import PolynomialTrajectory
-from tests.helpers import random_crossing
+from planning.types import DEADLINE, ITERATE, LATE
+from tests.helpers import random_crossing, segments
 
 
 @pytest.fixture(scope="module")
@@ -92,7 +95,7 @@ def test_sqpmethod_status_comes_from_the_kkt_conditions_of_its_point(capfd):
 def test_fatrop_and_ipopt_find_the_same_optimum(baseline):
     scenario = Scenario()
     args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
-    plans = {name: Planner(baseline, PlannerConfig(solver=name)).solve(*args)
+    plans = {name: Planner(baseline, PlannerConfig(penalty=PenaltyOptions(solver=name))).solve(*args)
              for name in ("fatrop", "ipopt")}
     assert all(plan.success for plan in plans.values())
     fatrop, ipopt = plans["fatrop"], plans["ipopt"]
@@ -128,7 +131,7 @@ def test_a_replan_past_its_deadline_is_dropped_and_counted(baseline):
                                 forecast_at(scenario.obstacle, t), warm=first, deadline_ms=1e-6)
     assert not late.success and late.status.startswith(DEADLINE) and cpu > 1e-6
     assert late.status == DEADLINE + LATE  # its last solve converged, after the deadline
-    run = execute(planner, scenario)
+    run = execute(segments(planner), scenario)
     assert len(run.segments) == 1 and run.replan_failures  # every re-plan came too late
     assert all(status.startswith(DEADLINE) for status in run.replan_failures)
     assert len(run.solve_cpu_ms) == len(run.solve_ms) == 1 + len(run.replan_failures)
@@ -138,17 +141,18 @@ def test_a_late_but_converged_replan_is_the_next_warm_start(baseline, monkeypatc
     """The arm keeps following its last plan, but the next re-plan starts from the newest
     converged solution (Algorithm 2 in real time: late work is not thrown away)."""
     planner = Planner(baseline, PlannerConfig(replan_deadline_ms=1e-6))
-    calls, real = [], replanning.plan_segment
+    loop = PenaltyLoop(planner)
+    calls, real = [], loop.plan
 
-    def recording(*args, warm=None, **kwargs):
-        result = real(*args, warm=warm, **kwargs)
-        calls.append((warm, result[0]))
+    def recording(problem, warm=None):
+        result = real(problem, warm)
+        calls.append((warm, result))
         return result
 
     free = planner.solve(Scenario().start, (0.0,) * 3, 2.0, Scenario().goal).trajectory
     scenario = swaying_scenario(free, planner.config.geometry)  # every forecast is new
-    monkeypatch.setattr(replanning, "plan_segment", recording)
-    run = execute(planner, scenario)
+    monkeypatch.setattr(loop, "plan", recording)
+    run = execute(loop, scenario)
     replans = [(warm, result) for warm, result in calls if warm is not None]
     latest = run.segments[0]
     assert len(run.segments) == 1 and replans
@@ -190,7 +194,7 @@ def test_a_warm_solve_the_fast_solver_cannot_finish_is_rescued_by_ipopt(baseline
     """fatrop capped at one iteration cannot converge a re-plan; IPOPT, warm-started from the
     same point, finishes it (the same optimum as an uncapped fatrop solve)."""
     scenario = Scenario()
-    capped = Planner(baseline, PlannerConfig(warm_max_iterations=1))
+    capped = Planner(baseline, PlannerConfig(penalty=PenaltyOptions(warm_max_iterations=1)))
     full = Planner(baseline, PlannerConfig())
     first, _, _ = plan_segment(full, scenario.start, scenario.start_velocity, 0.0,
                                scenario.duration, scenario.goal, forecast_at(scenario.obstacle, 0.0))
@@ -208,7 +212,7 @@ def test_a_warm_solve_the_fast_solver_cannot_finish_is_rescued_by_ipopt(baseline
         <= 1e-5 * (reference.energy + reference.penalty)
     # ... but not a re-plan under a deadline (rescue=False), warm or from a cold start: its
     # answer would come too late; fatrop's unfinished solve is returned unsuccessful
-    late = Planner(baseline, PlannerConfig(warm_max_iterations=1, max_iterations=1))
+    late = Planner(baseline, PlannerConfig(penalty=PenaltyOptions(warm_max_iterations=1, max_iterations=1)))
     for warm in (first, None):
         dropped = late.solve(*args, warm=warm, reference=reference_path, rescue=False)
         assert not dropped.success and dropped.status != "Solve_Succeeded"
@@ -239,7 +243,7 @@ def test_each_start_point_reaches_a_plan_of_its_own(baseline):
 
 def test_replan_timing_breaks_down_into_the_solver_and_the_rest(baseline):
     """Re-plan times are end to end; the solver calls (Planner.solver_ms) are part of them."""
-    timings, _ = measure(Planner(baseline), Scenario(), cold_repeats=1, stride=40)
+    timings, _ = measure(segments(Planner(baseline)), Scenario(), cold_repeats=1, stride=40)
     replans, solver = np.asarray(timings.replan_ms), np.asarray(timings.replan_solver_ms)
     assert len(replans) == len(solver) > 0
     assert np.all(solver > 0) and np.all(solver <= replans)
@@ -266,7 +270,7 @@ def test_a_warm_plan_its_rounds_leave_beyond_a_joint_limit_is_not_successful(bas
 
 
 def test_feasible_sqp_reaches_ipopts_optimum_from_a_feasible_start_and_prints_nothing(capfd):
-    """CasADi's feasiblesqpmethod (planning.backends "feasiblesqp") on the constrained
+    """CasADi's feasiblesqpmethod (planning.penalty.backends "feasiblesqp") on the constrained
     Rosenbrock, from a feasible start: IPOPT's optimum; capped at 1, 3 and 8 iterations,
     iterates that keep the constraint and here cost no more than the start or the iterate of
     a lower cap (its trust region shrinks at first, so the first step may be refused; on
@@ -299,7 +303,7 @@ def test_a_real_time_iteration_is_followed_only_where_it_is_feasible_and_cheaper
     keeps the limits, and its objective lies between the start's and the converged re-plan's.
     The same re-plan without `iterate` is solved out."""
     scenario = Scenario()
-    planner = Planner(baseline, PlannerConfig(replan_iterations=1))
+    planner = Planner(baseline, PlannerConfig(penalty=PenaltyOptions(replan_iterations=1)))
     first, _, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0,
                                scenario.duration, scenario.goal,
                                forecast_at(scenario.obstacle, 0.0))
@@ -334,9 +338,9 @@ def test_algorithm_2_with_real_time_iterations_follows_iterates_and_stays_feasib
     segments iterates)."""
     runs = {}
     for iterations in (None, 1):
-        planner = Planner(baseline, PlannerConfig(replan_iterations=iterations))
+        planner = Planner(baseline, PlannerConfig(penalty=PenaltyOptions(replan_iterations=iterations)))
         case, _ = random_crossing(planner, 4)
-        run = execute(planner, case)
+        run = execute(segments(planner), case)
         runs[iterations] = (run, evaluate(run, case, baseline, planner.config))
     iterated, result = runs[1]
     assert result.feasible, result.problems
@@ -355,13 +359,14 @@ def test_cold_plans_settling_and_polishing_never_stop_at_an_iterate(baseline):
     (rounds, penalty growth, polishing with the split rule) are solved out, and the
     polisher and the IPOPT rescuer build no feasible SQP."""
     scenario = Scenario()
-    planner = Planner(baseline, PlannerConfig(replan_iterations=1, polish=1, polish_samples=16))
+    planner = Planner(baseline, PlannerConfig(penalty=PenaltyOptions(
+        replan_iterations=1, polish=1, polish_samples=16)))
     plan, _, _, plans = plan_multistart(planner, scenario.start, scenario.start_velocity, 0.0,
                                         scenario.duration, scenario.goal,
                                         forecast_at(scenario.obstacle, 0.0))
     assert plan.success and plan.status != ITERATE
     assert all(p.status != ITERATE for p in plans)
-    assert planner.polisher.config.replan_iterations is None
+    assert planner.polisher.config.penalty.replan_iterations is None
     assert all(s.iterate is None for s in planner.polisher._relaxed.values())
     assert all(s.iterate is None for s in planner._rescue.values())
     again, _, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0,
@@ -369,6 +374,6 @@ def test_cold_plans_settling_and_polishing_never_stop_at_an_iterate(baseline):
                                forecast_at(scenario.obstacle, 0.0), warm=plan)
     assert again.status != ITERATE  # a warm plan_segment call outside Algorithm 2
     with pytest.raises(ValueError, match="replan_iterations"):
-        Planner(baseline, PlannerConfig(replan_iterations=0))
+        Planner(baseline, PlannerConfig(penalty=PenaltyOptions(replan_iterations=0)))
     with pytest.raises(ValueError, match="solver must be one of"):
-        Planner(baseline, PlannerConfig(solver="feasiblesqp"))
+        Planner(baseline, PlannerConfig(penalty=PenaltyOptions(solver="feasiblesqp")))

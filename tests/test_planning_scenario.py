@@ -11,13 +11,13 @@ import pytest
 from harness.cli import main
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from planning.config import PlannerConfig, Scenario
-from planning.energy import absolute_energy
+from planning.config import PenaltyOptions, PlannerConfig, Scenario
 from planning.errors import PlanningError
+from planning.formulation.energy import absolute_energy
+from planning.penalty.solver import Planner
 from planning.replanning import execute
 from planning.result import evaluate
-from planning.solver import Planner
-from tests.helpers import perturbed_model
+from tests.helpers import perturbed_model, segments
 
 
 @pytest.fixture(scope="module")
@@ -29,8 +29,8 @@ def baseline():
 def paper(baseline):
     planner = Planner(baseline)
     scenario = Scenario()
-    free = evaluate(execute(planner, scenario, avoid=False), scenario, baseline, planner.config)
-    avoided = evaluate(execute(planner, scenario), scenario, baseline, planner.config)
+    free = evaluate(execute(segments(planner), scenario, avoid=False), scenario, baseline, planner.config)
+    avoided = evaluate(execute(segments(planner), scenario), scenario, baseline, planner.config)
     return planner, scenario, free, avoided
 
 
@@ -62,7 +62,7 @@ def test_stand_in_model_energy_close_to_baseline(paper, baseline):
     keeps the clearance."""
     planner, scenario, _, reference = paper
     model = perturbed_model()
-    result = evaluate(execute(Planner(model), scenario), scenario, model, planner.config)
+    result = evaluate(execute(segments(Planner(model)), scenario), scenario, model, planner.config)
     assert result.feasible, result.problems
     assert np.max(np.abs(result.q - reference.q)) > 1e-3  # another plan, not the same one
     energy = absolute_energy(baseline, result.t, result.q, result.qd, result.qdd)
@@ -78,21 +78,22 @@ def test_stand_in_model_energy_close_to_baseline(paper, baseline):
 def test_bad_input_is_an_error(baseline, change, message):
     scenario = dataclasses.replace(Scenario(obstacle=None), **change)
     with pytest.raises(PlanningError, match=message):
-        execute(Planner(baseline), scenario)
+        execute(segments(Planner(baseline)), scenario)
 
 
 def test_start_inside_threshold_is_an_error(paper):
     planner, scenario, _, _ = paper
     obstacle = dataclasses.replace(scenario.obstacle, start=(0.0, 0.15, 0.2))
     with pytest.raises(PlanningError, match="inside the obstacle threshold"):
-        execute(planner, dataclasses.replace(scenario, obstacle=obstacle))
+        execute(segments(planner), dataclasses.replace(scenario, obstacle=obstacle))
 
 
 def test_solver_failure_is_flagged(baseline):
     # no solve may finish: cold and warm capped, no IPOPT rescue (it has its own warm cap)
-    config = PlannerConfig(max_iterations=2, warm_max_iterations=2, solver="ipopt")
+    config = PlannerConfig(penalty=PenaltyOptions(max_iterations=2, warm_max_iterations=2,
+                                                   solver="ipopt"))
     scenario = Scenario()
-    result = evaluate(execute(Planner(baseline, config), scenario), scenario, baseline, config)
+    result = evaluate(execute(segments(Planner(baseline, config)), scenario), scenario, baseline, config)
     assert not result.feasible
     assert any("solver failed" in p for p in result.problems)
 
@@ -156,7 +157,7 @@ def test_obstacle_parked_on_the_goal_is_flagged(paper, baseline):
     tip = planner.config.geometry.flange_position(np.asarray([scenario.goal]))
     parked = dataclasses.replace(scenario.obstacle, start=tuple(tip[0]), end=tuple(tip[0]))
     blocked = dataclasses.replace(scenario, obstacle=parked)
-    result = evaluate(execute(planner, blocked), blocked, baseline, planner.config)
+    result = evaluate(execute(segments(planner), blocked), blocked, baseline, planner.config)
     assert not result.feasible
     assert any("clearance" in p for p in result.problems)
 
@@ -164,7 +165,8 @@ def test_obstacle_parked_on_the_goal_is_flagged(paper, baseline):
 def test_warm_replan_finds_the_cold_optimum(paper, baseline):
     """Warm starting changes the solve time, not the answer."""
     planner, scenario, _, avoided = paper
-    from planning.replanning import forecast_at, plan_segment
+    from planning.penalty.loop import plan_segment
+    from planning.replanning import forecast_at
 
     plan, t = avoided.execution.segments[-1], 0.5
     q, qd, _ = plan.trajectory.state(t)
@@ -181,7 +183,7 @@ def test_rest_at_goal_on_a_joint_limit(baseline):
     """The paper's goal has q1 on its lower limit; arriving at rest there stays inside."""
     config = PlannerConfig(rest_at_goal=True)
     scenario = Scenario()
-    result = evaluate(execute(Planner(baseline, config), scenario), scenario, baseline, config)
+    result = evaluate(execute(segments(Planner(baseline, config)), scenario), scenario, baseline, config)
     assert result.feasible, result.problems
     assert np.allclose(result.qd[-1], 0.0, atol=1e-8)
     assert result.limit_violation <= 1e-9
@@ -194,8 +196,8 @@ def test_crossing_obstacle_is_avoided_at_every_sample(paper, baseline):
 
     planner, _, free, _ = paper
     crossing = crossing_scenario(free.execution.segments[0].trajectory, planner.config.geometry)
-    blind = evaluate(execute(planner, crossing, avoid=False), crossing, baseline, planner.config)
-    result = evaluate(execute(planner, crossing), crossing, baseline, planner.config)
+    blind = evaluate(execute(segments(planner), crossing, avoid=False), crossing, baseline, planner.config)
+    result = evaluate(execute(segments(planner), crossing), crossing, baseline, planner.config)
     needed = blind.sample_clearance < planner.config.threshold
     assert needed.sum() > 20 and blind.sample_clearance.min() < 1e-6  # it really crosses
     assert result.feasible, result.problems
@@ -211,8 +213,8 @@ def test_penalty_weight_rises_until_the_threshold_holds(paper, baseline):
     crossing = crossing_scenario(free.execution.segments[0].trajectory, planner.config.geometry)
     results = {}
     for ceiling in (2.0, 2e5):
-        config = PlannerConfig(penalty_weight=2.0, max_penalty_weight=ceiling)
-        results[ceiling] = evaluate(execute(Planner(baseline, config), crossing), crossing,
+        config = PlannerConfig(penalty_weight=2.0, penalty=PenaltyOptions(max_weight=ceiling))
+        results[ceiling] = evaluate(execute(segments(Planner(baseline, config)), crossing), crossing,
                                     baseline, config)
     assert not results[2.0].feasible
     held = results[2e5]
@@ -233,8 +235,9 @@ def test_a_detour_the_obstacle_has_left_is_replanned(paper, baseline):
     """The first plan bends round the obstacle where it stands at t = 0; the obstacle then
     leaves upwards. The first plan stays clear (Algorithm 2 alone would follow it to the
     end), yet its detour is wasted energy: the planner re-plans and spends less."""
-    from planning.obstacle import LinearObstacle
-    from planning.replanning import _predicted_clearance, forecast_at
+    from planning.formulation.clearance import predicted_clearance
+    from planning.formulation.obstacle import LinearObstacle
+    from planning.replanning import forecast_at
 
     planner, scenario, free, _ = paper
     t_mid = 0.5 * scenario.duration
@@ -243,12 +246,13 @@ def test_a_detour_the_obstacle_has_left_is_replanned(paper, baseline):
     leaving = LinearObstacle(start=tuple(tip), end=tuple(tip + [0.0, 0.0, 1.5]),
                              duration=scenario.duration)
     case = dataclasses.replace(scenario, obstacle=leaving)
-    followed = execute(planner, case, replan=False)
+    followed = execute(segments(planner), case, replan=False)
     first = followed.segments[0]
     assert first.penalty > 0.0  # bent round the obstacle standing still
     moving = forecast_at(leaving, leaving.sample_times[0])
-    assert _predicted_clearance(planner, first, moving) > planner.config.threshold  # no threat
-    replanned = execute(planner, case)
+    assert predicted_clearance(planner.config.geometry, first.trajectory, moving) > \
+        planner.config.threshold  # no threat
+    replanned = execute(segments(planner), case)
     assert len(replanned.segments) >= 2
     energy = {name: evaluate(run, case, baseline, planner.config)
               for name, run in (("followed", followed), ("replanned", replanned))}

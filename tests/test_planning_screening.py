@@ -7,10 +7,11 @@ import pytest
 
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
-from planning.clearance import link_clearances
 from planning.config import PlannerConfig, Scenario
-from planning.screening import Screen, near_samples, screen, uncovered
-from planning.solver import ObstacleForecast, Planner
+from planning.formulation.clearance import link_clearances
+from planning.formulation.screening import Screen, near_samples, screen, uncovered
+from planning.penalty.solver import Planner
+from planning.types import ObstacleForecast
 
 
 def _screen(dips, gap):
@@ -98,7 +99,7 @@ def test_the_anytime_screen_covers_dips_per_link_and_within_the_thinning_gap():
 
 def test_thinning_is_numpys_even_rounding():
     # the compiled thinning against np.round(np.linspace(...)), halves included (26 of 23)
-    from planning.screening import _thinned
+    from planning.formulation.screening import _thinned
     for count in range(2, 120):
         for slots in range(0, count):
             expected = np.round(np.linspace(0, count - 1, slots)).astype(int)

@@ -16,10 +16,11 @@ from harness.robots.arm import motor_torque_limit
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_mujoco, load_pinocchio
 from planning.config import PlannerConfig, Scenario
+from planning.penalty.solver import Planner
 from planning.replanning import execute
 from planning.result import TORQUE_TOLERANCE, evaluate, to_json
 from planning.scenarios import swaying_scenario
-from planning.solver import Planner
+from tests.helpers import segments
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +30,7 @@ def baseline():
 
 def _plan(model, scenario, config=None, avoid=True):
     planner = Planner(model, config)
-    return evaluate(execute(planner, scenario, avoid=avoid), scenario, model, planner.config)
+    return evaluate(execute(segments(planner), scenario, avoid=avoid), scenario, model, planner.config)
 
 
 def _dense_peak(model, result) -> np.ndarray:
@@ -91,7 +92,7 @@ def swaying(baseline):
     planner = Planner(baseline)
     free = _plan(baseline, Scenario(), avoid=False)
     scenario = swaying_scenario(free.execution.segments[0].trajectory, planner.config.geometry)
-    result = evaluate(execute(planner, scenario), scenario, baseline, planner.config)
+    result = evaluate(execute(segments(planner), scenario), scenario, baseline, planner.config)
     return scenario, result, planner.config
 
 

@@ -15,7 +15,6 @@ from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from harness.sections.real_data.section import HOLDOUT, LOG, RATE, ROBOT, log_result
 
-
 pytestmark = pytest.mark.slow  # the section on the whole log: half a minute
 
 

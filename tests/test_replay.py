@@ -9,7 +9,7 @@ from harness.replay.reference import plan_reference
 from harness.replay.simulate import TrackingGains, replay
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import MODELS, load_mujoco, load_pinocchio
-from planning.clearance import segment_distance
+from planning.formulation.clearance import segment_distance
 
 Q0 = np.array([np.pi / 2, np.pi / 5, -np.pi / 4])
 Q_END = np.array([-np.pi / 2, 2 * np.pi / 5, -np.pi / 3])

@@ -66,7 +66,7 @@ class MeasuredRun:
                "structure_after": r.structure_after.tolist(), "noise_sigma": r.noise.tolist(),
                "validation_before": r.validation_before.tolist(),
                "validation_after": r.validation_after.tolist(),
-               "sensor_offsets": r.model.declared.offsets.tolist(),
+               "sensor_offsets": r.model.declared.bias.tolist(),
                "selection": {"path": [list(p) for p in r.path],
                              "not_named": [{"joint": j, "effect": e, "validation_gain": g,
                                             "reason": why} for j, e, g, why in r.not_named],

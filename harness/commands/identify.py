@@ -7,17 +7,12 @@ import warnings
 
 from harness.data.runs import join, load_runs, split_files
 from harness.io import write_json
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import DEFAULT_ROBOT, data_robot, load_pinocchio, robot_entry
-from harness.robots.torque_models import library_named, robot_record
-from identification.consistent import identify_consistent
+from harness.robots.registry import DEFAULT_ROBOT, data_robot
+from harness.robots.torque_models import robot_identification, robot_record
+from identification.choice import LIBRARIES, METHODS, PRIORS
 from identification.errors import IdentificationError
 from identification.identify import identify
-from identification.library.kinematic import KinematicLibrary
-
-LIBRARIES = ("auto", "kinematic", "prior", "prior-general", "paper", "generic")
-METHODS = ("auto", "coupled", "per-joint", "jointwise")
-PRIORS = ("auto", "nominal", "flat", "none")
+from identification.model import model_payload
 
 
 def register(sub) -> None:
@@ -58,37 +53,6 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-
-def choose_library(name: str, dof: int, robot: str = DEFAULT_ROBOT):
-    """The library called name ('auto': the first the robot's registry entry offers)."""
-    if name == "auto":
-        name = robot_entry(robot).libraries[0]
-    return library_named(name, robot, dof)
-
-
-def choose_prior(name: str, meta: dict, library) -> str:
-    """The prior `--prior` names ('auto': nominal on a measured log, else none); the consistent
-    fits need a robot's atoms (the kinematic library)."""
-    if name == "auto":
-        name = "nominal" if meta.get("mode") == "measured log" else "none"
-        if not isinstance(library, KinematicLibrary):
-            return "none"
-    if name != "none" and not isinstance(library, KinematicLibrary):
-        raise IdentificationError(f"--prior {name} fits the robot's atoms: use --library kinematic "
-                                  f"(not {library.name})")
-    return name
-
-
-def fit(data: dict, library, holdout: float, prior: str, robot: str, method: str):
-    """The Identification `prior` asks for (see --prior)."""
-    if prior == "none":
-        return identify(data["q"], data["qd"], data["qdd"], data["tau"], library, holdout,
-                        data.get("tau_clean"), method=None if method == "auto" else method)
-    nominal = PinocchioModel(load_pinocchio(robot)).atom_parameters() if prior == "nominal" else None
-    return identify_consistent(data["q"], data["qd"], data["qdd"], data["tau"], library, nominal,
-                               holdout, data.get("tau_clean"))
-
-
 def run(args) -> int:
     if not 0.0 < args.holdout < 1.0:  # 0 would score the training data as "held out"
         raise IdentificationError(f"--holdout must be in (0, 1), got {args.holdout}")
@@ -104,22 +68,18 @@ def run(args) -> int:
     data, meta = runs.arrays, runs.metas[0]
     dof = data["q"].shape[1]
     robot = data_robot(meta, args.robot)
-    library = choose_library("kinematic" if args.library == "auto" and args.prior in
-                             ("nominal", "flat") else args.library, dof, robot)
-    prior = choose_prior(args.prior, meta, library)
+    library, regressor = robot_identification(robot, dof, args.library, args.prior, args.method,
+                                              meta.get("mode") == "measured log")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        result = fit(data, library, holdout, prior, robot, args.method)
+        result = identify(data["q"], data["qd"], data["qdd"], data["tau"], library, holdout,
+                          data.get("tau_clean"), regressor)
     # every warning reaches the user, once each (a library's rank, a solver's convergence,
     # a numerical library's complaint alike)
     for line in dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught):
         print(f"torquebench identify: warning: {' '.join(line.split())}", file=sys.stderr)
-    payload = {"robot": robot_record(robot), **result.model.to_dict(),
-               "metrics": {**result.metrics(), "heldout": held,
-                           "scored_against": "tau_clean" if "tau_clean" in data else "tau"}}
-    if result.lagrangian():
-        payload["lagrangian"] = result.lagrangian()
-    write_json(args.out, payload)
+    write_json(args.out, model_payload(result, robot_record(robot), held,
+                                       "tau_clean" if "tau_clean" in data else "tau"))
     for line in result.model.equations():
         print(line)
     if result.physical:

@@ -18,15 +18,15 @@ from harness.io import write_json
 from harness.robots.arm import planner_config, torque_limit
 from harness.robots.registry import DEFAULT_ROBOT, robot_entry
 from harness.robots.torque_models import load_torque_model
-from planning.backends import SOLVERS
-from planning.config import PlannerConfig, Scenario, true_energy_config
+from planning.config import ALIASES, REPLANNERS, PlannerConfig, Scenario, true_energy_config
 from planning.errors import PlanningError
-from planning.obstacle import LinearObstacle, SwayingObstacle
-from planning.quadrature import RULES, splits_evenly
+from planning.formulation.obstacle import LinearObstacle, SwayingObstacle
+from planning.formulation.quadrature import RULES, splits_evenly
+from planning.penalty.backends import SOLVERS
+from planning.penalty.solver import Planner
+from planning.planners import segment_planner, uses_anytime
 from planning.replanning import execute
 from planning.result import closest_link, evaluate, to_json
-from planning.segments import uses_anytime
-from planning.solver import Planner
 
 DEFAULT = Scenario()
 PLANNER = true_energy_config()
@@ -96,26 +96,26 @@ def register(sub) -> None:
                         "the Lynxmotion, ipopt on other arms)")
     p.add_argument("--starts", type=int, default=PLANNER.starts,
                    help="start points of the cold plan (the best is kept)")
-    p.add_argument("--polish", type=int, default=PLANNER.polish,
+    p.add_argument("--polish", type=int, default=PLANNER.penalty.polish,
                    help="the best N distinct cold plans are solved again with the split "
                         "quadrature (breaks at the power's sign changes) and the one that "
                         "spends least kept (0: none)")
-    p.add_argument("--polish-samples", type=int, default=PLANNER.polish_samples,
+    p.add_argument("--polish-samples", type=int, default=PLANNER.penalty.polish_samples,
                    help="nodes of the polishing quadrature: a multiple of --power-breaks + 1")
     p.add_argument("--deadline-ms", type=float, default=0.0,
                    help="CPU ms a re-plan may take; a later one is dropped and the last plan "
                         "kept, as on a real-time controller (0, the default: no deadline; "
                         "the obstacle's sample period is 10 ms)")
-    p.add_argument("--replanner", choices=("sqp", "fatrop"), default=None,
-                   help="how plans and re-plans are solved: sqp (clearance as elastic rows, an "
-                        "anytime SQP under a CPU budget per re-plan; a re-plan that cannot "
-                        "clear the forecast returns the plan that misses the threshold least) "
-                        "or fatrop (the penalty loop: alpha raised until the plan keeps the "
-                        f"threshold); default {PLANNER.replanner}, fatrop with --free-end (on 20 "
-                        "random crossings with a free end the sqp executions broke the "
-                        "threshold on 2, the penalty loop's on none: docs/realtime.md)")
-    p.add_argument("--replan-budget-ms", type=float, default=PLANNER.replan_budget_ms,
-                   help="sqp: CPU ms a re-plan may take (it returns its best iterate then)")
+    p.add_argument("--replanner", choices=REPLANNERS + tuple(ALIASES), default=None,
+                   help="how plans and re-plans are solved: anytime (alias sqp: clearance as "
+                        "elastic rows, an anytime SQP under a CPU budget per re-plan; a "
+                        "re-plan that cannot clear the forecast returns the plan that misses "
+                        "the threshold least) or penalty (alias fatrop: the paper's penalty "
+                        f"loop, alpha raised until the plan keeps the threshold); default "
+                        f"{PLANNER.replanner}, penalty with --free-end (it keeps the threshold "
+                        "more often there: docs/realtime.md, 'harness.commands.plan')")
+    p.add_argument("--replan-budget-ms", type=float, default=PLANNER.anytime.replan_budget_ms,
+                   help="anytime: CPU ms a re-plan may take (it returns its best iterate then)")
     p.add_argument("--replan-iterations", type=int, default=0,
                    help="real-time iterations: each re-plan first takes this many iterations "
                         "of CasADi's feasible SQP from the last plan and the arm follows the "
@@ -202,14 +202,14 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  torque_limit=None)
     dof = config.geometry.dof
     config = dataclasses.replace(config, torque_limit=_torque_limit(args, dof))
-    config = dataclasses.replace(config, solver=args.solver or config.solver, starts=args.starts,
+    config = config.with_penalty(solver=args.solver or config.penalty.solver,
                                  polish=args.polish, polish_samples=args.polish_samples,
-                                 compile_code=not args.no_compile,
+                                 replan_iterations=args.replan_iterations or None)
+    config = dataclasses.replace(config.with_anytime(replan_budget_ms=args.replan_budget_ms),
+                                 starts=args.starts, compile_code=not args.no_compile,
                                  replan_deadline_ms=args.deadline_ms or None,
-                                 replan_iterations=args.replan_iterations or None,
-                                 replanner=args.replanner or ("fatrop" if args.free_end
-                                                              else PLANNER.replanner),
-                                 replan_budget_ms=args.replan_budget_ms)
+                                 replanner=args.replanner or ("penalty" if args.free_end
+                                                              else PLANNER.replanner))
     path = (_vector(args.obstacle_from, "obstacle-from"),
             _vector(args.obstacle_to, "obstacle-to"), args.duration, args.samples)
     sway = _vector(args.obstacle_sway, "obstacle-sway")
@@ -231,8 +231,8 @@ def run(args) -> int:
     unreachable = torque_diagnosis(planner, scenario)  # before a long search that must fail
     if unreachable:
         raise PlanningError(unreachable)
-    result = evaluate(execute(planner, scenario, replan=not args.no_replan), scenario, model,
-                      config)
+    result = evaluate(execute(segment_planner(model, config, planner), scenario,
+                              replan=not args.no_replan), scenario, model, config)
     if not result.feasible:
         raise PlanningError(infeasible(result.problems, config))
     write_json(args.out, to_json(result, scenario, config, args.model))
@@ -245,11 +245,11 @@ def run(args) -> int:
 
 def infeasible(problems, config: PlannerConfig) -> str:
     """The error line of an execution that is not feasible; with the anytime SQP it says
-    what its re-plans had: their quality is what that CPU buys on this machine (the Panda's
-    default plan measured feasible at 10 ms one day, infeasible the next, feasible at 20)."""
+    what its re-plans had: their quality is what that CPU buys on this machine
+    (docs/realtime.md, 'harness.commands.plan')."""
     message = "no feasible plan: " + "; ".join(problems)
     if uses_anytime(config):
-        message += (f" (the anytime SQP re-planned within {config.replan_budget_ms:g} ms of "
+        message += (f" (the anytime SQP re-planned within {config.anytime.replan_budget_ms:g} ms of "
                     "CPU: a larger --replan-budget-ms or --replanner fatrop may find one)")
     return message
 

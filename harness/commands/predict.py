@@ -9,8 +9,8 @@ from harness.errors import UserError
 from harness.io import write_npz
 from harness.robots.registry import DEFAULT_ROBOT, recorded_robot
 from harness.robots.torque_models import load_torque_model
-from identification.identify import sensor_offsets
 from identification.metrics import rel_error
+from identification.model import sensor_offsets
 
 
 def register(sub) -> None:

@@ -12,6 +12,7 @@ excitation the project designed alone.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,11 +20,12 @@ import numpy as np
 from harness.data.generate import SAMPLE_RATE, generate, inverse_torques
 from harness.robots.baseline import PinocchioModel
 from harness.robots.plant import load_plant
-from identification.consistent import identify_consistent
 from identification.identify import identify
 from identification.library.kinematic import KinematicLibrary
 from identification.metrics import rel_error
+from identification.regression.consistent import ConsistentRegressor
 from identification.regression.oracle import BaseParameterRegression
+from identification.regression.torque import TorqueRegressor
 
 SAMPLES, NOISE, HOLDOUT = 4000, 0.05, 0.25
 FILL = 0.85  # of each joint's range the sines motion may sweep
@@ -90,34 +92,41 @@ def oracle_fit(baseline: PinocchioModel, data, n_train: int) -> tuple[BaseParame
 
 
 @dataclass(frozen=True)
-class ConsistentFit:
-    """The physically consistent fit on a robot's atoms (identification.consistent): with the
-    nominal prior when a baseline is given - its inertias perturbed per draw (perturbed_nominal,
-    seeded by the draw), so that no figure comes from reading the truth - else flat."""
+class Fit:
+    """A library and the regressor fitted on a draw (by the draw's seed), for score_draw."""
 
-    library: KinematicLibrary
-    baseline: PinocchioModel | None = None
+    library: object
+    regressor: Callable[[int], TorqueRegressor]
 
-    def identify(self, data):
-        nominal = (None if self.baseline is None else
-                   perturbed_nominal(self.baseline, int(data.meta["seed"])))
-        return identify_consistent(data.q, data.qd, data.qdd, data.tau, self.library, nominal,
-                                   HOLDOUT, data.tau_clean)
-
-    def __len__(self) -> int:
-        return 13 * self.library.dof
+    @property
+    def parameters(self) -> int:
+        """Candidate coefficients the fit chooses among."""
+        return self.regressor(0).parameters(self.library)
 
 
-def score_draw(data, libraries: dict, baseline: PinocchioModel, judges: list[Motion]) -> dict:
-    """Each library's identification (a ConsistentFit: its fit) and the oracle on one dataset
-    (the first 1 - HOLDOUT trains), scored on every judge motion against its clean torque:
-    relative RMS error per joint; the model of each library kept under 'models'."""
+def fixed_fit(library, regressor: TorqueRegressor) -> Fit:
+    """The same regressor on every draw."""
+    return Fit(library, lambda seed: regressor)
+
+
+def perturbed_prior_fit(library: KinematicLibrary, baseline: PinocchioModel) -> Fit:
+    """The physically consistent fit on a robot's atoms with the nominal prior, its inertias
+    perturbed per draw (perturbed_nominal, seeded by the draw), so that no figure comes from
+    reading the truth."""
+    return Fit(library, lambda seed: ConsistentRegressor(perturbed_nominal(baseline, seed)))
+
+
+def score_draw(data, fits: dict[str, Fit], baseline: PinocchioModel, judges: list[Motion]) -> dict:
+    """Each fit's identification and the oracle on one dataset (the first 1 - HOLDOUT
+    trains), scored on every judge motion against its clean torque: relative RMS error per
+    joint; the model of each fit kept under 'models'."""
     n = int(round(len(data.q) * (1 - HOLDOUT)))
-    out: dict = {"seed": int(data.meta["seed"]), "models": {}}
-    for name, library in libraries.items():
+    seed = int(data.meta["seed"])
+    out: dict = {"seed": seed, "models": {}}
+    for name, fit in fits.items():
         cpu = time.process_time()
-        result = (library.identify(data) if isinstance(library, ConsistentFit) else
-                  identify(data.q, data.qd, data.qdd, data.tau, library, HOLDOUT, data.tau_clean))
+        result = identify(data.q, data.qd, data.qdd, data.tau, fit.library, HOLDOUT,
+                          data.tau_clean, fit.regressor(seed))
         cpu = time.process_time() - cpu
         out["models"][name] = result.model
         out[name] = {m.name: rel_error(result.model.torque(m.q, m.qd, m.qdd), m.tau_clean).tolist()

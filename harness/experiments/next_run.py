@@ -31,8 +31,9 @@ from harness.experiments.peers import least_squares
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from harness.robots.torque_models import robot_library
-from identification.consistent import identify_consistent
+from identification.identify import identify
 from identification.metrics import rel_error
+from identification.regression.consistent import ConsistentRegressor
 
 RULE_RMS = 2.0  # N m: joints that carry real torque
 LOAD_SHARE = 0.25  # ... or, on a small arm, this share of its most loaded joint's RMS
@@ -100,7 +101,8 @@ def next_run(robot: str, seed: int, samples: int = SAMPLES, noise: float = NOISE
     out = {"nominal": library.evaluate_every(second.q, second.qd, second.qdd) @ runs.nominal,
            "least_squares": least_squares(robot, *states, tau, n)[n:]}
     for name, prior in (("identified", runs.nominal), ("consistent_flat", None)):
-        fit = identify_consistent(*states, tau, library, prior, len(second.q) / len(tau))
+        fit = identify(*states, tau, library, len(second.q) / len(tau),
+                       regressor=ConsistentRegressor(prior))
         out[name] = fit.model.torque(second.q, second.qd, second.qdd) + fit.model.offsets
     errors = {k: rel_error(v, runs.truth_second) for k, v in out.items()}
     rms = np.sqrt(np.mean(runs.truth_second**2, axis=0))

@@ -4,8 +4,6 @@ robot extras that plan)."""
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pinocchio as pin
 
@@ -14,7 +12,7 @@ from harness.sections.base import Check, Target, check
 from planning.result import CLEARANCE_TOLERANCE, END_TOLERANCE, closest_link, executed_energy
 
 # the bench's executed plans count each iteration of the anytime SQP as this many ms of its
-# budgets (PlannerConfig.iteration_ms: the same plans on a loaded machine; measured on the
+# budgets (AnytimeOptions.iteration_ms: the same plans on a loaded machine; measured on the
 # Lynxmotion's bench scenarios, a re-plan costs ~1 ms plus ~0.45 ms per iteration of CPU
 # here); the planning section reports their real CPU beside, against the budget
 REPLAY_ITERATION_MS = 0.5
@@ -24,7 +22,7 @@ ENERGY_TOLERANCE = 1e-3  # J below the physical bound still counted (quadrature)
 
 def reproducible(config):
     """config with its anytime budgets counted in SQP iterations (REPLAY_ITERATION_MS each)."""
-    return dataclasses.replace(config, iteration_ms=REPLAY_ITERATION_MS)
+    return config.with_anytime(iteration_ms=REPLAY_ITERATION_MS)
 
 
 def energy_bound(model: pin.Model, result) -> float:

@@ -1,6 +1,6 @@
 """Link-obstacle clearance measured on a MuJoCo plant.
 
-Two measures, both in m, over every link the planner checks (planning.kinematics:
+Two measures, both in m, over every link the planner checks (planning.formulation.kinematics:
 segments between consecutive joint origins and to the flange, those that move):
 - centre-to-segment: distance from the obstacle centre to each link segment, its ends
   read from MuJoCo (joint anchors `xanchor`, the flange site 'end_effector'); on the
@@ -18,8 +18,8 @@ import mujoco
 import numpy as np
 
 from harness.errors import UserError
-from planning.clearance import segment_distance
-from planning.kinematics import ArmGeometry, paper_arm
+from planning.formulation.clearance import segment_distance
+from planning.formulation.kinematics import ArmGeometry, paper_arm
 
 FLANGE_SITE = "end_effector"
 OBSTACLE = "obstacle"

@@ -27,7 +27,7 @@ from harness.errors import UserError
 from harness.replay.clearance import ClearanceProbe
 from harness.replay.reference import PlanReference, check_joint_limits
 from identification.torque_model import TorqueModel
-from planning.kinematics import ArmGeometry
+from planning.formulation.kinematics import ArmGeometry
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,5 @@
 """What the planner needs of a robot, read from its model: the kinematic chain as data
-(planning.kinematics.ArmGeometry), its joint limits and its motors' torque limits.
+(planning.formulation.kinematics.ArmGeometry), its joint limits and its motors' torque limits.
 
 Joint placements and axes come from the Pinocchio model (identification.library.chain);
 the flange is the first of registry.FLANGES the model has (else the frame on the last
@@ -27,7 +27,7 @@ from harness.robots.registry import (
     robot_entry,
 )
 from planning.config import PlannerConfig, Scenario, true_energy_config
-from planning.kinematics import ArmGeometry
+from planning.formulation.kinematics import ArmGeometry
 
 
 def robot_label(robot: str | Path) -> str:
@@ -97,8 +97,9 @@ def planner_config(robot: str, **changes) -> PlannerConfig:
     per re-plan)."""
     lower, upper = joint_limits(robot)
     base = dict(geometry=arm_geometry(robot), lower=lower, upper=upper,
-                torque_limit=torque_limit(robot), solver=robot_entry(robot).solver)
-    return true_energy_config(**{**base, **changes})
+                torque_limit=torque_limit(robot))
+    return true_energy_config(**{**base, **changes}).with_penalty(
+        solver=robot_entry(robot).solver)
 
 
 def bench_motion(robot: str, duration: float = 2.0) -> tuple[Scenario, int]:

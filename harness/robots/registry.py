@@ -42,7 +42,7 @@ class Robot:
     # identification libraries `identify` offers for it, the first its default ("kinematic":
     # the base atoms generated from its kinematics, for any arm)
     libraries: tuple[str, ...] = ("kinematic",)
-    solver: str = "ipopt"  # the planner's NLP solver (planning.backends)
+    solver: str = "ipopt"  # the planner's NLP solver (planning.penalty.backends)
     # a published library (harness.robots.extras) its data report the conditioning of and
     # its excitation design keeps well conditioned; None: its kinematics' base atoms, reported
     excitation_library: str | None = None

@@ -21,7 +21,7 @@ from harness.errors import UserError
 from harness.robots.arm import arm_geometry, torque_limit
 from harness.robots.registry import ROBOTS, get_robot, load_mujoco
 from harness.robots.urdf import arm_urdf, strip_geometry
-from planning.kinematics import ArmGeometry
+from planning.formulation.kinematics import ArmGeometry
 
 TIMESTEP = 0.0005  # s
 OBSTACLE_RADIUS = 0.02  # m, drawn only: clearance is measured to the centre

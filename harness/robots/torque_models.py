@@ -8,10 +8,11 @@ from pathlib import Path
 from harness.errors import UserError
 from harness.io import read_json
 from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import DEFAULT_ROBOT, ROBOTS, load_chain, load_pinocchio
+from harness.robots.registry import DEFAULT_ROBOT, ROBOTS, load_chain, load_pinocchio, robot_entry
+from identification.choice import choose_fit, choose_prior, library_name
 from identification.errors import IdentificationError
-from identification.kinematic_model import LIBRARY, KinematicModel
 from identification.library.kinematic import KinematicLibrary
+from identification.model import model_from_dict
 from identification.torque_model import TorqueModel
 
 
@@ -46,8 +47,6 @@ def load_torque_model(spec: str, robot: str | None = None) -> TorqueModel:
     path = Path(spec)
     if not path.is_file():
         raise UserError(f"model file not found: {path} (or use 'pinocchio')")
-    from identification.model import model_from_dict
-
     payload = read_json(path, "model")
     try:
         recorded = _recorded(payload)
@@ -62,9 +61,7 @@ def load_torque_model(spec: str, robot: str | None = None) -> TorqueModel:
             raise IdentificationError(f"model was identified for robot '{recorded['name']:.60}' "
                                       f"(kinematics {str(recorded.get('hash')):.20}), not "
                                       f"'{chain.name}' ({chain.digest()})")
-        if payload.get("library") == LIBRARY:
-            return KinematicModel.from_dict(payload, robot_library(robot))
-        return model_from_dict(payload)
+        return model_from_dict(payload, lambda: robot_library(robot))
     except IdentificationError as exc:
         raise UserError(f"model {path}: {exc}") from None
 
@@ -89,3 +86,16 @@ def library_named(name: str, robot: str, dof: int | None = None):
     if name == "paper":
         return published_library(name)
     return prior_knowledge_library(3, symmetric_links=name != "prior-general")
+
+
+def robot_identification(robot: str, dof: int | None = None, library: str = "auto",
+                         prior: str = "none", method: str = "auto", measured: bool = False):
+    """(library, regressor) of an identification on robot, chosen by identification.choice
+    from the names `identify --library/--prior/--method` take (measured: the data are a
+    measured log); the robot's inputs (its libraries, its nominal inertias) made here.
+    The CLI, the sweep and the bench all identify with this (the bench's perturbed prior
+    alone builds its ConsistentRegressor per draw)."""
+    lib = library_named(library_name(library, prior, robot_entry(robot).libraries), robot, dof)
+    regressor = choose_fit(lib, choose_prior(prior, measured, lib), method,
+                           lambda: PinocchioModel(load_pinocchio(robot)).atom_parameters())
+    return lib, regressor

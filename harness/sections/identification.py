@@ -23,9 +23,10 @@ from harness.experiments.identification import (
     HOLDOUT,
     NOISE,
     SAMPLES,
-    ConsistentFit,
     closed_form_gap,
+    fixed_fit,
     generated_motion,
+    perturbed_prior_fit,
     ratios,
     score_draw,
     sines_motion,
@@ -35,7 +36,7 @@ from harness.experiments.next_run import next_run, rule_targets
 from harness.robots.baseline import PinocchioModel
 from harness.robots.extras import extra as load_extra
 from harness.robots.registry import load_pinocchio
-from harness.robots.torque_models import library_named, robot_library
+from harness.robots.torque_models import robot_identification, robot_library
 from harness.sections.base import Context, Row, SectionResult, Target, check
 from identification.identify import identify
 
@@ -56,18 +57,19 @@ PRIOR, FLAT = "consistent, perturbed URDF prior", "consistent, no prior"
 
 def run(ctx: Context) -> SectionResult:
     robot = ctx.robot.name
-    libraries = {name: library_named(name, robot) for name in ctx.robot.libraries}
+    fits = {name: fixed_fit(*robot_identification(robot, library=name))
+            for name in ctx.robot.libraries}
     default = ctx.robot.libraries[0]
     baseline = PinocchioModel(load_pinocchio(robot))
-    libraries[PRIOR] = ConsistentFit(robot_library(robot), baseline)
-    libraries[FLAT] = ConsistentFit(robot_library(robot))
+    fits[PRIOR] = perturbed_prior_fit(robot_library(robot), baseline)
+    fits[FLAT] = fixed_fit(*robot_identification(robot, prior="flat"))
     judges = [generated_motion(robot, SAMPLES, FRESH_SEED), sines_motion(robot, SAMPLES, FRESH_SEED)]
     clean = generate(robot, SAMPLES, 0.0, 1, "inverse")
-    exact = identify(clean.q, clean.qd, clean.qdd, clean.tau, libraries[default], HOLDOUT,
-                     clean.tau_clean)
+    exact = identify(clean.q, clean.qd, clean.qdd, clean.tau, fits[default].library, HOLDOUT,
+                     clean.tau_clean, fits[default].regressor(1))
     exact_oracle = score_draw(clean, {}, baseline, judges[:1])["oracle"]["fresh"]
     levels = QUICK_LEVELS if ctx.quick else LEVELS
-    by_level = {level: [score_draw(generate(robot, SAMPLES, level, seed, "inverse"), libraries,
+    by_level = {level: [score_draw(generate(robot, SAMPLES, level, seed, "inverse"), fits,
                                    baseline, judges) for seed in seeds]
                 for level, seeds in levels.items()}
     draws = by_level[NOISE]
@@ -82,7 +84,7 @@ def run(ctx: Context) -> SectionResult:
               f"fresh-motion error {max(exact_oracle):.1e} (bar {EXACT:g})"),
     ]
     summary = {f"{level:g}": {name: {judge: _summary(ratios(d, name, judge))
-                                     for judge in ("fresh", "sines")} for name in libraries}
+                                     for judge in ("fresh", "sines")} for name in fits}
                for level, d in by_level.items()}
     targets = []
     for level, by_name in summary.items():
@@ -110,14 +112,14 @@ def run(ctx: Context) -> SectionResult:
                     "(median over draws), against the oracle's",
                     ", ".join(f"{100 * e:.2f} %" for e in errors) + " (oracle "
                     + ", ".join(f"{100 * o:.2f} %" for o in oracle) + ")")]
-    results = {"robot": robot, "libraries": list(libraries), "default_library": default,
+    results = {"robot": robot, "libraries": list(fits), "default_library": default,
                "samples": SAMPLES, "noise": NOISE, "closed_form_gap": gap,
                "noise_free_heldout": exact.heldout_rel_rmse.tolist(),
                "oracle_parameters": draws[0]["oracle_parameters"],
                "draws": {f"{level:g}": [{k: v for k, v in d.items() if k != "models"} for d in ds]
                          for level, ds in by_level.items()},
                "summary": summary, "next_run": runs}
-    md = "\n".join([_markdown(results, libraries), "", *next_run_markdown(runs)])
+    md = "\n".join([_markdown(results, fits), "", *next_run_markdown(runs)])
     out = SectionResult(md, results, checks, targets, headline,
                         outputs={"model": model, "draws": draws})
     for extra in ctx.robot.extras:
@@ -130,7 +132,7 @@ def _summary(r: np.ndarray) -> dict:
             "worst_median": float(np.median(r, axis=1).max()), "worst_joint": float(r.max())}
 
 
-def _markdown(r: dict, libraries: dict) -> str:
+def _markdown(r: dict, fits: dict) -> str:
     counts = ", ".join(f"{len(d)} at {100 * float(level):g} %" for level, d in r["draws"].items())
     md = [f"Robot `{r['robot']}`: draws at each torque noise level ({counts}; noise std = level "
           f"x each joint's torque std), {SAMPLES} samples each (first {100 * (1 - HOLDOUT):g} % "
@@ -144,7 +146,7 @@ def _markdown(r: dict, libraries: dict) -> str:
     for level, by_name in r["summary"].items():
         for name, by_judge in by_name.items():
             for judge, s in by_judge.items():
-                md.append(f"| {100 * float(level):g} % | {name} | {len(libraries[name])} | {judge} | "
+                md.append(f"| {100 * float(level):g} % | {name} | {fits[name].parameters} | {judge} | "
                           + ", ".join(f"{x:.2f}" for x in s["median_ratio_per_joint"])
                           + f" | {s['worst_median']:.2f} / {s['worst_joint']:.2f} |")
     return "\n".join(md)

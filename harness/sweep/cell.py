@@ -29,16 +29,15 @@ import numpy as np
 from scipy.linalg import LinAlgWarning
 from threadpoolctl import threadpool_limits
 
-from harness.commands.identify import choose_library
 from harness.data.generate import generate
 from harness.errors import UserError
 from harness.experiments.identification import oracle_design
 from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_chain, load_pinocchio
+from harness.robots.registry import load_pinocchio
+from harness.robots.torque_models import robot_identification
 from harness.sweep.grid import Cell
 from identification.errors import IdentificationError, LibraryRankWarning
 from identification.identify import identify
-from identification.library.kinematic import KinematicLibrary
 from identification.metrics import rel_error
 from identification.regression.oracle import BaseParameterRegression
 from identification.regression.peers import PeerRegression
@@ -73,9 +72,15 @@ class CellFailure:
 
 
 @cache
+def identification(robot: str):
+    """(library, regressor) `torquebench identify` uses on robot's generated data by default
+    (cached per process)."""
+    return robot_identification(robot)
+
+
 def library(robot: str):
-    """The library `torquebench identify` uses on robot by default (cached per process)."""
-    return choose_library("auto", load_chain(robot).dof, robot)
+    """The library `torquebench identify` uses on robot by default."""
+    return identification(robot)[0]
 
 
 @cache
@@ -89,18 +94,9 @@ def fresh(robot: str):
     return generate(robot, FRESH_SAMPLES, 0.0, FRESH_SEED, "inverse")
 
 
-def joint_columns(lib, q, qd, qdd) -> list[np.ndarray]:
-    """Per joint, the (n, p_j) columns a per-joint regression sees: the library's features
-    (every joint the same), or for base atoms the atoms acting on that joint."""
-    if isinstance(lib, KinematicLibrary):
-        design = lib.evaluate(q, qd, qdd)
-        return [design[:, j][:, lib.acts_on[j]] for j in range(lib.dof)]
-    theta = lib.evaluate(q, qd, qdd)
-    return [theta] * lib.dof
-
-
 def _coupled(robot: str, d) -> Predictor:
-    return identify(d.q, d.qd, d.qdd, d.tau, library(robot), holdout=0.0).model.torque
+    lib, regressor = identification(robot)
+    return identify(d.q, d.qd, d.qdd, d.tau, lib, 0.0, regressor=regressor).model.torque
 
 
 def _oracle(robot: str, d) -> Predictor:
@@ -112,10 +108,10 @@ def _oracle(robot: str, d) -> Predictor:
 def _per_joint(make: Callable) -> Callable[[str, object], Predictor]:
     def fit(robot: str, d) -> Predictor:
         lib = library(robot)
-        fits = [make().fit(x, d.tau[:, j]) for j, x in enumerate(joint_columns(lib, d.q, d.qd, d.qdd))]
+        fits = [make().fit(x, d.tau[:, j]) for j, x in enumerate(lib.joint_designs(d.q, d.qd, d.qdd))]
 
         def predict(q, qd, qdd):
-            return np.column_stack([f.predict(x) for f, x in zip(fits, joint_columns(lib, q, qd, qdd),
+            return np.column_stack([f.predict(x) for f, x in zip(fits, lib.joint_designs(q, qd, qdd),
                                                                   strict=True)])
         return predict
     return fit

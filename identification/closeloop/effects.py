@@ -50,7 +50,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import expit
+
+from identification.friction import sigmoid_friction
 
 JOINT_EFFECTS = ("viscous", "coulomb", "armature", "offset", "spring")
 # the candidates on a measured log (identification.closeloop.measured): Gaz et al.'s sigmoid
@@ -100,11 +101,6 @@ class EffectTerm:
         if self.effect == "sigmoid":
             out.update(steepness=self.steepness, shift=self.shift)
         return out
-
-
-def sigmoid_friction(qd: np.ndarray, steepness: float, shift: float) -> np.ndarray:
-    """Gaz et al.'s friction at unit phi1: s(phi2 (qd + phi3)) - s(phi2 phi3), 0 at rest."""
-    return expit(steepness * (qd + shift)) - expit(steepness * shift)
 
 
 def joint_signal(effect: str, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,

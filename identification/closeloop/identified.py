@@ -40,9 +40,10 @@ from identification.closeloop.loop import (
     trace,
 )
 from identification.closeloop.residual import noise_sigma
+from identification.feature_model import IdentifiedModel
 from identification.identify import identify
 from identification.library.base import Library
-from identification.model import IdentifiedModel, model_from_dict
+from identification.model import model_from_dict, model_to_dict
 
 
 def identified_model(library: Library, q, qd, qdd, tau) -> IdentifiedModel:
@@ -53,7 +54,7 @@ def identified_model(library: Library, q, qd, qdd, tau) -> IdentifiedModel:
 
 def term_columns(model: IdentifiedModel, q, qd, qdd) -> list[np.ndarray]:
     """Per joint, the (n, k_j) torques of its kept terms at unit coefficient (N m)."""
-    spec = model.to_dict()
+    spec = model_to_dict(model)
     dof = int(spec["dof"])
     out = []
     for j, joint in enumerate(spec["joints"]):
@@ -99,16 +100,15 @@ def refit_kept(model: IdentifiedModel, terms: tuple[EffectTerm, ...], q, qd, qdd
 
     The refit is plain least squares even if the identification shared coefficients
     across joints (coupled fit) or denoised first: correcting its coefficients by only the
-    effects' projection is not the joint refit then (measured: 0.2 vs 0.004 held-out error
-    on joint 1 of the friction plant). A joint no effect acts on is left as identified:
-    the joint refit leaves its least-squares coefficients unchanged there, and the
-    identification's own (regularized, possibly coupled) fit is better on it (payload
-    plant, joint 1: 1.8e-3 as identified vs 4.0e-3 refitted)."""
+    effects' projection is not the joint refit then. A joint no effect acts on is left as
+    identified: the joint refit leaves its least-squares coefficients unchanged there, and
+    the identification's own (regularized, possibly coupled) fit is better on it
+    (docs/identification.md, 'identification.closeloop.identified')."""
     if not terms:
         return model
     target = tau - effect_torque(terms, q, qd, qdd, payload)
     touched = np.any(effect_torque(terms, q, qd, qdd, payload) != 0, axis=0)
-    spec = model.to_dict()
+    spec = model_to_dict(model)
     for j, (X, joint) in enumerate(zip(term_columns(model, q, qd, qdd), spec["joints"],
                                        strict=True)):
         if X.shape[1] and touched[j]:  # a joint no effect acts on keeps its identification
@@ -123,8 +123,8 @@ def _not_better_in_training(extended: ExtendedModel, identified: IdentifiedModel
     than sqrt(2 / n) of it, one standard deviation of a noise-only sum of squares of n
     samples. There the two differ only by the re-identification (shared coefficients move
     when another joint's target changes), a fit on the same training part, whose small
-    in-sample gains do not carry over (payload plant, joint 1: 0.0038 -> 0.0066 held out
-    for a 1 % lower training sum); where they are large they do (joint 2: 0.029 -> 0.0021)."""
+    in-sample gains do not carry over; large ones do (docs/identification.md,
+    'identification.closeloop.identified')."""
     touched = np.any(effect_torque(extended.terms, *states, extended._payload) != 0, axis=0)
     sse = [np.sum((tau - m.torque(*states)) ** 2, axis=0) for m in (extended, identified)]
     margin = 1.0 - np.sqrt(2.0 / len(tau))

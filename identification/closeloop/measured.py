@@ -75,13 +75,14 @@ class WithOffsets:
     measured torque is compared with."""
 
     def __init__(self, model, offsets: np.ndarray):
-        self.model, self.offsets, self.dof = model, np.asarray(offsets, float), model.dof
+        # `bias`, not `offsets`: a model's `offsets` are the ones its torque leaves out
+        self.model, self.bias, self.dof = model, np.asarray(offsets, float), model.dof
 
     def torque(self, q, qd, qdd) -> np.ndarray:
-        return self.model.torque(q, qd, qdd) + self.offsets
+        return self.model.torque(q, qd, qdd) + self.bias
 
     def symbolic_torque(self, q, qd, qdd):
-        return self.model.symbolic_torque(q, qd, qdd) + self.offsets
+        return self.model.symbolic_torque(q, qd, qdd) + self.bias
 
 
 @dataclass(frozen=True)

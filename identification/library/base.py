@@ -38,6 +38,11 @@ class Library:
         """Theta of shape (n, len(self)) at states of shape (n, dof)."""
         return np.column_stack([f.evaluate(q, qd, qdd) for f in self.features])
 
+    def joint_designs(self, q, qd, qdd) -> list[np.ndarray]:
+        """Per joint, the (n, p_j) columns a regression of that joint alone sees: every
+        feature, the same for every joint."""
+        return [self.evaluate(q, qd, qdd)] * self.dof
+
     def symbolic(self, q, qd, qdd) -> list:
         """The features as CasADi expressions of column vectors q, qd, qdd."""
         import casadi

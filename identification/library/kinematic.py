@@ -35,9 +35,8 @@ JOINT_ATOMS = (("armature", "kg m^2"), ("viscous", "N m s/rad"), ("coulomb", "N 
 N_STATES = 64  # random states the base atoms are found on
 RANK_TOL = 1e-4  # relative, on unit-norm columns: an atom independent of the others by less
 # is never identifiable from data, and kept it takes huge opposite coefficients with its near
-# twin. A URDF's angles rounded (1.5708 for pi/2) leave such a pair: the xArm7's armature2 and
-# Izz2' at 3.9e-6 (fitted -260 and +260 at 2 % noise: joint 2 31.9x the oracle on another
-# motion); every other arm's kept atoms are above 0.37, its dropped ones below 1e-9
+# twin; a URDF's angles rounded (1.5708 for pi/2) leave such a pair (docs/identification.md,
+# 'identification.library.kinematic')
 SPAN_TOL = 10 * RANK_TOL  # an atom outside the base atoms' span misses by O(1), a folded one by
 # less than RANK_TOL
 
@@ -105,6 +104,11 @@ class KinematicLibrary:
         out = self.function.map(n)(np.asarray(q, float).T, np.asarray(qd, float).T,
                                    np.asarray(qdd, float).T)
         return np.asarray(out).reshape(self.dof, n, len(self)).transpose(1, 0, 2)
+
+    def joint_designs(self, q, qd, qdd) -> list[np.ndarray]:
+        """Per joint, the (n, p_j) torques of the base atoms acting on it."""
+        design = self.evaluate(q, qd, qdd)
+        return [design[:, j][:, self.acts_on[j]] for j in range(self.dof)]
 
     def symbolic(self, q, qd, qdd):
         """(dof, p) CasADi expression of the base atoms at column vectors q, qd, qdd."""

@@ -11,7 +11,7 @@ subclass's core step `_fit` and returns self. What a fit learns ends in "_":
 - intercept_: the unpenalized offset (the sensor bias), a float, or (dof,) when stacked;
 - n_features_in_: p, checked again by predict.
 
-`predict(X)` is the torque model X @ coef_ *without* intercept_: as in identification.model,
+`predict(X)` is the torque model X @ coef_ *without* intercept_: as in identification.feature_model,
 the sensor bias is not torque; `predict(X, offset=True)` adds it. Predicting before fit raises
 scikit-learn's NotFittedError; bad data raise IdentificationError.
 

@@ -6,14 +6,14 @@ the default planner (true energy, rest to rest) on the same scenario."""
 from __future__ import annotations
 
 from harness.experiments.planning import plan_checks, reproducible, summary
+from harness.paper.planning.variants import PAPER
 from harness.robots.arm import planner_config
 from harness.robots.baseline import PinocchioModel
 from harness.sections.base import Context, Row, SectionResult, Target
+from planning.planners import segment_planner
 from planning.replanning import execute
 from planning.result import evaluate, to_json
 from planning.scenarios import paper_scenario
-from planning.solver import Planner
-from planning.variants import PAPER
 
 IDENTIFIED_TARGET = 0.02  # identified plan's true energy within 2 % of the closed form's
 
@@ -27,7 +27,7 @@ def run(ctx: Context, models: dict) -> SectionResult:
     runs["default_pinocchio"] = (baseline, default)
     results, plans, checks = {}, {}, []
     for name, (model, config) in runs.items():
-        executed = evaluate(execute(Planner(model, config), scenario), scenario, model, config)
+        executed = evaluate(execute(segment_planner(model, config), scenario), scenario, model, config)
         results[name] = summary(executed, baseline, config)
         plans[name] = to_json(executed, scenario, config, name.split("_", 1)[1])
         checks += plan_checks(name, results[name], config.threshold, config.rest_at_goal)[0]

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.report.figures import plt, save_figure
-from planning.kinematics import ArmGeometry
+from planning.formulation.kinematics import ArmGeometry
 
 STYLES = {"unobstructed": ("tab:red", ":"), "pinocchio": ("tab:green", "-"),
           "identified": ("tab:orange", "--")}

@@ -7,17 +7,17 @@ import dataclasses
 import numpy as np
 
 from harness.experiments.planning import REPLAY_ITERATION_MS, plan_checks, reproducible, summary
+from harness.paper.planning.speed import measure
 from harness.robots.arm import bench_motion, planner_config
 from harness.robots.baseline import PinocchioModel
 from harness.robots.extras import extra as load_extra
 from harness.robots.registry import load_pinocchio
 from harness.sections.base import Context, Row, SectionResult, Target, check
 from harness.sections.planning import figures
+from planning.planners import segment_planner
 from planning.replanning import execute
 from planning.result import evaluate, to_json
 from planning.scenarios import crossing_scenario, swaying_scenario
-from planning.solver import Planner
-from planning.speed import measure
 
 IDENTIFIED_TARGET = 0.02  # identified plan's true energy within 2 % of the closed form's
 COLD_TARGET_MS, REPLAN_MEDIAN_MS, REPLAN_MAX_MS = 25.0, 2.0, 10.0
@@ -32,7 +32,7 @@ def run(ctx: Context) -> SectionResult:
     # load); the speed is measured under the real CPU budget, the penalty loop beside
     config = reproducible(planner_config(robot, compile_code=True))
     base, link = bench_motion(robot)
-    planner = Planner(baseline, config)
+    planner = segment_planner(baseline, config)
     free = evaluate(execute(planner, base, avoid=False), base, baseline, config)
     scenario = crossing_scenario(free.execution.segments[0].trajectory, config.geometry,
                                  base=base, link=link)
@@ -56,7 +56,7 @@ def run(ctx: Context) -> SectionResult:
                     free_crossing.clearance.min() < config.threshold,
                     f"unobstructed clearance {1e3 * free_crossing.clearance.min():.1f} mm")]
     for name, model in models.items():
-        p = planner if model is baseline else Planner(model, config)
+        p = planner if model is baseline else segment_planner(model, config)
         executed[name] = evaluate(execute(p, scenario), scenario, model, config)
         results[name] = summary(executed[name], baseline, config)
         plans[f"{name}_crossing"] = to_json(executed[name], scenario, config, name)
@@ -85,9 +85,9 @@ def run(ctx: Context) -> SectionResult:
             plan_targets.append(Target(f"{name.replace('_', ' ')}: re-plans", replans, least,
                                      lower_is_better=False))
     speeds = {}
-    for replanner in ("sqp", "fatrop"):
-        live = dataclasses.replace(config, iteration_ms=None, replanner=replanner)
-        timings, _ = measure(Planner(baseline, live), scenario,
+    for replanner in ("anytime", "penalty"):
+        live = dataclasses.replace(config.with_anytime(iteration_ms=None), replanner=replanner)
+        timings, _ = measure(segment_planner(baseline, live), scenario,
                              cold_repeats=2 if ctx.quick else 5, stride=10 if ctx.quick else 2)
         speeds[replanner] = {**timings.summary(),
                              "cold_cpu_max_ms": float(np.max(timings.cold_cpu_ms)),
@@ -97,7 +97,7 @@ def run(ctx: Context) -> SectionResult:
     executed_cpu = [ms for name in ("pinocchio", "swaying")
                     for ms in executed[name].execution.solve_cpu_ms[1:]]
     speed["executed_replan_cpu_max_ms"] = largest(executed_cpu)
-    results["timing"] = {"speed": speed, "penalty_loop_speed": speeds["fatrop"],
+    results["timing"] = {"speed": speed, "penalty_loop_speed": speeds["penalty"],
                          "replay_iteration_ms": REPLAY_ITERATION_MS}
     targets = [Target("cold plan CPU time, max", speed["cold_cpu_max_ms"], COLD_TARGET_MS,
                       "ms", timing=True),

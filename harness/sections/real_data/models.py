@@ -30,9 +30,9 @@ from harness.experiments.peers import least_squares, nominal_friction
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from harness.robots.torque_models import robot_library
-from identification.consistent import identify_consistent
 from identification.identify import identify
 from identification.metrics import rel_error
+from identification.regression.consistent import ConsistentRegressor
 
 
 @dataclass(frozen=True)
@@ -63,14 +63,13 @@ def score_models(robot: str, q, qd, qdd, tau, holdout: float) -> tuple[dict[str,
     add("least_squares", lambda: least_squares(robot, q, qd, qdd, tau, split))
     library, result = robot_library(robot), {}
 
-    def fitted(name, prior):
+    def fitted(name, regressor):
         def fn():
-            result[name] = (identify(q, qd, qdd, tau, library, holdout) if isinstance(prior, str) else
-                            identify_consistent(q, qd, qdd, tau, library, prior, holdout))
+            result[name] = identify(q, qd, qdd, tau, library, holdout, regressor=regressor)
             return result[name].model.torque(q, qd, qdd) + result[name].model.offsets
         return fn
 
-    add("least_squares_lmi", fitted("least_squares_lmi", None))
-    add("identified", fitted("identified", nominal.atom_parameters()))
-    add("sparse", fitted("sparse", "none"))
+    add("least_squares_lmi", fitted("least_squares_lmi", ConsistentRegressor()))
+    add("identified", fitted("identified", ConsistentRegressor(nominal.atom_parameters())))
+    add("sparse", fitted("sparse", None))
     return out, result["identified"]

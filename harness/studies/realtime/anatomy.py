@@ -3,7 +3,7 @@
     .venv/bin/python -m harness.studies.realtime.anatomy [--scenarios 20] [--seed 2026]
         [--split | --polish]
 
-1. Algorithm 2 with the default planner (compiled) on the planning bench's random
+1. Algorithm 2 with the penalty loop (compiled) on the planning bench's random
    scenarios; for every warm re-plan: its solver calls, their iterations and CPU time, the
    share of the re-plan spent in them, the calls that ran to the warm iteration cap and
    the penalty weight each call solved with.
@@ -15,7 +15,7 @@
    point its capped solve returned (its own solution where that converged): the floor of
    any warm start.
 --split: the planner with the split energy quadrature (random_scenarios.SPLIT); --polish:
-the default's with its cold plans polished (random_scenarios.POLISHED: the re-plans start
+the default's with its cold plans polished (random_scenarios.polished: the re-plans start
 warm from a polished plan's motion; section 2, one warm solve, is the default's). Section 1
 also prints the replayed energy of the feasible executed motions, summed, and how many were
 infeasible.
@@ -34,12 +34,14 @@ from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
 from harness.studies.realtime import measure as realtime
 from harness.studies.realtime import options as random_scenarios
-from planning import backends
 from planning.config import true_energy_config
-from planning.replanning import execute, forecast_at, plan_segment
+from planning.formulation.screening import screen
+from planning.penalty import backends
+from planning.penalty.loop import plan_segment
+from planning.penalty.planner import PenaltyLoop
+from planning.penalty.solver import Planner
+from planning.replanning import execute, forecast_at
 from planning.scenarios import paper_scenario
-from planning.screening import screen
-from planning.solver import Planner
 
 
 class RecordingPlanner(Planner):
@@ -68,7 +70,7 @@ def replans(baseline, config, setup: realtime.Setup) -> dict:
     plant, executed, infeasible, cold = load_mujoco(DEFAULT_ROBOT, scene=True), 0.0, 0, []
     for case in realtime.scenarios(baseline, config, setup):
         planner.groups.clear()
-        run = execute(planner, case)
+        run = execute(PenaltyLoop(planner), case)
         energy, feasible = realtime.replayed_energy(plant, baseline, run, case, config)
         if feasible:
             executed += energy
@@ -81,7 +83,7 @@ def replans(baseline, config, setup: realtime.Setup) -> dict:
     cpu = np.array([r["cpu_ms"] for r in per_replan])
     solver = np.array([sum(c[2] for c in r["calls"]) for r in per_replan])
     calls = [c for r in per_replan for c in r["calls"]]
-    capped = [c for c in calls if c[0] and c[1] >= config.warm_max_iterations]
+    capped = [c for c in calls if c[0] and c[1] >= config.penalty.warm_max_iterations]
     return {
         "executed_energy_J_sum_of_feasible": executed, "infeasible_executions": infeasible,
         "cold_cpu_ms": realtime.distribution(cold),
@@ -134,7 +136,7 @@ def call_costs(baseline, config) -> dict:
     problem = {"x": nlp.x, "p": nlp.p, "f": nlp.f, "g": nlp.g}
     out = {}
     for plugin in ("fatrop", "ipopt", "sqpmethod", "feasiblesqp"):
-        for cap in (0, 1, 5, config.warm_max_iterations):
+        for cap in (0, 1, 5, config.penalty.warm_max_iterations):
             solver = backends.solver(f"anatomy_{plugin}_{cap}", plugin, problem,
                                      nlp.lbg == nlp.ubg, warm=True, max_iter=cap,
                                      hessian="exact", compile_code=True)
@@ -169,9 +171,10 @@ def main() -> None:
     variant.add_argument("--polish", action="store_true")
     args = options.parse_args()
     baseline = PinocchioModel(load_pinocchio(DEFAULT_ROBOT))
-    config = true_energy_config(compile_code=True, **(
-        random_scenarios.SPLIT if args.split else random_scenarios.POLISHED if args.polish
-        else {}))
+    config = true_energy_config(compile_code=True, **(random_scenarios.SPLIT if args.split
+                                                      else {}))
+    if args.polish:
+        config = random_scenarios.polished(config)
     setup = random_scenarios.setup(args)
     print(json.dumps({"call_costs": call_costs(baseline, config)}, indent=1))
     print(json.dumps({"replans": replans(baseline, config, setup)}, indent=1))

@@ -25,10 +25,12 @@ from harness.replay.reference import plan_reference
 from harness.replay.simulate import replay
 from harness.studies.realtime import references
 from planning.config import PlannerConfig, Scenario, true_energy_config
-from planning.replanning import DEADLINE, Execution, execute
+from planning.penalty.solver import Planner
+from planning.planners import segment_planner
+from planning.replanning import Execution, execute
 from planning.result import evaluate, to_json
 from planning.scenarios import random_scenarios
-from planning.solver import Planner
+from planning.types import DEADLINE
 
 
 @dataclass(frozen=True)
@@ -64,7 +66,7 @@ def scenarios(baseline, config: PlannerConfig, setup: Setup) -> list[Scenario]:
 def timing(baseline, config: PlannerConfig, cases: list[Scenario]) -> tuple[dict, list]:
     """Algorithm 2 on every case: distributions of cold and warm times (wall and CPU, ms),
     deadline misses and failures; and the executions."""
-    planner = Planner(baseline, config)
+    planner = segment_planner(baseline, config)
     runs = [execute(planner, case) for case in cases]
     cold_wall = [r.solve_ms[0] for r in runs]
     cold_cpu = [r.solve_cpu_ms[0] for r in runs]
@@ -126,29 +128,29 @@ def ways_in(config: PlannerConfig, quick: bool) -> dict[str, PlannerConfig]:
     """The configurations compared side by side: the previous default (IPOPT in CasADi's
     virtual machine), each change alone, and the default."""
     vm = dataclasses.replace(config, compile_code=False)
-    previous = dataclasses.replace(vm, solver="ipopt", energy_quadrature="paper",
+    previous = dataclasses.replace(vm.with_penalty(solver="ipopt"), energy_quadrature="paper",
                                    energy_samples=10, starts=1)
     rows = {"ipopt, virtual machine, paper quadrature, 1 start (previous default)": previous}
     if quick:
         return {**rows, "default: " + describe(config): config}
     rows |= {"ipopt, virtual machine, primal-only warm start":
-                dataclasses.replace(vm, solver="ipopt", dual_warm_start=False),
+                vm.with_penalty(solver="ipopt", dual_warm_start=False),
             "ipopt, virtual machine, limited-memory Hessian":
-                dataclasses.replace(vm, solver="ipopt", hessian="limited-memory"),
-            "fatrop, virtual machine": dataclasses.replace(vm, solver="fatrop"),
-            "ipopt, compiled": dataclasses.replace(config, solver="ipopt"),
-            "sqpmethod (qpOASES), compiled": dataclasses.replace(config, solver="sqpmethod"),
+                vm.with_penalty(solver="ipopt", hessian="limited-memory"),
+            "fatrop, virtual machine": vm.with_penalty(solver="fatrop"),
+            "ipopt, compiled": config.with_penalty(solver="ipopt"),
+            "sqpmethod (qpOASES), compiled": config.with_penalty(solver="sqpmethod"),
             "fatrop, compiled, 8 penalty samples": dataclasses.replace(config, obstacle_slots=8),
             "fatrop, compiled, 1 start": dataclasses.replace(config, starts=1),
             "fatrop, compiled, real-time iterations (1 feasible-SQP iteration a re-plan)":
-                dataclasses.replace(config, replan_iterations=1)}
+                config.with_penalty(replan_iterations=1)}
     return rows | fast_ways(config)
 
 
 def fast_ways(config: PlannerConfig) -> dict[str, PlannerConfig]:
     """The two re-planners side by side: the penalty loop (fatrop) and the anytime SQP."""
     rows = {}
-    for replanner in ("fatrop", "sqp"):
+    for replanner in ("penalty", "anytime"):
         variant = dataclasses.replace(config, replanner=replanner)
         label = "default: " if variant == config else ""
         rows[label + describe(variant)] = variant
@@ -158,11 +160,11 @@ def fast_ways(config: PlannerConfig) -> dict[str, PlannerConfig]:
 def describe(config: PlannerConfig) -> str:
     """One line naming what a configuration solves with."""
     code = "compiled" if config.compile_code else "virtual machine"
-    if config.replanner == "sqp":
+    if config.replanner == "anytime":
         return (f"anytime elastic SQP (DAQP), {code}, {config.energy_quadrature} N = "
                 f"{config.energy_samples}, {config.starts} start(s) in "
-                f"{config.cold_budget_ms:g} ms, re-plans in {config.replan_budget_ms:g} ms")
-    return (f"{config.solver}, {code}, {config.energy_quadrature} N = {config.energy_samples}, "
+                f"{config.anytime.cold_budget_ms:g} ms, re-plans in {config.anytime.replan_budget_ms:g} ms")
+    return (f"{config.penalty.solver}, {code}, {config.energy_quadrature} N = {config.energy_samples}, "
             f"{config.starts} start(s), {config.obstacle_slots} penalty samples")
 
 
@@ -181,7 +183,7 @@ def run(baseline, plant, quick: bool, setup: Setup | None = None,
         rows[name] |= spent(plant, baseline, variant, cases, executed[name])
     live = dataclasses.replace(config, replan_deadline_ms=setup.deadline_ms)
     default, _ = timing(baseline, live, cases)
-    anytime = dataclasses.replace(config, replanner="sqp")
+    anytime = dataclasses.replace(config, replanner="anytime")
     name = next((n for n, v in ways.items() if v == anytime), None)
     if name is None:
         name = describe(anytime)

@@ -6,9 +6,9 @@ each scenario of the study (same seed) is planned once, the obstacle at every sa
 it will be, no re-planning; every plan is replayed in MuJoCo. The default (4 starts, Gauss
 N = 20) against the best of a global check: each of 8 start points alone, and the default's
 starts at Gauss N = 40; beside it the split quadrature (Gauss between the power's sign
-changes, planning.breaks: 7 breaks, 3 nodes each), 4 starts; and polished: 8 starts on the
+changes, planning.formulation.breaks: 7 breaks, 3 nodes each), 4 starts; and polished: 8 starts on the
 default's rule, the best 2 distinct plans solved again with the split rule at 40 nodes
-(config.polish). Printed per scenario, then how many of the default's, the split and the
+(config.penalty.polish). Printed per scenario, then how many of the default's, the split and the
 polished plans are within 0.5 % of the best of all of them.
 
     python -m harness.studies.realtime.oneshot [--scenarios 20] [--seed 2026]
@@ -25,9 +25,11 @@ from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
 from harness.studies.realtime import measure as realtime
 from harness.studies.realtime import options as random_scenarios
 from planning.config import true_energy_config
-from planning.replanning import Execution, plan_multistart, plan_segment
-from planning.solver import ObstacleForecast, Planner
+from planning.penalty.solver import Planner
+from planning.planners import segment_planner
+from planning.replanning import Execution
 from planning.starts import start_points
+from planning.types import ObstacleForecast, Segment
 
 GLOBAL_STARTS = 8
 FINE_SAMPLES = 40
@@ -44,14 +46,15 @@ def main() -> None:
     plant = load_mujoco(DEFAULT_ROBOT, scene=True)
     config = true_energy_config(compile_code=True)
     cases = realtime.scenarios(baseline, config, random_scenarios.setup(args))
-    default = Planner(baseline, config)
-    fine = Planner(baseline, dataclasses.replace(config, energy_samples=FINE_SAMPLES,
+    default, numbers = segment_planner(baseline, config), Planner(baseline, config)
+    fine = segment_planner(baseline, dataclasses.replace(config, energy_samples=FINE_SAMPLES,
                                                  compile_code=False))
     # the planners scored against the best of all: the default, and those beside it
     scored = {"default": default,
-              "split": Planner(baseline, dataclasses.replace(config, **random_scenarios.SPLIT)),
-              "polished": Planner(baseline,
-                                  dataclasses.replace(config, **random_scenarios.POLISHED))}
+              "split": segment_planner(baseline,
+                                       dataclasses.replace(config, **random_scenarios.SPLIT)),
+              "polished": segment_planner(baseline,
+                                          random_scenarios.polished(config))}
 
     def replayed(plan, planner):
         return realtime.replayed_energy(plant, baseline, _execution(plan), case, planner.config)
@@ -66,13 +69,13 @@ def main() -> None:
                    ObstacleForecast(t, case.obstacle.position(t)))
         runs = {}  # name: (replayed energy, feasible, cold CPU ms)
         for name, planner in scored.items():
-            plan, _, cpu, _ = plan_multistart(planner, *segment)
-            runs[name] = (*replayed(plan, planner), cpu)
-        points = start_points(default, case.start, case.start_velocity, case.duration,
+            plan, _ = planner.plan_cold(Segment(*segment))
+            runs[name] = (*replayed(plan, planner), plan.solve_cpu_ms)
+        points = start_points(numbers, case.start, case.start_velocity, case.duration,
                               case.goal, GLOBAL_STARTS)
-        singles = [replayed(plan_segment(default, *segment, x0=x if k else None)[0], default)
+        singles = [replayed(default.plan(Segment(*segment, x0=x if k else None)), default)
                    for k, x in enumerate(points)]
-        fine_energy, fine_feasible = replayed(plan_multistart(fine, *segment)[0], fine)
+        fine_energy, fine_feasible = replayed(fine.plan_cold(Segment(*segment))[0], fine)
         candidates = [e for e, ok in singles if ok] + ([fine_energy] if fine_feasible else [])
         candidates += [e for e, ok, _ in runs.values() if ok]
         best = min(candidates) if candidates else np.nan

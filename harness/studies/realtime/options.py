@@ -4,13 +4,13 @@ scenarios (ways, oneshot, anatomy)."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 
 from harness.studies.realtime import measure as realtime
+from planning.config import PlannerConfig
 
-# the split energy quadrature as the tools plan it beside the default (planning.breaks)
+# the split energy quadrature as the tools plan it beside the default (planning.formulation.breaks)
 SPLIT = {"energy_quadrature": "split", "power_breaks": 7, "energy_samples": 24}
-# 8 starts on the default's rule, the best 2 distinct plans polished (config.polish)
-POLISHED = {"starts": 8, "polish": 2, "polish_samples": 40}
 
 
 def parser(doc: str) -> argparse.ArgumentParser:
@@ -24,3 +24,8 @@ def parser(doc: str) -> argparse.ArgumentParser:
 def setup(args: argparse.Namespace) -> realtime.Setup:
     """The study's setup with the scenario count and seed given."""
     return realtime.Setup(scenarios=args.scenarios, seed=args.seed)
+
+
+def polished(config: PlannerConfig) -> PlannerConfig:
+    """8 starts on the default's rule, the best 2 distinct plans polished (PenaltyOptions.polish)."""
+    return dataclasses.replace(config, starts=8).with_penalty(polish=2, polish_samples=40)

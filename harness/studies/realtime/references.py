@@ -9,7 +9,7 @@
 (iii) the one-shot plan with the obstacle's whole path known at t = 0 (multi-start, not
     re-planned): the value of information, reported, not a bar;
 and, beside them, the quadrature's own error: each re-plan's planned energy (Gauss N) against
-the dense integral of |P| along the same motion (planning.energy.dense_energy).
+the dense integral of |P| along the same motion (planning.formulation.energy.dense_energy).
 """
 
 from __future__ import annotations
@@ -18,11 +18,13 @@ import dataclasses
 
 import numpy as np
 
+from planning.anytime.planner import AnytimePlanner
+from planning.anytime.solver import Anytime
 from planning.config import PlannerConfig, Scenario
-from planning.energy import dense_energy
+from planning.formulation.energy import dense_energy
+from planning.planners import segment_planner
 from planning.replanning import Execution, execute
-from planning.segments import anytime_of, plan_multistart
-from planning.solver import ObstacleForecast, Planner
+from planning.types import ObstacleForecast, Segment
 
 TOLERANCE = 0.005  # relative: "within 0.5 %"
 UNLIMITED_MS = 1e4  # the references' CPU budget per solve: they run to convergence
@@ -30,11 +32,11 @@ UNLIMITED_MS = 1e4  # the references' CPU budget per solve: they run to converge
 
 def per_replan(baseline, config: PlannerConfig, cases: list[Scenario], starts: int) -> dict:
     """(i) and the quadrature's error, over every re-plan of Algorithm 2 on the cases."""
-    planner = Planner(baseline, config)
-    anytime = anytime_of(planner)
+    planner = AnytimePlanner(baseline, config)
+    anytime = planner.anytime
     # the references solve on planners of their own: their long solves would otherwise
     # count in the measured planner's estimate of an iteration's cost (AnytimeSQP)
-    multistart = anytime_of(Planner(baseline, config))
+    multistart = Anytime(baseline, config)
     gaps, safe_misses, errors, count, overhead, outside = [], 0, [], 0, [], []
     for case in cases:
         anytime.record = []
@@ -67,7 +69,7 @@ def objective(anytime, plan, t_begin: float, duration: float, goal, forecast) ->
     links = anytime.check(plan.trajectory, times[keep], forecast.centres[keep]).links
     violation = float(np.sum(np.maximum(config.threshold - links, 0.0)))
     unsafe = config.threshold - float(np.min(links, initial=np.inf)) > config.penalty_tolerance
-    return unsafe or not plan.success, plan.energy + config.elastic_weight * violation
+    return unsafe or not plan.success, plan.energy + config.anytime.elastic_weight * violation
 
 
 def _gap(ours: tuple, best: tuple) -> float:
@@ -82,24 +84,25 @@ def causal_multistart(baseline, config: PlannerConfig, cases: list[Scenario],
                       starts: int) -> list[Execution]:
     """(ii): Algorithm 2 whose every re-plan is the best of the warm start and `starts` cold
     start points, each run to convergence."""
-    reference = dataclasses.replace(config, replan_starts=starts,
-                                    replan_budget_ms=UNLIMITED_MS, replan_deadline_ms=None)
-    planner = Planner(baseline, reference)
+    reference = dataclasses.replace(
+        config.with_anytime(replan_starts=starts, replan_budget_ms=UNLIMITED_MS),
+        replan_deadline_ms=None)
+    planner = segment_planner(baseline, reference)
     return [execute(planner, case) for case in cases]
 
 
 def one_shot(baseline, config: PlannerConfig, cases: list[Scenario],
              starts: int) -> list[Execution]:
     """(iii): one multi-start plan per case with the obstacle's whole path known, followed."""
-    planner = Planner(baseline, dataclasses.replace(config, cold_budget_ms=UNLIMITED_MS))
+    planner = segment_planner(baseline, config.with_anytime(cold_budget_ms=UNLIMITED_MS))
     runs = []
     for case in cases:
         times = case.obstacle.sample_times
         known = ObstacleForecast(times, case.obstacle.position(times))
-        plan, ms, cpu, _ = plan_multistart(planner, case.start, case.start_velocity, 0.0,
-                                           case.duration, case.goal, known, starts)
-        runs.append(Execution((plan,), (0.0,), (ms,), () if plan.success else (plan.status,),
-                              (), (cpu,)))
+        plan, _ = planner.plan_cold(Segment(case.start, case.start_velocity, 0.0,
+                                            case.duration, case.goal, known), starts)
+        runs.append(Execution((plan,), (0.0,), (plan.solve_ms,),
+                              () if plan.success else (plan.status,), (), (plan.solve_cpu_ms,)))
     return runs
 
 

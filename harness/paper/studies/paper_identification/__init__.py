@@ -24,7 +24,7 @@ selection cost nothing). Peers: pysindy STLSQ (threshold) and SSR (stopping poin
 elimination path), each swept and chosen on our validation blocks inside the training
 part (identification.regression.peers); every reported time includes its sweep. Denoise then
 regress: the coupled fit on the GCV-denoised training torque beside the raw one at every
-noisy level (identification.identify's docstring summarizes the outcome). "True terms" are the
+noisy level (docs/identification.md, 'identification.identify', summarizes the outcome). "True terms" are the
 library features with a non-zero coefficient in the exact noise-free least-squares fit
 of the library; "true atoms" likewise for the Lagrangian atoms.
 """

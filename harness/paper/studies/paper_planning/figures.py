@@ -8,8 +8,8 @@ import numpy as np
 
 from harness.report.figures import plt, save_figure
 from planning.config import Scenario
-from planning.energy import power as mechanical_power
-from planning.kinematics import paper_arm
+from planning.formulation.energy import power as mechanical_power
+from planning.formulation.kinematics import paper_arm
 
 COLORS = {"pinocchio": "tab:green", "identified": "tab:orange"}
 
@@ -89,7 +89,7 @@ def markdown(results: dict, config) -> str:
         f"Quartic joint polynomials, energy sum |P| sigma/N (N = {config.energy_samples}) plus "
         f"alpha max(0, lambda - d)^2 (alpha = {config.penalty_weight}, lambda = "
         f"{config.threshold} m) to the link *segments* at every predicted obstacle sample, "
-        f"{config.solver} with exact CasADi derivatives; re-planning per Algorithm 2 (the "
+        f"{config.penalty.solver} with exact CasADi derivatives; re-planning per Algorithm 2 (the "
         "paper's parametrization; the row 'default' is the default planner, which integrates "
         "the true energy: see below). alpha is raised "
         "x10 while a solution dips more than 1 mm below lambda (exterior penalty method); "

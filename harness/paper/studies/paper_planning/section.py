@@ -6,6 +6,8 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
+from harness.paper.planning.speed import measure
+from harness.paper.planning.variants import PAPER
 from harness.paper.studies.paper_planning import figures
 from harness.paper.studies.paper_planning.studies import (
     minimum_jerk_study,
@@ -19,12 +21,10 @@ from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from harness.sections.base import Context, SectionResult, Target, check
 from planning.config import true_energy_config
-from planning.energy import absolute_energy
+from planning.formulation.energy import absolute_energy
+from planning.planners import segment_planner
 from planning.result import PlanResult, to_json
 from planning.scenarios import crossing_scenario, paper_scenario
-from planning.solver import Planner
-from planning.speed import measure
-from planning.variants import PAPER
 
 CLEARANCE_SLACK = 2e-3  # m: acceptance allows lambda - 2 mm where avoidance is needed
 
@@ -93,7 +93,7 @@ def run(ctx: Context) -> SectionResult:
     samples["difference_pct"] = 100 * (samples["energy_N10_J"] - samples["energy_N40_J"]) \
         / samples["energy_N40_J"]
     speed = speed_study(baseline, scenario, quick, config)
-    crossing_timings, _ = measure(Planner(baseline, config), crossing, cold_repeats=3)
+    crossing_timings, _ = measure(segment_planner(baseline, config), crossing, cold_repeats=3)
     speed["crossing"] = crossing_timings.summary()
     free_trajectory = free.execution.segments[0].trajectory
     sway, sway_result, sway_scenario = swaying_study(baseline, free_trajectory, quick, config)

@@ -7,20 +7,22 @@ import dataclasses
 
 import numpy as np
 
-from planning.baselines import MinimumJerk, solve_trust_constr
+from harness.paper.planning.baselines import MinimumJerk, solve_trust_constr
+from harness.paper.planning.speed import measure
+from harness.paper.planning.variants import PARAMETRIZATIONS, Parametrization
 from planning.config import PlannerConfig
-from planning.energy import absolute_energy, net_work
+from planning.formulation.energy import absolute_energy, net_work
+from planning.formulation.screening import screen
+from planning.penalty.solver import Planner
+from planning.planners import segment_planner
 from planning.replanning import execute
 from planning.result import PlanResult, evaluate, sample_execution
 from planning.scenarios import swaying_scenario
-from planning.screening import screen
-from planning.solver import ObstacleForecast, Planner
-from planning.speed import measure
-from planning.variants import PARAMETRIZATIONS, Parametrization
+from planning.types import ObstacleForecast
 
 
 def plan_scenario(model, scenario, config=None, avoid=True) -> PlanResult:
-    planner = Planner(model, config)
+    planner = segment_planner(model, config)
     return evaluate(execute(planner, scenario, avoid=avoid), scenario, model, planner.config)
 
 
@@ -52,7 +54,7 @@ def _parametrization(baseline, scenario, variant: Parametrization, stride: int) 
     """True energy of the unobstructed optimum and of the executed paper-scenario plan,
     the planned (objective) energy, and cold / re-plan timings for one parametrization."""
     config = variant.config()
-    planner = Planner(baseline, config)
+    planner = segment_planner(baseline, config)
     free = evaluate(execute(planner, scenario, avoid=False), scenario, baseline, config)
     paper = evaluate(execute(planner, scenario), scenario, baseline, config)
     timings, _ = measure(planner, scenario, cold_repeats=2, stride=stride)
@@ -92,7 +94,7 @@ def swaying_study(baseline, free_trajectory, quick: bool,
                   config: PlannerConfig | None = None) -> tuple[dict, PlanResult, object]:
     """The crossing obstacle swaying sideways: the constant-velocity prediction from the last
     two samples is never exact, so Algorithm 2 re-plans wherever the forecast threatens."""
-    planner = Planner(baseline, config)
+    planner = segment_planner(baseline, config)
     scenario = swaying_scenario(free_trajectory, planner.config.geometry)
     result = evaluate(execute(planner, scenario), scenario, baseline, planner.config)
     replan_ms = np.asarray(result.execution.solve_ms[1:])

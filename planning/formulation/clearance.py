@@ -1,0 +1,57 @@
+"""Distance from an obstacle centre to the arm's link segments (paper eq. 16, as segments).
+
+The paper's code measured the distance to the infinite line through a link;
+here it is the distance to the segment (each moving link of planning.formulation.kinematics: between
+consecutive joint origins and to the flange; on the Lynxmotion shoulder-elbow and
+elbow-end effector),
+via the clamped projection. The distance to a segment is continuously
+differentiable away from the segment itself (the clamp only switches where
+its derivative does not matter), which is enough for IPOPT with a quadratic
+exterior penalty. Units: metres.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from planning.formulation.kinematics import ArmGeometry
+
+
+def segment_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance (...) from points (..., 3) to segments a-b (..., 3 each, broadcast); a
+    zero-length segment is its point."""
+    ab, ap = b - a, point - a
+    t = np.einsum("...i,...i->...", ap, ab) / np.maximum(np.einsum("...i,...i->...", ab, ab),
+                                                          1e-300)
+    return np.linalg.norm(ap - np.clip(t, 0.0, 1.0)[..., None] * ab, axis=-1)
+
+
+def symbolic_segment_distance(point, a, b, length: float):
+    """CasADi distance from point to segment a-b of known constant length (m)."""
+    ab = b - a
+    t = ca.fmin(ca.fmax(ca.dot(point - a, ab) / length**2, 0.0), 1.0)
+    return ca.norm_2(point - a - t * ab)
+
+
+def link_clearances(geometry: ArmGeometry, q: np.ndarray, obstacle: np.ndarray) -> np.ndarray:
+    """Distances (n, links) of obstacle centres (n, 3) or (3,) to each link of the arm
+    (geometry.links) at joint angles q (n, dof)."""
+    points = geometry.points(q)
+    first, second = (np.asarray(index) for index in zip(*geometry.links, strict=True))
+    centres = np.reshape(obstacle, (-1, 1, 3))  # (n or 1, 1, 3): one centre per row of q
+    return segment_distance(centres, points[:, first], points[:, second])
+
+
+def symbolic_link_clearances(geometry: ArmGeometry, q, obstacle) -> list:
+    """CasADi distances of an obstacle centre to each link at joint vector q."""
+    points = geometry.symbolic_points(q)
+    return [symbolic_segment_distance(obstacle, points[i], points[j], length)
+            for (i, j), length in zip(geometry.links, geometry.link_lengths, strict=True)]
+
+
+def predicted_clearance(geometry: ArmGeometry, trajectory, forecast) -> float:
+    """Smallest clearance (m) of a motion's links to an obstacle forecast
+    (planning.types.ObstacleForecast) at its sample times."""
+    q = trajectory.position(forecast.times)
+    return float(link_clearances(geometry, q, forecast.centres).min())

@@ -1,0 +1,52 @@
+"""The segment planners behind one protocol: the factory picks one from the configuration,
+the replanner's old names stay accepted, and PLAN.json keeps them."""
+
+from __future__ import annotations
+
+import pytest
+
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
+from planning.anytime.planner import AnytimePlanner
+from planning.config import JSON_NAMES, PenaltyOptions, PlannerConfig, true_energy_config
+from planning.penalty.planner import PenaltyLoop
+from planning.penalty.polish import Polished
+from planning.planners import segment_planner
+from planning.types import SegmentPlanner
+
+
+@pytest.fixture(scope="module")
+def baseline():
+    return PinocchioModel(load_pinocchio("lynxmotion"))
+
+
+@pytest.mark.parametrize("name, kind", [("penalty", PenaltyLoop), ("fatrop", PenaltyLoop),
+                                        ("anytime", AnytimePlanner), ("sqp", AnytimePlanner)])
+def test_the_factory_picks_the_replanner_the_config_names(baseline, name, kind):
+    config = true_energy_config(replanner=name, compile_code=False)
+    planner = segment_planner(baseline, config)
+    assert isinstance(planner, kind) and isinstance(planner, SegmentPlanner)
+    assert planner.config.replanner in ("penalty", "anytime")
+    assert JSON_NAMES[planner.config.replanner] in ("fatrop", "sqp")
+
+
+def test_the_split_rule_and_real_time_iterations_keep_the_penalty_loop(baseline):
+    split = true_energy_config(energy_quadrature="split", energy_samples=24, compile_code=False)
+    iterating = true_energy_config(compile_code=False).with_penalty(replan_iterations=1)
+    assert isinstance(segment_planner(baseline, split), PenaltyLoop)
+    assert isinstance(segment_planner(baseline, iterating), PenaltyLoop)
+
+
+def test_the_anytime_sqps_cold_plans_are_polished_by_the_penalty_loop(baseline):
+    config = true_energy_config(compile_code=False).with_penalty(polish=1)
+    planner = segment_planner(baseline, config)
+    assert isinstance(planner, Polished) and isinstance(planner.inner, AnytimePlanner)
+
+
+def test_options_are_grouped_by_the_planner_they_belong_to():
+    config = PlannerConfig(penalty=PenaltyOptions(solver="ipopt")).with_anytime(
+        replan_budget_ms=20.0)
+    assert config.penalty.solver == "ipopt" and config.anytime.replan_budget_ms == 20.0
+    assert config.replanner == "penalty"
+    with pytest.raises(ValueError, match="replanner"):
+        PlannerConfig(replanner="newton")
