@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 
 from harness.experiments.planning import REPLAY_ITERATION_MS, plan_checks, reproducible, summary
-from harness.paper.planning.speed import measure
+from harness.experiments.speed import measure
 from harness.robots.arm import bench_motion, planner_config
 from harness.robots.baseline import PinocchioModel
 from harness.robots.extras import extra as load_extra

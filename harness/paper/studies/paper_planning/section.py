@@ -6,7 +6,7 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-from harness.paper.planning.speed import measure
+from harness.experiments.speed import measure
 from harness.paper.planning.variants import PAPER
 from harness.paper.studies.paper_planning import figures
 from harness.paper.studies.paper_planning.studies import (
