@@ -32,10 +32,3 @@ def multisine(n: int, dof: int, seed: int, centre, amplitude, duration: float = 
         qd[:, j] = np.cos(arg) @ (a * w)
         qdd[:, j] = -np.sin(arg) @ (a * w**2)
     return Motion(t, q, qd, qdd)
-
-
-def lynxmotion_motion(n: int = 4000, seed: int = 0, duration: float = 20.0) -> Motion:
-    """Wide multi-sine inside the Lynxmotion joint limits (q1 in [-pi/2, pi/2], q2 in
-    [0, pi], q3 in [-pi, 0]) with a 0.1 rad margin."""
-    centre = [0.0, np.pi / 2, -np.pi / 2]
-    return multisine(n, 3, seed, centre, np.pi / 2 - 0.1, duration)

@@ -5,6 +5,8 @@ import pinocchio as pin
 
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
+from identification.signals import multisine
+from identification.torque_model import Motion
 
 
 def central_difference(fun, x, h=1e-6):
@@ -55,3 +57,10 @@ def segments(planner):
     from planning.planners import segment_planner
 
     return segment_planner(planner.model, planner.config, planner)
+
+
+def lynxmotion_motion(n: int = 4000, seed: int = 0, duration: float = 20.0) -> Motion:
+    """Wide multi-sine inside the Lynxmotion joint limits (q1 in [-pi/2, pi/2], q2 in
+    [0, pi], q3 in [-pi, 0]) with a 0.1 rad margin."""
+    centre = [0.0, np.pi / 2, -np.pi / 2]
+    return multisine(n, 3, seed, centre, np.pi / 2 - 0.1, duration)

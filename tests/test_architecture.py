@@ -1,5 +1,8 @@
-"""The layout's rules, checked on the source: data flows one way, no import cycle,
-planning meets identification only at the torque-model interface, modules stay small."""
+"""The layout's rules (README.md, 'Layout'), checked on the source: data flows one way,
+no import cycle, planning meets identification only at the torque-model interface, package
+roots import nothing, the paper's reproduction (harness.paper) is imported by nothing
+outside it (the product names it lazily: harness.robots.extras, harness.studies), modules
+stay small."""
 
 from __future__ import annotations
 
@@ -10,7 +13,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("harness", "identification", "planning", "models")
-MAX_LINES = 300  # modules stay small (DESIGN.md)
+MAX_LINES = 300  # modules stay small
 
 
 def _modules() -> dict[str, Path]:
@@ -65,8 +68,14 @@ def test_planning_imports_only_the_torque_model_interface_of_identification():
 
 def test_package_roots_load_nothing():
     """Importing identification.torque_model must not load the rest of identification."""
-    for pkg in ("identification", "planning"):
+    for pkg in ("identification", "planning", "harness.paper"):
         assert not GRAPH[pkg], (pkg, GRAPH[pkg])
+
+
+def test_nothing_outside_the_paper_imports_it():
+    bad = {m: sorted(i for i in deps if i.startswith("harness.paper"))
+           for m, deps in GRAPH.items() if not m.startswith("harness.paper")}
+    assert not {m: d for m, d in bad.items() if d}
 
 
 def test_no_import_cycle():

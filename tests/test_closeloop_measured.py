@@ -19,7 +19,7 @@ from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from identification.closeloop.measured import close_loop_measured
 from identification.friction import sigmoid_friction
-from identification.signals import lynxmotion_motion
+from tests.helpers import lynxmotion_motion
 
 SIGMOID = (0.08, 15.0, 0.03)  # phi1 N m, phi2 s/rad, phi3 rad/s on joint 1
 VISCOUS = 0.05  # N m s/rad on joint 2

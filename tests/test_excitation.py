@@ -69,7 +69,7 @@ def test_designed_better_conditioned_than_default_ur5(ur5_file):
     traj = read_trajectory(ur5_file[0], 6)
     plant = load_plant("ur5")
     regressor = AtomRegressor(robot_library("ur5"))
-    default, _ = default_excitation(plant, int(DURATION * 200), 0)
+    default, _ = default_excitation(plant, "ur5", int(DURATION * 200), 0)
     grid = np.linspace(0, DURATION, 200, endpoint=False)
     assert log_condition(regressor, *traj.evaluate(grid)) < log_condition(regressor, *default.evaluate(grid))
 
@@ -93,7 +93,7 @@ def test_generate_along_the_file_matches_rnea(ur5_file, tmp_path):
 
 def test_default_excitation_holds_the_velocity_limits():
     plant = load_plant("ur5")
-    exc, _ = default_excitation(plant, 400, 0)
+    exc, _ = default_excitation(plant, "ur5", 400, 0)
     _, qd, _ = exc.evaluate(np.arange(4000) / 200.0)
     assert np.all(np.abs(qd) <= plant.velocity_limits())
     lynx = load_plant("lynxmotion")  # within its limits: the excitation it always had

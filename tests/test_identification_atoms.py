@@ -13,7 +13,7 @@ from harness.robots.registry import load_pinocchio
 from identification.identify import identify
 from identification.library.prior_knowledge import Atom, Combination, arm_atoms, prior_knowledge_library
 from identification.regression.coupled import AtomBasis
-from identification.signals import lynxmotion_motion
+from tests.helpers import lynxmotion_motion
 
 
 @pytest.fixture(scope="module")

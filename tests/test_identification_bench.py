@@ -8,7 +8,7 @@ import pytest
 from threadpoolctl import threadpool_limits
 
 from harness.data.generate import generate
-from harness.studies.paper_identification import denoising, robustness, study
+from harness.paper.studies.paper_identification import denoising, robustness, study
 
 
 @pytest.fixture(scope="module")

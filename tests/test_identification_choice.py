@@ -6,11 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from harness.paper.identification.published_library import paper_library
 from harness.robots.torque_models import robot_identification, robot_library
 from identification.choice import choose_fit, choose_prior, choose_regressor, library_name
 from identification.errors import IdentificationError
 from identification.library.prior_knowledge import prior_knowledge_library
-from identification.library.published import paper_library
 from identification.regression.consistent import ConsistentRegressor
 from identification.regression.torque import (
     BaseAtomRegressor,

@@ -11,7 +11,7 @@ from harness.cli import main
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from identification.model import load_model
-from identification.signals import lynxmotion_motion
+from tests.helpers import lynxmotion_motion
 
 
 @pytest.fixture(scope="module")

@@ -9,16 +9,17 @@ import casadi
 import numpy as np
 import pytest
 
+from harness.paper.identification.published_library import paper_library
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from identification.errors import IdentificationError, LibraryRankWarning
 from identification.identify import identify
 from identification.library.features import parse_feature
+from identification.library.generic import generic_library
 from identification.library.prior_knowledge import prior_knowledge_library
-from identification.library.published import generic_library, paper_library
 from identification.model import load_model, model_to_dict
 from identification.regression.oracle import fit_base_parameters
-from identification.signals import lynxmotion_motion
+from tests.helpers import lynxmotion_motion
 
 
 @pytest.fixture(scope="module")

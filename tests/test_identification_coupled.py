@@ -10,16 +10,16 @@ import numpy as np
 import pytest
 
 from harness.data.generate import generate
+from harness.paper.identification.published_library import paper_library
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from identification.errors import IdentificationError
 from identification.identify import identify
 from identification.library.prior_knowledge import absolute_chain_atoms, arm_atoms, prior_knowledge_library
-from identification.library.published import paper_library
 from identification.model import load_model, model_to_dict
 from identification.regression.coupled import AtomBasis, CoupledRegression, base_atoms
 from identification.regression.oracle import fit_base_parameters
-from identification.signals import lynxmotion_motion
+from tests.helpers import lynxmotion_motion
 
 
 @pytest.fixture(scope="module")

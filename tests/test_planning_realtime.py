@@ -9,7 +9,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from harness.paper.planning.speed import measure
+from harness.experiments.speed import measure
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from planning.config import PenaltyOptions, PlannerConfig, Scenario

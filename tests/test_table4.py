@@ -6,9 +6,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from harness.paper.identification.table4 import (
+    CONSISTENT_DOUBLE_PENDULUM,
+    SYSTEMS,
+    fit_system,
+    lagrangian_residual,
+)
 from identification.identify import identify
 from identification.library.features import parse_feature
-from identification.table4 import CONSISTENT_DOUBLE_PENDULUM, SYSTEMS, fit_system, lagrangian_residual
 
 BY_NAME = {s.name: s for s in (*SYSTEMS, CONSISTENT_DOUBLE_PENDULUM)}
 

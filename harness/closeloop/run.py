@@ -202,7 +202,7 @@ def run_closeloop(plant: str | Path, samples: int = 4000, noise: float = 0.05, s
     load_chain(robot)  # a fixed-base open serial chain of revolute joints, or one clear error
     model = load_pinocchio(robot)
     p = check_plant(plant, model.nv, robot)
-    data = generate(str(plant), samples, noise, seed, "measured", bias)
+    data = generate(str(plant), samples, noise, seed, "measured", bias, robot=robot)
     split = int(round(samples * (1.0 - holdout)))
     payload = PayloadTorque(model, flange_frame(model) or "")
     truth, outside = true_effects(p.model, effects_reference(robot))

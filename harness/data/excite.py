@@ -128,7 +128,7 @@ def design_for(robot: str, duration: float, rate: float, acceleration: float = D
         raise UserError(f"robot {robot}: the designed excitation touches a link or a limit at "
                         "the written samples; try another --seed or a longer --duration")
     grid = np.linspace(0.0, duration, CONDITION_POINTS, endpoint=False)
-    default, _ = default_excitation(plant, max(int(round(duration * SAMPLE_RATE)), 10), seed)
+    default, _ = default_excitation(plant, robot, max(int(round(duration * SAMPLE_RATE)), 10), seed)
     return DesignedExcitation(design, trajectory,
                               float(np.exp(log_condition(regressor, *design.excitation.evaluate(grid)))),
                               float(np.exp(log_condition(regressor, *default.evaluate(grid)))), limits)

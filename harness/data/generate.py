@@ -18,8 +18,9 @@ from harness.data.sensors import SensorConfig, torque_noise
 from harness.data.tracking import simulate_measured
 from harness.errors import UserError
 from harness.robots.baseline import PinocchioModel
+from harness.robots.extras import published_library
 from harness.robots.plant import Plant, load_plant
-from harness.robots.registry import robot_reference
+from harness.robots.registry import robot_entry, robot_reference
 from identification.excitation.fourier import FourierExcitation, design_excitation, normalized_condition
 from identification.regression.oracle import base_columns
 
@@ -28,17 +29,19 @@ SAMPLE_RATE = 200.0  # Hz, rate of the data handed to identification
 
 
 
-def _condition_fn(plant: Plant, rate: float, samples: int):
+def _condition_fn(plant: Plant, robot: str, rate: float, samples: int):
     """Excitation quality: the worse of the normalized conditions of the plant's
-    base regressor (Pinocchio) and of the paper's feature library (3-DOF)."""
+    base regressor (Pinocchio) and of the library robot's registry entry declares for its
+    data (Robot.excitation_library), if any."""
     pmodel = plant.pinocchio()
+    declared = declared_library(robot)
     t = np.linspace(0.0, samples / rate, min(samples, 400), endpoint=False)
     baseline = PinocchioModel(pmodel)
     base: list[np.ndarray] = []  # base-parameter columns: structural, found on the first candidate
 
     def condition(exc: FourierExcitation) -> float:
         states = exc.evaluate(t)
-        conds = [library_report(*states)["library_condition"]] if plant.dof == 3 else []
+        conds = [library_condition(declared, *states).condition] if declared else []
         Y = baseline.regressor(*states).reshape(-1, 10 * (pmodel.njoints - 1))
         if not base:
             base.append(base_columns(Y))
@@ -48,11 +51,12 @@ def _condition_fn(plant: Plant, rate: float, samples: int):
     return condition
 
 
-def default_excitation(p: Plant, samples: int, seed: int) -> tuple[FourierExcitation, float]:
+def default_excitation(p: Plant, robot: str, samples: int, seed: int
+                       ) -> tuple[FourierExcitation, float]:
     """generate's own excitation for `samples` points at SAMPLE_RATE: the best-conditioned
     of seeded random Fourier series in the joint limits and the URDF's speed limits."""
     lo, hi = p.limits()
-    return design_excitation(lo, hi, seed, _condition_fn(p, SAMPLE_RATE, samples),
+    return design_excitation(lo, hi, seed, _condition_fn(p, robot, SAMPLE_RATE, samples),
                              velocity=p.velocity_limits())
 
 
@@ -102,19 +106,22 @@ def generate(
     bias: float = 0.2,
     sensors: SensorConfig | None = None,
     excitation: Trajectory | None = None,
+    robot: str | None = None,
 ) -> Dataset:
     """One dataset of `samples` points at SAMPLE_RATE Hz; noise is a fraction of torque std.
-    With an excitation (inverse mode only): along its first `samples` states, at its rate."""
+    With an excitation (inverse mode only): along its first `samples` states, at its rate.
+    robot: the registered robot plant is a variant of, whose entry's declared library the
+    excitation and the report use (default: plant's own entry)."""
     _validate(samples, noise, bias)
     p = load_plant(plant)
     rate = SAMPLE_RATE
     if excitation is None:
-        exc, cond = default_excitation(p, samples, seed)
+        exc, cond = default_excitation(p, robot or plant, samples, seed)
         t = np.arange(samples) / SAMPLE_RATE
     else:
         exc = excitation
         t, rate = _along(excitation, p.dof, samples, mode)
-        cond = _condition_fn(p, rate, samples)(exc)
+        cond = _condition_fn(p, robot or plant, rate, samples)(exc)
     rng = np.random.default_rng(seed + 1)
     meta = dict(plant=robot_reference(plant), mode=mode, noise=noise, bias=bias, seed=seed, dof=p.dof,
                 samples=samples, rate=rate, excitation_condition=cond)
@@ -128,24 +135,31 @@ def generate(
         meta.update(stats)
     else:
         raise UserError(f"--mode must be 'inverse' or 'measured', got '{mode}'")
-    meta.update(library_report(q, qd, qdd, p.pinocchio()))
+    meta.update(library_report(robot or plant, q, qd, qdd, p.pinocchio()))
     tau = tau_clean + torque_noise(tau_clean, noise, bias, rng)
     return Dataset(t, q, qd, qdd, tau, tau_clean, meta, truth)
 
 
-def report_library(dof: int, pmodel=None):
-    """The library whose conditioning is reported for a dof-joint dataset.
+def declared_library(robot: str):
+    """The library robot's registry entry declares for its data (Robot.excitation_library:
+    the Lynxmotion's is the paper's published 75 features), or None."""
+    name = robot_entry(robot).excitation_library
+    return published_library(name) if name else None
 
-    3 joints: the paper's published 75 features (the paper's arm). Otherwise the base atoms
-    generated from the plant's kinematics (identification.library.kinematic), or, with no
-    Pinocchio model of the plant, the generic polynomial x trig library.
+
+def report_library(robot: str, dof: int, pmodel=None):
+    """The library whose conditioning is reported for robot's data: the one its registry
+    entry declares (declared_library); otherwise the base atoms generated from the plant's
+    kinematics (identification.library.kinematic), or, with no Pinocchio model of the plant,
+    the generic polynomial x trig library.
     """
     from identification.library.chain import ChainError, KinematicChain
+    from identification.library.generic import generic_library
     from identification.library.kinematic import KinematicLibrary
-    from identification.library.published import generic_library, paper_library
 
-    if dof == 3:
-        return paper_library()
+    declared = declared_library(robot)
+    if declared is not None:
+        return declared
     if pmodel is not None and pmodel.nv == dof:
         try:
             return KinematicLibrary.generate(KinematicChain.from_pinocchio(pmodel))
@@ -154,12 +168,17 @@ def report_library(dof: int, pmodel=None):
     return generic_library(dof) if dof <= 2 else generic_library(dof, trig_joints=(1, 2))
 
 
-def library_report(q, qd, qdd, pmodel=None) -> dict:
-    """Rank and normalized condition of the report library on this data."""
+def library_condition(library, q, qd, qdd):
+    """Rank and normalized condition of library's columns on this motion."""
     from identification.library.base import conditioning
 
-    library = report_library(q.shape[1], pmodel)
     columns = library.evaluate(q, qd, qdd)
-    cond = conditioning(columns.reshape(-1, columns.shape[-1]), library.names)
+    return conditioning(columns.reshape(-1, columns.shape[-1]), library.names)
+
+
+def library_report(robot: str, q, qd, qdd, pmodel=None) -> dict:
+    """Rank and normalized condition of robot's report library on this data."""
+    library = report_library(robot, q.shape[1], pmodel)
+    cond = library_condition(library, q, qd, qdd)
     return {"library": library.name, "library_rank": cond.rank, "library_size": cond.size,
             "library_condition": cond.condition}

@@ -43,8 +43,11 @@ class Robot:
     # the base atoms generated from its kinematics, for any arm)
     libraries: tuple[str, ...] = ("kinematic",)
     solver: str = "ipopt"  # the planner's NLP solver (planning.penalty.backends)
+    # a published library (harness.robots.extras) its data report the conditioning of and
+    # its excitation design keeps well conditioned; None: its kinematics' base atoms, reported
+    excitation_library: str | None = None
     # reproductions the bench's sections run for this robot beside their common work
-    # (harness.sections.paper: "paper", the paper's Tables III-IV and planning scenario)
+    # (harness.robots.extras: "paper", the paper's Tables III-IV and planning scenario)
     extras: tuple[str, ...] = ()
     logs: tuple[str, ...] = ()  # measured logs of this robot shipped under data/
 
@@ -76,7 +79,7 @@ ROBOTS = {
         # the paper scenario's start and goal; the obstacle crosses the forearm
         motion=((pi / 2, pi / 5, -pi / 4), (-pi / 2, 2 * pi / 5, -pi / 3), "link3"),
         libraries=("prior", "kinematic", "prior-general", "paper"), solver="fatrop",
-        extras=("paper",),
+        excitation_library="paper", extras=("paper",),
     ),
     "double_pendulum": lambda: _erd(
         "double_pendulum", "double_pendulum_description/urdf/double_pendulum.urdf"

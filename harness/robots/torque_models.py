@@ -75,8 +75,9 @@ def library_named(name: str, robot: str, dof: int | None = None):
     'kinematic' (base atoms generated from its kinematics), 'prior' / 'prior-general' (derived
     from simple structures: 3-DOF arms), 'paper' (the published 75 features, 3-DOF),
     'generic' (polynomial x trig, any dof)."""
+    from harness.robots.extras import published_library
+    from identification.library.generic import generic_library
     from identification.library.prior_knowledge import prior_knowledge_library
-    from identification.library.published import generic_library, paper_library
 
     dof = load_chain(robot).dof if dof is None else dof
     if name == "kinematic":
@@ -87,7 +88,7 @@ def library_named(name: str, robot: str, dof: int | None = None):
     if name == "generic" or dof != 3:
         return generic_library(dof)
     if name == "paper":
-        return paper_library()
+        return published_library(name)
     return prior_knowledge_library(3, symmetric_links=name != "prior-general")
 
 

@@ -2,7 +2,7 @@
 
 A section is the module harness.sections.<name> (for a package, its `section` module) with
 `run(context) -> SectionResult` (harness.sections.base). Work only some robots need is
-declared in the robot's registry entry (Robot.extras, harness.sections.paper), not branched
+declared in the robot's registry entry (Robot.extras, harness.robots.extras), not branched
 on here.
 """
 
@@ -13,18 +13,17 @@ import importlib
 SECTIONS = ("identification", "planning", "replay", "closeloop", "real_data")
 
 
-def entry_module(package: str, name: str, known):
-    """The module package.<name> with run(context), or for a sub-package its `section`
-    module (ValueError if name is not one of known)."""
+def entry_module(kind: str, name: str, known, module: str):
+    """The module (dotted path) with run(context) of the kind's entry name, or for a package
+    its `section` module (ValueError if name is not one of known)."""
     if name not in known:
-        raise ValueError(f"unknown {package.rsplit('.', 1)[-1]} {name!r} (known: "
-                         f"{', '.join(known)})")
-    module = importlib.import_module(f"{package}.{name}")
-    if hasattr(module, "__path__"):
-        module = importlib.import_module(f"{package}.{name}.section")
-    return module
+        raise ValueError(f"unknown {kind} {name!r} (known: {', '.join(known)})")
+    entry = importlib.import_module(module)
+    if hasattr(entry, "__path__"):
+        entry = importlib.import_module(f"{module}.section")
+    return entry
 
 
 def load_section(name: str):
     """The entry module of section name."""
-    return entry_module("harness.sections", name, SECTIONS)
+    return entry_module("sections", name, SECTIONS, f"harness.sections.{name}")

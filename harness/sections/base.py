@@ -85,7 +85,7 @@ class SectionResult:
     outputs: dict[str, Any] = field(default_factory=dict)
 
     def extend(self, other: SectionResult, name: str) -> None:
-        """Add a robot-declared extra's work (harness.sections.paper) under its name: its
+        """Add a robot-declared extra's work (harness.robots.extras) under its name: its
         text as a subsection, its checks and targets prefixed, its results under name, its
         plans beside this section's."""
         self.markdown += f"\n\n### {name}\n\n{other.markdown}"

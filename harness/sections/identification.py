@@ -36,10 +36,10 @@ from harness.experiments.identification import (
 from harness.experiments.next_run import markdown as next_run_markdown
 from harness.experiments.next_run import next_run, rule_targets
 from harness.robots.baseline import PinocchioModel
+from harness.robots.extras import extra as load_extra
 from harness.robots.registry import load_pinocchio
 from harness.robots.torque_models import robot_identification, robot_library
 from harness.sections.base import Context, Row, SectionResult, Target, check
-from harness.sections.paper import EXTRAS
 from identification.identify import identify
 
 # draws (seeds) per torque noise level; the paper's level, 5 %, gets the most. Seeds from
@@ -130,7 +130,7 @@ def run(ctx: Context) -> SectionResult:
     out = SectionResult(md, results, checks, targets, headline,
                         outputs={"model": model, "draws": draws})
     for extra in ctx.robot.extras:
-        out.extend(EXTRAS[extra].identification(ctx), extra)
+        out.extend(load_extra(extra).identification(ctx), extra)
     return out
 
 

@@ -1,8 +1,9 @@
 """Long studies, run on demand: `torquebench study NAME --out DIR` (or `bench --full`).
 
-Each is a module harness.studies.<name> (for a package, its `section` module) with
-`run(context) -> SectionResult` like a bench section, and a one-line description here. A
-study reports what it measures as results, checks and targets; it is smoke-tested in
+Each is a module (for a package, its `section` module) with `run(context) -> SectionResult`
+like a bench section, and a one-line description here: harness.studies.<name>, or the module
+MODULES names (the paper's studies live in harness.paper, imported only when run). A study
+reports what it measures as results, checks and targets; it is smoke-tested in
 tests/test_studies.py on its quick form.
 """
 
@@ -21,7 +22,11 @@ STUDIES = {
                         "declared models (Pinocchio and the identified one)",
 }
 
+# studies that live outside this package: name -> their module
+MODULES = {"paper_identification": "harness.paper.studies.paper_identification",
+           "paper_planning": "harness.paper.studies.paper_planning"}
+
 
 def load_study(name: str):
     """The entry module of study name."""
-    return entry_module("harness.studies", name, STUDIES)
+    return entry_module("studies", name, STUDIES, MODULES.get(name, f"harness.studies.{name}"))

@@ -97,7 +97,7 @@ class PeerRegression(Regressor):
         self.intercept_ = float(mean_y - mean_x @ coef)
         self.seconds_ = time.perf_counter() - start
 
-    # the names the bench (harness.studies.paper_identification) reads from tune's result
+    # the names the study (harness.paper.studies.paper_identification) reads from tune's result
     coef = property(lambda self: self.coef_)
     intercept = property(lambda self: self.intercept_)
     setting = property(lambda self: self.setting_)

@@ -7,12 +7,12 @@ import dataclasses
 import numpy as np
 
 from harness.experiments.planning import REPLAY_ITERATION_MS, plan_checks, reproducible, summary
-from harness.paper.planning.speed import measure
+from harness.experiments.speed import measure
 from harness.robots.arm import bench_motion, planner_config
 from harness.robots.baseline import PinocchioModel
+from harness.robots.extras import extra as load_extra
 from harness.robots.registry import load_pinocchio
 from harness.sections.base import Context, Row, SectionResult, Target, check
-from harness.sections.paper import EXTRAS
 from harness.sections.planning import figures
 from planning.planners import segment_planner
 from planning.replanning import execute
@@ -125,7 +125,7 @@ def run(ctx: Context) -> SectionResult:
     out.figures.append(figures.path3d(executed, scenario, config.geometry,
                                       ctx.figures_dir / "planning_path3d.png"))
     for extra in ctx.robot.extras:
-        out.extend(EXTRAS[extra].planning(ctx, models), extra)
+        out.extend(load_extra(extra).planning(ctx, models), extra)
     return out
 
 

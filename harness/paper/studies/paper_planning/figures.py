@@ -1,4 +1,4 @@
-"""Figures and markdown of the planning section (paper Figs. 9, 10, 11)."""
+"""Figures and markdown of the paper_planning study (paper Figs. 9, 10, 11)."""
 
 from __future__ import annotations
 

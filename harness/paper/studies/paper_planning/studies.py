@@ -1,4 +1,4 @@
-"""The planning section's comparisons: minimum jerk, parametrizations against dense quadrature,
+"""The paper_planning study's comparisons: minimum jerk, parametrizations against dense quadrature,
 the swaying obstacle, and the solver timings (cold plans, warm re-plans, per scenario)."""
 
 from __future__ import annotations
@@ -7,8 +7,8 @@ import dataclasses
 
 import numpy as np
 
+from harness.experiments.speed import measure
 from harness.paper.planning.baselines import MinimumJerk, solve_trust_constr
-from harness.paper.planning.speed import measure
 from harness.paper.planning.variants import PARAMETRIZATIONS, Parametrization
 from planning.config import PlannerConfig
 from planning.formulation.energy import absolute_energy, net_work

@@ -28,8 +28,8 @@ import numpy as np
 from identification.identify import identify
 from identification.library.base import Library
 from identification.library.features import parse_feature
+from identification.library.generic import generic_library
 from identification.library.prior_knowledge import Atom, absolute_chain_atoms, derive
-from identification.library.published import generic_library
 from identification.metrics import rel_error
 from identification.regression.coupled import CoupledRegression
 from identification.signals import Motion, multisine

@@ -1,4 +1,4 @@
-"""Bench section (entry point: .section.run): energy-optimal planning with moving-obstacle
+"""Study `paper_planning` (entry point: .section.run): energy-optimal planning with moving-obstacle
 avoidance (paper III.G).
 
 Plans the paper's scenario with the closed-form (Pinocchio) model and, when one is

@@ -1,6 +1,6 @@
 """Study `paper_identification` (entry point: .section.run): coupled and per-joint sparse
 identification vs the base-parameter oracle and pysindy (paper Figs. 2-8, Table III; Table IV
-is the identification section's paper extra).
+runs in the bench's identification section, the Lynxmotion's paper extra: harness.paper.sections).
 
 Data: the default robot, `generate('lynxmotion', 4000, noise, seed=0)`, last 25 % held
 out; a fresh excitation (seed 5) checks that the model predicts a trajectory it was not

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.paper.studies.paper_identification.study import n_train
 from harness.report.figures import plt, save_figure
-from harness.studies.paper_identification.study import n_train
 from identification.regression.denoise import denoise
 
 

@@ -1,11 +1,11 @@
-"""Denoising in the identification section: the GCV-denoised torque against the clean one, and
+"""Denoising in the paper_identification study: the GCV-denoised torque against the clean one, and
 the coupled fit on the denoised training torque beside the raw one (denoise then regress)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from harness.studies.paper_identification.study import HOLDOUT, n_train, scores
+from harness.paper.studies.paper_identification.study import HOLDOUT, n_train, scores
 from identification.identify import identify
 from identification.regression.coupled import weighted_lstsq
 from identification.regression.denoise import denoise

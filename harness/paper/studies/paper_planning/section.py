@@ -1,18 +1,15 @@
-"""The planning section of the bench: plans the scenarios, checks acceptance, writes the
-tables and figures. What is measured: see the package docstring (harness.studies.paper_planning)."""
+"""The paper_planning study's entry: plans the scenarios, checks acceptance, writes the
+tables and figures. What is measured: see the package docstring (harness.paper.studies.paper_planning)."""
 
 from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
 
-from harness.paper.planning.speed import measure
+from harness.experiments.speed import measure
 from harness.paper.planning.variants import PAPER
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
-from harness.sections.base import Context, SectionResult, Target, check
-from harness.studies.paper_planning import figures
-from harness.studies.paper_planning.studies import (
+from harness.paper.studies.paper_planning import figures
+from harness.paper.studies.paper_planning.studies import (
     minimum_jerk_study,
     parametrization_study,
     plan_scenario,
@@ -20,6 +17,9 @@ from harness.studies.paper_planning.studies import (
     speed_study,
     swaying_study,
 )
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
+from harness.sections.base import Context, SectionResult, Target, check
 from planning.config import true_energy_config
 from planning.formulation.energy import absolute_energy
 from planning.planners import segment_planner

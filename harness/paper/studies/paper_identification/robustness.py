@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.studies.paper_identification.study import (
+from harness.paper.studies.paper_identification.study import (
     METHODS,
     RATIO_LIMIT,
     ROBUST_SEEDS,

@@ -1,6 +1,6 @@
-"""The identification section of the bench: runs the study, writes its tables and figures.
+"""The paper_identification study's entry: runs it, writes its tables and figures.
 
-What is measured and how: see the package docstring (harness.studies.paper_identification)."""
+What is measured and how: see the package docstring (harness.paper.studies.paper_identification)."""
 
 from __future__ import annotations
 
@@ -9,14 +9,13 @@ from pathlib import Path
 
 from threadpoolctl import threadpool_limits
 
-from harness.sections.base import Context, SectionResult, Target
-from harness.studies.paper_identification.denoising import (
+from harness.paper.studies.paper_identification.denoising import (
     denoise_markdown,
     denoise_regress_markdown,
     denoise_then_regress,
 )
-from harness.studies.paper_identification.figures import section_figures
-from harness.studies.paper_identification.robustness import (
+from harness.paper.studies.paper_identification.figures import section_figures
+from harness.paper.studies.paper_identification.robustness import (
     acceptance,
     default_choice,
     expected_errors,
@@ -25,7 +24,7 @@ from harness.studies.paper_identification.robustness import (
     robustness_markdown,
     why_joint3,
 )
-from harness.studies.paper_identification.study import (
+from harness.paper.studies.paper_identification.study import (
     LEVELS,
     METHODS,
     NOISE_SEEDS,
@@ -35,6 +34,7 @@ from harness.studies.paper_identification.study import (
     compare,
     context,
 )
+from harness.sections.base import Context, SectionResult, Target
 
 RATIO_TARGET = 1.25  # x the oracle's held-out error, every joint at 5 %
 

@@ -9,9 +9,9 @@ import dataclasses
 import numpy as np
 
 from harness.data.generate import generate
+from harness.paper.identification.published_library import paper_library
+from harness.paper.identification.table4 import CONSISTENT_DOUBLE_PENDULUM, SYSTEMS, fit_system
 from harness.sections.base import Context, Row, SectionResult, Target, check
-from identification.library.published import paper_library
-from identification.table4 import CONSISTENT_DOUBLE_PENDULUM, SYSTEMS, fit_system
 
 COEFFICIENT_TARGET = 0.02  # relative error of every Table IV coefficient
 SPANS = 1e-9  # noise-free least-squares residual of a joint the library spans
@@ -56,7 +56,7 @@ def _markdown(fits, span) -> list[str]:
     md = ["Table IV at 5 % noise (4000 samples, 60 s multi-sine; +/- = standard error of the "
           "refit; libraries derived from each structure's atoms where known; the printed "
           "double pendulum is not Lagrangian and is fitted jointwise, see "
-          "identification/table4.py):", "",
+          "harness/paper/identification/table4.py):", "",
           "| system | method | eq. | term | true | paper identified | ours +/- s.e. | error |",
           "|---|---|---|---|---|---|---|---|"]
     for f in fits:
