@@ -16,6 +16,9 @@ import numpy as np
 
 from harness.errors import UserError
 
+# a MODEL.json's own standard parameters, 13 per joint, when it carries them at top level
+PARAMETERS_KEY = "body_parameters"
+JOINT_PARAMETERS = ("armature", "viscous", "coulomb")  # metrics.physical.joint_parameters, in order
 MIN_MASS = 1e-9  # kg: MuJoCo needs a positive mass on a moving body
 
 
@@ -33,6 +36,23 @@ def body_inertials(parameters: np.ndarray) -> tuple[float, np.ndarray, np.ndarra
     quat = np.zeros(4)
     mujoco.mju_mat2Quat(quat, axes.ravel())
     return mass, c, np.maximum(moments, 0.0), quat
+
+
+def model_standard_parameters(payload: dict) -> np.ndarray | None:
+    """The 13 dof standard parameters (module docstring) of a MODEL.json's payload: its
+    'body_parameters', else a consistent fit's metrics.physical; None for a model without
+    bodies (a fit in the robot's base atoms, a feature model)."""
+    if payload.get(PARAMETERS_KEY) is not None:
+        return np.asarray(payload[PARAMETERS_KEY], float)
+    physical = (payload.get("metrics") or {}).get("physical") or {}
+    if "standard_parameters" not in physical or "joint_parameters" not in physical:
+        return None
+    joints = physical["joint_parameters"]
+    try:
+        return np.array([*physical["standard_parameters"],
+                         *(v for k in JOINT_PARAMETERS for v in joints[k])], float)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise UserError(f"the model's metrics.physical parameters are malformed: {exc}") from None
 
 
 def set_standard_parameters(model: mujoco.MjModel, parameters) -> mujoco.MjModel:
