@@ -127,3 +127,21 @@ def test_bad_input_is_one_line(fitted, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and not out.exists()
     assert robot_entry("ur5").urdf is not None
+
+
+def test_replay_simulates_the_consistent_fits_bodies(fitted):
+    """`replay --plant MODEL.json` reads metrics.physical as it reads 'body_parameters'."""
+    from harness.replay.plants import replay_plant
+
+    payload = json.loads((fitted / "m.json").read_text())
+    physical = payload["metrics"]["physical"]
+    plant = replay_plant(str(fitted / "m.json"), "ur5").model
+    masses = physical["standard_parameters"][::10]
+    bodies = [plant.jnt_bodyid[j] for j in range(plant.njnt)]
+    assert np.allclose(plant.body_mass[bodies], masses, rtol=1e-9)
+    assert np.allclose(plant.dof_damping, physical["joint_parameters"]["viscous"], rtol=1e-9)
+    explicit = {**payload, "body_parameters": [*physical["standard_parameters"], *(
+        v for k in ("armature", "viscous", "coulomb") for v in physical["joint_parameters"][k])]}
+    (fitted / "explicit.json").write_text(json.dumps(explicit))
+    again = replay_plant(str(fitted / "explicit.json"), "ur5").model
+    assert np.array_equal(again.body_inertia, plant.body_inertia)
