@@ -145,3 +145,11 @@ def test_replay_simulates_the_consistent_fits_bodies(fitted):
     (fitted / "explicit.json").write_text(json.dumps(explicit))
     again = replay_plant(str(fitted / "explicit.json"), "ur5").model
     assert np.array_equal(again.body_inertia, plant.body_inertia)
+
+
+def test_a_model_of_other_kinematics_is_refused(fitted, capsys):
+    out = fitted / "other.csv"
+    assert main(["export", "--model", str(fitted / "m.json"), "--robot", "lynxmotion",
+                 "--format", "csv", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "identified for robot" in err and not out.exists()

@@ -5,6 +5,7 @@ from __future__ import annotations
 from harness.io import read_json
 from harness.robots.export import FORMATS, export_model
 from harness.robots.registry import DEFAULT_ROBOT
+from harness.robots.torque_models import load_torque_model
 
 
 def register(sub) -> None:
@@ -27,6 +28,7 @@ def run(args) -> int:
     recorded = payload.get("robot")
     robot = args.robot or (recorded.get("name") if isinstance(recorded, dict) else None) \
         or DEFAULT_ROBOT
+    load_torque_model(args.model, robot)  # a well-formed model of this robot's kinematics
     export_model(payload, robot, args.format, args.out)
     print(f"wrote {args.out}")
     return 0
