@@ -21,7 +21,7 @@ import pinocchio as pin
 from harness.errors import UserError
 from harness.io import atomic_write
 from harness.robots.baseline import PinocchioModel
-from harness.robots.inertials import body_inertials, model_standard_parameters, set_standard_parameters
+from harness.robots.inertials import centroidal_inertia, model_standard_parameters, set_standard_parameters
 from harness.robots.registry import load_mujoco, load_pinocchio, robot_entry
 from identification.library.kinematic import atom_unit
 from identification.model import joint_entries
@@ -101,9 +101,7 @@ def export_urdf(params: np.ndarray, robot: str) -> str:
     for k, name in enumerate(list(model.names)[1:dof + 1]):
         joint = joints[name]
         child = joint.find("child").get("link")
-        mass, c, _, _ = body_inertials(params[10 * k:10 * k + 10])
-        inertia_c = _inertia_at_com(params[10 * k:10 * k + 10], mass, c)
-        _set_inertial(links[child], mass, c, inertia_c)
+        _set_inertial(links[child], *centroidal_inertia(params[10 * k:10 * k + 10]))
         for welded in _welded(child, children):
             _set_inertial(links[welded], 0.0, np.zeros(3), np.zeros((3, 3)))
         dynamics = joint.find("dynamics")
@@ -120,12 +118,6 @@ def _absolute_meshes(root: ET.Element, folder: Path) -> None:
         name = mesh.get("filename", "")
         if name and "://" not in name and not Path(name).is_absolute():
             mesh.set("filename", str((folder / name).resolve()))
-
-
-def _inertia_at_com(p, mass, c) -> np.ndarray:
-    ixx, ixy, iyy, ixz, iyz, izz = p[4:]
-    origin = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-    return origin - mass * (c @ c * np.eye(3) - np.outer(c, c))
 
 
 def _welded(link: str, children: dict) -> list[str]:

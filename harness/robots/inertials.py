@@ -22,14 +22,20 @@ JOINT_PARAMETERS = ("armature", "viscous", "coulomb")  # metrics.physical.joint_
 MIN_MASS = 1e-9  # kg: MuJoCo needs a positive mass on a moving body
 
 
-def body_inertials(parameters: np.ndarray) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
-    """Mass (kg), centre of mass (3,) m, principal moments (3,) kg m^2 and the quaternion
-    (w, x, y, z) of the principal axes, of one body's 10 standard parameters."""
+def centroidal_inertia(parameters: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    """Mass (kg), centre of mass (3,) m and the (3, 3) rotational inertia about it (kg m^2)
+    of one body's 10 standard parameters."""
     m, hx, hy, hz, ixx, ixy, iyy, ixz, iyz, izz = (float(v) for v in parameters)
     mass = max(m, MIN_MASS)
     c = np.array([hx, hy, hz]) / mass
     origin = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-    centre = origin - mass * (c @ c * np.eye(3) - np.outer(c, c))  # parallel axis theorem
+    return mass, c, origin - mass * (c @ c * np.eye(3) - np.outer(c, c))  # parallel axis
+
+
+def body_inertials(parameters: np.ndarray) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
+    """Mass (kg), centre of mass (3,) m, principal moments (3,) kg m^2 and the quaternion
+    (w, x, y, z) of the principal axes, of one body's 10 standard parameters."""
+    mass, c, centre = centroidal_inertia(parameters)
     moments, axes = np.linalg.eigh(centre)
     if np.linalg.det(axes) < 0:
         axes[:, 0] = -axes[:, 0]  # a rotation, not a reflection
