@@ -3,7 +3,8 @@
 The standard parameters are those MODEL.json's metrics.physical holds (harness.robots.inertials'
 order: per body about its joint's frame, which for a URDF is the child link's frame, then per
 joint armature, viscous, Coulomb). urdf: every moving link's <inertial> and its joint's
-<dynamics damping friction> (the links welded to it are in its parameters and left massless);
+<dynamics damping friction> (the links below it that the identification held fixed - welded
+links, a gripper's fingers - are in its parameters and left massless; URDF has no armature);
 mjcf: MuJoCo's model of the robot with the same inertials, armature, damping, frictionloss;
 csv: body or joint, parameter, value, unit, nominal. A model without bodies (the sparse fit on
 base atoms, a feature model) exports its terms as csv and refuses urdf/mjcf in one line.
@@ -98,11 +99,12 @@ def export_urdf(params: np.ndarray, robot: str) -> str:
     for j in joints.values():
         children.setdefault(j.find("parent").get("link"), []).append(j)
     links = {link.get("name"): link for link in root.findall("link")}
+    arm = set(list(model.names)[1:])
     for k, name in enumerate(list(model.names)[1:dof + 1]):
         joint = joints[name]
         child = joint.find("child").get("link")
         _set_inertial(links[child], *centroidal_inertia(params[10 * k:10 * k + 10]))
-        for welded in _welded(child, children):
+        for welded in _welded(child, children, arm):
             _set_inertial(links[welded], 0.0, np.zeros(3), np.zeros((3, 3)))
         dynamics = joint.find("dynamics")
         if dynamics is None:
@@ -120,12 +122,14 @@ def _absolute_meshes(root: ET.Element, folder: Path) -> None:
             mesh.set("filename", str((folder / name).resolve()))
 
 
-def _welded(link: str, children: dict) -> list[str]:
+def _welded(link: str, children: dict, arm: set[str]) -> list[str]:
+    """The links below link reached without an arm joint (fixed links, a gripper's fingers):
+    the identification held them fixed, so their mass is in link's parameters."""
     out = []
     for j in children.get(link, []):
-        if j.get("type") == "fixed":
+        if j.get("name") not in arm:
             name = j.find("child").get("link")
-            out += [name, *_welded(name, children)]
+            out += [name, *_welded(name, children, arm)]
     return out
 
 
