@@ -153,3 +153,20 @@ def test_a_model_of_other_kinematics_is_refused(fitted, capsys):
                  "--format", "csv", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "identified for robot" in err and not out.exists()
+
+
+def test_a_gripper_held_fixed_is_left_massless(tmp_path):
+    """The Panda's fingers were held fixed (their mass is in the hand's parameters): its URDF
+    with the nominal parameters written back gives the nominal gravity, fingers moving or not."""
+    from harness.robots.baseline import PinocchioModel
+    from harness.robots.export import export_model
+
+    nominal = load_pinocchio("panda")
+    out = tmp_path / "panda.urdf"
+    export_model({"body_parameters": PinocchioModel(nominal).atom_parameters().tolist()},
+                 "panda", "urdf", out)
+    exported = pin.buildModelFromUrdf(str(out))
+    assert exported.nv == nominal.nv + 2
+    q = np.random.default_rng(5).uniform(-1, 1, exported.nq)
+    _close(pin.computeGeneralizedGravity(exported, exported.createData(), q)[:nominal.nv],
+           pin.computeGeneralizedGravity(nominal, nominal.createData(), q[:nominal.nq]))
