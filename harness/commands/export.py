@@ -29,6 +29,6 @@ def run(args) -> int:
     robot = args.robot or (recorded.get("name") if isinstance(recorded, dict) else None) \
         or DEFAULT_ROBOT
     load_torque_model(args.model, robot)  # a well-formed model of this robot's kinematics
-    export_model(payload, robot, args.format, args.out)
-    print(f"wrote {args.out}")
+    what = export_model(payload, robot, args.format, args.out)
+    print(f"wrote {args.out}: {what}")
     return 0

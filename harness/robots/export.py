@@ -146,8 +146,9 @@ def _set_inertial(link, mass: float, c, inertia) -> None:
     ET.SubElement(inertial, "inertia", {k: f"{inertia[i]:.12g}" for k, i in names.items()})
 
 
-def export_model(payload: dict, robot: str, fmt: str, out: str | Path) -> None:
-    """Write MODEL.json's payload for robot in fmt to out, whole or not at all."""
+def export_model(payload: dict, robot: str, fmt: str, out: str | Path) -> str:
+    """Write MODEL.json's payload for robot in fmt to out, whole or not at all; what it wrote,
+    in words."""
     if fmt not in FORMATS:
         raise UserError(f"--format must be one of {', '.join(FORMATS)}, got {fmt}")
     params = model_standard_parameters(payload)
@@ -167,5 +168,9 @@ def export_model(payload: dict, robot: str, fmt: str, out: str | Path) -> None:
         def write(tmp: str) -> None:
             mujoco.mj_saveLastXML(tmp, model)
         atomic_write(out, write, suffix=".xml")
-        return
+        return f"robot {robot}'s MuJoCo model with the identified bodies"
     atomic_write(out, lambda tmp: Path(tmp).write_text(text), suffix="." + fmt)
+    if params is None:
+        return "the model's terms (it has no bodies)"
+    return f"robot {robot}'s " + ("URDF with the identified bodies" if fmt == "urdf"
+                                  else "identified bodies and joints beside the URDF's")
