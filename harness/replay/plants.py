@@ -12,15 +12,11 @@ import mujoco
 from harness.errors import UserError
 from harness.io import read_json
 from harness.robots.baseline import PinocchioModel
-from harness.robots.inertials import set_standard_parameters
+from harness.robots.inertials import PARAMETERS_KEY, model_standard_parameters, set_standard_parameters
 from harness.robots.registry import load_mujoco, load_pinocchio
 from harness.robots.scene import build_scene, replay_scene
 from harness.robots.torque_models import load_torque_model
 from identification.torque_model import TorqueModel
-
-# a MODEL.json's standard parameters (harness.robots.inertials), 13 per joint, as the
-# identification's export writes them
-PARAMETERS_KEY = "body_parameters"
 
 
 @dataclass(frozen=True)
@@ -58,10 +54,11 @@ def _identified(path: Path, robot: str, radii: tuple[float, ...]) -> ReplayPlant
     """The robot's scene with the bodies a MODEL.json identified, its own torque the
     feed-forward."""
     payload = read_json(path, "model")
-    parameters = payload.get(PARAMETERS_KEY)
+    parameters = model_standard_parameters(payload)
     if parameters is None:
         raise UserError(f"model {path} has no per-body inertial parameters to simulate ('"
-                        f"{PARAMETERS_KEY}'): a model in the robot's base atoms has no bodies; "
-                        "pass a URDF or MJCF with the identified inertials as --plant")
+                        f"{PARAMETERS_KEY}' or a consistent fit's metrics.physical): a model in "
+                        "the robot's base atoms has no bodies; identify with --prior nominal|flat "
+                        "or pass a URDF or MJCF with the identified inertials as --plant")
     model = set_standard_parameters(build_scene(robot, radii).compile(), parameters)
     return ReplayPlant(model, load_torque_model(str(path), robot), str(path), str(path))

@@ -16,23 +16,49 @@ import numpy as np
 
 from harness.errors import UserError
 
+# a MODEL.json's own standard parameters, 13 per joint, when it carries them at top level
+PARAMETERS_KEY = "body_parameters"
+JOINT_PARAMETERS = ("armature", "viscous", "coulomb")  # metrics.physical.joint_parameters, in order
 MIN_MASS = 1e-9  # kg: MuJoCo needs a positive mass on a moving body
+
+
+def centroidal_inertia(parameters: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    """Mass (kg), centre of mass (3,) m and the (3, 3) rotational inertia about it (kg m^2)
+    of one body's 10 standard parameters."""
+    m, hx, hy, hz, ixx, ixy, iyy, ixz, iyz, izz = (float(v) for v in parameters)
+    mass = max(m, MIN_MASS)
+    c = np.array([hx, hy, hz]) / mass
+    origin = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    return mass, c, origin - mass * (c @ c * np.eye(3) - np.outer(c, c))  # parallel axis
 
 
 def body_inertials(parameters: np.ndarray) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
     """Mass (kg), centre of mass (3,) m, principal moments (3,) kg m^2 and the quaternion
     (w, x, y, z) of the principal axes, of one body's 10 standard parameters."""
-    m, hx, hy, hz, ixx, ixy, iyy, ixz, iyz, izz = (float(v) for v in parameters)
-    mass = max(m, MIN_MASS)
-    c = np.array([hx, hy, hz]) / mass
-    origin = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-    centre = origin - mass * (c @ c * np.eye(3) - np.outer(c, c))  # parallel axis theorem
+    mass, c, centre = centroidal_inertia(parameters)
     moments, axes = np.linalg.eigh(centre)
     if np.linalg.det(axes) < 0:
         axes[:, 0] = -axes[:, 0]  # a rotation, not a reflection
     quat = np.zeros(4)
     mujoco.mju_mat2Quat(quat, axes.ravel())
     return mass, c, np.maximum(moments, 0.0), quat
+
+
+def model_standard_parameters(payload: dict) -> np.ndarray | None:
+    """The 13 dof standard parameters (module docstring) of a MODEL.json's payload: its
+    'body_parameters', else a consistent fit's metrics.physical; None for a model without
+    bodies (a fit in the robot's base atoms, a feature model)."""
+    if payload.get(PARAMETERS_KEY) is not None:
+        return np.asarray(payload[PARAMETERS_KEY], float)
+    physical = (payload.get("metrics") or {}).get("physical") or {}
+    if "standard_parameters" not in physical or "joint_parameters" not in physical:
+        return None
+    joints = physical["joint_parameters"]
+    try:
+        return np.array([*physical["standard_parameters"],
+                         *(v for k in JOINT_PARAMETERS for v in joints[k])], float)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise UserError(f"the model's metrics.physical parameters are malformed: {exc}") from None
 
 
 def set_standard_parameters(model: mujoco.MjModel, parameters) -> mujoco.MjModel:

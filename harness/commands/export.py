@@ -1,0 +1,34 @@
+"""`torquebench export`: a consistent fit's bodies as the robot's URDF or MJCF, or a table."""
+
+from __future__ import annotations
+
+from harness.io import read_json
+from harness.robots.export import FORMATS, export_model
+from harness.robots.registry import DEFAULT_ROBOT
+from harness.robots.torque_models import load_torque_model
+
+
+def register(sub) -> None:
+    p = sub.add_parser("export", help="write an identified model's bodies into the robot's file")
+    p.add_argument("--model", required=True, help="MODEL.json written by `identify`")
+    p.add_argument("--robot", default=None,
+                   help=f"robot name or URDF/MJCF path (default: the MODEL.json's, else "
+                   f"{DEFAULT_ROBOT})")
+    p.add_argument("--format", choices=FORMATS, required=True,
+                   help="urdf: the robot's URDF with each body's <inertial> and each joint's "
+                   "<dynamics damping friction>; mjcf: MuJoCo's model with the inertials, "
+                   "armature, damping, frictionloss; csv: body or joint, parameter, value, unit, "
+                   "nominal (a model without bodies: its terms)")
+    p.add_argument("--out", required=True, help="output file")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    payload = read_json(args.model, "model")
+    recorded = payload.get("robot")
+    robot = args.robot or (recorded.get("name") if isinstance(recorded, dict) else None) \
+        or DEFAULT_ROBOT
+    load_torque_model(args.model, robot)  # a well-formed model of this robot's kinematics
+    what = export_model(payload, robot, args.format, args.out)
+    print(f"wrote {args.out}: {what}")
+    return 0
