@@ -58,7 +58,7 @@ class Identification:
         if self.method == "coupled":
             out["noise_sigma"] = self.regressions[0].sigma_.tolist()
         if self.physical:
-            out["physical"] = self.physical
+            out["physical"] = {k: v for k, v in self.physical.items() if k != "nominal"}
         return out
 
     def lagrangian(self) -> dict:

@@ -107,6 +107,12 @@ def model_payload(result, robot: dict, heldout: dict, scored_against: str) -> di
                            "scored_against": scored_against}}
     if result.lagrangian():
         payload["lagrangian"] = result.lagrangian()
+    if isinstance(result.model, KinematicModel):  # readable: bodies, what each atom sums
+        from identification.bodies import base_parameters, bodies_payload
+
+        if result.physical and "standard_parameters" in result.physical:
+            payload.update(bodies_payload(result.physical))
+        payload["base_parameters"] = base_parameters(result.model.library)
     return payload
 
 

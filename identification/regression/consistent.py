@@ -70,7 +70,8 @@ class ConsistentRegressor:
                     "standard_parameters": fit.params[:10 * dof].tolist(),
                     "joint_parameters": {k: fit.params[(10 + i) * dof:(11 + i) * dof].tolist()
                                          for i, k in enumerate(("armature", "viscous", "coulomb"))},
-                    "validation": fit.validation}
+                    "validation": fit.validation,
+                    "nominal": None if nominal is None else np.asarray(nominal, float).tolist()}
         if not fit.consistent:  # the solver's tolerance: never returned silently
             worst = float(fit.min_eigenvalues.min())
             warnings.warn(f"identified bodies are not physically consistent: smallest "

@@ -155,7 +155,7 @@ def log_result(out_dir: Path) -> SectionResult:
                        "max_ratio": float(np.max(ratio)),
                        "ratio_to_least_squares_same_data": same_data,
                        "physical": {k: v for k, v in identification.physical.items()
-                                    if k != "validation"}},
+                                    if k not in ("validation", "nominal")}},
         "source_window": source,
         "closeloop": {**loop.to_json(), "data": {**loop.to_json()["data"],
                                                  "file": npz.relative_to(out_dir).as_posix()}},
