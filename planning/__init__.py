@@ -20,7 +20,9 @@ Modules at the top:
 - types: what both solvers share: the SegmentPlanner protocol (plan(problem, warm) ->
   SegmentPlan) and a segment to plan (Segment), SegmentPlan, ObstacleForecast, the re-plan
   statuses (ITERATE, DEADLINE, LATE)
-- planners: the one factory choosing the SegmentPlanner a configuration asks for
+- planners: the one factory choosing the SegmentPlanner a configuration asks for, its
+  offline variant and the plan command's execution (executed)
+- offline: cold plans to convergence, falling back to the other method
 - config: PlannerConfig (the formulation and the replanner) with its PenaltyOptions and
   AnytimeOptions, and Scenario; errors: PlanningError
 - starts: the multi-start's start points and the ranking of cold plans
