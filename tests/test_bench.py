@@ -68,6 +68,7 @@ def test_reduced_bench_writes_complete_report(reduced):
     assert "| section | target | measured | aim | gap | met |" in (out / "headline.md").read_text()
 
 
+@pytest.mark.slow
 def test_failed_check_exits_3_naming_it(tmp_path, monkeypatch, capsys):
     """The real section under a bar it cannot meet: the report is written, the exit status
     is 3 and stderr names the failed check."""
@@ -84,6 +85,7 @@ def test_failed_check_exits_3_naming_it(tmp_path, monkeypatch, capsys):
     assert "**2 of" in (out / "report.md").read_text()  # the status line says it too
 
 
+@pytest.mark.slow
 def test_a_missed_target_does_not_change_the_exit_status(tmp_path, monkeypatch):
     import harness.sections.identification as section
 
@@ -107,6 +109,7 @@ def test_a_section_that_raises_is_recorded_as_failed(tmp_path, capsys):
     assert "replay: FAILED" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_a_warning_raised_in_a_section_reaches_stderr_and_the_report(tmp_path, monkeypatch,
                                                                      capsys):
     import warnings

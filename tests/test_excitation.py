@@ -74,6 +74,7 @@ def test_designed_better_conditioned_than_default_ur5(ur5_file):
     assert log_condition(regressor, *traj.evaluate(grid)) < log_condition(regressor, *default.evaluate(grid))
 
 
+@pytest.mark.slow
 def test_designed_better_conditioned_than_default_panda():
     designed = design_for("panda", DURATION, RATE, ACCEL, seed=0, iterations=ITERATIONS)
     assert designed.condition < designed.default_condition
