@@ -11,9 +11,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from harness.errors import UserError
 from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import ROBOTS, load_chain, load_pinocchio
+from harness.robots.registry import identified_robot, load_chain, load_pinocchio
 from identification.closeloop.effects import UNITS, EffectTerm
 from identification.closeloop.runs import closed_model
 from identification.errors import IdentificationError
@@ -59,15 +58,8 @@ def closeloop_model(payload: dict, robot: str | None, path: Path, robot_library)
     """The model a closeloop model.json describes, for robot (default: the one it records);
     robot_library(robot): its base atoms."""
     recorded = payload.get("robot") if isinstance(payload.get("robot"), dict) else {}
-    robot = robot or recorded.get("name")
-    if not robot or (robot not in ROBOTS and not Path(robot).is_file()):
-        raise UserError(f"model {path} was identified for robot '{str(recorded.get('name')):.60}'"
-                        ": pass its URDF/MJCF with --robot")
+    robot = identified_robot(recorded, robot, path)
     chain = load_chain(robot)
-    if recorded.get("hash") != chain.digest():
-        raise IdentificationError(f"model was identified for robot '{recorded.get('name')}' "
-                                  f"(kinematics {recorded.get('hash')}), not '{chain.name}' "
-                                  f"({chain.digest()})")
     declared = declared_model(payload.get("declared"), robot, robot_library)
     inertial = payload.get("inertial")
     inertial = None if inertial is None else model_from_dict(inertial,

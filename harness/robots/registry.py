@@ -124,6 +124,24 @@ def robot_entry(name_or_path: str | Path) -> Robot:
                  source=str(path))
 
 
+def identified_robot(recorded: dict, robot: str | None, path) -> str:
+    """The robot a model file at path is used with: robot (default: the one its record
+    {"name", "hash"} names), checked against the record's kinematics hash. UserError when no
+    such robot can be found, IdentificationError when its kinematics differ."""
+    from identification.errors import IdentificationError
+
+    robot = robot or recorded.get("name")
+    if not robot or (robot not in ROBOTS and not Path(robot).is_file()):
+        raise UserError(f"model {path} was identified for robot '{str(recorded.get('name')):.60}'"
+                        ": pass its URDF/MJCF with --robot")
+    chain = load_chain(robot)
+    if recorded.get("hash") != chain.digest():
+        raise IdentificationError(f"model was identified for robot '{str(recorded.get('name')):.60}' "
+                                  f"(kinematics {str(recorded.get('hash')):.20}), not "
+                                  f"'{chain.name}' ({chain.digest()})")
+    return robot
+
+
 def robot_reference(name_or_path: str | Path) -> str:
     """How data and plans record a robot: its registered name, or its file's absolute path
     (so the record still finds it from another working directory)."""

@@ -8,7 +8,13 @@ from pathlib import Path
 from harness.errors import UserError
 from harness.io import read_json
 from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import DEFAULT_ROBOT, ROBOTS, load_chain, load_pinocchio, robot_entry
+from harness.robots.registry import (
+    DEFAULT_ROBOT,
+    identified_robot,
+    load_chain,
+    load_pinocchio,
+    robot_entry,
+)
 from identification.choice import choose_fit, choose_prior, library_name
 from identification.errors import IdentificationError
 from identification.library.kinematic import KinematicLibrary
@@ -56,15 +62,7 @@ def load_torque_model(spec: str, robot: str | None = None) -> TorqueModel:
         recorded = _recorded(payload)
         if recorded is None:
             return model_from_dict(payload)
-        robot = robot or recorded["name"]
-        if robot not in ROBOTS and not Path(robot).is_file():
-            raise UserError(f"model {path} was identified for robot '{recorded['name']:.60}': "
-                            "pass its URDF/MJCF with --robot")
-        chain = load_chain(robot)
-        if recorded.get("hash") != chain.digest():
-            raise IdentificationError(f"model was identified for robot '{recorded['name']:.60}' "
-                                      f"(kinematics {str(recorded.get('hash')):.20}), not "
-                                      f"'{chain.name}' ({chain.digest()})")
+        robot = identified_robot(recorded, robot, path)
         return model_from_dict(payload, lambda: robot_library(robot))
     except IdentificationError as exc:
         raise UserError(f"model {path}: {exc}") from None
