@@ -45,6 +45,7 @@ def reduced(tmp_path_factory):
     return code, out, err.getvalue()
 
 
+@pytest.mark.slow
 def test_reduced_bench_writes_complete_report(reduced):
     code, out, err = reduced
     report = json.loads((out / "report.json").read_text())
@@ -153,6 +154,7 @@ def _without_timings(tree):
     return tree
 
 
+@pytest.mark.slow
 def test_two_runs_write_the_same_report_apart_from_timings(reduced, tmp_path):
     """The second run in a fresh process: report.json equal once the timing keys are gone, and
     no timing hides in a text value (every text equal, not only the numbers)."""

@@ -60,6 +60,7 @@ def test_effect_outside_dictionary_is_unexplained():
     assert loop.result.terms == ()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [2, 3])
 def test_tendon_names_no_stand_ins_and_is_never_worse(seed):
     """The tendon q2 + q3 is outside the dictionary: BIC's stand-ins (springs, offsets,
