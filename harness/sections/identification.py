@@ -29,7 +29,7 @@ from harness.experiments.identification import (
     fixed_fit,
     generated_motion,
     perturbed_prior_fit,
-    ratios,
+    ratio_summary,
     score_draw,
     sines_motion,
 )
@@ -85,7 +85,7 @@ def run(ctx: Context) -> SectionResult:
         check("noise_free_exact_oracle", max(exact_oracle) <= EXACT,
               f"fresh-motion error {max(exact_oracle):.1e} (bar {EXACT:g})"),
     ]
-    summary = {f"{level:g}": {name: {judge: _summary(ratios(d, name, judge))
+    summary = {f"{level:g}": {name: {judge: ratio_summary(d, name, judge)
                                      for judge in ("fresh", "sines")} for name in fits}
                for level, d in by_level.items()}
     targets = []
@@ -132,11 +132,6 @@ def run(ctx: Context) -> SectionResult:
     for extra in ctx.robot.extras:
         out.extend(load_extra(extra).identification(ctx), extra)
     return out
-
-
-def _summary(r: np.ndarray) -> dict:
-    return {"median_ratio_per_joint": np.median(r, axis=0).tolist(),
-            "worst_median": float(np.median(r, axis=1).max()), "worst_joint": float(r.max())}
 
 
 def _markdown(r: dict, fits: dict) -> str:
