@@ -151,6 +151,12 @@ def _predict(A, law_cols, fitted) -> np.ndarray:
     return A @ x + off + law_cols * g
 
 
+def choose_weight(lambdas, errors, tie: float = TIE) -> float:
+    """The smallest weight whose validation error is within `tie` (relative) of the best:
+    where validation cannot tell, the data and not the nominal decide."""
+    return float(min(w for w, e in zip(lambdas, errors, strict=True) if e <= (1 + tie) * min(errors)))
+
+
 def _rows(runs, n: int, validation: float) -> np.ndarray:
     """True on the samples the validation predicts: the last `validation` fraction of each
     run (of the whole set without runs), so that every run is both fitted and judged."""
@@ -186,9 +192,7 @@ def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np
         fitted = _solve(A[fit], tau[fit], cols[fit], laws, scale, nominal, lam, used)
         pred = _predict(A[held], cols[held], fitted)
         errors.append(float(np.mean(((pred - tau[held]) / scale) ** 2)))
-    # the smallest weight within TIE of the best: where validation cannot tell, the data
-    # and not the nominal decide
-    lam = float(min(w for w, e in zip(lambdas, errors, strict=True) if e <= (1 + TIE) * min(errors)))
+    lam = choose_weight(lambdas, errors)
     chosen = {}
     if choose_friction:
         x = _solve(A[fit], tau[fit], cols[fit], laws, scale, nominal, lam, used)[0]
