@@ -142,3 +142,12 @@ def test_a_fallback_to_scs_is_warned_and_recorded(lynx, monkeypatch):
         fit = fit_physical(atoms, data.qd, data.tau, np.zeros(39), lambdas=(1e-6,),
                            choose_friction=False)
     assert fit.validation["solver"] == "SCS"
+
+
+def test_the_solver_is_in_the_metrics(lynx):
+    """MODEL.json's metrics.physical names the solver the consistent fit took (issue #45)."""
+    library, _, _ = lynx
+    data = generate("lynxmotion", 600, 0.01, 3, "inverse")
+    result = identify(data.q, data.qd, data.qdd, data.tau, library, 0.25, data.tau_clean,
+                      ConsistentRegressor(None, choose_friction=False))
+    assert result.metrics()["physical"]["solver"] == "CLARABEL"

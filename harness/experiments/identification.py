@@ -30,6 +30,7 @@ from identification.regression.oracle import BaseParameterRegression
 from identification.regression.torque import TorqueRegressor
 
 SAMPLES, NOISE, HOLDOUT = 4000, 0.05, 0.25
+ORACLE = "unbiased weighted least squares on the true base-parameter structure, no prior"
 FILL = 0.85  # of each joint's range the sines motion may sweep
 
 
