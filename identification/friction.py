@@ -1,11 +1,14 @@
 """Joint friction laws a fit can choose among, per joint, by held-out error.
 
-Every law is viscous + Coulomb + offset (the kinematic library's `viscous` and `coulomb`
-atoms and the fitted intercept) plus at most one column of its own, linear in its
-coefficient once its shape is fixed; the shape is taken from a grid by the same
-validation that chooses the law:
+Every law is viscous + offset (the kinematic library's `viscous` atom and the fitted
+intercept), most with Coulomb (its `coulomb` atom), plus at most one column of its own,
+linear in its coefficient once its shape is fixed; the shape is taken from a grid by the
+same validation that chooses the law:
 
-- viscous-coulomb: nothing more;
+- viscous: no Coulomb (a joint whose data show none: a Coulomb coefficient held >= 0 fits
+  the noise one way and misses other motions, docs/identification.md,
+  'identification.friction');
+- viscous-coulomb: viscous and Coulomb, nothing more;
 - stribeck (v_s): + F_s sign(qd) exp(-(qd / v_s)^2), the static friction's excess over
   Coulomb at low speed (Stribeck, Armstrong-Helouvry 1994), F_s >= 0;
 - sigmoid (slope, shift): the Coulomb atom replaced by Gaz et al.'s (2019) friction of the
@@ -29,7 +32,7 @@ from identification.library.kinematic import COULOMB_WIDTH
 STRIBECK_SPEEDS = (0.01, 0.03, 0.1)  # rad/s
 SIGMOID_SLOPES = (3.0, 10.0, 30.0, 100.0)  # s/rad
 SIGMOID_SHIFTS = (-0.03, 0.0, 0.03)  # rad/s
-LAWS = ("viscous-coulomb", "stribeck", "sigmoid")
+LAWS = ("viscous", "viscous-coulomb", "stribeck", "sigmoid")
 
 
 def sigmoid_friction(qd: np.ndarray, steepness: float, shift: float) -> np.ndarray:
@@ -45,7 +48,7 @@ class FrictionLaw:
     shape: tuple[float, ...] = ()
 
     def __post_init__(self):
-        sizes = {"viscous-coulomb": 0, "stribeck": 1, "sigmoid": 2}
+        sizes = {"viscous": 0, "viscous-coulomb": 0, "stribeck": 1, "sigmoid": 2}
         if self.name not in sizes:
             raise IdentificationError(f"unknown friction law {self.name!r} (one of {', '.join(LAWS)})")
         if len(self.shape) != sizes[self.name] or not all(np.isfinite(self.shape)):
@@ -56,12 +59,12 @@ class FrictionLaw:
 
     @property
     def has_column(self) -> bool:
-        return self.name != "viscous-coulomb"
+        return self.name not in ("viscous", "viscous-coulomb")
 
     @property
     def keeps_coulomb(self) -> bool:
-        """The sigmoid takes the Coulomb atom's place; the others add to it."""
-        return self.name != "sigmoid"
+        """The sigmoid takes the Coulomb atom's place, viscous has none; the others add to it."""
+        return self.name not in ("viscous", "sigmoid")
 
     def column(self, qd, lib=np):
         """The law's own column at joint velocities qd (array or CasADi expression)."""
@@ -76,7 +79,7 @@ class FrictionLaw:
             # derivative, inf / inf, is NaN (a plan's NLP evaluated there fails)
             return 0.5 * lib.tanh(0.5 * slope * (qd + shift)) + 0.5 \
                 - 1 / (1 + np.exp(-slope * shift))
-        raise IdentificationError("the viscous-coulomb law has no column of its own")
+        raise IdentificationError(f"the {self.name} law has no column of its own")
 
     def term(self, joint: int) -> str:
         """The column's name in a model's equation of joint `joint` (1-based)."""
@@ -105,8 +108,8 @@ class FrictionLaw:
 
 
 def candidate_laws() -> list[FrictionLaw]:
-    """Every law and shape the choice is made among (viscous-coulomb first)."""
-    return ([FrictionLaw()] + [FrictionLaw("stribeck", (v,)) for v in STRIBECK_SPEEDS]
+    """Every law and shape the choice is made among (viscous, then viscous-coulomb first)."""
+    return ([FrictionLaw("viscous"), FrictionLaw()] + [FrictionLaw("stribeck", (v,)) for v in STRIBECK_SPEEDS]
             + [FrictionLaw("sigmoid", (s, d)) for s in SIGMOID_SLOPES for d in SIGMOID_SHIFTS])
 
 
@@ -123,8 +126,9 @@ def choose_law(residual: np.ndarray, qd: np.ndarray, coulomb: np.ndarray, folds:
                margin: float = 0.05) -> tuple[FrictionLaw, list[tuple[FrictionLaw, float]]]:
     """The law whose fit of one joint's friction residual (the torque minus the rigid body's,
     n samples) predicts it best in blocked cross-validation (`folds` contiguous blocks, each
-    predicted from the others); a law other than viscous-coulomb must beat it by `margin`
-    (relative mean square). Also every candidate's validation error."""
+    predicted from the others), the simpler preferred: viscous-coulomb must beat viscous,
+    and a law with a column of its own the one of those chosen, by `margin` (relative mean
+    square). Also every candidate's validation error."""
     from scipy.optimize import nnls
 
     blocks = np.array_split(np.arange(len(residual)), folds)
@@ -139,6 +143,6 @@ def choose_law(residual: np.ndarray, qd: np.ndarray, coulomb: np.ndarray, folds:
             coef, _ = nnls(x[train], residual[train], maxiter=50 * x.shape[1])
             error += float(np.sum((x[block] @ coef - residual[block]) ** 2))
         scored.append((law, error / len(residual)))
-    plain = scored[0][1]
-    best = min(scored[1:], key=lambda s: s[1])
-    return (best[0] if best[1] < (1 - margin) * plain else scored[0][0]), scored
+    simple = scored[1] if scored[1][1] < (1 - margin) * scored[0][1] else scored[0]
+    best = min(scored[2:], key=lambda s: s[1])
+    return (best if best[1] < (1 - margin) * simple[1] else simple)[0], scored

@@ -13,6 +13,7 @@ default (coupled when the library has atoms).
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -109,12 +110,15 @@ def _score(model, q, qd, qdd, truth, offsets=0.0) -> tuple[np.ndarray, np.ndarra
 
 
 def identify(q, qd, qdd, tau, library, holdout: float = 0.25, tau_clean=None,
-             regressor: TorqueRegressor | None = None, method: str | None = None) -> Identification:
+             regressor: TorqueRegressor | None = None, method: str | None = None,
+             runs=None) -> Identification:
     """Fit `regressor` (by default the library's, identification.choice.choose_regressor with
     `method`) on the first 1 - holdout of the samples, score on the rest.
 
     holdout 0 fits on all samples (closed-loop re-identification) and scores nothing: the
-    held-out errors are NaN, never a training-data error under a held-out name."""
+    held-out errors are NaN, never a training-data error under a held-out name. runs: (n,)
+    labels of the runs the samples come from (several logs): each run fitted with its own
+    sensor offset where the regressor can (per_run_offsets), warned where it cannot."""
     regressor = choose_regressor(library, method) if regressor is None else regressor
     n_features = regressor.min_samples(library)
     # thousands of rows by tens of columns: one BLAS thread is faster (no thread contention;
@@ -123,11 +127,23 @@ def identify(q, qd, qdd, tau, library, holdout: float = 0.25, tau_clean=None,
         q, qd, qdd, tau, n = split_training(q, qd, qdd, tau, library.dof, library.name, holdout,
                                             n_features)
         start = time.perf_counter()
-        fit = regressor.fit(library, q[:n], qd[:n], qdd[:n], tau[:n])
+        fit = regressor.fit(library, q[:n], qd[:n], qdd[:n], tau[:n], **_runs(regressor, runs, n))
         seconds = time.perf_counter() - start
         rel, mse = heldout_errors(fit.model, q, qd, qdd, tau, tau_clean, n)
     return Identification(fit.model, rel, mse, fit.conditioning, seconds, fit.regressions,
                           fit.method, fit.basis, fit.physical)
+
+
+def _runs(regressor, runs, n: int) -> dict:
+    """fit's runs keyword for the first n samples: none for a single run."""
+    if runs is None or len(np.unique(np.asarray(runs)[:n])) < 2:
+        return {}
+    if getattr(regressor, "per_run_offsets", False):
+        return {"runs": np.asarray(runs)[:n]}
+    warnings.warn("several runs fitted with one sensor offset per joint (this regressor has "
+                  "no offset per run: use the kinematic library or --prior nominal)",
+                  RuntimeWarning, stacklevel=3)
+    return {}
 
 
 def split_training(q, qd, qdd, tau, dof: int, name: str, holdout: float, n_features: int):

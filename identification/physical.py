@@ -17,7 +17,8 @@ J_b = [[tr(I)/2 1 - I, h], [h^T, m]] the pseudo-inertia (Wensing, Wensing & Slot
 a body's (m, h, I) is physically consistent iff J_b is positive semidefinite). lam = 0 is
 least squares under the LMI; lam > 0 pulls what the data leave open toward the nominal
 model. lam and each joint's friction law are chosen by validation inside the training data
-(its last contiguous block), never on a scored part. Solved by Clarabel (SCS if it fails).
+(the last contiguous block of each run), never on a scored part; several runs have an
+offset each. Solved by Clarabel (SCS if it fails).
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ import cvxpy as cp
 import numpy as np
 
 from identification.friction import FrictionLaw, choose_law
+from identification.regression.base import within_runs
 
 LAMBDAS = (1e-6, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)  # ridge weights tried toward the nominal
 TIE = 0.02  # a larger weight must predict the validation block this much better (relative
@@ -149,29 +151,51 @@ def _predict(A, law_cols, fitted) -> np.ndarray:
     return A @ x + off + law_cols * g
 
 
+def choose_weight(lambdas, errors, tie: float = TIE) -> float:
+    """The smallest weight whose validation error is within `tie` (relative) of the best:
+    where validation cannot tell, the data and not the nominal decide."""
+    return float(min(w for w, e in zip(lambdas, errors, strict=True) if e <= (1 + tie) * min(errors)))
+
+
+def _rows(runs, n: int, validation: float) -> np.ndarray:
+    """True on the samples the validation predicts: the last `validation` fraction of each
+    run (of the whole set without runs), so that every run is both fitted and judged."""
+    runs = np.zeros(n, int) if runs is None else np.asarray(runs)
+    held = np.zeros(n, bool)
+    for r in np.unique(runs):
+        at = np.flatnonzero(runs == r)
+        held[at[int(round(len(at) * (1 - validation))):]] = True
+    return held
+
+
 def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np.ndarray,
-                 lambdas=LAMBDAS, validation: float = 0.2, choose_friction: bool = True) -> PhysicalFit:
+                 lambdas=LAMBDAS, validation: float = 0.2, choose_friction: bool = True,
+                 runs=None) -> PhysicalFit:
     """The consistent fit of tau (n, dof) on every atom's torque (n, dof, 13 dof), offsets and
     friction, pulled toward the nominal coefficients (13 dof) with the lam of `lambdas` that
-    predicts the last `validation` fraction of these samples best when fitted on the rest;
-    each joint's friction law chosen on the same split (choose_friction); refitted on all."""
+    predicts the last `validation` fraction of each run best when fitted on the rest; each
+    joint's friction law chosen on the same split (choose_friction); refitted on all.
+    runs: (n,) run labels of several runs, each with its own sensor offset (the fit's
+    offsets are their mean over the samples); None: one run."""
     A, qd, tau, nominal = (np.asarray(x, float) for x in (atoms, qd, tau, nominal))
     n, dof, _ = A.shape
+    several = runs is not None and len(np.unique(runs)) > 1
+    centred = (lambda x: within_runs(x, runs)) if several else (lambda x: x)
+    raw_A, raw_tau, A, tau = A, tau, centred(A), centred(tau)
     scale = np.maximum(tau.std(axis=0), 1e-9)
-    split, used = int(round(n * (1 - validation))), []
+    held, used = _rows(runs if several else None, n, validation), []
+    fit = ~held
     laws = (FrictionLaw(),) * dof
-    cols = law_columns(laws, qd)
+    cols = centred(law_columns(laws, qd))
     errors = []
     for lam in lambdas:
-        fitted = _solve(A[:split], tau[:split], cols[:split], laws, scale, nominal, lam, used)
-        pred = _predict(A[split:], cols[split:], fitted)
-        errors.append(float(np.mean(((pred - tau[split:]) / scale) ** 2)))
-    # the smallest weight within TIE of the best: where validation cannot tell, the data
-    # and not the nominal decide
-    lam = float(min(w for w, e in zip(lambdas, errors, strict=True) if e <= (1 + TIE) * min(errors)))
+        fitted = _solve(A[fit], tau[fit], cols[fit], laws, scale, nominal, lam, used)
+        pred = _predict(A[held], cols[held], fitted)
+        errors.append(float(np.mean(((pred - tau[held]) / scale) ** 2)))
+    lam = choose_weight(lambdas, errors)
     chosen = {}
     if choose_friction:
-        x = _solve(A[:split], tau[:split], cols[:split], laws, scale, nominal, lam, used)[0]
+        x = _solve(A[fit], tau[fit], cols[fit], laws, scale, nominal, lam, used)[0]
         rigid = A[:, :, :11 * dof] @ x[:11 * dof]  # the rigid body and the armature
         coulomb = A[:, :, 12 * dof:].diagonal(axis1=1, axis2=2)
         picks = [choose_law(tau[:, j] - rigid[:, j], qd[:, j], coulomb[:, j])
@@ -179,8 +203,10 @@ def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np
         laws = tuple(p[0] for p in picks)
         chosen = {"friction_errors": [{law.name: min(e for other, e in p[1] if other.name == law.name)
                                        for law, _ in p[1]} for p in picks]}
-        cols = law_columns(laws, qd)
+        cols = centred(law_columns(laws, qd))
     x, off, g = _solve(A, tau, cols, laws, scale, nominal, lam, used)
+    if several:  # one offset for the model: the runs' mean
+        off = np.mean(raw_tau - raw_A @ x - law_columns(laws, qd) * g, axis=0)
     return PhysicalFit(x, off, laws, g, lam, min_pseudo_eigenvalues(x[:10 * dof]),
                        {"lambdas": list(lambdas), "lambda_errors": errors, **chosen,
                         "solver": "SCS" if "SCS" in used else "CLARABEL"})

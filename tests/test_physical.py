@@ -86,13 +86,13 @@ def test_a_perturbed_nominal_stays_physical_and_differs(lynx):
 
 
 @pytest.mark.parametrize("law", [FrictionLaw("sigmoid", (30.0, 0.03)), FrictionLaw("stribeck", (0.03,)),
-                                 FrictionLaw()])
+                                 FrictionLaw(), FrictionLaw("viscous")])
 def test_the_law_the_data_were_made_with_is_chosen(law):
     rng = np.random.default_rng(5)
     t = np.arange(4000) / 100
     qd = 0.6 * np.sin(0.7 * t) + 0.3 * np.sin(1.9 * t + 1)
     coulomb = qd / np.sqrt(qd**2 + 1e-6)
-    torque = 0.4 * qd + 0.2 + (0.0 if law.has_column else 0.5 * coulomb)
+    torque = 0.4 * qd + 0.2 + (0.5 * coulomb if law == FrictionLaw() else 0.0)
     if law.has_column:
         torque = torque + 0.5 * law.column(qd) + (0.3 * coulomb if law.keeps_coulomb else 0)
     chosen, scored = choose_law(torque + 0.01 * rng.normal(size=len(t)), qd, coulomb)
@@ -142,3 +142,12 @@ def test_a_fallback_to_scs_is_warned_and_recorded(lynx, monkeypatch):
         fit = fit_physical(atoms, data.qd, data.tau, np.zeros(39), lambdas=(1e-6,),
                            choose_friction=False)
     assert fit.validation["solver"] == "SCS"
+
+
+def test_the_solver_is_in_the_metrics(lynx):
+    """MODEL.json's metrics.physical names the solver the consistent fit took (issue #45)."""
+    library, _, _ = lynx
+    data = generate("lynxmotion", 600, 0.01, 3, "inverse")
+    result = identify(data.q, data.qd, data.qdd, data.tau, library, 0.25, data.tau_clean,
+                      ConsistentRegressor(None, choose_friction=False))
+    assert result.metrics()["physical"]["solver"] == "CLARABEL"

@@ -73,7 +73,7 @@ def run(args) -> int:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         result = identify(data["q"], data["qd"], data["qdd"], data["tau"], library, holdout,
-                          data.get("tau_clean"), regressor)
+                          data.get("tau_clean"), regressor, runs=runs.labels)
     # every warning reaches the user, once each (a library's rank, a solver's convergence,
     # a numerical library's complaint alike)
     for line in dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught):

@@ -2,7 +2,8 @@
 
 Each run keeps its own derivative estimate (made when it was generated or ingested); the
 runs are concatenated in the order given, which is what a static regression on (q, qd, qdd,
-tau) needs: no time series crosses from one run to the next. A run without `tau_clean`
+tau) needs: no time series crosses from one run to the next. Each run keeps its own sensor
+offset too: identify is told which run each sample comes from (Runs.labels). A run without `tau_clean`
 (a measured log) makes the whole set one: the scores are then against the measured torque.
 """
 
@@ -21,15 +22,21 @@ KEYS = ("q", "qd", "qdd", "tau")
 
 @dataclass(frozen=True)
 class Runs:
-    """Concatenated arrays of several runs, each run's meta and file, and where each starts."""
+    """Concatenated arrays of several runs, each run's meta, file and number of samples."""
 
     arrays: dict[str, np.ndarray]
     metas: tuple[dict, ...]
     files: tuple[str, ...]
+    lengths: tuple[int, ...]
 
     @property
     def samples(self) -> int:
         return len(self.arrays["q"])
+
+    @property
+    def labels(self) -> np.ndarray:
+        """(samples,) the index of the run each sample comes from (identify's runs)."""
+        return np.repeat(np.arange(len(self.lengths)), self.lengths)
 
 
 def split_files(spec: str, option: str) -> list[str]:
@@ -53,7 +60,8 @@ def load_runs(files: list[str]) -> Runs:
                         f"({', '.join(sorted(robots))}): runs of one robot only")
     keys = KEYS + (("tau_clean",) if all("tau_clean" in a for a, _ in loaded) else ())
     arrays = {k: np.concatenate([a[k] for a, _ in loaded]) for k in keys}
-    return Runs(arrays, tuple(m for _, m in loaded), tuple(str(Path(f)) for f in files))
+    return Runs(arrays, tuple(m for _, m in loaded), tuple(str(Path(f)) for f in files),
+                tuple(len(a["q"]) for a, _ in loaded))
 
 
 def join(train: Runs, validate: Runs) -> Runs:
@@ -63,4 +71,5 @@ def join(train: Runs, validate: Runs) -> Runs:
                         f"logs {train.arrays['q'].shape[1]}")
     keys = [k for k in train.arrays if k in validate.arrays]
     return Runs({k: np.concatenate([train.arrays[k], validate.arrays[k]]) for k in keys},
-                train.metas + validate.metas, train.files + validate.files)
+                train.metas + validate.metas, train.files + validate.files,
+                train.lengths + validate.lengths)

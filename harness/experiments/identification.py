@@ -30,6 +30,7 @@ from identification.regression.oracle import BaseParameterRegression
 from identification.regression.torque import TorqueRegressor
 
 SAMPLES, NOISE, HOLDOUT = 4000, 0.05, 0.25
+ORACLE = "unbiased weighted least squares on the true base-parameter structure, no prior"
 FILL = 0.85  # of each joint's range the sines motion may sweep
 
 
@@ -54,23 +55,36 @@ def oracle_design(baseline: PinocchioModel, q, qd, qdd) -> np.ndarray:
     return np.concatenate([baseline.regressor(q, qd, qdd), joint], axis=2)
 
 
-def sines_motion(robot: str, samples: int, seed: int, rate: float = SAMPLE_RATE) -> Motion:
+@dataclass(frozen=True)
+class Spectrum:
+    """A sum-of-sines family: sines per joint in [count[0], count[1]), frequencies uniform in
+    band (Hz), the fraction `fill` of each joint's range swept, and the seed's stream."""
+
+    count: tuple[int, int] = (3, 7)
+    band: tuple[float, float] = (0.05, 1.0)
+    fill: float = FILL
+    stream: int = 7919
+
+
+def sines_motion(robot: str, samples: int, seed: int, rate: float = SAMPLE_RATE,
+                 spectrum: Spectrum = Spectrum()) -> Motion:
     """A motion of another family than generate's Fourier series: per joint 3 to 6 sines of
     random frequencies (0.05-1 Hz), amplitudes and phases, scaled into FILL of the joint's
-    range (unlimited joints: of [-pi, pi]); torque by mj_inverse on the robot's plant."""
+    range (unlimited joints: of [-pi, pi]); torque by mj_inverse on the robot's plant.
+    Another spectrum gives another family (harness.experiments.generalization)."""
     plant = load_plant(robot)
     lower, upper = plant.limits()
-    rng = np.random.default_rng([seed, 7919])
+    rng = np.random.default_rng([seed, spectrum.stream])
     t = np.arange(samples) / rate
     q, qd, qdd = (np.zeros((samples, plant.dof)) for _ in range(3))
     for j in range(plant.dof):
-        k = int(rng.integers(3, 7))
-        w = 2 * np.pi * rng.uniform(0.05, 1.0, k)
+        k = int(rng.integers(*spectrum.count))
+        w = 2 * np.pi * rng.uniform(*spectrum.band, k)
         a, phi = rng.uniform(0.2, 1.0, k), rng.uniform(0, 2 * np.pi, k)
         s = np.sin(np.outer(t, w) + phi)
         shape = s @ a
         lo, hi = shape.min(), shape.max()
-        scale = FILL * (upper[j] - lower[j]) / (hi - lo)
+        scale = spectrum.fill * (upper[j] - lower[j]) / (hi - lo)
         centre = 0.5 * (lower[j] + upper[j]) - scale * 0.5 * (lo + hi)
         q[:, j] = centre + scale * shape
         qd[:, j] = scale * (np.cos(np.outer(t, w) + phi) @ (a * w))
@@ -146,6 +160,14 @@ def ratios(draws: list[dict], method: str, judge: str) -> np.ndarray:
     """(draws, dof) error ratios of method to the oracle on the judge motion."""
     return np.array([np.array(d[method][judge]) / np.maximum(np.array(d["oracle"][judge]), 1e-300)
                      for d in draws])
+
+
+def ratio_summary(draws: list[dict], method: str, judge: str) -> dict:
+    """The ratios to the oracle on judge: median over draws per joint, the worst draw's
+    median over joints, the worst joint of any draw."""
+    r = ratios(draws, method, judge)
+    return {"median_ratio_per_joint": np.median(r, axis=0).tolist(),
+            "worst_median": float(np.median(r, axis=1).max()), "worst_joint": float(r.max())}
 
 
 def closed_form_gap(robot: str, motion: Motion) -> float:

@@ -18,6 +18,9 @@ STUDIES = {
                       "quadrature, the swaying obstacle, solver timings",
     "realtime": "Algorithm 2 on 20 random obstacle scenarios: re-plan CPU times, deadline "
                 "misses, executed energy and clearance, per planner",
+    "generalization": "identification on data along another excitation than the project's, "
+                      "a perturbed URDF prior, judged on a fresh motion against the oracle "
+                      "(UR5, Panda, xArm7, Z1)",
     "closeloop_plants": "closing the loop on the Lynxmotion's hand-written plants, with both "
                         "declared models (Pinocchio and the identified one)",
 }

@@ -15,8 +15,8 @@ subclass's core step `_fit` and returns self. What a fit learns ends in "_":
 the sensor bias is not torque; `predict(X, offset=True)` adds it. Predicting before fit raises
 scikit-learn's NotFittedError; bad data raise IdentificationError.
 
-Also here: what several regressors share arithmetic for, the validation blocks and the
-centring / column scaling of the sparse selectors.
+Also here: what several regressors share arithmetic for, the validation blocks, the
+centring / column scaling of the sparse selectors, and the centring per run of several runs.
 """
 
 from __future__ import annotations
@@ -34,6 +34,18 @@ from identification.errors import IdentificationError
 def validation_mask(n: int, block: int = 50, every: int = 5) -> np.ndarray:
     """Every `every`-th block of `block` consecutive samples is validation."""
     return (np.arange(n) // block) % every == every - 1
+
+
+def within_runs(x: np.ndarray, runs) -> np.ndarray:
+    """x (n, ...) less each run's mean over its samples (runs: (n,) run labels; None or a
+    single run: x less its mean). Fitting on this is fitting a free offset per run and joint
+    (Frisch-Waugh-Lovell): a sensor offset that differs between runs is not fitted as
+    dynamics."""
+    runs = np.zeros(len(x), int) if runs is None else np.asarray(runs)
+    out = np.array(x, dtype=float)
+    for r in np.unique(runs):
+        out[runs == r] -= out[runs == r].mean(axis=0)
+    return out
 
 
 def standardize(x: np.ndarray, y: np.ndarray, rows):

@@ -45,6 +45,7 @@ class ConsistentRegressor:
 
     nominal: np.ndarray | None = None
     choose_friction: bool = True
+    per_run_offsets = True  # fit(runs=...) gives each run its own sensor offset
 
     def min_samples(self, library: KinematicLibrary) -> int:
         if self.nominal is not None and np.shape(self.nominal) != (13 * library.dof,):
@@ -55,15 +56,16 @@ class ConsistentRegressor:
     def parameters(self, library: KinematicLibrary) -> int:
         return 13 * library.dof
 
-    def fit(self, library: KinematicLibrary, q, qd, qdd, tau) -> TorqueFit:
+    def fit(self, library: KinematicLibrary, q, qd, qdd, tau, runs=None) -> TorqueFit:
         dof, nominal = library.dof, self.nominal
         atoms = library.evaluate_every(q, qd, qdd)
         cond = conditioning(atoms[:, :, list(library.columns)].reshape(-1, len(library)),
                             library.names)
         fit = fit_physical(atoms, qd, tau, np.zeros(13 * dof) if nominal is None else nominal,
                            lambdas=(FLAT,) if nominal is None else LAMBDAS,
-                           choose_friction=self.choose_friction)
+                           choose_friction=self.choose_friction, runs=runs)
         physical = {"prior": "flat" if nominal is None else "nominal", "lambda": fit.lam,
+                    "solver": fit.validation["solver"],
                     "consistent": fit.consistent,
                     "min_pseudo_eigenvalues": fit.min_eigenvalues.tolist(),
                     "friction": [law.describe() for law in fit.laws],

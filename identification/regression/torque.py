@@ -25,6 +25,7 @@ from identification.feature_model import IdentifiedModel, JointModel
 from identification.kinematic_model import KinematicModel
 from identification.library.base import Conditioning, Library, conditioning, warn_if_rank_deficient
 from identification.library.kinematic import KinematicLibrary
+from identification.regression.base import within_runs
 from identification.regression.coupled import AtomBasis, CoupledRegression, restriction_pvalue
 from identification.regression.sparse import SparseRegression
 
@@ -54,7 +55,8 @@ class TorqueRegressor(Protocol):
         """Candidate coefficients the fit chooses among."""
 
     def fit(self, library, q, qd, qdd, tau) -> TorqueFit:
-        """The model fitted on training samples (n, dof)."""
+        """The model fitted on training samples (n, dof). A regressor whose class sets
+        `per_run_offsets` also takes runs=(n,) run labels: a sensor offset per run."""
 
 
 def _conditioned(theta: np.ndarray, names: list[str]) -> Conditioning:
@@ -153,6 +155,7 @@ class BaseAtomRegressor:
     by every joint it acts on)."""
 
     selector: SparseRegression | None = None
+    per_run_offsets = True  # fit(runs=...) gives each run its own sensor offset
 
     def min_samples(self, library: KinematicLibrary) -> int:
         return len(library) // library.dof + 1
@@ -167,12 +170,16 @@ class BaseAtomRegressor:
         strict = float(norm.isf(FAMILYWISE / (2 * len(library))))
         return np.array([strict if n.startswith("coulomb") else KEEP_T for n in library.names])
 
-    def fit(self, library: KinematicLibrary, q, qd, qdd, tau) -> TorqueFit:
+    def fit(self, library: KinematicLibrary, q, qd, qdd, tau, runs=None) -> TorqueFit:
         design = library.evaluate(q, qd, qdd)
         cond = _conditioned(design.reshape(-1, len(library)), library.names)
+        several = runs is not None and len(np.unique(runs)) > 1
+        centred = (lambda x: within_runs(x, runs)) if several else (lambda x: x)
         reg = CoupledRegression(selector=self.selector, t_bound=self.bounds(library),
-                                shrink=SHRINK).fit(design, tau)
-        model = KinematicModel(library, reg.coef_.copy(), np.asarray(reg.intercept_, float).copy())
+                                shrink=SHRINK).fit(centred(design), centred(tau))
+        # several runs: fitted within each run; the model's offset is the runs' mean
+        offsets = np.mean(tau - design @ reg.coef_, axis=0) if several else reg.intercept_
+        model = KinematicModel(library, reg.coef_.copy(), np.asarray(offsets, float).copy())
         return TorqueFit(model, cond, "coupled", (reg,), library)
 
 
