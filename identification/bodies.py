@@ -3,7 +3,8 @@
 bodies: per body (its joint's index, 1-based), the mass (kg), centre of mass (m, in the
 joint's frame) and rotational inertia about the centre of mass (kg m^2), each with the
 nominal value the fit was pulled toward (zeros without a prior), and whether the body is
-physically consistent (its pseudo-inertia positive semidefinite). joints_dynamics: per joint
+physically consistent (its pseudo-inertia positive semidefinite) and, when fitted with
+bounding ellipsoids, plausible (its mass inside its link's ellipsoid, also given). joints_dynamics: per joint
 armature (kg m^2), viscous (N m s/rad), Coulomb (N m), with nominal. base_parameters: each
 base atom's coefficient is this sum of standard parameters (KinematicLibrary.fold).
 """
@@ -43,6 +44,9 @@ def bodies_payload(physical: dict) -> dict:
                        "inertia_at_com": {"value": inertia.tolist(), "unit": "kg m^2",
                                           "nominal": inertia0.tolist()},
                        "consistent": bool(eig[j] >= -CONSISTENT_TOL)})
+        if physical.get("plausible"):  # fitted inside its link's bounding ellipsoid
+            bodies[-1]["plausible"] = bool(physical["plausible"][j])
+            bodies[-1]["ellipsoid"] = physical["ellipsoids"][j]
     dynamics = []
     for j in range(dof):
         dynamics.append({"joint": j + 1, **{

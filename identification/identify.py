@@ -59,7 +59,9 @@ class Identification:
         if self.method == "coupled":
             out["noise_sigma"] = self.regressions[0].sigma_.tolist()
         if self.physical:
-            out["physical"] = {k: v for k, v in self.physical.items() if k != "nominal"}
+            # the nominal and the ellipsoids are in MODEL.json's bodies
+            out["physical"] = {k: v for k, v in self.physical.items()
+                               if k not in ("nominal", "ellipsoids")}
         return out
 
     def lagrangian(self) -> dict:

@@ -10,6 +10,8 @@ plus an offset per joint and, per joint, the column of its friction law
     minimize  mean_k,j ((tau - A x - offsets - G g) / s_j)^2 + lam * ||(x - nom) / r||^2
     subject to  J_b(x_b) >= 0 (positive semidefinite) for every body b,
                 armature, viscous, Coulomb, the laws' coefficients g >= 0,
+                tr(J_b Q_b) >= 0 for every body given a bounding ellipsoid Q_b (plausible:
+                its mass inside its link, identification.ellipsoids),
 
 where s_j is joint j's torque scale, r a per-parameter scale of the nominal values (the
 body's largest, so a link with no nominal inertia is not pinned), and
@@ -105,26 +107,32 @@ def ridge_scale(nominal: np.ndarray, dof: int) -> np.ndarray:
     return np.concatenate([per_body.ravel(), mass * rho2, np.ones(2 * dof)])
 
 
-def _solve(A, tau, law_cols, laws, scale, nominal, lam: float, used: list[str]):
-    """The fit at ridge weight lam; the solver it took appended to used."""
+def _solve(A, tau, law_cols, laws, scale, nominal, lam: float, used: list[str], bounds=None):
+    """The fit at ridge weight lam; the solver it took appended to used. bounds: per body a
+    4x4 ellipsoid matrix Q (identification.ellipsoids) its mass must lie inside, or None."""
     n, dof, p = A.shape
-    x, off, g = cp.Variable(p), cp.Variable(dof), cp.Variable(dof)
+    # in units of the nominal's scale about the nominal (x = nominal + ref y): a light arm's
+    # 1e-4 kg m^2 inertias and its ridge's 1e8 weights otherwise stall the interior point
+    ref = ridge_scale(nominal, dof)
+    y, off, g = cp.Variable(p), cp.Variable(dof), cp.Variable(dof)
+    x = nominal + cp.multiply(ref, y)
     eye = np.broadcast_to(np.eye(dof), (n, dof, dof))
-    cols = np.concatenate([A, eye, law_cols[:, :, None] * np.eye(dof)], axis=2)
+    cols = np.concatenate([A * ref, eye, law_cols[:, :, None] * np.eye(dof)], axis=2)
     a = (cols / scale[None, :, None]).reshape(n * dof, -1)
-    b = (tau / scale).reshape(-1)
+    b = ((tau - A @ nominal) / scale).reshape(-1)
     # the squared error through a's QR factors (the problem's size is its columns'; R may
     # be singular: parameters the data do not excite, held by the LMI and the ridge)
     q, r = np.linalg.qr(a / np.sqrt(len(b)))
     c = q.T @ (b / np.sqrt(len(b)))
-    cost = cp.sum_squares(r @ cp.hstack([x, off, g]) - c)
+    cost = cp.sum_squares(r @ cp.hstack([y, off, g]) - c)
     if lam > 0:
-        ref = ridge_scale(nominal, dof)
-        ridged = np.arange(11 * dof)  # inertial parameters and armature, not friction
-        cost = cost + lam * cp.sum_squares(cp.multiply(1.0 / ref[ridged], x[ridged] - nominal[ridged]))
-    constraints = [(j + j.T) / 2 >> 0 for j in
-                   (cp.bmat(pseudo_inertia(x[10 * k:10 * k + 10])) for k in range(dof))]
+        cost = cost + lam * cp.sum_squares(y[:11 * dof])  # inertial and armature, not friction
+    constraints = [(j + j.T) / (2 * ref[10 * k]) >> 0 for k, j in
+                   enumerate(cp.bmat(pseudo_inertia(x[10 * k:10 * k + 10])) for k in range(dof))]
     constraints += [x[10 * dof:] >= 0, g >= 0]
+    for k, q in enumerate(bounds or ()):  # plausible: the mass inside its link's ellipsoid
+        if q is not None:
+            constraints.append(cp.trace(cp.bmat(pseudo_inertia(x[10 * k:10 * k + 10])) @ q) / ref[10 * k] >= 0)
     for j, law in enumerate(laws):
         if not law.has_column:
             constraints.append(g[j] == 0)
@@ -141,7 +149,7 @@ def _solve(A, tau, law_cols, laws, scale, nominal, lam: float, used: list[str]):
                       stacklevel=3)
         problem.solve(solver=cp.SCS)
         used.append("SCS")
-    if x.value is None:
+    if y.value is None:
         raise ValueError(f"the consistent fit did not solve ({problem.status})")
     return np.asarray(x.value), np.asarray(off.value), np.asarray(g.value)
 
@@ -170,13 +178,14 @@ def _rows(runs, n: int, validation: float) -> np.ndarray:
 
 def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np.ndarray,
                  lambdas=LAMBDAS, validation: float = 0.2, choose_friction: bool = True,
-                 runs=None) -> PhysicalFit:
+                 runs=None, bounds=None) -> PhysicalFit:
     """The consistent fit of tau (n, dof) on every atom's torque (n, dof, 13 dof), offsets and
     friction, pulled toward the nominal coefficients (13 dof) with the lam of `lambdas` that
     predicts the last `validation` fraction of each run best when fitted on the rest; each
     joint's friction law chosen on the same split (choose_friction); refitted on all.
     runs: (n,) run labels of several runs, each with its own sensor offset (the fit's
-    offsets are their mean over the samples); None: one run."""
+    offsets are their mean over the samples); None: one run. bounds: per body an ellipsoid
+    matrix Q (identification.ellipsoids) or None: the body's mass held inside (plausible)."""
     A, qd, tau, nominal = (np.asarray(x, float) for x in (atoms, qd, tau, nominal))
     n, dof, _ = A.shape
     several = runs is not None and len(np.unique(runs)) > 1
@@ -189,13 +198,13 @@ def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np
     cols = centred(law_columns(laws, qd))
     errors = []
     for lam in lambdas:
-        fitted = _solve(A[fit], tau[fit], cols[fit], laws, scale, nominal, lam, used)
+        fitted = _solve(A[fit], tau[fit], cols[fit], laws, scale, nominal, lam, used, bounds)
         pred = _predict(A[held], cols[held], fitted)
         errors.append(float(np.mean(((pred - tau[held]) / scale) ** 2)))
     lam = choose_weight(lambdas, errors)
     chosen = {}
     if choose_friction:
-        x = _solve(A[fit], tau[fit], cols[fit], laws, scale, nominal, lam, used)[0]
+        x = _solve(A[fit], tau[fit], cols[fit], laws, scale, nominal, lam, used, bounds)[0]
         rigid = A[:, :, :11 * dof] @ x[:11 * dof]  # the rigid body and the armature
         coulomb = A[:, :, 12 * dof:].diagonal(axis1=1, axis2=2)
         picks = [choose_law(tau[:, j] - rigid[:, j], qd[:, j], coulomb[:, j])
@@ -204,7 +213,7 @@ def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np
         chosen = {"friction_errors": [{law.name: min(e for other, e in p[1] if other.name == law.name)
                                        for law, _ in p[1]} for p in picks]}
         cols = centred(law_columns(laws, qd))
-    x, off, g = _solve(A, tau, cols, laws, scale, nominal, lam, used)
+    x, off, g = _solve(A, tau, cols, laws, scale, nominal, lam, used, bounds)
     if several:  # one offset for the model: the runs' mean
         off = np.mean(raw_tau - raw_A @ x - law_columns(laws, qd) * g, axis=0)
     return PhysicalFit(x, off, laws, g, lam, min_pseudo_eigenvalues(x[:10 * dof]),

@@ -30,6 +30,10 @@ def test_model_json_names_bodies_and_base_parameters(fitted):
     assert abs(body["mass"]["value"] - body["mass"]["nominal"]) < 0.1 * body["mass"]["nominal"]
     assert set(payload["joints_dynamics"][0]) == {"joint", "armature", "viscous", "coulomb"}
     assert "nominal" not in payload["metrics"]["physical"]  # metrics stay as they were
+    # plausible by default: each body inside the ellipsoid of its link's collision meshes
+    assert all(b["plausible"] for b in payload["bodies"])
+    assert all("collision geometry" in b["ellipsoid"]["source"] for b in payload["bodies"])
+    assert payload["metrics"]["physical"]["plausible"] == [True] * 6
     sparse = json.loads((fitted / "none.json").read_text())
     assert "bodies" not in sparse
     assert set(sparse["base_parameters"]) == {"explanation", *sparse["atoms"]}

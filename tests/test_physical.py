@@ -17,11 +17,12 @@ from harness.experiments.identification import perturbed_nominal, sines_motion
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from harness.robots.torque_models import robot_library
+from identification.ellipsoids import Ellipsoid, enclosing, holding, inside
 from identification.friction import FrictionLaw, choose_law
 from identification.identify import identify
 from identification.metrics import rel_error
 from identification.model import model_from_dict, model_to_dict
-from identification.physical import fit_physical, min_pseudo_eigenvalues
+from identification.physical import fit_physical, min_pseudo_eigenvalues, pseudo_inertia
 from identification.regression.consistent import ConsistentRegressor
 
 
@@ -151,3 +152,55 @@ def test_the_solver_is_in_the_metrics(lynx):
     result = identify(data.q, data.qd, data.qdd, data.tau, library, 0.25, data.tau_clean,
                       ConsistentRegressor(None, choose_friction=False))
     assert result.metrics()["physical"]["solver"] == "CLARABEL"
+
+
+def test_the_ellipsoid_row_keeps_a_body_inside(lynx):
+    """A sphere that excludes body 2's true centre of mass: the fit without the bound puts the
+    mass outside (tr(J Q) < 0), the fit with it inside (tr(J Q) >= 0), still consistent."""
+    library, base, _ = lynx
+    nominal = base.atom_parameters()
+    data = generate("lynxmotion", 800, 0.0, 3, "inverse")
+    atoms = library.evaluate_every(data.q, data.qd, data.qdd)
+    c = nominal[11:14] / nominal[10]  # body 2's centre of mass
+    bound = Ellipsoid(c + 0.5 * np.linalg.norm(c) + 0.02, np.full(3, 0.3 * np.linalg.norm(c) + 0.01),
+                      np.eye(3))
+
+    def held(fit):
+        return inside(np.array(pseudo_inertia(fit.params[10:20])), bound)
+
+    free = fit_physical(atoms, data.qd, data.tau, nominal, choose_friction=False)
+    bounded = fit_physical(atoms, data.qd, data.tau, nominal, choose_friction=False,
+                           bounds=[None, bound.matrix, None])
+    assert held(free) < 0 and held(bounded) >= -1e-8 and bounded.consistent
+
+
+def test_a_point_mass_is_inside_exactly_when_its_point_is():
+    """tr(J Q) of a point mass m at p is m (1 - (p - c)^T S^-2 (p - c)): the closed form."""
+    rng = np.random.default_rng(5)
+    bound = Ellipsoid(rng.normal(size=3), rng.uniform(0.1, 1.0, 3),
+                      np.linalg.qr(rng.normal(size=(3, 3)))[0])
+    for _ in range(20):
+        p, m = bound.centre + rng.normal(size=3), rng.uniform(0.1, 5.0)
+        pseudo = m * np.outer(np.append(p, 1.0), np.append(p, 1.0))  # [[p p^T, p], [p^T, 1]] m
+        u = bound.axes.T @ (p - bound.centre) / bound.semi_axes
+        assert inside(pseudo, bound) == pytest.approx(m * (1 - u @ u), rel=1e-9, abs=1e-12)
+
+
+def test_the_enclosing_ellipsoid_holds_every_point_and_is_smaller_than_the_boxs():
+    """Every point inside; the volume below the ellipsoid circumscribing the points' box
+    (semi-axes sqrt(3) x the half extents)."""
+    rng = np.random.default_rng(6)
+    points = rng.normal(size=(300, 3)) * [0.2, 0.05, 0.03] + [0.1, 0.0, 0.3]
+    bound = enclosing(points)
+    u = (points - bound.centre) @ bound.axes / bound.semi_axes
+    assert np.linalg.norm(u, axis=1).max() <= 1 + 1e-9
+    box = np.sqrt(3) * np.ptp(points, axis=0) / 2
+    assert np.prod(bound.semi_axes) < np.prod(box)
+
+
+def test_an_ellipsoid_grows_to_hold_the_nominal_body(lynx):
+    nominal = lynx[1].atom_parameters()
+    pseudo = np.array(pseudo_inertia(nominal[10:20]))
+    tiny = Ellipsoid(np.zeros(3), np.full(3, 1e-3), np.eye(3), "test")
+    grown = holding(tiny, pseudo)
+    assert inside(pseudo, tiny) < 0 <= inside(pseudo, grown) and "grown" in grown.source

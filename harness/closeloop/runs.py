@@ -22,6 +22,7 @@ from harness.data.runs import KEYS, load_runs, split_files
 from harness.errors import UserError
 from harness.io import read_json
 from harness.robots.baseline import PinocchioModel
+from harness.robots.ellipsoids import robot_ellipsoids
 from harness.robots.registry import data_robot, load_chain, load_pinocchio
 from harness.robots.torque_models import load_torque_model, robot_library
 from identification.closeloop.leftover import LEFT, Leftover, leftover
@@ -43,11 +44,14 @@ JOINT_ATOMS = ("armature", "viscous", "coulomb")
 
 def inertial_correction(robot: str, runs: list[tuple]) -> KinematicModel:
     """The consistent fit's rigid body pulled toward robot's nominal model, minus the nominal
-    rigid body: the torque to add to the nominal model (its joint atoms left out)."""
+    rigid body: the torque to add to the nominal model (its joint atoms left out); each run
+    with its own sensor offset, each body inside its link's ellipsoid."""
     library = robot_library(robot)
     nominal = PinocchioModel(load_pinocchio(robot)).atom_parameters()
     q, qd, qdd, tau = (np.concatenate([r[i] for r in runs]) for i in range(4))
-    fit = identify(q, qd, qdd, tau, library, 0.0, regressor=ConsistentRegressor(nominal)).model
+    labels = np.repeat(np.arange(len(runs)), [len(r[0]) for r in runs])  # an offset per run
+    regressor = ConsistentRegressor(nominal, ellipsoids=robot_ellipsoids(robot))
+    fit = identify(q, qd, qdd, tau, library, 0.0, regressor=regressor, runs=labels).model
     delta = fit.coefficients - library.fold @ nominal
     delta[[k for k, n in enumerate(library.names) if n.startswith(JOINT_ATOMS)]] = 0.0
     return KinematicModel(library, delta, np.zeros(library.dof), "consistent")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import sys
 import warnings
 
@@ -50,6 +51,12 @@ def register(sub) -> None:
                    "the sparse fit (the fast path, consistency not imposed); auto: nominal on "
                    "measured logs (`ingest`ed), none on data `generate` made (where the URDF is "
                    "the truth)")
+    p.add_argument("--plausible", action=argparse.BooleanOptionalAction, default=True,
+                   help="with a consistent fit (--prior nominal|flat): each body's mass inside "
+                   "an ellipsoid bounding its link (the smallest holding its collision, else "
+                   "visual, geometry in the URDF; else about the segment to its child joint; "
+                   "grown to hold the nominal body); MODEL.json's bodies say whether each is "
+                   "plausible (default: on; --no-plausible: consistent only)")
     p.set_defaults(func=run)
 
 
@@ -69,7 +76,7 @@ def run(args) -> int:
     dof = data["q"].shape[1]
     robot = data_robot(meta, args.robot)
     library, regressor = robot_identification(robot, dof, args.library, args.prior, args.method,
-                                              meta.get("mode") == "measured log")
+                                              meta.get("mode") == "measured log", args.plausible)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         result = identify(data["q"], data["qd"], data["qdd"], data["tau"], library, holdout,
@@ -84,8 +91,10 @@ def run(args) -> int:
         print(line)
     if result.physical:
         p = result.physical
+        plausible = ("" if "plausible" not in p else "; every body plausible (inside its link's "
+                     f"ellipsoid): {'yes' if all(p['plausible']) else 'NO'}")
         print(f"prior {p['prior']} (weight {p['lambda']:g}); every body physically consistent: "
-              f"{'yes' if p['consistent'] else 'NO'}")
+              f"{'yes' if p['consistent'] else 'NO'}{plausible}")
     else:
         print("physical consistency not imposed (sparse fit; --prior nominal or flat imposes it)")
     rel = ", ".join(f"{x:.3e}" for x in result.heldout_rel_rmse)

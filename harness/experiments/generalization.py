@@ -28,6 +28,7 @@ from harness.experiments.identification import (
     sines_motion,
 )
 from harness.robots.baseline import PinocchioModel
+from harness.robots.ellipsoids import robot_ellipsoids
 from harness.robots.registry import load_pinocchio
 from harness.robots.torque_models import robot_identification, robot_library
 
@@ -53,7 +54,7 @@ def generalization(robot: str, seeds=SEEDS) -> dict:
     the draws' per-joint errors."""
     baseline = PinocchioModel(load_pinocchio(robot))
     fits = {SPARSE: fixed_fit(*robot_identification(robot)),
-            PRIOR: perturbed_prior_fit(robot_library(robot), baseline),
+            PRIOR: perturbed_prior_fit(robot_library(robot), baseline, robot_ellipsoids(robot)),
             FLAT: fixed_fit(*robot_identification(robot, prior="flat"))}
     judges = [generated_motion(robot, SAMPLES, JUDGE_SEED), sines_motion(robot, SAMPLES, JUDGE_SEED)]
     draws = [score_draw(outside_dataset(robot, seed), fits, baseline, judges) for seed in seeds]

@@ -125,11 +125,13 @@ def fixed_fit(library, regressor: TorqueRegressor) -> Fit:
     return Fit(library, lambda seed: regressor)
 
 
-def perturbed_prior_fit(library: KinematicLibrary, baseline: PinocchioModel) -> Fit:
+def perturbed_prior_fit(library: KinematicLibrary, baseline: PinocchioModel,
+                        ellipsoids=None) -> Fit:
     """The physically consistent fit on a robot's atoms with the nominal prior, its inertias
     perturbed per draw (perturbed_nominal, seeded by the draw), so that no figure comes from
-    reading the truth."""
-    return Fit(library, lambda seed: ConsistentRegressor(perturbed_nominal(baseline, seed)))
+    reading the truth; ellipsoids: the bodies' bounds (plausible, as identify's default)."""
+    return Fit(library, lambda seed: ConsistentRegressor(perturbed_nominal(baseline, seed),
+                                                         ellipsoids=ellipsoids))
 
 
 def score_draw(data, fits: dict[str, Fit], baseline: PinocchioModel, judges: list[Motion]) -> dict:

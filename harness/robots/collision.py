@@ -89,6 +89,30 @@ def _placement(element: ET.Element | None) -> pin.SE3:
     return pin.SE3(pin.rpy.rpyToMatrix(*rpy), xyz)
 
 
+def body_points(urdf: Path, model: pin.Model, packages: tuple[Path, ...] = (),
+                kind: str = "collision") -> dict[int, np.ndarray]:
+    """Per joint of model (1-based) carrying any, the points (n, 3) standing for the surface
+    of the URDF's `kind` ("collision" or "visual") geometry of the links it carries (links
+    fixed to it included), in that joint's frame (m)."""
+    out: dict[int, list[np.ndarray]] = {}
+    for link in ET.parse(urdf).getroot().iter("link"):
+        name = link.get("name")
+        if not model.existFrame(name, pin.FrameType.BODY):
+            continue
+        frame = model.frames[model.getFrameId(name, pin.FrameType.BODY)]
+        if frame.parentJoint == 0:
+            continue
+        for element in link.iter(kind):
+            geometry = element.find("geometry")
+            points = None if geometry is None else _points(geometry, urdf, packages)
+            if points is None or not len(points):
+                continue
+            placement = frame.placement * _placement(element.find("origin"))
+            out.setdefault(frame.parentJoint, []).append(
+                points @ placement.rotation.T + placement.translation)
+    return {j: np.vstack(p) for j, p in out.items()}
+
+
 def link_radii(urdf: Path, model: pin.Model, geometry: ArmGeometry,
                packages: tuple[Path, ...] = ()) -> tuple[float | None, ...]:
     """Radius (m) of each of geometry.links from the URDF's collision geometry (module
@@ -99,23 +123,12 @@ def link_radii(urdf: Path, model: pin.Model, geometry: ArmGeometry,
     home = geometry.points(np.zeros(geometry.dof))[0]
     owner = {i + 1: k for k, (i, _) in enumerate(geometry.links)}  # joint -> link
     radii: list[float | None] = [None] * len(geometry.links)
-    for link in ET.parse(urdf).getroot().iter("link"):
-        name = link.get("name")
-        if not model.existFrame(name, pin.FrameType.BODY):
-            continue
-        frame = model.frames[model.getFrameId(name, pin.FrameType.BODY)]
-        k = owner.get(frame.parentJoint)
+    for joint, points in body_points(urdf, model, packages).items():
+        k = owner.get(joint)
         if k is None:
             continue
-        for collision in link.iter("collision"):
-            element = collision.find("geometry")
-            points = None if element is None else _points(element, urdf, packages)
-            if points is None or not len(points):
-                continue
-            placement = data.oMi[frame.parentJoint] * frame.placement \
-                * _placement(collision.find("origin"))
-            world = points @ placement.rotation.T + placement.translation
-            i, j = geometry.links[k]
-            reach = float(segment_distance(world, home[i], home[j]).max())
-            radii[k] = max(radii[k] or 0.0, reach)
+        placement = data.oMi[joint]
+        world = points @ placement.rotation.T + placement.translation
+        i, j = geometry.links[k]
+        radii[k] = float(segment_distance(world, home[i], home[j]).max())
     return tuple(radii)

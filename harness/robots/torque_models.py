@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import cache
 from pathlib import Path
 
@@ -19,6 +20,7 @@ from identification.choice import choose_fit, choose_prior, library_name
 from identification.errors import IdentificationError
 from identification.library.kinematic import KinematicLibrary
 from identification.model import model_from_dict
+from identification.regression.consistent import ConsistentRegressor
 from identification.torque_model import TorqueModel
 
 
@@ -91,13 +93,19 @@ def library_named(name: str, robot: str, dof: int | None = None):
 
 
 def robot_identification(robot: str, dof: int | None = None, library: str = "auto",
-                         prior: str = "none", method: str = "auto", measured: bool = False):
+                         prior: str = "none", method: str = "auto", measured: bool = False,
+                         plausible: bool = True):
     """(library, regressor) of an identification on robot, chosen by identification.choice
     from the names `identify --library/--prior/--method` take (measured: the data are a
     measured log); the robot's inputs (its libraries, its nominal inertias) made here.
     The CLI, the sweep and the bench all identify with this (the bench's perturbed prior
-    alone builds its ConsistentRegressor per draw)."""
+    alone builds its ConsistentRegressor per draw). plausible: a consistent fit keeps each
+    body inside its link's bounding ellipsoid (harness.robots.ellipsoids)."""
     lib = library_named(library_name(library, prior, robot_entry(robot).libraries), robot, dof)
     regressor = choose_fit(lib, choose_prior(prior, measured, lib), method,
                            lambda: PinocchioModel(load_pinocchio(robot)).atom_parameters())
+    if plausible and isinstance(regressor, ConsistentRegressor):
+        from harness.robots.ellipsoids import robot_ellipsoids
+
+        regressor = replace(regressor, ellipsoids=robot_ellipsoids(robot))
     return lib, regressor

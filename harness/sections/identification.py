@@ -37,6 +37,7 @@ from harness.experiments.identification import (
 from harness.experiments.next_run import markdown as next_run_markdown
 from harness.experiments.next_run import next_run, rule_targets
 from harness.robots.baseline import PinocchioModel
+from harness.robots.ellipsoids import robot_ellipsoids
 from harness.robots.extras import extra as load_extra
 from harness.robots.registry import load_pinocchio
 from harness.robots.torque_models import robot_identification, robot_library
@@ -64,7 +65,7 @@ def run(ctx: Context) -> SectionResult:
             for name in ctx.robot.libraries}
     default = ctx.robot.libraries[0]
     baseline = PinocchioModel(load_pinocchio(robot))
-    fits[PRIOR] = perturbed_prior_fit(robot_library(robot), baseline)
+    fits[PRIOR] = perturbed_prior_fit(robot_library(robot), baseline, robot_ellipsoids(robot))
     fits[FLAT] = fixed_fit(*robot_identification(robot, prior="flat"))
     judges = [generated_motion(robot, SAMPLES, FRESH_SEED), sines_motion(robot, SAMPLES, FRESH_SEED)]
     clean = generate(robot, SAMPLES, 0.0, 1, "inverse")

@@ -17,11 +17,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from identification.ellipsoids import Ellipsoid, holding, inside
 from identification.errors import IdentificationError
 from identification.kinematic_model import KinematicModel
 from identification.library.base import conditioning
 from identification.library.kinematic import KinematicLibrary
-from identification.physical import CONSISTENT_TOL, LAMBDAS, fit_physical
+from identification.physical import CONSISTENT_TOL, LAMBDAS, fit_physical, pseudo_inertia
 from identification.regression.torque import TorqueFit
 
 PRIORS = ("nominal", "flat")
@@ -41,10 +42,14 @@ def model_of(library: KinematicLibrary, fit) -> KinematicModel:
 class ConsistentRegressor:
     """nominal: the robot's nominal coefficients of every candidate atom (13 per joint,
     PinocchioModel.atom_parameters) - the prior; None fits without one (least squares under
-    the LMI). choose_friction False keeps viscous-Coulomb on every joint."""
+    the LMI). choose_friction False keeps viscous-Coulomb on every joint. ellipsoids: per
+    body the Ellipsoid bounding its link (or None): each body's mass held inside it
+    (plausible), the ellipsoid first grown to hold the nominal body (identification.ellipsoids.
+    holding); None: consistent only."""
 
     nominal: np.ndarray | None = None
     choose_friction: bool = True
+    ellipsoids: tuple[Ellipsoid | None, ...] | None = None
     per_run_offsets = True  # fit(runs=...) gives each run its own sensor offset
 
     def min_samples(self, library: KinematicLibrary) -> int:
@@ -61,9 +66,11 @@ class ConsistentRegressor:
         atoms = library.evaluate_every(q, qd, qdd)
         cond = conditioning(atoms[:, :, list(library.columns)].reshape(-1, len(library)),
                             library.names)
+        bounds = self.bounds(dof)
         fit = fit_physical(atoms, qd, tau, np.zeros(13 * dof) if nominal is None else nominal,
                            lambdas=(FLAT,) if nominal is None else LAMBDAS,
-                           choose_friction=self.choose_friction, runs=runs)
+                           choose_friction=self.choose_friction, runs=runs,
+                           bounds=None if bounds is None else [b and b.matrix for b in bounds])
         physical = {"prior": "flat" if nominal is None else "nominal", "lambda": fit.lam,
                     "solver": fit.validation["solver"],
                     "consistent": fit.consistent,
@@ -74,9 +81,25 @@ class ConsistentRegressor:
                                          for i, k in enumerate(("armature", "viscous", "coulomb"))},
                     "validation": fit.validation,
                     "nominal": None if nominal is None else np.asarray(nominal, float).tolist()}
+        if bounds is not None:
+            physical["ellipsoids"] = [b and b.to_dict() for b in bounds]
+            physical["plausible"] = [b is None or inside(np.array(pseudo_inertia(
+                fit.params[10 * k:10 * k + 10])), b) >= -CONSISTENT_TOL for k, b in enumerate(bounds)]
         if not fit.consistent:  # the solver's tolerance: never returned silently
             worst = float(fit.min_eigenvalues.min())
             warnings.warn(f"identified bodies are not physically consistent: smallest "
                           f"pseudo-inertia eigenvalue {worst:.3g} < -{CONSISTENT_TOL:g}",
                           RuntimeWarning, stacklevel=2)
         return TorqueFit(model_of(library, fit), cond, "consistent", physical=physical)
+
+    def bounds(self, dof: int) -> tuple[Ellipsoid | None, ...] | None:
+        """Each body's ellipsoid, grown to hold its nominal body (the prior stays feasible)."""
+        if self.ellipsoids is None:
+            return None
+        if len(self.ellipsoids) != dof:
+            raise IdentificationError(f"{len(self.ellipsoids)} bounding ellipsoids for {dof} bodies")
+        if self.nominal is None:
+            return tuple(self.ellipsoids)
+        nominal = np.asarray(self.nominal, float)
+        return tuple(e and holding(e, np.array(pseudo_inertia(nominal[10 * k:10 * k + 10])))
+                     for k, e in enumerate(self.ellipsoids))

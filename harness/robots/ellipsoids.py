@@ -1,0 +1,66 @@
+"""Each body's bounding ellipsoid, for plausible identified bodies (identification.ellipsoids).
+
+A body's ellipsoid is the smallest one holding its links' collision geometry (else their
+visual geometry) from the URDF, in its joint's frame, where the standard parameters are.
+A body without geometry the harness can read (none in the file, an MJCF, meshes other than
+STL) gets one around the segment from its joint to its child joint, a quarter of the
+segment thick (at least MIN_RADIUS); a last body without geometry a sphere of MIN_RADIUS
+about its nominal centre of mass. Each is grown about its centre until it holds the URDF's
+own body (a bound the robot's file breaks is a wrong bound, and generated data are that
+body's); the consistent fit grows it again to hold its prior's body.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from harness.robots.collision import body_points
+from harness.robots.registry import erd_robots_dir, load_pinocchio, robot_entry
+from identification.ellipsoids import Ellipsoid, enclosing, holding
+from identification.physical import pseudo_inertia
+
+MIN_RADIUS = 0.05  # m: a link without geometry is still this thick
+
+
+def _frame(axis: np.ndarray) -> np.ndarray:
+    """A rotation whose first column is the unit vector axis."""
+    other = np.eye(3)[np.argmin(np.abs(axis))]
+    second = np.cross(axis, other)
+    second /= np.linalg.norm(second)
+    return np.column_stack([axis, second, np.cross(axis, second)])
+
+
+def segment_ellipsoid(model: pin.Model, joint: int) -> Ellipsoid:
+    """The ellipsoid of a body without geometry (module docstring)."""
+    children = [k for k in range(joint + 1, model.njoints) if model.parents[k] == joint]
+    if not children:
+        return Ellipsoid(np.asarray(model.inertias[joint].lever, float).copy(),
+                         np.full(3, MIN_RADIUS), np.eye(3), "sphere about the last body's centre of mass")
+    end = np.asarray(model.jointPlacements[children[0]].translation, float)
+    length = float(np.linalg.norm(end))
+    radius = max(MIN_RADIUS, 0.25 * length)
+    axes = _frame(end / length) if length > 1e-9 else np.eye(3)
+    return Ellipsoid(end / 2, np.array([length / 2 + radius, radius, radius]), axes,
+                     "about the segment to the child joint")
+
+
+def robot_ellipsoids(robot: str) -> tuple[Ellipsoid, ...]:
+    """Per body of the robot's arm, its bounding ellipsoid (its source says where from)."""
+    model, entry = load_pinocchio(robot), robot_entry(robot)
+    found: dict[str, dict[int, np.ndarray]] = {}
+    if entry.urdf is not None:
+        packages = (erd_robots_dir().parent.parent,) if entry.source == "example-robot-data" else ()
+        found = {kind: body_points(Path(entry.urdf), model, packages, kind)
+                 for kind in ("collision", "visual")}
+    ellipsoids = []
+    for joint in range(1, model.njoints):
+        kind = next((k for k in ("collision", "visual") if joint in found.get(k, {})), None)
+        bound = segment_ellipsoid(model, joint) if kind is None else replace(
+            enclosing(found[kind][joint]), source=f"smallest holding the links' {kind} geometry")
+        body = np.array(pseudo_inertia(model.inertias[joint].toDynamicParameters()))
+        ellipsoids.append(holding(bound, body, "the URDF's body"))
+    return tuple(ellipsoids)
