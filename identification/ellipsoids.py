@@ -21,6 +21,7 @@ import cvxpy as cp
 import numpy as np
 
 MARGIN = 0.05  # a nominal body at least this fraction of its mass inside (tr(J Q) / m)
+MAX_POINTS = 400  # hull vertices the enclosing ellipsoid is fitted on
 GROWTH = 1.1  # semi-axes' factor per step while growing an ellipsoid to hold a body
 
 
@@ -59,22 +60,22 @@ def enclosing(points: np.ndarray, thickness: float = 0.01) -> Ellipsoid:
     """The smallest-volume ellipsoid holding the points (n, 3) grown by `thickness` (m) in
     every direction (so that flat or thin geometry gives a bounded ellipsoid): max log det A
     s.t. |A p + b| <= 1 on the points' convex hull vertices (Boyd & Vandenberghe 8.4.1)."""
-    from scipy.spatial import ConvexHull, QhullError
-
-    pts = np.asarray(points, float).reshape(-1, 3)
+    pts = _hull(np.asarray(points, float).reshape(-1, 3))
     pad = thickness * np.vstack([np.eye(3), -np.eye(3)])
-    pts = (pts[:, None, :] + pad[None]).reshape(-1, 3)
-    try:
-        pts = pts[ConvexHull(pts).vertices]
-    except QhullError:
-        pass
-    centre0, spread = pts.mean(axis=0), max(float(np.ptp(pts, axis=0).max()), thickness)
-    unit = (pts - centre0) / spread  # conditioned for the solver
+    pts = _hull((pts[:, None, :] + pad[None]).reshape(-1, 3))
+    # a mesh's hull may have thousands of vertices: the ellipsoid is fitted on an even
+    # subset, then scaled to hold every point
+    fitted = pts[np.linspace(0, len(pts) - 1, min(len(pts), MAX_POINTS)).astype(int)]
+    centre0, spread = fitted.mean(axis=0), max(float(np.ptp(fitted, axis=0).max()), thickness)
+    unit = (fitted - centre0) / spread  # conditioned for the solver
     a, b = cp.Variable((3, 3), PSD=True), cp.Variable(3)
     problem = cp.Problem(cp.Maximize(cp.log_det(a)), [cp.norm(unit @ a + b[None, :], axis=1) <= 1])
     with warnings.catch_warnings():  # an inaccurate optimum is still an ellipsoid: held below
         warnings.filterwarnings("ignore", "Solution may be inaccurate")
-        problem.solve(solver=cp.CLARABEL)
+        try:
+            problem.solve(solver=cp.CLARABEL)
+        except cp.SolverError:
+            problem.solve(solver=cp.SCS)
     if a.value is None:
         raise ValueError(f"no enclosing ellipsoid ({problem.status})")
     values, vectors = np.linalg.eigh(np.asarray(a.value))
@@ -82,6 +83,16 @@ def enclosing(points: np.ndarray, thickness: float = 0.01) -> Ellipsoid:
     found = Ellipsoid(centre0 + spread * centre, spread / np.maximum(values, 1e-12), vectors)
     reach = np.linalg.norm((pts - found.centre) @ found.axes / found.semi_axes, axis=1).max()
     return found.scaled(max(1.0, float(reach)))  # every point inside, whatever the accuracy
+
+
+def _hull(points: np.ndarray) -> np.ndarray:
+    """The vertices of the points' convex hull (the points themselves if they are flat)."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        return points[ConvexHull(points).vertices]
+    except QhullError:
+        return points
 
 
 def holding(ellipsoid: Ellipsoid, pseudo: np.ndarray, whose: str = "the nominal body",
