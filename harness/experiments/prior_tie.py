@@ -22,10 +22,12 @@ from harness.experiments.identification import (
     sines_motion,
 )
 from harness.robots.baseline import PinocchioModel
+from harness.robots.ellipsoids import robot_ellipsoids
 from harness.robots.registry import load_pinocchio
 from harness.robots.torque_models import robot_library
 from identification.metrics import rel_error
-from identification.physical import LAMBDAS, choose_weight, fit_physical
+from identification.physical import LAMBDAS, TIE, choose_weight, fit_physical
+from identification.regression.consistent import ConsistentRegressor
 
 TIES = (0.001, 0.005, 0.01, 0.02, 0.05, 0.1)
 # draws and judge motions the bench never scores (its seeds: 101-105, 201-203, 301-303, 401,
@@ -34,9 +36,10 @@ CHOOSE = {"seeds": {0.02: (611, 612), 0.05: (601, 602, 603, 604), 0.10: (621, 62
 RESCORE = {"seeds": {0.02: (631, 632), 0.05: (641, 642, 643, 644), 0.10: (651, 652)}, "judge": 1602}
 
 
-def draw_ratios(robot: str, level: float, seed: int, judge, baseline, library) -> dict:
+def draw_ratios(robot: str, level: float, seed: int, judge, baseline, library,
+                ellipsoids=None) -> dict:
     """Per ridge weight, the fit's error / the oracle's on the judge (dof,); the weights'
-    validation errors."""
+    validation errors. ellipsoids: the bodies' bounds (identify's plausible default)."""
     data = generate(robot, SAMPLES, level, seed, "inverse")
     n = int(round(SAMPLES * (1 - HOLDOUT)))
     oracle, _ = oracle_fit(baseline, data, n)
@@ -45,10 +48,13 @@ def draw_ratios(robot: str, level: float, seed: int, judge, baseline, library) -
     atoms = library.evaluate_every(data.q[:n], data.qd[:n], data.qdd[:n])
     judged = library.evaluate_every(judge.q, judge.qd, judge.qdd)
     nominal = perturbed_nominal(baseline, seed)
-    errors = fit_physical(atoms, data.qd[:n], data.tau[:n], nominal).validation["lambda_errors"]
+    held = ConsistentRegressor(nominal, ellipsoids=ellipsoids).bounds(library.dof)
+    bounds = None if held is None else [b.matrix for b in held]
+    errors = fit_physical(atoms, data.qd[:n], data.tau[:n], nominal,
+                          bounds=bounds).validation["lambda_errors"]
     ratios = {}
     for lam in LAMBDAS:
-        fit = fit_physical(atoms, data.qd[:n], data.tau[:n], nominal, lambdas=(lam,))
+        fit = fit_physical(atoms, data.qd[:n], data.tau[:n], nominal, lambdas=(lam,), bounds=bounds)
         ratios[lam] = rel_error(fit.torque(judged, judge.qd, offsets=False), judge.tau_clean) / floor
     return {"errors": errors, "ratios": ratios}
 
@@ -57,7 +63,7 @@ def scan(robot: str, draws: dict = CHOOSE, ties=TIES) -> dict:
     """Per margin: the worst draw's median ratio over joints and the worst joint's ratio."""
     baseline, library = PinocchioModel(load_pinocchio(robot)), robot_library(robot)
     judge = sines_motion(robot, SAMPLES, draws["judge"])
-    made = [draw_ratios(robot, level, seed, judge, baseline, library)
+    made = [draw_ratios(robot, level, seed, judge, baseline, library, robot_ellipsoids(robot))
             for level, seeds in draws["seeds"].items() for seed in seeds]
     out = {}
     for tie in ties:
@@ -65,3 +71,22 @@ def scan(robot: str, draws: dict = CHOOSE, ties=TIES) -> dict:
         out[tie] = {"worst_median": float(np.median(picked, axis=1).max()),
                     "worst_joint": float(picked.max())}
     return out
+
+
+def choose_tie(scans: list[dict], ties=TIES) -> float:
+    """The margin whose worst joint over every robot's draws is smallest (ties broken by the
+    worst median, then the smaller margin)."""
+    return min(ties, key=lambda t: (round(max(s[t]["worst_joint"] for s in scans), 2),
+                                    round(max(s[t]["worst_median"] for s in scans), 2), t))
+
+
+def tie_study(robots, quick: bool = False) -> dict:
+    """The margin chosen on CHOOSE's draws and judge over robots, every margin re-scored on
+    RESCORE's; and whether the chosen one is the code's TIE."""
+    pick = {"seeds": {0.05: (601,)}, "judge": CHOOSE["judge"]} if quick else CHOOSE
+    again = {"seeds": {0.05: (641,)}, "judge": RESCORE["judge"]} if quick else RESCORE
+    chosen_on = {robot: scan(robot, pick) for robot in robots}
+    rescored = {robot: scan(robot, again) for robot in robots}
+    tie = choose_tie(list(chosen_on.values()))
+    return {"robots": list(robots), "ties": list(TIES), "chosen": tie, "code": TIE,
+            "chosen_on": chosen_on, "rescored": rescored}

@@ -21,6 +21,8 @@ STUDIES = {
     "generalization": "identification on data along another excitation than the project's, "
                       "a perturbed URDF prior, judged on a fresh motion against the oracle "
                       "(UR5, Panda, xArm7, Z1)",
+    "prior_tie": "the consistent fit's prior-weight margin (TIE) chosen on draws no bench "
+                 "section scores and re-scored on fresh ones (UR5, xArm7, SO-101)",
     "closeloop_plants": "closing the loop on the Lynxmotion's hand-written plants, with both "
                         "declared models (Pinocchio and the identified one)",
 }
