@@ -132,7 +132,8 @@ def _solve(A, tau, law_cols, laws, scale, nominal, lam: float, used: list[str], 
     constraints += [x[10 * dof:] >= 0, g >= 0]
     for k, q in enumerate(bounds or ()):  # plausible: the mass inside its link's ellipsoid
         if q is not None:
-            constraints.append(cp.trace(cp.bmat(pseudo_inertia(x[10 * k:10 * k + 10])) @ q) / ref[10 * k] >= 0)
+            body = cp.bmat(pseudo_inertia(x[10 * k:10 * k + 10]))
+            constraints.append(cp.trace(body @ q) / ref[10 * k] >= 0)
     for j, law in enumerate(laws):
         if not law.has_column:
             constraints.append(g[j] == 0)

@@ -71,7 +71,7 @@ def markdown(results: list[dict]) -> list[str]:
     for r in results:
         for name, by_judge in r["summary"].items():
             for judge, s in by_judge.items():
-                md.append(f"| {r['robot']} | {name} | {judge} | "
+                md.append(f"| {r['robot'].rsplit('/', 1)[-1]} | {name} | {judge} | "
                           + ", ".join(f"{x:.2f}" for x in s["median_ratio_per_joint"])
                           + f" | {s['worst_median']:.2f} / {s['worst_joint']:.2f} |")
     return md
