@@ -73,20 +73,22 @@ def scan(robot: str, draws: dict = CHOOSE, ties=TIES) -> dict:
     return out
 
 
-def choose_tie(scans: list[dict], ties=TIES) -> float:
-    """The margin whose worst joint over every robot's draws is smallest (ties broken by the
-    worst median, then the smaller margin)."""
-    return min(ties, key=lambda t: (round(max(s[t]["worst_joint"] for s in scans), 2),
-                                    round(max(s[t]["worst_median"] for s in scans), 2), t))
+def best_ties(scans: list[dict], ties=TIES) -> list[float]:
+    """The margins whose worst joint over every robot's draws is smallest, and among those
+    the worst median (to 0.01x: below that the draws cannot tell them apart)."""
+    def score(t):
+        return (round(max(s[t]["worst_joint"] for s in scans), 2),
+                round(max(s[t]["worst_median"] for s in scans), 2))
+    best = min(score(t) for t in ties)
+    return [t for t in ties if score(t) == best]
 
 
 def tie_study(robots, quick: bool = False) -> dict:
-    """The margin chosen on CHOOSE's draws and judge over robots, every margin re-scored on
-    RESCORE's; and whether the chosen one is the code's TIE."""
+    """The margins best on CHOOSE's draws and judge over robots, every margin re-scored on
+    RESCORE's; and whether the code's TIE is among the best."""
     pick = {"seeds": {0.05: (601,)}, "judge": CHOOSE["judge"]} if quick else CHOOSE
     again = {"seeds": {0.05: (641,)}, "judge": RESCORE["judge"]} if quick else RESCORE
     chosen_on = {robot: scan(robot, pick) for robot in robots}
     rescored = {robot: scan(robot, again) for robot in robots}
-    tie = choose_tie(list(chosen_on.values()))
-    return {"robots": list(robots), "ties": list(TIES), "chosen": tie, "code": TIE,
-            "chosen_on": chosen_on, "rescored": rescored}
+    return {"robots": list(robots), "ties": list(TIES), "best": best_ties(list(chosen_on.values())),
+            "code": TIE, "chosen_on": chosen_on, "rescored": rescored}

@@ -45,8 +45,9 @@ from harness.sections.base import Context, Row, SectionResult, Target, check
 from identification.identify import identify
 
 # draws (seeds) per torque noise level; the paper's level, 5 %, gets the most. Seeds from
-# 101 on: the identification's thresholds were chosen on seeds 1-10 (the earlier arm check),
-# so the draws scored here were never used to choose them; each level has draws of its own
+# 101 on: the identification's thresholds were chosen on seeds 1-10 (the earlier arm check)
+# and the consistent fit's TIE on seeds 601-622 (study prior_tie), so the draws scored here
+# were not used to choose them; each level has draws of its own
 # (one draw rescaled would give the same ratios at every level wherever the selection holds)
 LEVELS = {0.02: (201, 202, 203), NOISE: (101, 102, 103, 104, 105), 0.10: (301, 302, 303)}
 QUICK_LEVELS = {NOISE: (101, 102)}

@@ -25,7 +25,8 @@ def run(ctx: Context) -> SectionResult:
           "a perturbed URDF prior, the fit at every ridge weight; each margin picks its weight "
           "from the same validation errors. Judged on random sines (judge seeds 1601 to "
           "choose, 1602 to re-score) against the oracle fitted on the same samples.", "",
-          f"Chosen margin: {r['chosen']:g} (the code's TIE: {r['code']:g}).", "",
+          "Best margins on the choosing draws (equal to 0.01x): "
+          + ", ".join(f"{t:g}" for t in r["best"]) + f"; the code's TIE: {r['code']:g}.", "",
           "| robot | draws | margin | worst draw's median / oracle | worst joint / oracle |",
           "|---|---|---|---|---|"]
     for name in ("chosen_on", "rescored"):
@@ -35,8 +36,9 @@ def run(ctx: Context) -> SectionResult:
                           f"{s['worst_median']:.2f} | {s['worst_joint']:.2f} |")
     worst = max(by_tie[r["code"]]["worst_joint"] for by_tie in r["rescored"].values())
     # one draw each way (quick) chooses nothing: the check is the full study's
-    checks = [] if ctx.quick else [check("code_tie_is_the_chosen", r["chosen"] == r["code"],
-                                         f"chosen {r['chosen']:g} on unscored draws, code {r['code']:g}")]
+    best = ", ".join(f"{t:g}" for t in r["best"])
+    checks = [] if ctx.quick else [check("code_tie_among_the_best", r["code"] in r["best"],
+                                         f"best on unscored draws {best}, code {r['code']:g}")]
     targets = [Target("TIE re-scored on fresh draws: worst joint / oracle over robots", worst,
                       JOINT_TARGET, "x")]
     return SectionResult("\n".join(md), r, checks, targets)
