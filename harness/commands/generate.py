@@ -40,7 +40,9 @@ def run(args) -> int:
     meta = ds.meta
     line = (f"wrote {args.out}: {samples} samples, mode {args.mode}, "
             f"noise {args.noise:g}, {_library(meta)}, "
-            f"excitation design condition {meta['excitation_condition']:.3g}")
+            f"excitation condition {meta['excitation_condition']:.3g} (the rigid-body base "
+            "regressor's, columns normalized; `excite` prints the identification's, with "
+            "friction and offsets)")
     print(line)
     if args.mode == "measured":
         print("  estimated-state error (rel RMS per joint): "
