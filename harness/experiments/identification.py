@@ -150,6 +150,8 @@ def score_draw(data, fits: dict[str, Fit], baseline: PinocchioModel, judges: lis
         out[name] = {m.name: rel_error(result.model.torque(m.q, m.qd, m.qdd), m.tau_clean).tolist()
                      for m in judges}
         out[name]["timing"] = {"cpu_s": cpu}
+        if result.physical and "plausible" in result.physical:  # each body inside its link
+            out[name]["plausible"] = [bool(p) for p in result.physical["plausible"]]
     oracle, cpu = oracle_fit(baseline, data, n)
     out["oracle"] = {m.name: rel_error(oracle.predict(oracle_design(baseline, m.q, m.qd, m.qdd)),
                                        m.tau_clean).tolist() for m in judges}

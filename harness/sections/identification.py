@@ -88,6 +88,11 @@ def run(ctx: Context) -> SectionResult:
         check("noise_free_exact_oracle", max(exact_oracle) <= EXACT,
               f"fresh-motion error {max(exact_oracle):.1e} (bar {EXACT:g})"),
     ]
+    bounded = [d[name]["plausible"] for d in sum(by_level.values(), []) for name in (PRIOR, FLAT)
+               if "plausible" in d[name]]
+    checks.append(check("consistent_fits_plausible", bounded and all(all(b) for b in bounded),
+                        f"{sum(all(b) for b in bounded)} of {len(bounded)} consistent fits with "
+                        "every body inside its link's ellipsoid"))
     summary = {f"{level:g}": {name: {judge: ratio_summary(d, name, judge)
                                      for judge in ("fresh", "sines")} for name in fits}
                for level, d in by_level.items()}
