@@ -6,7 +6,7 @@ Sub-packages, in the order the math flows:
   where the power is sampled (quadrature, breaks), the arm's links (kinematics) and their
   distance to the obstacle (clearance, obstacle), joint limits (limits), energy, the NLP
   (nlp) and its numbers for one segment (problem), which obstacle samples a solve sees
-  (screening), its functions compiled to C (compiled)
+  (screening), its functions compiled to C (compiled, c_units)
 - penalty/: the paper's exterior penalty loop, a SegmentPlanner (planner): the NLP solver
   built once and warm-started (solver, backends: fatrop, sqpmethod or IPOPT;
   realtime_iteration: capped feasible-SQP steps), the loop raising alpha until the plan

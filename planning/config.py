@@ -119,6 +119,9 @@ class PlannerConfig:
     geometry: ArmGeometry = field(default_factory=paper_arm)  # links for clearance
     power_smoothing: float = 0.0  # W; 0: exact epigraph of |P|, > 0: sqrt(P^2 + eps^2) - eps
     compile_code: bool = False  # NLP functions as C compiled once (planning.formulation.compiled)
+    # built at -O0 when not cached optimized: quick to build, slower to run, the same
+    # numbers; for plans no CPU time decides (planning.formulation.compiled.QUICK_FLAGS)
+    quick_build: bool = False
     starts: int = 1  # cold plans solve from this many start points (planning.starts)
     # a re-plan still unfinished after this much CPU time of the planning thread (ms) is
     # abandoned and the arm keeps its last plan (Algorithm 2); None: no deadline

@@ -54,7 +54,8 @@ class SafetyCheck:
         self.config, self.dof, self.degree = config, model.dof, config.degree
         checks = [self._clearance_function(), self._motion_function(model),
                   self._energy_function(model)]
-        checks = compiled.functions(checks) if compile_code else checks  # built together
+        if compile_code:  # built together
+            checks = compiled.functions(checks, config.quick_build, "the safety checks")
         self._clearance, self._motion, self._energy = map(compiled.Buffered, checks)
 
     def energy(self, trajectory: PolynomialTrajectory) -> float:

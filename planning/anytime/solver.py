@@ -90,7 +90,10 @@ class Anytime(ProblemNumbers):
             config = self.config if torque else dataclasses.replace(self.config,
                                                                     torque_limit=None)
             nlp = PlanningNLP(self.model, config, key[0], elastic=True)
-            build = compiled.function if self.config.compile_code else (lambda f: f)
+            what = f"the anytime SQP's {'torque-limited ' if torque else ''}model"
+            quick = self.config.quick_build
+            build = (lambda f: compiled.function(f, quick, what)) if self.config.compile_code \
+                else (lambda f: f)
             local = build(local_model.local_function(nlp, "elastic_local"))
             parts = compiled.Buffered(build(ca.Function("elastic_parts", [nlp.x, nlp.p],
                                                         [ca.vertcat(nlp.energy, nlp.penalty)])))

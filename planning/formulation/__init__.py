@@ -11,5 +11,7 @@
   with joint and torque limits, built once as CasADi functions
 - problem: the numbers of one segment's NLP (parameters, bounds, start points, motions)
 - screening: which obstacle samples a solve must see
-- compiled: the NLP's functions compiled to machine code, cached per problem
+- compiled: the NLP's functions compiled to machine code, cached per problem (quick -O0
+  builds where no CPU time decides a plan, optimized ones otherwise); c_units: a large
+  function's generated C split into units built in parallel
 """

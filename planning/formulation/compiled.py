@@ -19,20 +19,29 @@ import os
 import shutil
 import subprocess
 import tempfile
+import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
+from planning.formulation import c_units
+
 COMPILER = os.environ.get("CC", "gcc")
 # -O1: most of the speed for a short build. An NLP solver's function whose C is over
 # O0_SOURCE_BYTES is built at -O0 instead: gcc's time at -O1 grows faster than the
 # function's size, and a solve is a few % slower. The anytime SQP's functions (`function`,
-# `functions`) stay at -O1: at -O0 its re-plans did less within their CPU budget and missed
-# the threshold (docs/realtime.md, 'planning.formulation.compiled')
+# `functions`) stay at -O1: at -O0 they run ~2.4x slower, and real-time re-plans do less
+# within their CPU budget (docs/realtime.md, 'planning.formulation.compiled')
 FLAGS = ("-O1", "-fPIC")
 O0_SOURCE_BYTES = 500_000
+# quick builds, for plans no CPU time decides: every unit at -O0, a function's C over
+# PART_BYTES split into units of about that size (planning.formulation.c_units) built in
+# parallel; the same operations in the same order, so the same bits, ~2.4x slower to run
+# (docs/realtime.md, 'planning.formulation.compiled')
+QUICK_FLAGS = ("-O0", "-fPIC")
+PART_BYTES = 1_000_000
 # Larger sources stay in CasADi's virtual machine: their build takes minutes and gigabytes
 # (docs/realtime.md, 'planning.formulation.compiled')
 MAX_SOURCE_BYTES = 8_000_000
@@ -59,16 +68,12 @@ def available() -> bool:
     return shutil.which(COMPILER) is not None
 
 
-def _shared_library(functions: list[ca.Function], what: str, quick: bool = False
-                    ) -> Path | None:
+def _shared_library(functions: list[ca.Function], what: str, nlp: bool = False,
+                    quick: bool = False) -> Path | None:
     """One shared library exporting each of functions under its name (cached by the hash of
     their C and the build's flags); each function's C is a unit of its own, the units built in
-    parallel (quick: -O0 for a unit over O0_SOURCE_BYTES). None if their C is over
-    MAX_SOURCE_BYTES in all."""
-
-    def _flags(size: int) -> tuple[str, ...]:
-        return ("-O0", *FLAGS[1:]) if quick and size > O0_SOURCE_BYTES else FLAGS
-
+    parallel at FLAGS (nlp: -O0 for a unit over O0_SOURCE_BYTES). quick: the library built so
+    if cached, else every unit at QUICK_FLAGS. None if their C is over MAX_SOURCE_BYTES in all."""
     folder = cache_dir()
     with tempfile.TemporaryDirectory(dir=folder) as tmp:
         sources = []
@@ -86,63 +91,98 @@ def _shared_library(functions: list[ca.Function], what: str, quick: bool = False
         texts = [source.read_bytes() for source in sources]
         if sum(map(len, texts)) > MAX_SOURCE_BYTES:
             return None
-        key = hashlib.sha256()
-        for text in texts:
-            key.update(text + " ".join((COMPILER, *_flags(len(text)))).encode())
-        key.update(ca.__version__.encode())
-        target = folder / f"{key.hexdigest()[:20]}.so"
+        flags = [QUICK_FLAGS if nlp and len(text) > O0_SOURCE_BYTES else FLAGS
+                 for text in texts]
+        part_bytes = None
+        target = folder / f"{_key(texts, flags)}.so"
+        if quick and not target.exists():
+            flags, part_bytes = [QUICK_FLAGS] * len(texts), PART_BYTES
+            target = folder / f"{_key(texts, flags, part_bytes)}.so"
         if not target.exists():
-            log.info("compiling %s (%d kB of C)", what, sum(map(len, texts)) // 1000)
-            objects = [source.with_suffix(".o") for source in sources]
-            # largest first: the longest build starts at once
-            order = sorted(range(len(sources)), key=lambda i: -len(texts[i]))
-            with ThreadPoolExecutor(max_workers=min(len(sources), os.cpu_count() or 1)) as pool:
-                list(pool.map(lambda i: _run([COMPILER, *_flags(len(texts[i])), "-c",
-                                              str(sources[i]), "-o", str(objects[i])]), order))
-            log.debug("built %s", ", ".join(f"{f.name()} {len(t) // 1000} kB"
-                                            for f, t in zip(functions, texts, strict=True)))
-            built = Path(tmp) / "library.so"
-            _run([COMPILER, "-shared", *map(str, objects), "-o", str(built), "-lm"])
-            os.replace(built, target)
+            _build(sources, texts, flags, target, what, part_bytes)
     return target
+
+
+def _key(texts: list[bytes], flags: list[tuple[str, ...]], part_bytes: int | None = None
+         ) -> str:
+    key = hashlib.sha256()
+    for text, unit in zip(texts, flags, strict=True):
+        key.update(text + " ".join((COMPILER, *unit)).encode())
+    key.update(ca.__version__.encode())
+    if part_bytes is not None:
+        key.update(f"split into units of {part_bytes} bytes".encode())
+    return key.hexdigest()[:20]
+
+
+def _build(sources: list[Path], texts: list[bytes], flags: list[tuple[str, ...]],
+           target: Path, what: str, part_bytes: int | None) -> None:
+    """Compile each source with its flags (split into units of about part_bytes if given),
+    the units in parallel, the largest first so that the longest build starts at once; link
+    them and move the library to target."""
+    kilobytes = sum(map(len, texts)) // 1000
+    level = "/".join(sorted({unit[0] for unit in flags}))
+    log.info("compiling %s (%d kB of C, %s)", what, kilobytes, level,
+             extra={"stage": what, "kilobytes": kilobytes, "level": level, "done": False})
+    began = time.perf_counter()
+    units: list[tuple[Path, tuple[str, ...], int]] = []
+    for source, text, unit_flags in zip(sources, texts, flags, strict=True):
+        split = [text.decode()] if part_bytes is None else c_units.split(text.decode(),
+                                                                         part_bytes)
+        for k, code in enumerate(split):
+            path = source if k == 0 else source.with_name(f"{source.stem}_unit{k}.c")
+            path.write_text(code)
+            units.append((path, unit_flags, len(code)))
+    units.sort(key=lambda unit: -unit[2])
+    objects = [path.with_suffix(".o") for path, _, _ in units]
+    with ThreadPoolExecutor(max_workers=min(len(units), os.cpu_count() or 1)) as pool:
+        list(pool.map(lambda unit, obj: _run([COMPILER, *unit[1], "-c", str(unit[0]), "-o",
+                                              str(obj)]), units, objects))
+    built = sources[0].parent / "library.so"
+    _run([COMPILER, "-shared", *map(str, objects), "-o", str(built), "-lm"])
+    os.replace(built, target)
+    seconds = time.perf_counter() - began
+    log.info("compiled %s in %.0f s", what, seconds,
+             extra={"stage": what, "kilobytes": kilobytes, "level": level, "done": True})
 
 
 def _run(command: list[str]) -> None:
     subprocess.run(command, check=True, capture_output=True)
 
 
-def library(solver: ca.Function) -> Path | None:
-    """The compiled shared library of `solver`'s NLP functions (built on first need); None if
-    their C source is over MAX_SOURCE_BYTES (too long to build: they stay interpreted)."""
+def library(solver: ca.Function, quick: bool = False) -> Path | None:
+    """The compiled shared library of `solver`'s NLP functions (built on first need; quick:
+    as _shared_library); None if their C source is over MAX_SOURCE_BYTES (too long to build:
+    they stay interpreted)."""
     if not available():
         raise CompilerMissing(f"C compiler '{COMPILER}' not found")
     functions = [solver.oracle()] + [solver.get_function(name) for name in solver.get_function()]
-    return _shared_library(functions, "the planning problem", quick=True)
+    return _shared_library(functions, "the NLP solvers' functions", nlp=True, quick=quick)
 
 
-def function(f: ca.Function) -> ca.Function:
-    """f compiled to C (cached like the NLPs' libraries) and loaded back; f itself where no
-    C compiler is found or its source is over MAX_SOURCE_BYTES."""
-    if not available():
-        return f
-    target = _shared_library([f], f.name())
-    return f if target is None else ca.external(f.name(), str(target))
+def function(f: ca.Function, quick: bool = False, what: str | None = None) -> ca.Function:
+    """f compiled to C (cached like the NLPs' libraries; quick: as _shared_library; what:
+    what its build is announced as) and loaded back; f itself where no C compiler is found
+    or its source is over MAX_SOURCE_BYTES."""
+    return functions([f], quick, what)[0]
 
 
-def functions(fs: list[ca.Function]) -> list[ca.Function]:
+def functions(fs: list[ca.Function], quick: bool = False, what: str | None = None
+              ) -> list[ca.Function]:
     """Each of fs compiled to C as `function` does, in one library (their units built in
     parallel)."""
     if not available():
         return list(fs)
-    target = _shared_library(list(fs), ", ".join(f.name() for f in fs))
+    target = _shared_library(list(fs), what or ", ".join(f.name() for f in fs), quick=quick)
     return list(fs) if target is None else [ca.external(f.name(), str(target)) for f in fs]
 
 
-def nlpsol(name: str, plugin: str, problem: dict, options: dict) -> ca.Function:
-    """ca.nlpsol on `problem` (x, p, f, g) with its functions compiled (cached), or evaluated
-    in CasADi's virtual machine where they are too large to compile (see library)."""
+def nlpsol(name: str, plugin: str, problem: dict, options: dict, quick: bool = False
+           ) -> ca.Function:
+    """ca.nlpsol on `problem` (x, p, f, g) with its functions compiled (cached; quick: as
+    _shared_library), or evaluated in CasADi's virtual machine where they are too large to
+    compile (see library)."""
     generator = ca.nlpsol(f"{name}_source", plugin, problem, options)
-    built = library(generator)
+    built = library(generator, quick)
     if built is None:
         return ca.nlpsol(name, plugin, problem, options)
     return ca.nlpsol(name, plugin, str(built), options)

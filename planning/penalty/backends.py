@@ -90,9 +90,11 @@ _PLUGINS = {"feasiblesqp": "feasiblesqpmethod"}  # CasADi's name of the plugin
 
 
 def solver(name: str, plugin: str, problem: dict, equality: np.ndarray, *, warm: bool,
-           max_iter: int, hessian: str, compile_code: bool) -> ca.Function:
+           max_iter: int, hessian: str, compile_code: bool, quick: bool = False
+           ) -> ca.Function:
     """An nlpsol instance of `plugin` on problem (x, p, f, g); equality: which rows of g are
-    equalities (fatrop needs it); compile_code: NLP functions as compiled C (cached)."""
+    equalities (fatrop needs it); compile_code: NLP functions as compiled C (cached; quick:
+    planning.formulation.compiled's quick build)."""
     if plugin not in _OPTIONS:
         raise ValueError(f"solver must be one of {SOLVERS} (or feasiblesqp, for warm solves "
                          f"from a feasible start), got '{plugin}'")
@@ -102,7 +104,7 @@ def solver(name: str, plugin: str, problem: dict, equality: np.ndarray, *, warm:
         # both build qpOASES, which prints its licence banner for each instance (8 times in
         # the bench's log before)
         if compile_code and compiled.available():
-            function = compiled.nlpsol(name, casadi_name, problem, options)
+            function = compiled.nlpsol(name, casadi_name, problem, options, quick)
         else:
             function = ca.nlpsol(name, casadi_name, problem, options)
     return Silenced(function) if plugin in ("sqpmethod", "feasiblesqp") else function

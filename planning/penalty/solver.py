@@ -41,7 +41,7 @@ class _Solvers:
 def _build(nlp: PlanningNLP, config: PlannerConfig, name: str) -> _Solvers:
     problem = {"x": nlp.x, "p": nlp.p, "f": nlp.f, "g": nlp.g}
     common = {"equality": nlp.lbg == nlp.ubg, "hessian": config.penalty.hessian,
-              "compile_code": config.compile_code}
+              "compile_code": config.compile_code, "quick": config.quick_build}
     cold = backends.solver(f"{name}_cold", config.penalty.solver, problem, warm=False,
                            max_iter=config.penalty.max_iterations, **common)
     warm = backends.solver(f"{name}_warm", config.penalty.solver, problem, warm=True,
