@@ -224,6 +224,8 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  replan_iterations=args.replan_iterations or None)
     config = dataclasses.replace(config.with_anytime(replan_budget_ms=args.replan_budget_ms),
                                  starts=args.starts, compile_code=not args.no_compile,
+                                 # -O0 first where no CPU time decides the plan
+                                 quick_build=not (args.realtime or args.deadline_ms),
                                  replan_deadline_ms=args.deadline_ms or None,
                                  replanner=args.replanner or ("penalty" if args.free_end
                                                               else PLANNER.replanner))
@@ -244,13 +246,14 @@ def run(args) -> int:
     logger.addHandler(notice)
     logger.setLevel(logging.INFO)
     try:
-        return _run(args)
+        return _run(args, notice)
     finally:
         logger.removeHandler(notice)
 
 
-def _run(args) -> int:
+def _run(args, notice: BuildNotice) -> int:
     config, scenario = _setup(args)
+    notice.joints = config.geometry.dof
     model = load_torque_model(args.model, args.robot)
     if model.dof != config.geometry.dof:
         raise UserError(f"model has {model.dof} joints, robot {args.robot} has "
@@ -261,6 +264,7 @@ def _run(args) -> int:
         raise PlanningError(unreachable)
     config, result = executed(model, config, scenario, planner, replan=not args.no_replan,
                               realtime=args.realtime)
+    notice.finish()
     if not result.feasible:
         raise PlanningError(infeasible(result.problems, config))
     write_json(args.out, to_json(result, scenario, config, args.model))

@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import sys
+import time
 
 import numpy as np
 
@@ -49,16 +50,43 @@ def torque_diagnosis(planner: Planner, scenario: Scenario) -> str | None:
 
 
 class BuildNotice(logging.Handler):
-    """Says once on stderr that the planning problem is being compiled (it can take a while
-    on a new robot; planning.formulation.compiled logs each build), when stderr is a terminal
-    (a script reading stderr gets the one-line errors only)."""
+    """Says on stderr, one line as each stage starts, what of the planner is being compiled
+    and for how long compiling has gone on (it can take a while on a new robot;
+    planning.formulation.compiled logs each build's start and end), and the total once the
+    plan is written; only when stderr is a terminal (a script reading stderr gets the
+    one-line errors only)."""
 
-    def __init__(self, robot: str):
+    SMALL_KB = 100  # builds of less C take under a second: not announced
+
+    def __init__(self, robot: str, joints: int | None = None):
         super().__init__(logging.INFO)
-        self.robot, self.said = robot, False
+        self.robot, self.joints = robot, joints
+        self.began: float | None = None
+        self.ended = 0.0
 
     def emit(self, record) -> None:
-        if not self.said and sys.stderr.isatty():
-            self.said = True
-            print(f"torquebench: compiling the planning problem for {self.robot} (first time "
-                  "only)...", file=sys.stderr, flush=True)
+        stage = getattr(record, "stage", None)
+        if stage is None or not sys.stderr.isatty():
+            return
+        now = time.perf_counter()
+        if record.done:
+            self.ended = now
+            return
+        if record.kilobytes < self.SMALL_KB:
+            return
+        first = self.began is None
+        self.began = now if first else self.began
+        when = "first time only, cached for later runs" if first else \
+            f"{now - self.began:.0f} s"
+        print(f"{self._head()}: {when}, {stage} ({record.kilobytes} kB of C at "
+              f"{record.level})...", file=sys.stderr, flush=True)
+
+    def finish(self) -> None:
+        """The total time compiling took, if anything was compiled."""
+        if self.began is not None and sys.stderr.isatty():
+            print(f"{self._head()}: done in {self.ended - self.began:.0f} s", file=sys.stderr,
+                  flush=True)
+
+    def _head(self) -> str:
+        joints = "" if self.joints is None else f" ({self.joints} joints)"
+        return f"torquebench: compiling the planner for {self.robot}{joints}"
