@@ -2,11 +2,12 @@
 function's C split into units (planning.formulation.c_units) built in parallel; the same bits
 as the optimized build, which is used instead once cached; code of another shape left whole.
 The plan command's plan is the same with either build (slow: two builds of the Lynxmotion's
-planner)."""
+planner), and it says each compile stage on a terminal."""
 
 from __future__ import annotations
 
 import json
+import logging
 import re
 
 import casadi as ca
@@ -111,3 +112,34 @@ def test_the_plan_is_the_same_with_the_quick_and_the_optimized_build(tmp_path, m
         for key in TIMING_KEYS:
             plan.pop(key)
     assert plans[0] == plans[1]
+
+
+def test_the_plan_command_says_each_compile_stage_on_a_terminal(monkeypatch, capsys):
+    """One line as each stage of 100 kB or more starts, with the time so far, and the total;
+    nothing when stderr is not a terminal."""
+    from harness.commands.plan_messages import BuildNotice
+
+    notice = BuildNotice("panda", 7)
+    monkeypatch.setattr("sys.stderr.isatty", lambda: True)
+    for stage, kilobytes in (("the NLP solvers' functions", 5373), ("a small one", 14),
+                             ("the safety checks", 2133)):
+        notice.emit(_record(stage, kilobytes, False))
+        notice.emit(_record(stage, kilobytes, True))
+    notice.finish()
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 3 and all(line.startswith("torquebench: compiling the planner for "
+                                                   "panda (7 joints): ") for line in lines)
+    assert "first time only" in lines[0] and "5373 kB of C at -O0" in lines[0]
+    assert " s, the safety checks" in lines[1] and "done in" in lines[2]
+    monkeypatch.setattr("sys.stderr.isatty", lambda: False)
+    quiet = BuildNotice("panda", 7)
+    quiet.emit(_record("the safety checks", 2133, False))
+    quiet.finish()
+    assert capsys.readouterr().err == ""
+
+
+def _record(stage: str, kilobytes: int, done: bool) -> logging.LogRecord:
+    record = logging.LogRecord(compiled.log.name, logging.INFO, __file__, 0, "compiling", (),
+                               None)
+    record.stage, record.kilobytes, record.level, record.done = stage, kilobytes, "-O0", done
+    return record
