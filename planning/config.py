@@ -63,6 +63,29 @@ class AnytimeOptions:
     replan_starts: int = 0  # a re-plan also solves from this many cold start points
 
 
+@dataclass(frozen=True)
+class GlobalSearchOptions:
+    """A global search beside the anytime SQP's re-plans (planning.globalsearch): the latest
+    forecast solved from many starts (the obstacle passed on each side, above and below;
+    seeded random starts; the last plan), each to convergence, its best plan offered to the
+    real-time loop, which adopts it when, re-solved warm within its budget, it spends less on
+    the current forecast and keeps the clearance.
+
+    On the nominal clock (AnytimeOptions.iteration_ms) a search runs on the forecast of the
+    re-plan at obstacle sample k and is offered at sample k + lag (the same plan on any
+    machine); under CPU clocks (plan --realtime) it runs in another process and is adopted
+    when ready (with one core the real-time loop runs alone)."""
+
+    enabled: bool = False
+    lag: int = 4  # obstacle samples between a search's forecast and its offer
+    random_starts: int = 4  # seeded random start points beside the detours
+    # the detours: each of the first side_joints joints swung by +-detour_rad at mid-horizon
+    # (the base: either side; shoulder and elbow: above, below)
+    side_joints: int = 3
+    detour_rad: float = 0.5
+    solver: str = "sqp"  # each start to convergence by the anytime SQP, or "ipopt"
+
+
 def nominal_iteration_ms(dof: int) -> float:
     """What one anytime-SQP iteration counts on the deterministic clock (AnytimeOptions.
     iteration_ms, ms) on an arm of `dof` joints: 0.5 ms at 3 joints, growing as dof^1.5 (the
@@ -127,6 +150,7 @@ class PlannerConfig:
     replanner: str = "penalty"
     penalty: PenaltyOptions = field(default_factory=PenaltyOptions)
     anytime: AnytimeOptions = field(default_factory=AnytimeOptions)
+    global_search: GlobalSearchOptions = field(default_factory=GlobalSearchOptions)
 
     def __post_init__(self):
         name = ALIASES.get(self.replanner, self.replanner)
@@ -142,6 +166,11 @@ class PlannerConfig:
     def with_anytime(self, **changes) -> PlannerConfig:
         """This configuration with these anytime-SQP options changed."""
         return dataclasses.replace(self, anytime=dataclasses.replace(self.anytime, **changes))
+
+    def with_global_search(self, **changes) -> PlannerConfig:
+        """This configuration with these global-search options changed."""
+        return dataclasses.replace(self, global_search=dataclasses.replace(self.global_search,
+                                                                           **changes))
 
 
 def true_energy_config(**changes) -> PlannerConfig:

@@ -54,8 +54,12 @@ class _Problem:
 class Anytime(ProblemNumbers):
     """The anytime SQP's plans of one torque model and configuration."""
 
-    def __init__(self, model: TorqueModel, config: PlannerConfig):
+    def __init__(self, model: TorqueModel, config: PlannerConfig, converge: bool = False):
+        """converge: every solve runs to convergence (no settling, more screening rounds:
+        the global search's, planning.globalsearch), given an unlimited budget."""
         self.model, self.config = model, config
+        self.settled_share, self.round_cap = (0.0, 2 * ROUNDS) if converge else \
+            (sqp.SETTLED_SHARE, ROUNDS)
         self.check = SafetyCheck(model, config, config.compile_code)
         self._problems: dict[tuple, _Problem] = {}
         self._prepared: set[tuple] = set()
@@ -95,7 +99,8 @@ class Anytime(ProblemNumbers):
             parts = compiled.Buffered(build(ca.Function("elastic_parts", [nlp.x, nlp.p],
                                                         [ca.vertcat(nlp.energy, nlp.penalty)])))
             self._problems[key] = _Problem(nlp, sqp.AnytimeSQP(
-                local, local_model.layout_of(nlp), nlp.lbx, nlp.g.numel()), parts, ("elastic",) + key)
+                local, local_model.layout_of(nlp), nlp.lbx, nlp.g.numel(), self.settled_share), parts,
+                ("elastic",) + key)
         return self._problems[key]
 
     def solve(self, q0, qd0, t_begin: float, duration: float, goal,
@@ -118,7 +123,7 @@ class Anytime(ProblemNumbers):
         check = self.check.against(times, centres, t_begin, duration)
         best, plan, iterations, last = None, None, 0, warm
         spent = self._solver_ms()
-        for _ in range(ROUNDS):
+        for _ in range(self.round_cap):
             clock.tick(Clock.ROUND_ITERATIONS)
             round_began = clock.ms()
             problem = self.problem(goal, torque)

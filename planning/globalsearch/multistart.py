@@ -1,0 +1,82 @@
+"""The global search's multi-start: every start point (planning.globalsearch.starts) solved
+to convergence on one forecast, by the anytime SQP without budget or settling
+(planning.anytime.solver.Anytime, converge=True) or by IPOPT (planning.globalsearch.ipopt),
+and the best kept by one measure on the whole forecast (objective)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from identification.torque_model import TorqueModel
+from planning.anytime.solver import Anytime
+from planning.config import PlannerConfig
+from planning.globalsearch.ipopt import IpoptElastic
+from planning.globalsearch.starts import all_starts
+from planning.timing import Stopwatch, collection_deferred
+from planning.types import ObstacleForecast, SegmentPlan
+
+
+class MultiStart:
+    """Multi-start solves of one torque model and configuration (config.global_search)."""
+
+    def __init__(self, model: TorqueModel, config: PlannerConfig):
+        self.config = config
+        self.solver = IpoptElastic(model, config) if config.global_search.solver == "ipopt" \
+            else Anytime(model, config, converge=True)
+        self.check = self.solver.check  # planning.anytime.safety.SafetyCheck
+
+    def prepare(self, goal) -> None:
+        self.solver.prepare(goal)
+
+    @collection_deferred
+    def search(self, q0, qd0, t_begin: float, duration: float, goal,
+               forecast: ObstacleForecast | None, warm: SegmentPlan | None = None
+               ) -> tuple[SegmentPlan, list[SegmentPlan]]:
+        """The best plan (objective) from the warm plan's shape (if any) and every start
+        point, its times those of the whole search, and every plan."""
+        clock, solver = Stopwatch(), self.solver
+        self.prepare(goal)
+        segment = (q0, qd0, t_begin, duration, goal, forecast)
+        points = all_starts(solver, q0, qd0, duration, goal, self.config)
+        if warm is not None:
+            points.insert(0, shape_of(warm, t_begin, duration))
+        plans = [self._solve(segment, x0) for x0 in points]
+        best = min(plans, key=lambda plan: objective(self.check, self.config, plan,
+                                                     t_begin, duration, forecast))
+        wall, cpu = clock.read()
+        return _timed(best, wall, cpu), plans
+
+    def _solve(self, segment, x0) -> SegmentPlan:
+        if isinstance(self.solver, IpoptElastic):
+            return self.solver.solve(*segment, x0=x0)
+        return self.solver.solve(*segment, None, x0=x0, budget_ms=math.inf)[0]
+
+
+def shape_of(plan: SegmentPlan, t_begin: float, duration: float) -> np.ndarray:
+    """A start point with the plan's free coefficients on [t_begin, t_begin + duration]
+    (its start state replaced by the segment's)."""
+    return plan.trajectory.restrict(t_begin, duration).coefficients[:, 2:].ravel()
+
+
+def objective(check, config: PlannerConfig, plan: SegmentPlan, t_begin: float,
+              duration: float, forecast: ObstacleForecast | None) -> tuple[bool, float]:
+    """One measure for plans that saw different obstacle samples: (whether it is unusable or
+    misses the threshold beyond the penalty tolerance at a forecast sample, its energy
+    actually spent (dense integral of |P|, J) plus elastic_weight times its L1 violation of
+    the threshold over every forecast sample and link)."""
+    energy = check.energy(plan.trajectory)
+    if forecast is None:
+        return not plan.success, energy
+    times = np.asarray(forecast.times, float)
+    keep = (times > t_begin + 1e-12) & (times <= t_begin + duration + 1e-12)
+    links = check(plan.trajectory, times[keep], np.asarray(forecast.centres)[keep]).links
+    violation = float(np.sum(np.maximum(config.threshold - links, 0.0)))
+    unsafe = config.threshold - float(np.min(links, initial=np.inf)) > config.penalty_tolerance
+    return unsafe or not plan.success, energy + config.anytime.elastic_weight * violation
+
+
+def _timed(plan: SegmentPlan, wall: float, cpu: float) -> SegmentPlan:
+    return dataclasses.replace(plan, solve_ms=wall, solve_cpu_ms=cpu)

@@ -1,0 +1,157 @@
+"""GlobalSearchPlanner: the real-time loop's planner (the anytime SQP) with a global search
+beside it (GlobalSearchOptions), a SegmentPlanner (planning.types) like the one it wraps.
+
+At a re-plan the latest forecast goes to the search (when none runs, the obstacle still
+shapes the plan and the forecast is new). Its plan is offered on the nominal clock at the
+re-plan `lag` obstacle samples later (the search computed then and there, synchronously:
+the same plans on any machine), under CPU clocks when the other process has it ready. At a
+re-plan with an offer the budget is shared: the own warm re-plan and a warm re-solve from
+the offered plan get half each, and the offered one is adopted (its status marked ADOPTED)
+if it keeps the clearance and spends less on the current forecast (multistart.objective)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from identification.torque_model import TorqueModel
+from planning.anytime.safety import SafetyCheck
+from planning.config import PlannerConfig
+from planning.formulation.clearance import predicted_clearance
+from planning.globalsearch.background import Background, cores
+from planning.globalsearch.multistart import MultiStart, objective
+from planning.replanning import same_prediction
+from planning.types import Segment, SegmentPlan, SegmentPlanner
+
+ADOPTED = " (global search)"  # the status's tail of a re-plan adopted from the search
+NEAR = 0.1  # m above the threshold within which the obstacle still shapes a plan: searched
+SAMPLE_TOLERANCE = 1e-9  # s
+
+
+class GlobalSearchPlanner:
+    """`inner`'s plans, its re-plans adopting the global search's plans when they win."""
+
+    def __init__(self, inner: SegmentPlanner, model: TorqueModel, config: PlannerConfig):
+        self.inner, self.config = inner, config
+        nominal = config.anytime.iteration_ms is not None
+        # with one core the search would take the real-time loop's: the loop runs alone
+        self.mode = "nominal" if nominal else ("process" if cores() > 1 else "one core")
+        self._search = MultiStart(model, config) if nominal else None
+        self._background = Background(model, config) if self.mode == "process" else None
+        self.check = self._search.check if nominal else SafetyCheck(model, config,
+                                                                    config.compile_code)
+        self.searches = self.adoptions = 0
+        self._forget()
+
+    @property
+    def solver_ms(self) -> float:
+        return self.inner.solver_ms
+
+    def prepare(self, goal) -> None:
+        self.inner.prepare(goal)
+        if self._search is not None:
+            self._search.prepare(goal)
+
+    def offers(self, t: float) -> bool:
+        """Whether a search's plan is offered at sample time t (Algorithm 2 re-plans)."""
+        if self._background is not None:
+            return self._background.done()
+        return self._offer is not None and t >= self._offer[0] - SAMPLE_TOLERANCE
+
+    def plan_cold(self, problem: Segment, starts: int | None = None
+                  ) -> tuple[SegmentPlan, list[SegmentPlan]]:
+        self._forget()  # a new motion
+        return self.inner.plan_cold(problem, starts)
+
+    def plan(self, problem: Segment, warm: SegmentPlan | None = None) -> SegmentPlan:
+        if warm is None:
+            self._forget()
+            return self.inner.plan(problem)
+        offered = self._offered(problem.t_begin)
+        self._launch(problem, warm)
+        if offered is None:
+            return self.inner.plan(problem, warm)
+        config = self.config
+        budget = config.anytime.replan_budget_ms if problem.budget_ms is None \
+            else problem.budget_ms
+        if problem.deadline_ms is not None:
+            budget = min(budget, problem.deadline_ms)
+        half = dataclasses.replace(problem, budget_ms=0.5 * budget)
+        own, theirs = self.inner.plan(half, warm), self.inner.plan(half, offered)
+        segment = (problem.t_begin, problem.duration, problem.forecast)
+        ours, other = (objective(self.check, config, plan, *segment) for plan in (own, theirs))
+        adopt = theirs.success and not other[0] and (ours[0] or not own.success
+                                                       or other[1] < ours[1])
+        chosen = dataclasses.replace(theirs, status=theirs.status + ADOPTED) if adopt else own
+        self.adoptions += adopt
+        return dataclasses.replace(
+            chosen, iterations=own.iterations + theirs.iterations,
+            solve_ms=own.solve_ms + theirs.solve_ms,
+            solve_cpu_ms=own.solve_cpu_ms + theirs.solve_cpu_ms,
+            clock_ms=own.clock_ms + theirs.clock_ms)
+
+    def _forget(self) -> None:
+        self._offer: tuple[float, SegmentPlan] | None = None
+        self._searched = None  # the forecast of the last search
+        if self._background is not None:
+            self._background.forget()
+
+    def _offered(self, t: float) -> SegmentPlan | None:
+        """The plan offered at t, taken (None if none)."""
+        if self._background is not None:
+            return self._background.ready()
+        if not self.offers(t):
+            return None
+        plan, self._offer = self._offer[1], None
+        return plan
+
+    def _launch(self, problem: Segment, warm: SegmentPlan) -> None:
+        """Search this re-plan's forecast unless a search runs, the obstacle no longer comes
+        near the plan followed (within NEAR above the threshold) or the last search saw the
+        same prediction."""
+        forecast = problem.forecast
+        if self.mode == "one core" or forecast is None or len(forecast.times) < 2 or \
+                self._offer is not None or \
+                (self._background is not None and self._background.busy()):
+            return
+        if self._searched is not None and same_prediction(self._searched, forecast):
+            return
+        clearance = predicted_clearance(self.config.geometry, warm.trajectory, forecast)
+        if clearance > self.config.threshold + NEAR and not warm.detour:
+            return
+        self._searched = forecast
+        self.searches += 1
+        if self._background is not None:
+            self._background.submit(_segment(problem, warm, problem.t_begin), warm)
+            return
+        # planned from where the plan followed will be at the offer: the plan re-solved
+        # then starts near its own start
+        period = float(forecast.times[1] - forecast.times[0])
+        due = problem.t_begin + self.config.global_search.lag * period
+        if due >= problem.t_begin + problem.duration - period:
+            return
+        self._offer = (due, self._search.search(*_segment(problem, warm, due), warm)[0])
+
+
+def _segment(problem: Segment, warm: SegmentPlan, t: float) -> tuple:
+    """The search's segment from t (>= problem.t_begin) on: from the state the plan followed,
+    warm, reaches then, with the re-plan's forecast."""
+    q, qd, _ = warm.trajectory.state(t)
+    return (q[0], qd[0], t, problem.t_begin + problem.duration - t, problem.goal,
+            problem.forecast)
+
+
+def report(config: PlannerConfig, segments) -> dict | None:
+    """PLAN.json's account of the global search (None without one): how it ran and how many
+    of the segments followed were adopted from it."""
+    options = config.global_search
+    if not options.enabled or config.replanner != "anytime":
+        return None
+    if config.anytime.iteration_ms is not None:
+        mode = (f"nominal: each search on a re-plan's forecast, offered {options.lag} "
+                "obstacle samples later")
+    elif cores() > 1:
+        mode = "another process, adopted when ready"
+    else:
+        mode = "one core: the real-time loop ran alone, no global search"
+    return {"mode": mode, "adoptions": sum(s.status.endswith(ADOPTED) for s in segments),
+            "solver": options.solver, "lag_samples": options.lag}
