@@ -192,7 +192,7 @@ class Anytime(ProblemNumbers):
                 budget_ms: float) -> SegmentPlan:
         """The best (planning.starts.rank) of the plan from `warm` and of cold plans from
         `starts` start points (planning.starts), each with budget_ms of CPU: a multi-start
-        re-plan (AnytimeOptions.replan_starts; the realtime study's references)."""
+        re-plan (AnytimeOptions.replan_starts)."""
         segment = (q0, qd0, t_begin, duration, goal, forecast)
         plans = [] if warm is None else [self.solve(*segment, warm, budget_ms=budget_ms)[0]]
         for x0 in start_points(self, q0, qd0, duration, goal, starts):

@@ -62,20 +62,22 @@ def shape_of(plan: SegmentPlan, t_begin: float, duration: float) -> np.ndarray:
 
 
 def objective(check, config: PlannerConfig, plan: SegmentPlan, t_begin: float,
-              duration: float, forecast: ObstacleForecast | None) -> tuple[bool, float]:
-    """One measure for plans that saw different obstacle samples: (whether it is unusable or
-    misses the threshold beyond the penalty tolerance at a forecast sample, its energy
+              duration: float, forecast: ObstacleForecast | None) -> tuple[int, float]:
+    """One measure for plans that saw different obstacle samples: (2 if it is unusable (its
+    solve failed, a joint or torque limit left), 1 if it misses the threshold beyond the
+    penalty tolerance at a forecast sample, else 0; its energy
     actually spent (dense integral of |P|, J) plus elastic_weight times its L1 violation of
     the threshold over every forecast sample and link)."""
     energy = check.energy(plan.trajectory)
     if forecast is None:
-        return not plan.success, energy
+        return 2 * (not plan.success), energy
     times = np.asarray(forecast.times, float)
     keep = (times > t_begin + 1e-12) & (times <= t_begin + duration + 1e-12)
     links = check(plan.trajectory, times[keep], np.asarray(forecast.centres)[keep]).links
     violation = float(np.sum(np.maximum(config.threshold - links, 0.0)))
     unsafe = config.threshold - float(np.min(links, initial=np.inf)) > config.penalty_tolerance
-    return unsafe or not plan.success, energy + config.anytime.elastic_weight * violation
+    return 2 * (not plan.success) or int(unsafe), \
+        energy + config.anytime.elastic_weight * violation
 
 
 def _timed(plan: SegmentPlan, wall: float, cpu: float) -> SegmentPlan:

@@ -32,12 +32,12 @@ class GlobalSearchPlanner:
 
     def __init__(self, inner: SegmentPlanner, model: TorqueModel, config: PlannerConfig):
         self.inner, self.config = inner, config
-        nominal = config.anytime.iteration_ms is not None
+        lagged = config.anytime.iteration_ms is not None or not config.global_search.background
         # with one core the search would take the real-time loop's: the loop runs alone
-        self.mode = "nominal" if nominal else ("process" if cores() > 1 else "one core")
-        self._search = MultiStart(model, config) if nominal else None
+        self.mode = "lagged" if lagged else ("process" if cores() > 1 else "one core")
+        self._search = MultiStart(model, config) if lagged else None
         self._background = Background(model, config) if self.mode == "process" else None
-        self.check = self._search.check if nominal else SafetyCheck(model, config,
+        self.check = self._search.check if lagged else SafetyCheck(model, config,
                                                                     config.compile_code)
         self.searches = self.adoptions = 0
         self._forget()
@@ -146,7 +146,7 @@ def report(config: PlannerConfig, segments) -> dict | None:
     options = config.global_search
     if not options.enabled or config.replanner != "anytime":
         return None
-    if config.anytime.iteration_ms is not None:
+    if config.anytime.iteration_ms is not None or not options.background:
         mode = (f"nominal: each search on a re-plan's forecast, offered {options.lag} "
                 "obstacle samples later")
     elif cores() > 1:
