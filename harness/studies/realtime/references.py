@@ -18,19 +18,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from harness.experiments.causal import multistart
 from planning.anytime.planner import AnytimePlanner
 from planning.config import PlannerConfig, Scenario
 from planning.formulation.energy import dense_energy
-from planning.globalsearch.multistart import MultiStart, objective
+from planning.globalsearch.multistart import objective
 from planning.replanning import Execution, execute
-from planning.types import ObstacleForecast, Segment, SegmentPlan
+from planning.types import ObstacleForecast
 
 TOLERANCE = 0.005  # relative: "within 0.5 %"
-
-
-def multistart(baseline, config: PlannerConfig, starts: int) -> MultiStart:
-    """IPOPT from the global search's detours and `starts` random start points."""
-    return MultiStart(baseline, config.with_global_search(solver="ipopt", random_starts=starts))
 
 
 def per_replan(baseline, config: PlannerConfig, cases: list[Scenario], starts: int,
@@ -72,37 +68,6 @@ def _gap(ours: tuple, best: tuple) -> float:
     if ours[0] and not best[0]:
         return np.inf
     return 100 * (ours[1] - best[1]) / best[1] if best[1] > 0 else 0.0
-
-
-class CausalMultiStart:
-    """(ii) as a SegmentPlanner (planning.types): every plan and re-plan the IPOPT
-    multi-start's best."""
-
-    def __init__(self, search: MultiStart):
-        self.search, self.config = search, search.config
-
-    solver_ms = 0.0
-
-    def offers(self, t: float) -> bool:
-        return False
-
-    def prepare(self, goal) -> None:
-        self.search.prepare(goal)
-
-    def plan(self, problem: Segment, warm: SegmentPlan | None = None) -> SegmentPlan:
-        return self.search.search(problem.q0, problem.qd0, problem.t_begin, problem.duration,
-                                  problem.goal, problem.forecast, warm)[0]
-
-    def plan_cold(self, problem: Segment, starts: int | None = None
-                  ) -> tuple[SegmentPlan, list[SegmentPlan]]:
-        return self.plan(problem), []
-
-
-def causal_multistart(baseline, config: PlannerConfig, cases: list[Scenario],
-                      starts: int) -> list[Execution]:
-    """(ii): Algorithm 2 whose every plan and re-plan is the IPOPT multi-start's."""
-    planner = CausalMultiStart(multistart(baseline, config, starts))
-    return [execute(planner, case) for case in cases]
 
 
 def one_shot(baseline, config: PlannerConfig, cases: list[Scenario],
