@@ -39,8 +39,7 @@ class Setup:
 
     scenarios: int = 20
     seed: int = 2026
-    # random start points of every multi-start reference, beside the detours and the warm
-    # plan (an IPOPT search of 10 starts took ~2.5 s: docs/realtime.md, 'planning.globalsearch')
+    # random starts of each reference's multi-start (docs/realtime.md, 'planning.globalsearch')
     reference_starts: int = 2
     replan_stride: int = 4  # (i) on every this many re-plans
     deadline_ms: float = 10.0
@@ -56,9 +55,8 @@ def distribution(values) -> dict:
 
 
 def study_config(compile_code: bool, **changes) -> PlannerConfig:
-    """The default planner as the study runs it: the executions run faster than real time,
-    so the global search's other core is stood in for by its plans entering a fixed number
-    of samples later (GlobalSearchOptions.background)."""
+    """The default planner as the study runs it: its executions run faster than real time, so
+    the global search's plans enter a fixed number of samples later (GlobalSearchOptions)."""
     return true_energy_config(compile_code=compile_code, **changes).with_global_search(
         background=False)
 
