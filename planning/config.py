@@ -77,7 +77,7 @@ class GlobalSearchOptions:
     when ready (with one core the real-time loop runs alone)."""
 
     enabled: bool = False
-    lag: int = 4  # obstacle samples between a search's forecast and its offer
+    lag: int = 10  # obstacle samples between a search's forecast and its offer
     random_starts: int = 4  # seeded random start points beside the detours
     # the detours: each of the first side_joints joints swung by +-detour_rad at mid-horizon
     # (the base: either side; shoulder and elbow: above, below)

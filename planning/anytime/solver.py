@@ -60,6 +60,7 @@ class Anytime(ProblemNumbers):
         self.model, self.config = model, config
         self.settled_share, self.round_cap = (0.0, 2 * ROUNDS) if converge else \
             (sqp.SETTLED_SHARE, ROUNDS)
+        self.max_iterations = 200  # a round's SQP iterations at most
         self.check = SafetyCheck(model, config, config.compile_code)
         self._problems: dict[tuple, _Problem] = {}
         self._prepared: set[tuple] = set()
@@ -138,7 +139,8 @@ class Anytime(ProblemNumbers):
             points: list[sqp.Point] = []
             reserve = self.rounds.reserve(clock)  # for packing after the solve
             solution, count = problem.sqp.solve(start, p, lbg, ubg, lam_g, budget - reserve,
-                                                points.append, lam_x0=lam_x, clock=clock,
+                                                points.append, self.max_iterations,
+                                                lam_x0=lam_x, clock=clock,
                                                 per_point_ms=self.rounds.check_ms(clock))
             solved = clock.ms()
             iterations += count

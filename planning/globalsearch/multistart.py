@@ -1,7 +1,8 @@
-"""The global search's multi-start: every start point (planning.globalsearch.starts) solved
-to convergence on one forecast, by the anytime SQP without budget or settling
-(planning.anytime.solver.Anytime, converge=True) or by IPOPT (planning.globalsearch.ipopt),
-and the best kept by one measure on the whole forecast (objective)."""
+"""The global search's multi-start: the start points (planning.globalsearch.starts) on one
+forecast, by the anytime SQP without budget or settling (planning.anytime.solver.Anytime,
+converge=True: every start a few iterations, the best on to convergence) or by IPOPT
+(planning.globalsearch.ipopt, every start to convergence), and the best kept by one measure
+on the whole forecast (objective)."""
 
 from __future__ import annotations
 
@@ -17,6 +18,10 @@ from planning.globalsearch.ipopt import IpoptElastic
 from planning.globalsearch.starts import all_starts
 from planning.timing import Stopwatch, collection_deferred
 from planning.types import ObstacleForecast, SegmentPlan
+
+# the anytime SQP's search: every start SCREEN_ITERATIONS iterations a round, then the best
+# FINALISTS on from there to convergence (docs/realtime.md, 'planning.globalsearch')
+SCREEN_ITERATIONS, FINALISTS = 20, 2
 
 
 class MultiStart:
@@ -43,16 +48,20 @@ class MultiStart:
         points = all_starts(solver, q0, qd0, duration, goal, self.config)
         if warm is not None:
             points.insert(0, shape_of(warm, t_begin, duration))
-        plans = [self._solve(segment, x0) for x0 in points]
-        best = min(plans, key=lambda plan: objective(self.check, self.config, plan,
-                                                     t_begin, duration, forecast))
+        def score(plan):
+            return objective(self.check, self.config, plan, t_begin, duration, forecast)
+
+        if isinstance(solver, IpoptElastic):
+            plans = [solver.solve(*segment, x0=x0) for x0 in points]
+        else:  # every start a few iterations, the best FINALISTS on to convergence
+            solver.max_iterations = SCREEN_ITERATIONS
+            plans = [solver.solve(*segment, None, x0=x0, budget_ms=math.inf)[0] for x0 in points]
+            solver.max_iterations = 200
+            plans += [solver.solve(*segment, plan, budget_ms=math.inf)[0]
+                      for plan in sorted(plans, key=score)[:FINALISTS]]
+        best = min(plans, key=score)
         wall, cpu = clock.read()
         return _timed(best, wall, cpu), plans
-
-    def _solve(self, segment, x0) -> SegmentPlan:
-        if isinstance(self.solver, IpoptElastic):
-            return self.solver.solve(*segment, x0=x0)
-        return self.solver.solve(*segment, None, x0=x0, budget_ms=math.inf)[0]
 
 
 def shape_of(plan: SegmentPlan, t_begin: float, duration: float) -> np.ndarray:

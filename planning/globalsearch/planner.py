@@ -4,14 +4,18 @@ beside it (GlobalSearchOptions), a SegmentPlanner (planning.types) like the one 
 At a re-plan the latest forecast goes to the search (when none runs, the obstacle still
 shapes the plan and the forecast is new). Its plan is offered on the nominal clock at the
 re-plan `lag` obstacle samples later (the search computed then and there, synchronously:
-the same plans on any machine), under CPU clocks when the other process has it ready. At a
-re-plan with an offer the budget is shared: the own warm re-plan and a warm re-solve from
-the offered plan get half each, and the offered one is adopted (its status marked ADOPTED)
-if it keeps the clearance and spends less on the current forecast (multistart.objective)."""
+the same plans on any machine), under CPU clocks when the other process has it ready. A
+re-plan with an offer whose motion from now on scores better on the current forecast than
+the plan followed (multistart.objective: safe first, then the energy to go) goes on from it
+with the whole budget, and adopts the result (its status marked ADOPTED) if it keeps the
+clearance and spends less than the plan followed; otherwise the arm keeps that plan
+(Algorithm 2 re-plans from it at the next sample if it must). An offer that scores no
+better leaves the re-plan as it was."""
 
 from __future__ import annotations
 
 import dataclasses
+import math
 
 from identification.torque_model import TorqueModel
 from planning.anytime.safety import SafetyCheck
@@ -68,26 +72,30 @@ class GlobalSearchPlanner:
             return self.inner.plan(problem)
         offered = self._offered(problem.t_begin)
         self._launch(problem, warm)
-        if offered is None:
+        ours, other = (self._score(plan, problem) for plan in (warm, offered))
+        if offered is None or other >= ours:  # nothing offered, or nothing promising
             return self.inner.plan(problem, warm)
-        config = self.config
-        budget = config.anytime.replan_budget_ms if problem.budget_ms is None \
-            else problem.budget_ms
-        if problem.deadline_ms is not None:
-            budget = min(budget, problem.deadline_ms)
-        half = dataclasses.replace(problem, budget_ms=0.5 * budget)
-        own, theirs = self.inner.plan(half, warm), self.inner.plan(half, offered)
-        segment = (problem.t_begin, problem.duration, problem.forecast)
-        ours, other = (objective(self.check, config, plan, *segment) for plan in (own, theirs))
-        adopt = theirs.success and not other[0] and (ours[0] or not own.success
-                                                       or other[1] < ours[1])
-        chosen = dataclasses.replace(theirs, status=theirs.status + ADOPTED) if adopt else own
-        self.adoptions += adopt
-        return dataclasses.replace(
-            chosen, iterations=own.iterations + theirs.iterations,
-            solve_ms=own.solve_ms + theirs.solve_ms,
-            solve_cpu_ms=own.solve_cpu_ms + theirs.solve_cpu_ms,
-            clock_ms=own.clock_ms + theirs.clock_ms)
+        # the re-plan goes on from the offered plan instead, with the whole budget; kept if
+        # it wins on the current forecast, else the arm keeps its plan (re-planned from at
+        # the next sample if it must be)
+        theirs = self.inner.plan(problem, offered)
+        if not theirs.success or self._score(theirs, problem) >= ours:
+            return dataclasses.replace(warm, trajectory=_rest(warm, problem),
+                                       iterations=theirs.iterations,
+                                       solve_ms=theirs.solve_ms,
+                                       solve_cpu_ms=theirs.solve_cpu_ms,
+                                       clock_ms=theirs.clock_ms)
+        self.adoptions += 1
+        return dataclasses.replace(theirs, status=theirs.status + ADOPTED)
+
+    def _score(self, plan: SegmentPlan | None, problem: Segment) -> tuple[int, float]:
+        """multistart.objective of the plan's motion from the re-plan's time on (inf for
+        none)."""
+        if plan is None:
+            return (3, math.inf)
+        motion = dataclasses.replace(plan, trajectory=_rest(plan, problem))
+        return objective(self.check, self.config, motion, problem.t_begin, problem.duration,
+                         problem.forecast)
 
     def _forget(self) -> None:
         self._offer: tuple[float, SegmentPlan] | None = None
@@ -130,6 +138,11 @@ class GlobalSearchPlanner:
         if due >= problem.t_begin + problem.duration - period:
             return
         self._offer = (due, self._search.search(*_segment(problem, warm, due), warm)[0])
+
+
+def _rest(plan: SegmentPlan, problem: Segment):
+    """The plan's motion on the re-plan's horizon."""
+    return plan.trajectory.restrict(problem.t_begin, problem.duration)
 
 
 def _segment(problem: Segment, warm: SegmentPlan, t: float) -> tuple:
