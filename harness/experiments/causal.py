@@ -6,9 +6,11 @@ anytime SQP."""
 
 from __future__ import annotations
 
+from harness.experiments.planning import summary
 from planning.config import PlannerConfig, Scenario
 from planning.globalsearch.multistart import MultiStart
 from planning.replanning import Execution, execute
+from planning.result import evaluate
 from planning.types import Segment, SegmentPlan
 
 
@@ -54,9 +56,6 @@ def against_causal(baseline, config: PlannerConfig, scenario: Scenario, ours: fl
                    starts: int) -> dict:
     """A re-planner's executed energy `ours` (J, its true energy) against the causal
     reference's on the scenario: both energies and the excess (%)."""
-    from harness.experiments.planning import summary
-    from planning.result import evaluate
-
     run = causal_multistart(baseline, config, [scenario], starts)[0]
     reference = summary(evaluate(run, scenario, baseline, config), baseline, config)
     energy = reference["true_energy_J"]
