@@ -14,6 +14,10 @@ Sub-packages, in the order the math flows:
 - anytime/: the real-time SQP, a SegmentPlanner (planner): clearance as elastic rows, a
   trust-region SQP under a CPU budget (solver, sqp, elastic_qp, qp_kernels, local_model,
   budget), every iterate checked by compiled functions (safety, candidates)
+- globalsearch/: the global search beside the anytime SQP's re-plans, a SegmentPlanner around
+  it (planner): many starts (starts) solved to convergence by the SQP or IPOPT (multistart,
+  ipopt), offered a fixed number of obstacle samples later or from another process
+  (background), adopted when they win on the current forecast
 
 Modules at the top:
 
@@ -23,8 +27,8 @@ Modules at the top:
 - planners: the one factory choosing the SegmentPlanner a configuration asks for, its
   offline variant and the plan command's execution (executed)
 - offline: cold plans to convergence, falling back to the other method
-- config: PlannerConfig (the formulation and the replanner) with its PenaltyOptions and
-  AnytimeOptions, and Scenario; errors: PlanningError
+- config: PlannerConfig (the formulation and the replanner) with its PenaltyOptions,
+  AnytimeOptions and GlobalSearchOptions, and Scenario; errors: PlanningError
 - starts: the multi-start's start points and the ranking of cold plans
 - replanning: Algorithm 2, re-planning from the current state when the obstacle threatens,
   with any SegmentPlanner

@@ -63,6 +63,33 @@ class AnytimeOptions:
     replan_starts: int = 0  # a re-plan also solves from this many cold start points
 
 
+@dataclass(frozen=True)
+class GlobalSearchOptions:
+    """A global search beside the anytime SQP's re-plans (planning.globalsearch): the latest
+    forecast solved from many starts (the obstacle passed on each side, above and below;
+    seeded random starts; the last plan), each to convergence, its best plan offered to the
+    real-time loop, which adopts it when, re-solved warm within its budget, it spends less on
+    the current forecast and keeps the clearance.
+
+    On the nominal clock (AnytimeOptions.iteration_ms) a search runs on the forecast of the
+    re-plan at obstacle sample k and is offered at sample k + lag (the same plan on any
+    machine); under CPU clocks (plan --realtime) it runs in another process and is adopted
+    when ready (with one core the real-time loop runs alone)."""
+
+    enabled: bool = False
+    lag: int = 10  # obstacle samples between a search's forecast and its offer
+    random_starts: int = 4  # seeded random start points beside the detours
+    # the detours: each of the first side_joints joints swung by +-detour_rad at mid-horizon
+    # (the base: either side; shoulder and elbow: above, below)
+    side_joints: int = 3
+    detour_rad: float = 0.5
+    solver: str = "sqp"  # each start to convergence by the anytime SQP, or "ipopt"
+    # under CPU clocks, searches in another process; False: as on the nominal clock (in
+    # this thread, offered lag samples later: the realtime study's stand-in for the other
+    # core, its executions running faster than real time)
+    background: bool = True
+
+
 def nominal_iteration_ms(dof: int) -> float:
     """What one anytime-SQP iteration counts on the deterministic clock (AnytimeOptions.
     iteration_ms, ms) on an arm of `dof` joints: 0.5 ms at 3 joints, growing as dof^1.5 (the
@@ -130,6 +157,7 @@ class PlannerConfig:
     replanner: str = "penalty"
     penalty: PenaltyOptions = field(default_factory=PenaltyOptions)
     anytime: AnytimeOptions = field(default_factory=AnytimeOptions)
+    global_search: GlobalSearchOptions = field(default_factory=GlobalSearchOptions)
 
     def __post_init__(self):
         name = ALIASES.get(self.replanner, self.replanner)
@@ -146,15 +174,22 @@ class PlannerConfig:
         """This configuration with these anytime-SQP options changed."""
         return dataclasses.replace(self, anytime=dataclasses.replace(self.anytime, **changes))
 
+    def with_global_search(self, **changes) -> PlannerConfig:
+        """This configuration with these global-search options changed."""
+        return dataclasses.replace(self, global_search=dataclasses.replace(self.global_search,
+                                                                           **changes))
+
 
 def true_energy_config(**changes) -> PlannerConfig:
     """What `torquebench plan` and the bench plan with by default: the true energy (Gauss-
     Legendre, N = 20; eq. 18 with N = 10 lets the optimizer hide negative power between its
     samples), the best of 4 cold starts (the landscape has local optima), at rest at the
-    goal, planned and re-planned by the anytime SQP under a CPU budget (the paper's penalty
-    loop: replanner "penalty")."""
+    goal, planned and re-planned by the anytime SQP under a CPU budget with its global search
+    beside (docs/realtime.md, 'planning.globalsearch'; the paper's penalty loop: replanner
+    "penalty")."""
     return dataclasses.replace(PlannerConfig(energy_quadrature="gauss", energy_samples=20,
-                                             starts=4, rest_at_goal=True, replanner="anytime"),
+                                             starts=4, rest_at_goal=True, replanner="anytime",
+                                             global_search=GlobalSearchOptions(enabled=True)),
                                **changes)
 
 

@@ -26,6 +26,9 @@ class Offline:
         return self.primary.solver_ms + (0.0 if self.fallback is None else
                                          self.fallback.solver_ms)
 
+    def offers(self, t: float) -> bool:
+        return self.primary.offers(t)
+
     def prepare(self, goal) -> None:
         self.primary.prepare(goal)  # the fallback's built only if a plan needs it
 

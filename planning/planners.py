@@ -8,6 +8,7 @@ import dataclasses
 from identification.torque_model import TorqueModel
 from planning.anytime.planner import AnytimePlanner
 from planning.config import PlannerConfig, Scenario, nominal_iteration_ms
+from planning.globalsearch.planner import GlobalSearchPlanner
 from planning.offline import Offline
 from planning.penalty.planner import PenaltyLoop
 from planning.penalty.polish import Polished
@@ -37,7 +38,9 @@ def segment_planner(model: TorqueModel, config: PlannerConfig | None = None,
     if not uses_anytime(config):
         return PenaltyLoop(solver)
     planner = AnytimePlanner(model, config)
-    return Polished(planner, solver) if config.penalty.polish else planner
+    planner = Polished(planner, solver) if config.penalty.polish else planner
+    return GlobalSearchPlanner(planner, model, config) if config.global_search.enabled \
+        else planner
 
 
 def other_method(config: PlannerConfig) -> PlannerConfig | None:

@@ -86,8 +86,8 @@ def execute(planner: SegmentPlanner, scenario: Scenario, replan: bool = True,
     for t in obstacle.sample_times[:-1]:
         forecast = forecast_at(obstacle, t)
         iterating = plan.status.startswith(ITERATE)  # it stopped short: go on from it
-        if not iterating and (not _stale(planner, plan, forecast)
-                              or _same_prediction(planned_with, forecast)):
+        if not iterating and not planner.offers(t) and (not _stale(planner, plan, forecast)
+                              or same_prediction(planned_with, forecast)):
             continue  # safe, or nothing new to plan with: the last plan already saw this
         q, qd, _ = plan.trajectory.state(t)
         new = planner.plan(Segment(q[0], qd[0], t, T - t, goal, forecast, realtime=True,
@@ -123,7 +123,7 @@ def forecast_at(obstacle, t: float) -> ObstacleForecast:
     return ObstacleForecast(future, predict_linear(seen, obstacle.position(seen), future))
 
 
-def _same_prediction(old: ObstacleForecast, new: ObstacleForecast) -> bool:
+def same_prediction(old: ObstacleForecast, new: ObstacleForecast) -> bool:
     """True if `new` predicts every remaining sample within PREDICTION_TOLERANCE of `old`."""
     index = np.searchsorted(old.times, new.times)
     if np.any(index >= len(old.times)) or not np.allclose(old.times[index], new.times):

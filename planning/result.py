@@ -11,6 +11,7 @@ from planning.config import JSON_NAMES, PlannerConfig, Scenario
 from planning.formulation.clearance import link_clearances
 from planning.formulation.energy import absolute_energy
 from planning.formulation.limits import LIMIT_TOLERANCE
+from planning.globalsearch.planner import report
 from planning.replanning import Execution
 from planning.types import DEADLINE
 
@@ -155,6 +156,7 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
         # the budgets' clock: "nominal" (iteration_ms per SQP iteration: the same plan on any
         # machine and load) or "cpu" (plan --realtime)
         "clock": "cpu" if config.anytime.iteration_ms is None else "nominal",
+        "global_search": report(config, segments),
         "deadline_misses": sum(f.startswith(DEADLINE) for f in result.execution.replan_failures),
         "timing": timing(result.execution, config),
         "end_error": result.end_error, "limit_violation": result.limit_violation,

@@ -69,7 +69,7 @@ class Segment:
     goal: np.ndarray
     forecast: ObstacleForecast | None = None
     x0: np.ndarray | None = None  # a cold plan's start point (default: the initial guess)
-    # what a cold plan may spend on the budget's clock (ms; default: the config's; inf: an
+    # what the plan may spend on the budget's clock (ms; default: the config's; inf: an
     # offline plan, solved to convergence)
     budget_ms: float | None = None
     deadline_ms: float | None = None  # ms after which a re-plan is abandoned (status DEADLINE)
@@ -94,6 +94,10 @@ class SegmentPlanner(Protocol):
                   ) -> tuple[SegmentPlan, list[SegmentPlan]]:
         """The best of `starts` (default config.starts) cold plans (planning.starts), its
         times those of the whole search, and every plan of the search."""
+
+    def offers(self, t: float) -> bool:
+        """Whether it has a plan to offer at sample time t (a global search's,
+        planning.globalsearch): Algorithm 2 re-plans then even if its plan is safe."""
 
     @property
     def solver_ms(self) -> float:

@@ -74,7 +74,7 @@ def test_the_anytime_sqp_reaches_ipopts_optimum_of_the_same_nlp(planner, monkeyp
     nlp, p, lbg, ubg, start = _elastic_problem(planner, case, forecast)
     solver = sqp.AnytimeSQP(local_model.local_function(nlp, "local"), local_model.layout_of(nlp), nlp.lbx,
                             nlp.g.numel())
-    monkeypatch.setattr(sqp, "SETTLED_SHARE", 0.0)  # to convergence
+    solver.settled_share = 0.0  # to convergence
     solution, _ = solver.solve(start, p, lbg, ubg, np.zeros(nlp.g.numel()), 1e6,
                                lambda point: None)
     assert solution.status == sqp.CONVERGED and solution.violation < 1e-8
@@ -136,16 +136,17 @@ def test_the_qp_with_slacks_held_is_the_full_elastic_qp(planner, monkeypatch, ra
 
 def test_a_solve_settles_at_the_first_step_that_gains_less_than_its_share(planner,
                                                                          monkeypatch):
-    """sqp.SETTLED_SHARE: a solve ends (SETTLED, unconverged) at the first accepted step
-    that lowers the merit by less than that share of the objective, with the hard rows
-    kept; every earlier accepted step gained more. Without it the same solve runs on."""
+    """sqp.SETTLED_SHARE (AnytimeSQP.settled_share): a solve ends (SETTLED, unconverged)
+    at the first accepted step that lowers the merit by less than that share of the
+    objective, with the hard rows kept; every earlier accepted step gained more. Without it
+    the same solve runs on."""
     case, forecast = random_crossing(planner, seed=7)
     nlp, p, lbg, ubg, start = _elastic_problem(planner, case, forecast)
     solver = sqp.AnytimeSQP(local_model.local_function(nlp, "local"), local_model.layout_of(nlp), nlp.lbx,
                             nlp.g.numel())
 
     def solve(share):
-        monkeypatch.setattr(sqp, "SETTLED_SHARE", share)
+        solver.settled_share = share
         points = []
         solution, iterations = solver.solve(start, p, lbg, ubg, np.zeros(nlp.g.numel()), 1e6,
                                             points.append)

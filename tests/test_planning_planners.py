@@ -9,6 +9,7 @@ from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from planning.anytime.planner import AnytimePlanner
 from planning.config import JSON_NAMES, PenaltyOptions, PlannerConfig, true_energy_config
+from planning.globalsearch.planner import GlobalSearchPlanner
 from planning.penalty.planner import PenaltyLoop
 from planning.penalty.polish import Polished
 from planning.planners import segment_planner
@@ -23,7 +24,8 @@ def baseline():
 @pytest.mark.parametrize("name, kind", [("penalty", PenaltyLoop), ("fatrop", PenaltyLoop),
                                         ("anytime", AnytimePlanner), ("sqp", AnytimePlanner)])
 def test_the_factory_picks_the_replanner_the_config_names(baseline, name, kind):
-    config = true_energy_config(replanner=name, compile_code=False)
+    config = true_energy_config(replanner=name, compile_code=False).with_global_search(
+        enabled=False)
     planner = segment_planner(baseline, config)
     assert isinstance(planner, kind) and isinstance(planner, SegmentPlanner)
     assert planner.config.replanner in ("penalty", "anytime")
@@ -38,9 +40,22 @@ def test_the_split_rule_and_real_time_iterations_keep_the_penalty_loop(baseline)
 
 
 def test_the_anytime_sqps_cold_plans_are_polished_by_the_penalty_loop(baseline):
-    config = true_energy_config(compile_code=False).with_penalty(polish=1)
+    config = true_energy_config(compile_code=False).with_penalty(polish=1).with_global_search(
+        enabled=False)
     planner = segment_planner(baseline, config)
     assert isinstance(planner, Polished) and isinstance(planner.inner, AnytimePlanner)
+
+
+def test_the_global_search_goes_around_the_anytime_sqp_only(baseline):
+    """On by default (true_energy_config): the anytime SQP, polished or not, inside it; the
+    penalty loop never gets one."""
+    config = true_energy_config(compile_code=False).with_anytime(iteration_ms=0.5)
+    planner = segment_planner(baseline, config.with_penalty(polish=1))
+    assert isinstance(planner, GlobalSearchPlanner) and isinstance(planner, SegmentPlanner)
+    assert isinstance(planner.inner, Polished)
+    assert isinstance(segment_planner(baseline, config).inner, AnytimePlanner)
+    penalty = segment_planner(baseline, config.with_penalty(replan_iterations=1))
+    assert isinstance(penalty, PenaltyLoop)
 
 
 def test_options_are_grouped_by_the_planner_they_belong_to():

@@ -7,6 +7,7 @@ command names the problem and exits 2 without writing.
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import logging
 import math
@@ -137,6 +138,15 @@ def register(sub) -> None:
                         "follows its last plan; deadline_misses in PLAN.json) and the first "
                         "plan shares the cold budget; default: nominal clocks, and the first "
                         "plan solved to convergence, by the other method if need be")
+    p.add_argument("--global-search", action=argparse.BooleanOptionalAction,
+                   default=PLANNER.global_search.enabled,
+                   help="anytime: a global search beside the re-plans, solving the forecast "
+                        "from many starts (the obstacle passed each side, above, below; random "
+                        "starts) to convergence; a re-plan adopts its plan when, re-solved warm "
+                        "within its budget, it spends less and keeps the clearance (nominal "
+                        "clocks: offered a fixed number of obstacle samples later; --realtime: "
+                        "in another process, when ready). PLAN.json's global_search counts "
+                        f"the adoptions (default: {'on' if PLANNER.global_search.enabled else 'off'})")
     p.add_argument("--replan-iterations", type=int, default=0,
                    help="real-time iterations: each re-plan first takes this many iterations "
                         "of CasADi's feasible SQP from the last plan and the arm follows the "
@@ -222,6 +232,7 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
     config = config.with_penalty(solver=args.solver or config.penalty.solver,
                                  polish=args.polish, polish_samples=args.polish_samples,
                                  replan_iterations=args.replan_iterations or None)
+    config = config.with_global_search(enabled=args.global_search)
     config = dataclasses.replace(config.with_anytime(replan_budget_ms=args.replan_budget_ms),
                                  starts=args.starts, compile_code=not args.no_compile,
                                  # -O0 first where no CPU time decides the plan

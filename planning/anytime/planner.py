@@ -27,14 +27,19 @@ class AnytimePlanner:
         """CPU ms so far in the SQPs' solves."""
         return float(self.anytime._solver_ms()[1])
 
+    def offers(self, t: float) -> bool:
+        return False
+
     def prepare(self, goal) -> None:
         self.anytime.prepare(goal)
 
     @collection_deferred
     def plan(self, problem: Segment, warm: SegmentPlan | None = None) -> SegmentPlan:
         config = self.config
-        budget = config.anytime.replan_budget_ms if warm is not None else problem.budget_ms
-        budget = config.anytime.cold_budget_ms if budget is None else budget
+        budget = problem.budget_ms  # given: a share of a budget (or inf: to convergence)
+        if budget is None:
+            budget = config.anytime.replan_budget_ms if warm is not None else \
+                config.anytime.cold_budget_ms
         if problem.deadline_ms is not None:
             budget = min(budget, problem.deadline_ms)
         self.anytime.prepare(problem.goal)  # built once: not part of a plan's time

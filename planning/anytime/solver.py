@@ -54,8 +54,13 @@ class _Problem:
 class Anytime(ProblemNumbers):
     """The anytime SQP's plans of one torque model and configuration."""
 
-    def __init__(self, model: TorqueModel, config: PlannerConfig):
+    def __init__(self, model: TorqueModel, config: PlannerConfig, converge: bool = False):
+        """converge: every solve runs to convergence (no settling, more screening rounds:
+        the global search's, planning.globalsearch), given an unlimited budget."""
         self.model, self.config = model, config
+        self.settled_share, self.round_cap = (0.0, 2 * ROUNDS) if converge else \
+            (sqp.SETTLED_SHARE, ROUNDS)
+        self.max_iterations = 200  # a round's SQP iterations at most
         self.check = SafetyCheck(model, config, config.compile_code)
         self._problems: dict[tuple, _Problem] = {}
         self._prepared: set[tuple] = set()
@@ -98,7 +103,8 @@ class Anytime(ProblemNumbers):
             parts = compiled.Buffered(build(ca.Function("elastic_parts", [nlp.x, nlp.p],
                                                         [ca.vertcat(nlp.energy, nlp.penalty)])))
             self._problems[key] = _Problem(nlp, sqp.AnytimeSQP(
-                local, local_model.layout_of(nlp), nlp.lbx, nlp.g.numel()), parts, ("elastic",) + key)
+                local, local_model.layout_of(nlp), nlp.lbx, nlp.g.numel(), self.settled_share), parts,
+                ("elastic",) + key)
         return self._problems[key]
 
     def solve(self, q0, qd0, t_begin: float, duration: float, goal,
@@ -121,7 +127,7 @@ class Anytime(ProblemNumbers):
         check = self.check.against(times, centres, t_begin, duration)
         best, plan, iterations, last = None, None, 0, warm
         spent = self._solver_ms()
-        for _ in range(ROUNDS):
+        for _ in range(self.round_cap):
             clock.tick(Clock.ROUND_ITERATIONS)
             round_began = clock.ms()
             problem = self.problem(goal, torque)
@@ -136,7 +142,8 @@ class Anytime(ProblemNumbers):
             points: list[sqp.Point] = []
             reserve = self.rounds.reserve(clock)  # for packing after the solve
             solution, count = problem.sqp.solve(start, p, lbg, ubg, lam_g, budget - reserve,
-                                                points.append, lam_x0=lam_x, clock=clock,
+                                                points.append, self.max_iterations,
+                                                lam_x0=lam_x, clock=clock,
                                                 per_point_ms=self.rounds.check_ms(clock))
             solved = clock.ms()
             iterations += count
@@ -190,7 +197,7 @@ class Anytime(ProblemNumbers):
                 budget_ms: float) -> SegmentPlan:
         """The best (planning.starts.rank) of the plan from `warm` and of cold plans from
         `starts` start points (planning.starts), each with budget_ms of CPU: a multi-start
-        re-plan (AnytimeOptions.replan_starts; the realtime study's references)."""
+        re-plan (AnytimeOptions.replan_starts)."""
         segment = (q0, qd0, t_begin, duration, goal, forecast)
         plans = [] if warm is None else [self.solve(*segment, warm, budget_ms=budget_ms)[0]]
         for x0 in start_points(self, q0, qd0, duration, goal, starts):

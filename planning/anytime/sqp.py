@@ -59,8 +59,10 @@ class AnytimeSQP:
     """The solver for one elastic NLP: local evaluations by `local` (a compiled
     planning.anytime.local_model.local_function), the QPs by DAQP."""
 
-    def __init__(self, local: ca.Function, layout: Layout, lbx: np.ndarray, rows: int):
+    def __init__(self, local: ca.Function, layout: Layout, lbx: np.ndarray, rows: int,
+                 settled_share: float = SETTLED_SHARE):
         self.local, self.layout, self.lbx = compiled.Buffered(local), layout, np.asarray(lbx, float)
+        self.settled_share = settled_share  # 0: never settles (solved to convergence)
         n = len(self.lbx)
         self.sizes = (n, rows)  # variables, constraint rows
         # the slacks' rows and columns (above, below, e, clearance, v), for kernels.reset
@@ -161,7 +163,7 @@ class AnytimeSQP:
                             better / pred
             settled = False
             if ratio >= 1e-4:  # the merit's decrease is pred x ratio (corrected or not)
-                settled = pred * ratio <= SETTLED_SHARE * abs(trial.f) and \
+                settled = pred * ratio <= self.settled_share * abs(trial.f) and \
                     trial.violation <= PRIMAL_TOLERANCE
                 point, lam_g, lam_x = trial, lam_rows, lam_vars
                 accept(point)

@@ -21,6 +21,9 @@ class PenaltyLoop:
     def solver_ms(self) -> float:
         return self.planner.solver_ms
 
+    def offers(self, t: float) -> bool:
+        return False
+
     def prepare(self, goal) -> None:
         self.planner.prepare(goal)
 

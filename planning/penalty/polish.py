@@ -23,6 +23,9 @@ class Polished:
     def solver_ms(self) -> float:
         return self.inner.solver_ms
 
+    def offers(self, t: float) -> bool:
+        return self.inner.offers(t)
+
     def prepare(self, goal) -> None:
         self.inner.prepare(goal)
         self.planner.polisher.prepare(goal)

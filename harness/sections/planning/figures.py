@@ -59,6 +59,11 @@ def markdown(r: dict) -> list[str]:
            "bound: |V(T) - V(0) + dissipated|, what any rest-to-rest motion along that path "
            "must spend. The unobstructed optimum ignores the obstacle placed on it; `swaying`: "
            "the same crossing with the obstacle swaying 4 cm sideways (closed form).", "",
+           "Against the causal reference (Algorithm 2 re-planning by a multi-start of IPOPT to "
+           "convergence at every re-plan, harness.experiments.causal; true energy): " + "; ".join(
+               f"{name} {c['executed_J']:.4f} J against {c['reference_J']:.4f} J "
+               f"({c['excess_pct']:+.2f} %)" for name, c in r.get("against_causal", {}).items())
+           + ".", "",
            f"Speed (closed form, crossing scenario; CPU time of the planning thread): cold plan "
            f"median {speed['cold_cpu_median_ms']:.0f} ms, max {speed['cold_cpu_max_ms']:.0f} ms; "
            f"warm re-plan with the obstacle one sample further median "

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from harness.errors import UserError
+from harness.experiments.causal import causal_multistart
 from harness.replay.reference import plan_reference
 from harness.replay.simulate import replay
 from harness.studies.realtime import references
@@ -39,7 +40,9 @@ class Setup:
 
     scenarios: int = 20
     seed: int = 2026
-    reference_starts: int = 8  # cold start points of every multi-start reference
+    # random starts of each reference's multi-start (docs/realtime.md, 'planning.globalsearch')
+    reference_starts: int = 2
+    replan_stride: int = 4  # (i) on every this many re-plans
     deadline_ms: float = 10.0
 
 
@@ -50,6 +53,13 @@ def distribution(values) -> dict:
         return {"median": None, "p95": None, "max": None, "count": 0}
     return {"median": float(np.median(v)), "p95": float(np.percentile(v, 95)),
             "max": float(np.max(v)), "count": len(v)}
+
+
+def study_config(compile_code: bool, **changes) -> PlannerConfig:
+    """The default planner as the study runs it: its executions run faster than real time, so
+    the global search's plans enter a fixed number of samples later (GlobalSearchOptions)."""
+    return true_energy_config(compile_code=compile_code, **changes).with_global_search(
+        background=False)
 
 
 def scenarios(baseline, config: PlannerConfig, setup: Setup) -> list[Scenario]:
@@ -148,10 +158,13 @@ def ways_in(config: PlannerConfig, quick: bool) -> dict[str, PlannerConfig]:
 
 
 def fast_ways(config: PlannerConfig) -> dict[str, PlannerConfig]:
-    """The two re-planners side by side: the penalty loop (fatrop) and the anytime SQP."""
+    """The two re-planners side by side: the penalty loop (fatrop) and the anytime SQP, with
+    and without its global search."""
     rows = {}
-    for replanner in ("penalty", "anytime"):
-        variant = dataclasses.replace(config, replanner=replanner)
+    anytime = dataclasses.replace(config, replanner="anytime")
+    for variant in (dataclasses.replace(config, replanner="penalty"),
+                    anytime.with_global_search(enabled=not anytime.global_search.enabled),
+                    anytime):
         label = "default: " if variant == config else ""
         rows[label + describe(variant)] = variant
     return rows
@@ -161,20 +174,23 @@ def describe(config: PlannerConfig) -> str:
     """One line naming what a configuration solves with."""
     code = "compiled" if config.compile_code else "virtual machine"
     if config.replanner == "anytime":
+        search = config.global_search
         return (f"anytime elastic SQP (DAQP), {code}, {config.energy_quadrature} N = "
                 f"{config.energy_samples}, {config.starts} start(s) in "
-                f"{config.anytime.cold_budget_ms:g} ms, re-plans in {config.anytime.replan_budget_ms:g} ms")
+                f"{config.anytime.cold_budget_ms:g} ms, re-plans in {config.anytime.replan_budget_ms:g} ms"
+                + (f", global search offered {search.lag} samples later" if search.enabled
+                   else ", no global search"))
     return (f"{config.penalty.solver}, {code}, {config.energy_quadrature} N = {config.energy_samples}, "
             f"{config.starts} start(s), {config.obstacle_slots} penalty samples")
 
 
 def run(baseline, plant, quick: bool, setup: Setup | None = None,
         ways: dict[str, PlannerConfig] | None = None, **changes) -> dict:
-    """The whole study; quick: 2 scenarios, 2 reference starts, the previous default and the
-    two re-planners only, nothing compiled; changes: to the planner configuration (e.g. the
-    paper's free end, rest_at_goal=False)."""
-    setup = setup or (Setup(scenarios=2, reference_starts=2) if quick else Setup())
-    config = true_energy_config(compile_code=not quick, **changes)
+    """The whole study; quick: 2 scenarios, references without random starts on every 8th
+    re-plan, the previous default and the default only, nothing compiled; changes: to the
+    planner configuration (e.g. the paper's free end, rest_at_goal=False)."""
+    setup = setup or (Setup(scenarios=2, reference_starts=0, replan_stride=8) if quick else Setup())
+    config = study_config(not quick, **changes)
     cases = scenarios(baseline, config, setup)
     ways = ways_in(config, quick) if ways is None else ways
     rows, executed = {}, {}
@@ -191,20 +207,24 @@ def run(baseline, plant, quick: bool, setup: Setup | None = None,
         rows[name] |= spent(plant, baseline, anytime, cases, executed[name])
     return {"setup": dataclasses.asdict(setup), "config": describe(config),
             "ways_in": rows, "default": default, "anytime_way": name,
-            "references": _references(baseline, plant, anytime, cases, rows[name], setup),
+            "references": _references(baseline, plant, anytime, cases, rows[name], setup, rows),
             "scenarios": [_scenario_json(case) for case in cases]}
 
 
-def _references(baseline, plant, config, cases, row: dict, setup: Setup) -> dict:
+def _references(baseline, plant, config, cases, row: dict, setup: Setup, rows: dict) -> dict:
     """The anytime SQP against the fair references (harness.studies.realtime.references)."""
     starts = setup.reference_starts
     causal = spent(plant, baseline, config, cases,
-                   references.causal_multistart(baseline, config, cases, starts))
+                   causal_multistart(baseline, config, cases, starts))
     oneshot = spent(plant, baseline, config, cases,
                     references.one_shot(baseline, config, cases, starts))
-    return {"starts": starts,
-            "per_replan": references.per_replan(baseline, config, cases, starts),
+    return {"starts": starts, "stride": setup.replan_stride,
+            "per_replan": references.per_replan(baseline, config, cases, starts,
+                                                setup.replan_stride),
             "causal": references.compare(row["executed_J"], causal["executed_J"]),
+            # every way (the anytime SQP without its global search too) against it
+            "causal_other_way": {name: references.compare(other["executed_J"],
+                                 causal["executed_J"]) for name, other in rows.items()},
             "causal_executed_J": causal["executed_J"],
             "value_of_information": references.compare(row["executed_J"],
                                                        oneshot["executed_J"]),

@@ -38,6 +38,7 @@ def run(ctx: Context) -> SectionResult:
         Target("scenarios whose executed energy is within 0.5 % of the causal multi-start "
                "planner's", causal["within"], 18 * causal["scenarios"] / 20, "scenarios",
                lower_is_better=False, timing=True),
+        *_clearance_targets(study),
     ]
     if ctx.quick:  # the smoke-test size plans uncompiled: not comparable with the targets
         targets = []
@@ -58,3 +59,18 @@ def _anytime_targets(row: dict, per: dict) -> list[Target]:
                    per["overhead_cpu_ms"]["median"], OVERHEAD_MS, "ms", timing=True),
             Target("anytime SQP: CPU outside its solve per re-plan, median",
                    per["outside_cpu_ms"]["median"], OVERHEAD_MS, "ms", timing=True)]
+
+
+def _clearance_targets(study: dict) -> list[Target]:
+    """No loss of clearance from the global search: the default's infeasible executions and
+    smallest executed clearance against the anytime SQP's without it (when the study ran it)."""
+    row = study["ways_in"][study["anytime_way"]]
+    alone = next((r for name, r in study["ways_in"].items() if "no global search" in name), None)
+    if alone is None:
+        return []
+    return [Target("default planner: infeasible executions (the anytime SQP alone's as target)",
+                   row["executed_infeasible"], alone["executed_infeasible"], "", timing=True),
+            Target("default planner: smallest executed clearance (the anytime SQP alone's as "
+                   "target)", 1e3 * row["executed_min_clearance_m"],
+                   1e3 * alone["executed_min_clearance_m"], "mm", lower_is_better=False,
+                   timing=True)]

@@ -18,7 +18,6 @@ from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
 from harness.studies.realtime import measure as realtime
 from harness.studies.realtime import options as random_scenarios
-from planning.config import true_energy_config
 
 
 def main() -> None:
@@ -33,7 +32,7 @@ def main() -> None:
     setup = random_scenarios.setup(args)
     ways = None
     if args.ways == "fast":
-        ways = realtime.fast_ways(true_energy_config(compile_code=True, **changes))
+        ways = realtime.fast_ways(realtime.study_config(True, **changes))
     study = realtime.run(baseline, load_mujoco(DEFAULT_ROBOT, scene=True), False, setup, ways,
                          **changes)
     print("\n".join(realtime.markdown_lines(study)))

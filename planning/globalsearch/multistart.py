@@ -1,0 +1,93 @@
+"""The global search's multi-start: the start points (planning.globalsearch.starts) on one
+forecast, by the anytime SQP without budget or settling (planning.anytime.solver.Anytime,
+converge=True: every start a few iterations, the best on to convergence) or by IPOPT
+(planning.globalsearch.ipopt, every start to convergence), and the best kept by one measure
+on the whole forecast (objective)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from identification.torque_model import TorqueModel
+from planning.anytime.solver import Anytime
+from planning.config import PlannerConfig
+from planning.globalsearch.ipopt import IpoptElastic
+from planning.globalsearch.starts import all_starts
+from planning.timing import Stopwatch, collection_deferred
+from planning.types import ObstacleForecast, SegmentPlan
+
+# the anytime SQP's search: every start SCREEN_ITERATIONS iterations a round, then the best
+# FINALISTS on from there to convergence (docs/realtime.md, 'planning.globalsearch')
+SCREEN_ITERATIONS, FINALISTS = 20, 2
+
+
+class MultiStart:
+    """Multi-start solves of one torque model and configuration (config.global_search)."""
+
+    def __init__(self, model: TorqueModel, config: PlannerConfig):
+        self.config = config
+        self.solver = IpoptElastic(model, config) if config.global_search.solver == "ipopt" \
+            else Anytime(model, config, converge=True)
+        self.check = self.solver.check  # planning.anytime.safety.SafetyCheck
+
+    def prepare(self, goal) -> None:
+        self.solver.prepare(goal)
+
+    @collection_deferred
+    def search(self, q0, qd0, t_begin: float, duration: float, goal,
+               forecast: ObstacleForecast | None, warm: SegmentPlan | None = None
+               ) -> tuple[SegmentPlan, list[SegmentPlan]]:
+        """The best plan (objective) from the warm plan's shape (if any) and every start
+        point, its times those of the whole search, and every plan."""
+        clock, solver = Stopwatch(), self.solver
+        self.prepare(goal)
+        segment = (q0, qd0, t_begin, duration, goal, forecast)
+        points = all_starts(solver, q0, qd0, duration, goal, self.config)
+        if warm is not None:
+            points.insert(0, shape_of(warm, t_begin, duration))
+        def score(plan):
+            return objective(self.check, self.config, plan, t_begin, duration, forecast)
+
+        if isinstance(solver, IpoptElastic):
+            plans = [solver.solve(*segment, x0=x0) for x0 in points]
+        else:  # every start a few iterations, the best FINALISTS on to convergence
+            solver.max_iterations = SCREEN_ITERATIONS
+            plans = [solver.solve(*segment, None, x0=x0, budget_ms=math.inf)[0] for x0 in points]
+            solver.max_iterations = 200
+            plans += [solver.solve(*segment, plan, budget_ms=math.inf)[0]
+                      for plan in sorted(plans, key=score)[:FINALISTS]]
+        best = min(plans, key=score)
+        wall, cpu = clock.read()
+        return _timed(best, wall, cpu), plans
+
+
+def shape_of(plan: SegmentPlan, t_begin: float, duration: float) -> np.ndarray:
+    """A start point with the plan's free coefficients on [t_begin, t_begin + duration]
+    (its start state replaced by the segment's)."""
+    return plan.trajectory.restrict(t_begin, duration).coefficients[:, 2:].ravel()
+
+
+def objective(check, config: PlannerConfig, plan: SegmentPlan, t_begin: float,
+              duration: float, forecast: ObstacleForecast | None) -> tuple[int, float]:
+    """One measure for plans that saw different obstacle samples: (2 if it is unusable (its
+    solve failed, a joint or torque limit left), 1 if it misses the threshold beyond the
+    penalty tolerance at a forecast sample, else 0; its energy
+    actually spent (dense integral of |P|, J) plus elastic_weight times its L1 violation of
+    the threshold over every forecast sample and link)."""
+    energy = check.energy(plan.trajectory)
+    if forecast is None:
+        return 2 * (not plan.success), energy
+    times = np.asarray(forecast.times, float)
+    keep = (times > t_begin + 1e-12) & (times <= t_begin + duration + 1e-12)
+    links = check(plan.trajectory, times[keep], np.asarray(forecast.centres)[keep]).links
+    violation = float(np.sum(np.maximum(config.threshold - links, 0.0)))
+    unsafe = config.threshold - float(np.min(links, initial=np.inf)) > config.penalty_tolerance
+    return 2 * (not plan.success) or int(unsafe), \
+        energy + config.anytime.elastic_weight * violation
+
+
+def _timed(plan: SegmentPlan, wall: float, cpu: float) -> SegmentPlan:
+    return dataclasses.replace(plan, solve_ms=wall, solve_cpu_ms=cpu)

@@ -1,0 +1,170 @@
+"""GlobalSearchPlanner: the real-time loop's planner (the anytime SQP) with a global search
+beside it (GlobalSearchOptions), a SegmentPlanner (planning.types) like the one it wraps.
+
+At a re-plan the latest forecast goes to the search (when none runs, the obstacle still
+shapes the plan and the forecast is new). Its plan is offered on the nominal clock at the
+re-plan `lag` obstacle samples later (the search computed then and there, synchronously:
+the same plans on any machine), under CPU clocks when the other process has it ready. A
+re-plan with an offer whose motion from now on scores better on the current forecast than
+the plan followed (multistart.objective: safe first, then the energy to go) goes on from it
+with the whole budget, and adopts the result (its status marked ADOPTED) if it keeps the
+clearance and spends less than the plan followed; otherwise the arm keeps that plan
+(Algorithm 2 re-plans from it at the next sample if it must). An offer that scores no
+better leaves the re-plan as it was."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+from identification.torque_model import TorqueModel
+from planning.anytime.safety import SafetyCheck
+from planning.config import PlannerConfig
+from planning.formulation.clearance import predicted_clearance
+from planning.globalsearch.background import Background, cores
+from planning.globalsearch.multistart import MultiStart, objective
+from planning.replanning import same_prediction
+from planning.types import Segment, SegmentPlan, SegmentPlanner
+
+ADOPTED = " (global search)"  # the status's tail of a re-plan adopted from the search
+NEAR = 0.1  # m above the threshold within which the obstacle still shapes a plan: searched
+SAMPLE_TOLERANCE = 1e-9  # s
+
+
+class GlobalSearchPlanner:
+    """`inner`'s plans, its re-plans adopting the global search's plans when they win."""
+
+    def __init__(self, inner: SegmentPlanner, model: TorqueModel, config: PlannerConfig):
+        self.inner, self.config = inner, config
+        lagged = config.anytime.iteration_ms is not None or not config.global_search.background
+        # with one core the search would take the real-time loop's: the loop runs alone
+        self.mode = "lagged" if lagged else ("process" if cores() > 1 else "one core")
+        self._search = MultiStart(model, config) if lagged else None
+        self._background = Background(model, config) if self.mode == "process" else None
+        self.check = self._search.check if lagged else SafetyCheck(model, config,
+                                                                    config.compile_code)
+        self.searches = self.adoptions = 0
+        self._forget()
+
+    @property
+    def solver_ms(self) -> float:
+        return self.inner.solver_ms
+
+    def prepare(self, goal) -> None:
+        self.inner.prepare(goal)
+        if self._search is not None:
+            self._search.prepare(goal)
+
+    def offers(self, t: float) -> bool:
+        """Whether a search's plan is offered at sample time t (Algorithm 2 re-plans)."""
+        if self._background is not None:
+            return self._background.done()
+        return self._offer is not None and t >= self._offer[0] - SAMPLE_TOLERANCE
+
+    def plan_cold(self, problem: Segment, starts: int | None = None
+                  ) -> tuple[SegmentPlan, list[SegmentPlan]]:
+        self._forget()  # a new motion
+        return self.inner.plan_cold(problem, starts)
+
+    def plan(self, problem: Segment, warm: SegmentPlan | None = None) -> SegmentPlan:
+        if warm is None:
+            self._forget()
+            return self.inner.plan(problem)
+        offered = self._offered(problem.t_begin)
+        self._launch(problem, warm)
+        ours, other = (self._score(plan, problem) for plan in (warm, offered))
+        if offered is None or other >= ours:  # nothing offered, or nothing promising
+            return self.inner.plan(problem, warm)
+        # the re-plan goes on from the offered plan instead, with the whole budget; kept if
+        # it wins on the current forecast, else the arm keeps its plan (re-planned from at
+        # the next sample if it must be)
+        theirs = self.inner.plan(problem, offered)
+        if not theirs.success or self._score(theirs, problem) >= ours:
+            return dataclasses.replace(warm, trajectory=_rest(warm, problem),
+                                       iterations=theirs.iterations,
+                                       solve_ms=theirs.solve_ms,
+                                       solve_cpu_ms=theirs.solve_cpu_ms,
+                                       clock_ms=theirs.clock_ms)
+        self.adoptions += 1
+        return dataclasses.replace(theirs, status=theirs.status + ADOPTED)
+
+    def _score(self, plan: SegmentPlan | None, problem: Segment) -> tuple[int, float]:
+        """multistart.objective of the plan's motion from the re-plan's time on (inf for
+        none)."""
+        if plan is None:
+            return (3, math.inf)
+        motion = dataclasses.replace(plan, trajectory=_rest(plan, problem))
+        return objective(self.check, self.config, motion, problem.t_begin, problem.duration,
+                         problem.forecast)
+
+    def _forget(self) -> None:
+        self._offer: tuple[float, SegmentPlan] | None = None
+        self._searched = None  # the forecast of the last search
+        if self._background is not None:
+            self._background.forget()
+
+    def _offered(self, t: float) -> SegmentPlan | None:
+        """The plan offered at t, taken (None if none)."""
+        if self._background is not None:
+            return self._background.ready()
+        if not self.offers(t):
+            return None
+        plan, self._offer = self._offer[1], None
+        return plan
+
+    def _launch(self, problem: Segment, warm: SegmentPlan) -> None:
+        """Search this re-plan's forecast unless a search runs, the obstacle no longer comes
+        near the plan followed (within NEAR above the threshold) or the last search saw the
+        same prediction."""
+        forecast = problem.forecast
+        if self.mode == "one core" or forecast is None or len(forecast.times) < 2 or \
+                self._offer is not None or \
+                (self._background is not None and self._background.busy()):
+            return
+        if self._searched is not None and same_prediction(self._searched, forecast):
+            return
+        clearance = predicted_clearance(self.config.geometry, warm.trajectory, forecast)
+        if clearance > self.config.threshold + NEAR and not warm.detour:
+            return
+        self._searched = forecast
+        self.searches += 1
+        if self._background is not None:
+            self._background.submit(_segment(problem, warm, problem.t_begin), warm)
+            return
+        # planned from where the plan followed will be at the offer: the plan re-solved
+        # then starts near its own start
+        period = float(forecast.times[1] - forecast.times[0])
+        due = problem.t_begin + self.config.global_search.lag * period
+        if due >= problem.t_begin + problem.duration - period:
+            return
+        self._offer = (due, self._search.search(*_segment(problem, warm, due), warm)[0])
+
+
+def _rest(plan: SegmentPlan, problem: Segment):
+    """The plan's motion on the re-plan's horizon."""
+    return plan.trajectory.restrict(problem.t_begin, problem.duration)
+
+
+def _segment(problem: Segment, warm: SegmentPlan, t: float) -> tuple:
+    """The search's segment from t (>= problem.t_begin) on: from the state the plan followed,
+    warm, reaches then, with the re-plan's forecast."""
+    q, qd, _ = warm.trajectory.state(t)
+    return (q[0], qd[0], t, problem.t_begin + problem.duration - t, problem.goal,
+            problem.forecast)
+
+
+def report(config: PlannerConfig, segments) -> dict | None:
+    """PLAN.json's account of the global search (None without one): how it ran and how many
+    of the segments followed were adopted from it."""
+    options = config.global_search
+    if not options.enabled or config.replanner != "anytime":
+        return None
+    if config.anytime.iteration_ms is not None or not options.background:
+        mode = (f"nominal: each search on a re-plan's forecast, offered {options.lag} "
+                "obstacle samples later")
+    elif cores() > 1:
+        mode = "another process, adopted when ready"
+    else:
+        mode = "one core: the real-time loop ran alone, no global search"
+    return {"mode": mode, "adoptions": sum(s.status.endswith(ADOPTED) for s in segments),
+            "solver": options.solver, "lag_samples": options.lag}

@@ -1,0 +1,107 @@
+"""The global search beside the real-time loop (planning.globalsearch): it escapes a warm
+start in the wrong homotopy class where the anytime SQP's re-plan cannot, the same command
+gives the same plan with it on the nominal clock, IPOPT on the elastic NLP (the realtime
+study's reference) agrees with the penalty loop, and the plan's report counts adoptions."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
+from planning.anytime.planner import AnytimePlanner
+from planning.config import Scenario, true_energy_config
+from planning.globalsearch import background
+from planning.globalsearch.ipopt import IpoptElastic
+from planning.globalsearch.multistart import MultiStart, objective
+from planning.globalsearch.planner import ADOPTED, GlobalSearchPlanner, report
+from planning.penalty.solver import Planner
+from planning.planners import executed
+from planning.types import Segment
+from tests.helpers import random_crossing
+
+
+@pytest.fixture(scope="module")
+def baseline():
+    return PinocchioModel(load_pinocchio("lynxmotion"))
+
+
+@pytest.fixture(scope="module")
+def config():
+    return true_energy_config(compile_code=False, torque_limit=None).with_anytime(
+        iteration_ms=0.5)
+
+
+def test_the_search_escapes_a_warm_start_in_the_wrong_class(baseline, config):
+    """On a random crossing, the worst safe plan of the search's own starts (the obstacle
+    passed the other way) as warm start: the anytime SQP's 10 ms re-plan from it stays
+    dearer than the search from the same warm start, which reaches the best start's plan."""
+    numbers = Planner(baseline, config)
+    case, forecast = random_crossing(numbers, seed=3)
+    search = MultiStart(baseline, config)
+    segment = (case.start, case.start_velocity, 0.0, case.duration, case.goal, forecast)
+    best, plans = search.search(*segment)
+    scores = [objective(search.check, config, plan, 0.0, case.duration, forecast)
+              for plan in plans]
+    safe = [i for i, score in enumerate(scores) if not score[0]]
+    worst = max(safe, key=lambda i: scores[i][1])
+    wrong = plans[worst]
+    assert scores[worst][1] > 1.05 * min(scores[i][1] for i in safe)  # another class
+    anytime = AnytimePlanner(baseline, config)
+    replan = anytime.plan(Segment(*segment, realtime=True), warm=wrong)
+    found, _ = search.search(*segment, warm=wrong)
+    ours, theirs = (objective(search.check, config, plan, 0.0, case.duration, forecast)
+                    for plan in (replan, found))
+    assert not theirs[0] and theirs[1] <= ours[1]
+    assert theirs[1] <= objective(search.check, config, best, 0.0, case.duration,
+                                  forecast)[1] + 1e-6
+    assert theirs[1] < 0.99 * scores[worst][1]
+
+
+def test_the_same_scenario_twice_gives_the_same_plan(baseline, config):
+    """Algorithm 2 with the global search on the nominal clock, twice in one process (the
+    searches' planners and estimates warm the second time): identical segments, and a
+    search's plan adopted."""
+    runs = [executed(baseline, config, Scenario())[1] for _ in range(2)]
+    first, second = (run.execution.segments for run in runs)
+    assert len(first) == len(second)
+    for a, b in zip(first, second, strict=True):
+        assert a.status == b.status
+        np.testing.assert_array_equal(a.trajectory.coefficients, b.trajectory.coefficients)
+    adopted = sum(s.status.endswith(ADOPTED) for s in first)
+    assert adopted >= 1 and report(config, first)["adoptions"] == adopted
+
+
+def test_ipopt_on_the_elastic_nlp_agrees_with_the_penalty_loop(baseline, config):
+    """With the obstacle far from the motion (screened out) neither penalty binds: IPOPT on
+    the elastic NLP and the penalty loop's converged solve without obstacle reach the same
+    energy from the same start (the initial guess)."""
+    far = dataclasses.replace(config, replanner="penalty").with_penalty(solver="ipopt")
+    numbers = Planner(baseline, far)
+    case, forecast = random_crossing(numbers, seed=5)
+    forecast = dataclasses.replace(forecast, centres=forecast.centres + 5.0)
+    penalty = numbers.solve(case.start, case.start_velocity, case.duration, case.goal, None)
+    elastic = IpoptElastic(baseline, config).solve(case.start, case.start_velocity, 0.0,
+                                                   case.duration, case.goal, forecast)
+    assert penalty.success and elastic.success
+    assert elastic.penalty == pytest.approx(0.0, abs=1e-9)
+    assert elastic.energy == pytest.approx(penalty.energy, rel=1e-5)
+
+
+def test_with_one_core_the_real_time_loop_runs_alone(baseline, config, monkeypatch):
+    """Under CPU clocks on one core no search runs and the report says so."""
+    monkeypatch.setattr(background, "cores", lambda: 1)
+    monkeypatch.setattr("planning.globalsearch.planner.cores", lambda: 1)
+    live = config.with_anytime(iteration_ms=None)
+    planner = GlobalSearchPlanner(AnytimePlanner(baseline, live), baseline, live)
+    assert planner.mode == "one core"
+    case = Scenario()
+    first = planner.plan(Segment(case.start, case.start_velocity, 0.0, case.duration,
+                                 case.goal, None, budget_ms=math.inf))
+    assert not planner.offers(0.5)
+    assert "one core" in report(live, (first,))["mode"]
+    assert planner.searches == 0
