@@ -100,10 +100,11 @@ def excitation_limits(plant: Plant, acceleration: float) -> ExcitationLimits:
 
 def design_for(robot: str, duration: float, rate: float, acceleration: float = DEFAULT_ACCELERATION,
                seed: int = 0, iterations: int = ITERATIONS,
-               harmonics: int | None = None) -> DesignedExcitation:
+               harmonics: int | None = None, criterion: str = "condition") -> DesignedExcitation:
     """The robot's designed excitation sampled at rate (Hz) over [0, duration] s, ends
-    included (both at rest), with `harmonics` (default default_harmonics(duration)); UserError
-    on bad input or if it cannot be made collision-free."""
+    included (both at rest), with `harmonics` (default default_harmonics(duration)), optimal
+    for `criterion` (identification.excitation.design.CRITERIA); UserError on bad input or if
+    it cannot be made collision-free."""
     for name, value in (("--duration", duration), ("--rate", rate), ("--accel-limit", acceleration)):
         if not np.isfinite(value) or value <= 0:
             raise UserError(f"{name} must be a finite number > 0, got {value:g}")
@@ -118,7 +119,11 @@ def design_for(robot: str, duration: float, rate: float, acceleration: float = D
     clearance = capsule_clearance(robot)
     try:
         design = optimize_excitation(limits, duration, regressor, clearance, seed,
-                                     harmonics=harmonics, iterations=iterations)
+                                     harmonics=harmonics, iterations=iterations,
+                                     criterion=criterion,
+                                     # checked at the samples written (a design pressed to its
+                                     # limits may pass 1000 points and miss between them)
+                                     check_points=max(1000, int(round(duration * rate))))
     except ValueError as exc:
         raise UserError(f"robot {robot}: {exc}") from None
     t = np.arange(int(round(duration * rate)) + 1) / rate

@@ -185,6 +185,26 @@ def log_condition(regressor: Regressor, q, qd, qdd, gradient: bool = False):
     return value, regressor.vjp(q, qd, qdd, dY.reshape(A.shape))
 
 
+def log_information(regressor: Regressor, q, qd, qdd, gradient: bool = False):
+    """-(1/p) log det(Y^T Y / n) of the regressor Y (n rows, p columns) at the states: D-
+    optimality, the log volume of the parameters' confidence ellipsoid under a sensor noise of
+    fixed size (per column, so large motions count, unlike the normalized condition number);
+    with gradient, also its gradient with respect to q, qd and qdd (each (n, dof))."""
+    A = regressor.evaluate(q, qd, qdd)
+    Y = A.reshape(-1, A.shape[-1])
+    n, p = Y.shape
+    gram = Y.T @ Y / n
+    sign, logdet = np.linalg.slogdet(gram)
+    value = float(-logdet / p) if sign > 0 else float("inf")
+    if not gradient:
+        return value
+    dY = -2.0 / (n * p) * Y @ np.linalg.pinv(gram)
+    return value, regressor.vjp(q, qd, qdd, dY.reshape(A.shape))
+
+
+CRITERIA = {"condition": log_condition, "information": log_information}
+
+
 def optimize_excitation(
     limits: ExcitationLimits,
     duration: float,
@@ -197,13 +217,16 @@ def optimize_excitation(
     design_points: int = 100,
     limit_points: int | None = None,
     check_points: int = 1000,
+    criterion: str = "condition",
 ) -> ExcitationDesign:
     """The designed excitation (see the module docstring), `duration` s long; clearance(q)
     -> (n,) is the robot's smallest distance (m) to itself or the floor at joint states
     (n, dof), <= 0 where they touch: a constraint on the design grid (gradient by finite
-    differences), checked on a dense grid.
+    differences), checked on a dense grid. criterion: what is minimized, "condition" (the
+    log condition number of the normalized regressor) or "information" (log_information).
     A candidate that collides has its swing shrunk about its centre pose; ValueError if
     none is collision-free even so."""
+    measure = CRITERIA[criterion]
     dof, f0 = len(limits.lower), 1.0 / duration
     w = 2 * np.pi * f0
     design_t = np.linspace(0.0, duration, design_points, endpoint=False)
@@ -219,7 +242,7 @@ def optimize_excitation(
 
     def objective(x):
         X = x.reshape(dof, k)
-        value, (gq, gqd, gqdd) = log_condition(regressor, Dq @ X.T, Dqd @ X.T, Dqdd @ X.T, True)
+        value, (gq, gqd, gqdd) = measure(regressor, Dq @ X.T, Dqd @ X.T, Dqdd @ X.T, True)
         return value, (gq.T @ Dq + gqd.T @ Dqd + gqdd.T @ Dqdd).ravel()
 
     def safe(x) -> bool:
@@ -256,8 +279,12 @@ def optimize_excitation(
         best, value = x, objective(x)[0]
         if result.success:
             break
-    return ExcitationDesign(_to_excitation(best, dof, harmonics, f0), float(np.exp(value)),
-                            float(np.exp(scored[0][0])), used)
+    def condition(x) -> float:
+        X = x.reshape(dof, k)
+        return float(np.exp(log_condition(regressor, Dq @ X.T, Dqd @ X.T, Dqdd @ X.T)))
+
+    return ExcitationDesign(_to_excitation(best, dof, harmonics, f0), condition(best),
+                            condition(start), used)
 
 
 def _walk_back(safe_x: np.ndarray, x: np.ndarray, safe) -> np.ndarray:

@@ -1,0 +1,56 @@
+"""The designed excitation's criteria side by side, at the same sensor noise.
+
+`python -m harness.experiments.excitation_criteria ROBOT`: per criterion of `excite`
+(identification.excitation.design.CRITERIA), the design over the bench's duration (seed 1),
+its condition number against the default excitation's, and for draws 101-103 the robot's
+default fit's error on the bench's sines motion, trained along the design / along the
+default excitation (median over joints). Two noise models: the bench's (a fraction of each
+dataset's own torque std) and the same sensor (the default draw's noise samples added to the
+design's clean torque: a torque sensor's noise does not grow with the motion).
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import replace
+
+import numpy as np
+
+from harness.data.excite import design_for
+from harness.data.generate import SAMPLE_RATE, generate
+from harness.experiments.identification import NOISE, SAMPLES, fixed_fit, score_draw, sines_motion
+from harness.robots.baseline import PinocchioModel
+from harness.robots.registry import load_pinocchio
+from harness.robots.torque_models import robot_identification
+from identification.excitation.design import CRITERIA
+
+SEEDS, JUDGE = (101, 102, 103), 1005  # the bench's first draws and judge motion
+
+
+def compare(robot: str) -> dict:
+    """Per criterion: conditions and the error ratios per draw under both noise models."""
+    baseline, judge = PinocchioModel(load_pinocchio(robot)), sines_motion(robot, SAMPLES, JUDGE)
+    fit = fixed_fit(*robot_identification(robot))
+    out = {}
+    for criterion in CRITERIA:
+        designed = design_for(robot, SAMPLES / SAMPLE_RATE, SAMPLE_RATE, seed=1, criterion=criterion)
+        rows = []
+        for seed in SEEDS:
+            default = generate(robot, SAMPLES, NOISE, seed, "inverse")
+            along = generate(robot, SAMPLES, NOISE, seed, "inverse", excitation=designed.trajectory)
+            same = replace(along, tau=along.tau_clean + (default.tau - default.tau_clean))
+            error = {name: np.array(score_draw(d, {"fit": fit}, baseline, [judge])["fit"]["sines"])
+                     for name, d in (("default", default), ("bench", along), ("same", same))}
+            rows.append({"seed": seed, **{k: float(np.median(error[k] / error["default"]))
+                                           for k in ("bench", "same")}})
+        out[criterion] = {"condition": designed.condition,
+                          "default_condition": designed.default_condition, "draws": rows}
+    return out
+
+
+if __name__ == "__main__":
+    for criterion, r in compare(sys.argv[1] if len(sys.argv) > 1 else "lynxmotion").items():
+        ratios = "; ".join(f"seed {d['seed']}: {d['bench']:.2f}x bench noise, {d['same']:.2f}x "
+                           "same sensor" for d in r["draws"])
+        print(f"{criterion}: condition {r['condition']:.3g} (default {r['default_condition']:.3g}); "
+              f"error / default's: {ratios}")
