@@ -32,7 +32,7 @@ import cvxpy as cp
 import numpy as np
 
 from identification.friction import FrictionLaw, choose_law
-from identification.regression.base import within_runs
+from identification.regression.base import run_centring
 
 LAMBDAS = (1e-6, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)  # ridge weights tried toward the nominal
 TIE = 0.02  # a larger weight must predict the validation block this much better (relative
@@ -189,8 +189,7 @@ def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np
     matrix Q (identification.ellipsoids) or None: the body's mass held inside (plausible)."""
     A, qd, tau, nominal = (np.asarray(x, float) for x in (atoms, qd, tau, nominal))
     n, dof, _ = A.shape
-    several = runs is not None and len(np.unique(runs)) > 1
-    centred = (lambda x: within_runs(x, runs)) if several else (lambda x: x)
+    several, centred = run_centring(runs)
     raw_A, raw_tau, A, tau = A, tau, centred(A), centred(tau)
     scale = np.maximum(tau.std(axis=0), 1e-9)
     held, used = _rows(runs if several else None, n, validation), []

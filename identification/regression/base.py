@@ -48,6 +48,13 @@ def within_runs(x: np.ndarray, runs) -> np.ndarray:
     return out
 
 
+def run_centring(runs):
+    """(several, centred) for run labels (n,) or None: whether the samples come from more than
+    one run, and within_runs on them then (the identity for one run)."""
+    several = runs is not None and len(np.unique(runs)) > 1
+    return several, ((lambda x: within_runs(x, runs)) if several else (lambda x: x))
+
+
 def standardize(x: np.ndarray, y: np.ndarray, rows):
     """Centre x (n, p) and y (n,) on `rows` and scale x's columns to unit std there (columns
     constant there are left unscaled): (xs, yc, mean_x, mean_y, scale)."""

@@ -25,7 +25,7 @@ from identification.feature_model import IdentifiedModel, JointModel
 from identification.kinematic_model import KinematicModel
 from identification.library.base import Conditioning, Library, conditioning, warn_if_rank_deficient
 from identification.library.kinematic import KinematicLibrary
-from identification.regression.base import within_runs
+from identification.regression.base import run_centring
 from identification.regression.coupled import AtomBasis, CoupledRegression, restriction_pvalue
 from identification.regression.sparse import SparseRegression
 
@@ -173,8 +173,7 @@ class BaseAtomRegressor:
     def fit(self, library: KinematicLibrary, q, qd, qdd, tau, runs=None) -> TorqueFit:
         design = library.evaluate(q, qd, qdd)
         cond = _conditioned(design.reshape(-1, len(library)), library.names)
-        several = runs is not None and len(np.unique(runs)) > 1
-        centred = (lambda x: within_runs(x, runs)) if several else (lambda x: x)
+        several, centred = run_centring(runs)
         reg = CoupledRegression(selector=self.selector, t_bound=self.bounds(library),
                                 shrink=SHRINK).fit(centred(design), centred(tau))
         # several runs: fitted within each run; the model's offset is the runs' mean
