@@ -17,7 +17,7 @@ from harness.data.generate import default_excitation, generate
 from harness.robots.baseline import PinocchioModel
 from harness.robots.plant import load_plant
 from harness.robots.torque_models import robot_library
-from identification.excitation.design import log_condition
+from identification.excitation.criteria import log_information
 from identification.excitation.fourier import design_excitation
 from identification.excitation.regressor import AtomRegressor
 
@@ -65,18 +65,28 @@ def test_limits_rest_and_derivatives(ur5_file):
     assert np.all(capsule_clearance("ur5")(traj.q) > 0)
 
 
-def test_designed_better_conditioned_than_default_ur5(ur5_file):
+def test_designed_more_informative_than_default_ur5(ur5_file):
+    """The default criterion (D-optimal) at the file's samples: a larger log det of the
+    regressor's Gram than generate's default excitation over the same duration."""
     traj = read_trajectory(ur5_file[0], 6)
     plant = load_plant("ur5")
     regressor = AtomRegressor(robot_library("ur5"))
     default, _ = default_excitation(plant, "ur5", int(DURATION * 200), 0)
     grid = np.linspace(0, DURATION, 200, endpoint=False)
-    assert log_condition(regressor, *traj.evaluate(grid)) < log_condition(regressor, *default.evaluate(grid))
+    designed, ours = (log_information(regressor, *e.evaluate(grid)) for e in (traj, default))
+    assert designed < ours
+
+
+def test_condition_design_better_conditioned_than_default_ur5():
+    designed = design_for("ur5", DURATION, RATE, ACCEL, seed=0, iterations=ITERATIONS,
+                          criterion="condition")
+    assert designed.condition < designed.default_condition
 
 
 @pytest.mark.slow
 def test_designed_better_conditioned_than_default_panda():
-    designed = design_for("panda", DURATION, RATE, ACCEL, seed=0, iterations=ITERATIONS)
+    designed = design_for("panda", DURATION, RATE, ACCEL, seed=0, iterations=ITERATIONS,
+                          criterion="condition")
     assert designed.condition < designed.default_condition
 
 
@@ -147,8 +157,6 @@ def test_generate_excitation_bad_input(capsys, tmp_path, ur5_file):
 def test_the_information_gradient_matches_finite_differences():
     """log_information's gradient (through the regressor's vector-Jacobian product) against
     central differences of its value, at random UR5 states."""
-    from identification.excitation.design import log_information
-
     regressor = AtomRegressor(robot_library("ur5"))
     rng = np.random.default_rng(8)
     q, qd, qdd = (rng.normal(size=(40, 6)) for _ in range(3))
@@ -167,8 +175,6 @@ def test_the_information_gradient_matches_finite_differences():
 def test_an_information_design_holds_more_information_than_a_condition_design():
     """excite --criterion information: the log det of its Gram beats the condition design's,
     both within the limits and at rest at both ends."""
-    from identification.excitation.design import log_information
-
     regressor = AtomRegressor(robot_library("lynxmotion"))
     grid = np.linspace(0.0, 6.0, 120, endpoint=False)
     designs = {c: design_for("lynxmotion", 6.0, 50.0, seed=0, iterations=20, criterion=c)

@@ -8,7 +8,7 @@ from pathlib import Path
 from harness.data.excitation_file import write_trajectory
 from harness.data.excite import DEFAULT_ACCELERATION, ITERATIONS, design_for
 from harness.errors import UserError
-from identification.excitation.design import CRITERIA
+from identification.excitation.criteria import CRITERIA
 
 
 def register(sub) -> None:
@@ -24,12 +24,13 @@ def register(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the random starting candidates")
     p.add_argument("--iterations", type=int, default=ITERATIONS,
                    help=f"optimizer (SLSQP) iterations at most (default {ITERATIONS})")
-    p.add_argument("--criterion", choices=sorted(CRITERIA), default="condition",
-                   help="condition: the smallest condition number of the normalized regressor "
-                   "(the default); information: the largest log det of the regressor's Gram "
-                   "(D-optimal: large motions count; on generated UR5 data 0.3-0.5x the "
-                   "default excitation's error at the same sensor noise, at a worse condition "
-                   "number: docs/identification.md)")
+    p.add_argument("--criterion", choices=sorted(CRITERIA), default="information",
+                   help="information (the default): the largest log det of the regressor's Gram "
+                   "(D-optimal: large motions count; on generated Lynxmotion and UR5 data "
+                   "0.2-0.55x the default excitation's error at the same sensor noise); "
+                   "condition: the smallest condition number of the column-normalized "
+                   "regressor (blind to scale: its designs move little and generalize 2-10x "
+                   "worse; docs/identification.md, 'Excitation criteria')")
     p.add_argument("--out", required=True, help="output TRAJ.csv: t,q1..qn,qd1..qdn,qdd1..qddn")
     p.set_defaults(func=run)
 

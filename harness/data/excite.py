@@ -23,12 +23,8 @@ from harness.robots.arm import arm_geometry
 from harness.robots.plant import Plant, load_plant
 from harness.robots.scene import LINK_RADIUS
 from harness.robots.torque_models import robot_library
-from identification.excitation.design import (
-    ExcitationDesign,
-    ExcitationLimits,
-    log_condition,
-    optimize_excitation,
-)
+from identification.excitation.criteria import log_condition
+from identification.excitation.design import ExcitationDesign, ExcitationLimits, optimize_excitation
 from identification.excitation.regressor import AtomRegressor
 
 CAPSULE_FRACTION = 0.05  # of the reach: about the UR5's and the Panda's link radii
@@ -100,10 +96,10 @@ def excitation_limits(plant: Plant, acceleration: float) -> ExcitationLimits:
 
 def design_for(robot: str, duration: float, rate: float, acceleration: float = DEFAULT_ACCELERATION,
                seed: int = 0, iterations: int = ITERATIONS,
-               harmonics: int | None = None, criterion: str = "condition") -> DesignedExcitation:
+               harmonics: int | None = None, criterion: str = "information") -> DesignedExcitation:
     """The robot's designed excitation sampled at rate (Hz) over [0, duration] s, ends
     included (both at rest), with `harmonics` (default default_harmonics(duration)), optimal
-    for `criterion` (identification.excitation.design.CRITERIA); UserError on bad input or if
+    for `criterion` (identification.excitation.criteria.CRITERIA); UserError on bad input or if
     it cannot be made collision-free."""
     for name, value in (("--duration", duration), ("--rate", rate), ("--accel-limit", acceleration)):
         if not np.isfinite(value) or value <= 0:

@@ -1,7 +1,7 @@
 """The designed excitation's criteria side by side, at the same sensor noise.
 
 `python -m harness.experiments.excitation_criteria ROBOT`: per criterion of `excite`
-(identification.excitation.design.CRITERIA), the design over the bench's duration (seed 1),
+(identification.excitation.criteria.CRITERIA), the design over the bench's duration (seed 1),
 its condition number against the default excitation's, and for draws 101-103 the robot's
 default fit's error on the bench's sines motion, trained along the design / along the
 default excitation (median over joints). Two noise models: the bench's (a fraction of each
@@ -22,7 +22,7 @@ from harness.experiments.identification import NOISE, SAMPLES, fixed_fit, score_
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
 from harness.robots.torque_models import robot_identification
-from identification.excitation.design import CRITERIA
+from identification.excitation.criteria import CRITERIA
 
 SEEDS, JUDGE = (101, 102, 103), 1005  # the bench's first draws and judge motion
 

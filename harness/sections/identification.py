@@ -116,7 +116,7 @@ def run(ctx: Context) -> SectionResult:
     runs = [next_run(robot, seed) for seed in (QUICK_NEXT_RUNS if ctx.quick else NEXT_RUNS)]
     targets += rule_targets(runs)
     excitation_targets, excitation = excitation_comparison(
-        robot, fits[default], default, baseline, judges[1], draws[0], ctx.quick)
+        robot, fits[default], default, baseline, judges[1], draws, ctx.quick)
     targets += excitation_targets
     errors = np.median([d[default]["sines"] for d in draws], axis=0)
     oracle = np.median([d["oracle"]["sines"] for d in draws], axis=0)

@@ -1,12 +1,13 @@
 """An excitation designed for identification: a rest-to-rest finite Fourier series per joint
-(Swevers et al. 1997; as in FloBaRoID and FIGAROH) with the best conditioning found.
+(Swevers et al. 1997; as in FloBaRoID and FIGAROH), the best found for a criterion
+(D-optimal or the condition number).
 
 q_j(t) = c_j + sum_l a_jl sin(l w t) + b_jl cos(l w t), w = 2 pi / duration: periodic over
 the duration. At rest at t = 0, hence at t = duration: sum_l l a_jl = 0 and sum_l l^2 b_jl = 0.
 Position (inside a margin), velocity and acceleration limits are linear in the coefficients
-on a dense time grid. The objective is the log condition number of the column-normalized
-regressor (passed in: any columns, e.g. identification's atoms and offsets) on a coarse grid,
-its gradient from the regressor's vector-Jacobian product; SLSQP from the best of seeded
+on a dense time grid. The objective is a criterion of the regressor (passed in: any columns,
+e.g. identification's atoms and offsets; identification.excitation.criteria) on a coarse
+grid, its gradient from the regressor's vector-Jacobian product; SLSQP from the best of seeded
 random candidates that meet the limits. A clearance passed in (the robot's distance to itself
 and the floor) is a constraint on the coarse grid, its gradient by finite differences; an
 optimum that still touches on a dense grid between those points is walked back towards its
@@ -17,23 +18,18 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
 
 import numpy as np
 from scipy.optimize import minimize
+from threadpoolctl import threadpool_limits
 
+from identification.excitation.criteria import CRITERIA, Regressor, log_condition
 from identification.excitation.fourier import FourierExcitation
 
 CLEARANCE = 0.005  # m kept on the design grid: the closest approach may fall between its points
 TIGHTEN = 0.985  # of each bound on the limit grid: 20 points a cycle miss a peak by <= 1.2 %
 HALVINGS = 12  # bisection steps walking a colliding optimum back towards its start
 SHRINK, SHRINKS = 0.8, 10  # a colliding candidate's swing shrinks about its centre pose
-
-
-class Regressor(Protocol):
-    def evaluate(self, q, qd, qdd) -> np.ndarray: ...  # (n, dof, p)
-
-    def vjp(self, q, qd, qdd, adjoint) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
 
 
 @dataclass(frozen=True)
@@ -167,44 +163,6 @@ def _clearance_constraint(clearance, Dq: np.ndarray, dof: int, step: float = 1e-
     return {"type": "ineq", "fun": fun, "jac": jac}
 
 
-def log_condition(regressor: Regressor, q, qd, qdd, gradient: bool = False):
-    """log of the condition number of the column-normalized regressor at the states; with
-    gradient, also its gradient with respect to q, qd and qdd (each (n, dof))."""
-    A = regressor.evaluate(q, qd, qdd)
-    Y = A.reshape(-1, A.shape[-1])
-    norms = np.maximum(np.linalg.norm(Y, axis=0), 1e-300)
-    Yn = Y / norms
-    eig, v = np.linalg.eigh(Yn.T @ Yn)  # the Gram's eigenpairs: singular values squared
-    s = np.sqrt(np.maximum(eig[[-1, 0]], 1e-300))
-    value = float(np.log(s[0]) - np.log(s[1]))
-    if not gradient:
-        return value
-    u_max, u_min = Yn @ v[:, -1] / s[0], Yn @ v[:, 0] / s[1]
-    dYn = np.outer(u_max, v[:, -1]) / s[0] - np.outer(u_min, v[:, 0]) / s[1]
-    dY = dYn / norms - Y * (np.sum(dYn * Y, axis=0) / norms**3)  # through the normalization
-    return value, regressor.vjp(q, qd, qdd, dY.reshape(A.shape))
-
-
-def log_information(regressor: Regressor, q, qd, qdd, gradient: bool = False):
-    """-(1/p) log det(Y^T Y / n) of the regressor Y (n rows, p columns) at the states: D-
-    optimality, the log volume of the parameters' confidence ellipsoid under a sensor noise of
-    fixed size (per column, so large motions count, unlike the normalized condition number);
-    with gradient, also its gradient with respect to q, qd and qdd (each (n, dof))."""
-    A = regressor.evaluate(q, qd, qdd)
-    Y = A.reshape(-1, A.shape[-1])
-    n, p = Y.shape
-    gram = Y.T @ Y / n
-    sign, logdet = np.linalg.slogdet(gram)
-    value = float(-logdet / p) if sign > 0 else float("inf")
-    if not gradient:
-        return value
-    dY = -2.0 / (n * p) * Y @ np.linalg.pinv(gram)
-    return value, regressor.vjp(q, qd, qdd, dY.reshape(A.shape))
-
-
-CRITERIA = {"condition": log_condition, "information": log_information}
-
-
 def optimize_excitation(
     limits: ExcitationLimits,
     duration: float,
@@ -268,23 +226,55 @@ def optimize_excitation(
     constraints = _linear_constraints(limits, bases, harmonics)
     if clearance is not None:
         constraints.append(_clearance_constraint(clearance, Dq, dof))
-    best, value, used = start, scored[0][0], 0
-    while used < iterations:  # SLSQP again from where it stopped (its linearization may fail)
-        result = minimize(objective, best, jac=True, method="SLSQP", constraints=constraints,
-                          options={"maxiter": iterations - used, "ftol": 1e-6})
-        used += max(int(result.nit), 1)
-        x = result.x if safe(result.x) else _walk_back(best, result.x, safe)
-        if objective(x)[0] >= value - 1e-6:
-            break
-        best, value = x, objective(x)[0]
-        if result.success:
-            break
+    # one BLAS thread: SLSQP's path turns on rounding, and the design must be the same
+    # whatever threads the caller's BLAS runs
+    with threadpool_limits(limits=1, user_api="blas"):
+        best, used = _descend(objective, start, constraints, iterations, safe)
+
     def condition(x) -> float:
         X = x.reshape(dof, k)
         return float(np.exp(log_condition(regressor, Dq @ X.T, Dqd @ X.T, Dqdd @ X.T)))
 
     return ExcitationDesign(_to_excitation(best, dof, harmonics, f0), condition(best),
                             condition(start), used)
+
+
+def _descend(objective, start: np.ndarray, constraints: list[dict], budget: int,
+             safe) -> tuple[np.ndarray, int]:
+    """SLSQP on objective from start, again from where it stopped (its linearization may
+    fail) while it improves, within budget iterations. Each run's best safe point among its
+    iterates and its end point (walked back towards the last safe one if unsafe: SLSQP's
+    iterates need not meet the constraints, and may touch between the design grid's points);
+    that point and the iterations used."""
+    # scaled to a unit gradient at the start: SLSQP's first step, along its identity Hessian,
+    # is then about 1 rad of coefficients, not a jump far outside the limits that it may
+    # never walk back from (docs/identification.md, 'identification.excitation.criteria')
+    scale = 1.0 / max(float(np.linalg.norm(objective(start)[1])), 1e-300)
+    raw = objective
+
+    def objective(x):
+        value, grad = raw(x)
+        return scale * value, scale * grad
+
+    best, value, used = start, objective(start)[0], 0
+    while used < budget:
+        found = {"x": best, "value": value}
+
+        def keep(x, found=found):  # SLSQP's callback: the best safe iterate so far
+            v = objective(x)[0]
+            if v < found["value"] - 1e-6 and safe(x):
+                found.update(x=x.copy(), value=v)
+
+        result = minimize(objective, best, jac=True, method="SLSQP", constraints=constraints,
+                          callback=keep, options={"maxiter": budget - used, "ftol": 1e-6})
+        used += max(int(result.nit), 1)
+        keep(result.x if safe(result.x) else _walk_back(best, result.x, safe))
+        if found["value"] >= value - 1e-6:
+            break
+        best, value = found["x"], found["value"]
+        if result.success:
+            break
+    return best, used
 
 
 def _walk_back(safe_x: np.ndarray, x: np.ndarray, safe) -> np.ndarray:
