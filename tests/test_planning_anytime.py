@@ -25,7 +25,7 @@ from planning.formulation.obstacle import LinearObstacle
 from planning.formulation.trajectory import PolynomialTrajectory
 from planning.penalty.solver import Planner
 from planning.replanning import execute
-from planning.result import evaluate
+from planning.result import TORQUE_TOLERANCE, evaluate
 from planning.starts import start_points
 from planning.types import ITERATE, ObstacleForecast, Segment
 from tests.helpers import random_crossing, segments
@@ -513,3 +513,27 @@ def test_algorithm_2_with_the_anytime_sqp_keeps_the_threshold(baseline):
     assert results["anytime"].feasible, results["anytime"].problems
     assert len(results["anytime"].execution.segments) > 1  # it re-planned
     assert results["anytime"].energy <= 1.02 * results["penalty"].energy
+
+
+def test_a_quick_build_makes_the_torque_limited_nlp_when_a_plan_first_needs_it(baseline):
+    """quick_build (plain `plan`): prepare builds no torque-limited NLP; a motion in 0.13 s,
+    whose unlimited optimum overdrives the Lynxmotion's 10 N m, builds it and converges within
+    the limit, to the same plan (on the nominal clock) as with the NLP built ahead."""
+    from planning.config import AnytimeOptions, nominal_iteration_ms
+
+    goal, duration = (-1.57, 1.2566, -1.047), 0.13
+    plans = {}
+    for quick in (True, False):
+        config = true_energy_config(replanner="anytime", compile_code=False, quick_build=quick,
+                                    anytime=AnytimeOptions(iteration_ms=nominal_iteration_ms(3)))
+        anytime = Anytime(baseline, config)
+        anytime.prepare(goal)
+        assert any(torque for _, torque in anytime._problems) is not quick
+        plans[quick], _, _ = anytime.solve(np.zeros(3), np.zeros(3), 0.0, duration, goal, None,
+                                           budget_ms=1000.0)
+        assert any(torque for _, torque in anytime._problems)
+    plan = plans[True]
+    assert plan.success
+    peak = np.abs(baseline.torque(*plan.trajectory.state(np.linspace(0.0, duration, 2001))))
+    assert np.all(peak.max(axis=0) <= 10.0 * (1 + TORQUE_TOLERANCE))
+    assert np.array_equal(plan.trajectory.coefficients, plans[False].trajectory.coefficients)
