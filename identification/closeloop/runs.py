@@ -20,7 +20,9 @@ MODEL.json) and the training runs:
    it: coloured residuals make the white-noise formula far too small), and, if it has no
    physical reading (a spring: an arm's joints have none; an armature above
    ARMATURE_PLAUSIBLE), it cuts the error power by >= STRONG_GAIN.
-4. The model: D + the named effects + the offsets, refitted jointly on all training runs.
+4. The model: D + the named effects, refitted jointly with the offsets on all training runs.
+   The offsets stay out of it: a sensor offset is a property of a run, not of the robot, so
+   a new run is scored with its own offset refitted (identification.closeloop.leftover).
 """
 
 from __future__ import annotations
@@ -106,9 +108,9 @@ class Named:
 class RunsLoop:
     """Outcome of the loop on training runs (scores are the caller's, on held-out runs)."""
 
-    model: ExtendedModel  # declared + named effects + offsets
+    model: ExtendedModel  # declared + named effects (no sensor offset: that is a run's)
     named: tuple[Named, ...]
-    offsets: np.ndarray  # (dof,) N m
+    offsets: np.ndarray  # (dof,) N m, the training runs' sensor offset fitted with the effects
     folds: str  # "runs" (leave one run out) or "blocks" (one run: contiguous blocks)
     path: tuple[tuple[str, float], ...]  # (label added, weighted validation power after)
     not_named: tuple[tuple[int, str, float, str], ...]  # per joint: best left, gain, why
@@ -232,7 +234,7 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
         Named(replace(terms[i], coefficient=float(c)), tuple(map(float, pr)),
               tuple(map(float, ps)), g, physical_reading(replace(terms[i], coefficient=float(c))))
         for i, c, (g, pr, ps) in zip(chosen, coef, found, strict=True))
-    model = closed_model(declared, coef_base, tuple(x.term for x in named), inertial)
+    model = closed_model(declared, np.zeros(dof), tuple(x.term for x in named), inertial)
     return RunsLoop(model, named, coef_base, "runs" if several else "blocks", tuple(path),
                     _not_named(terms, chosen, rejected, trials))
 
