@@ -242,7 +242,8 @@ def test_training_runs_sensor_offsets_are_not_carried_into_a_new_run(tmp_path):
     assert r.loop.terms == () and not r.left.unexplained_joints
     assert np.all(r.error_after <= r.error_before + 1e-6), (r.error_before, r.error_after)
     assert r.model_json["offsets"] == [0.0] * 3
-    np.testing.assert_allclose(r.model_json["sensor_offsets"]["training"], r.loop.offsets)
+    np.testing.assert_allclose(r.model_json["sensor_offsets"]["training"], r.loop.run_offsets)
+    assert len(r.loop.run_offsets) == 2
 
 
 def test_a_friction_plant_with_sensor_offsets_still_names_its_effects(tmp_path):

@@ -4,8 +4,8 @@
 robot's nominal URDF/MJCF model) or the declared MODEL.json's content, "inertial": the
 rigid-body correction (a MODEL.json on the robot's base atoms) or null, "offsets": a
 constant torque per joint the model adds (N m; 0 as written by the loop), "effects": [{"joint",
-"effect", "coefficient", "unit", shape...}], "sensor_offsets": {"training": per joint (N m),
-"heldout": per held-out run, per joint}}: read by `predict` and `plan` through
+"effect", "coefficient", "unit", shape...}], "sensor_offsets": {"training", "heldout": per
+run, per joint (N m)}}: read by `predict` and `plan` through
 harness.robots.torque_models.load_torque_model. A sensor offset is a property of a run, not of
 the robot: reported under "sensor_offsets", never added to the torque a planner uses.
 """
@@ -30,12 +30,12 @@ def model_payload(robot: str, declared: dict | str, inertial: KinematicModel | N
                   terms: tuple[EffectTerm, ...], training_offsets,
                   heldout_offsets=()) -> dict:
     """The content of model.json (declared: 'pinocchio' or a MODEL.json's content); the
-    runs' sensor offsets (N m: training (dof,), heldout (runs, dof)) reported, not added."""
+    runs' sensor offsets ((runs, dof) N m, training and held out) reported, not added."""
     chain = load_chain(robot)
     return {"kind": KIND, "dof": chain.dof, "robot": {"name": chain.name, "hash": chain.digest()},
             "declared": declared, "inertial": None if inertial is None else model_to_dict(inertial),
             "offsets": [0.0] * chain.dof, "effects": [t.to_json() for t in terms],
-            "sensor_offsets": {"training": [float(o) for o in training_offsets],
+            "sensor_offsets": {"training": [[float(o) for o in c] for c in training_offsets],
                                "heldout": [[float(o) for o in c] for c in heldout_offsets]}}
 
 

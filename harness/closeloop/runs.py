@@ -94,6 +94,7 @@ class RunsRun:
                "unexplained_detail": left.to_json(),
                "declared": self.declared, "robot": self.robot,
                "sensor_offsets": r.offsets.tolist(),
+               "training_sensor_offsets": r.run_offsets.tolist(),
                "heldout_sensor_offsets": self.heldout_offsets.tolist(),
                "data": {"files": self.train_files},
                "selection": {"folds": r.folds, "path": [list(p) for p in r.path],
@@ -157,7 +158,7 @@ def run_runs(data: str, robot: str | None, declared: str = "pinocchio",
         raise UserError(f"{data}: {exc}") from None
     before, after = offset_error(model, held), offset_error(loop.model, held)
     heldout_offsets = run_offsets(loop.model, held)
-    payload = model_payload(robot, spec, inertial, loop.terms, loop.offsets, heldout_offsets)
+    payload = model_payload(robot, spec, inertial, loop.terms, loop.run_offsets, heldout_offsets)
     name = "the robot's nominal model (URDF/MJCF)" if declared == "pinocchio" else declared
     return RunsRun(robot, name, files, vfiles, holdout, loop, before, after,
                    leftover(loop.model, held), payload, heldout_offsets)

@@ -5,7 +5,9 @@ something else does. So, with the declared model D (the robot's nominal model, o
 MODEL.json) and the training runs:
 
 1. Target: tau - D(q, qd, qdd) on every training run; the base refitted beside the effects
-   is a constant sensor offset per joint. Rows of joint j weigh 1 / (RMS of its target).
+   is a constant sensor offset per joint and run (an offset is the run's, not the robot's;
+   a held-out run in validation gets its own refitted). Rows of joint j weigh 1 / (RMS of
+   its target).
 2. Candidates, per joint: `viscous`, `coulomb`, `armature`, `spring` (the Coulomb shape
    fitted by variable projection, identification.closeloop.measured.candidates), and,
    when given, `inertial`: the rigid-body correction of the consistent fit pulled toward
@@ -110,7 +112,8 @@ class RunsLoop:
 
     model: ExtendedModel  # declared + named effects (no sensor offset: that is a run's)
     named: tuple[Named, ...]
-    offsets: np.ndarray  # (dof,) N m, the training runs' sensor offset fitted with the effects
+    offsets: np.ndarray  # (dof,) N m, run_offsets' mean over the training samples
+    run_offsets: np.ndarray  # (runs, dof) N m, each training run's, fitted with the effects
     folds: str  # "runs" (leave one run out) or "blocks" (one run: contiguous blocks)
     path: tuple[tuple[str, float], ...]  # (label added, weighted validation power after)
     not_named: tuple[tuple[int, str, float, str], ...]  # per joint: best left, gain, why
@@ -183,7 +186,9 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
     states = (q, qd, qdd)
     target = tau - declared.torque(*states)
     n = len(q)
-    base = np.broadcast_to(np.eye(dof), (n, dof, dof))
+    base = np.zeros((n, dof, dof * len(runs)))  # a sensor offset per joint and run
+    for r, rows in enumerate(run_rows):
+        base[rows, :, r * dof:(r + 1) * dof] = np.eye(dof)
     w = 1.0 / np.maximum(np.std(target, axis=0), 1e-12)
     project = _Projector(base, w)
     terms = candidates(project, project(target), states, dof, effects)
@@ -193,7 +198,8 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
         cols.append(inertial.torque(*states))
     cols = np.stack(cols, axis=2)
     several = len(runs) > 1
-    cv = BlockValidation.build(base, target, cols, w, run_rows if several else VALIDATION_BLOCKS)
+    cv = BlockValidation.build(base, target, cols, w, run_rows if several else VALIDATION_BLOCKS,
+                               refit_offset=several)
     chosen: list[int] = []
     sse = cv.sse_folds([])
     path = [("", float(np.sum(sse)))]
@@ -235,8 +241,10 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
               tuple(map(float, ps)), g, physical_reading(replace(terms[i], coefficient=float(c))))
         for i, c, (g, pr, ps) in zip(chosen, coef, found, strict=True))
     model = closed_model(declared, np.zeros(dof), tuple(x.term for x in named), inertial)
-    return RunsLoop(model, named, coef_base, "runs" if several else "blocks", tuple(path),
-                    _not_named(terms, chosen, rejected, trials))
+    run_offsets = coef_base.reshape(len(runs), dof)
+    mean = np.average(run_offsets, axis=0, weights=np.diff(lengths))
+    return RunsLoop(model, named, mean, run_offsets, "runs" if several else "blocks",
+                    tuple(path), _not_named(terms, chosen, rejected, trials))
 
 
 def _not_named(terms, chosen, rejected, trials) -> tuple[tuple[int, str, float, str], ...]:
