@@ -9,6 +9,7 @@ shape) and the viscous term, nothing else, and call joint 3 unexplained.
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -170,9 +171,13 @@ def test_runs_and_validate_write_heldout_and_a_model_predict_reads(tmp_path, cap
                  "--out", str(tmp_path / "p.npz")]) == 0
     predicted = np.load(tmp_path / "p.npz")["tau"]
     measured = np.load(files[2])["tau"]
-    np.testing.assert_allclose(np.linalg.norm(predicted - measured, axis=0)
+    offset = np.mean(measured - predicted, axis=0)  # the held-out run's own, refitted
+    np.testing.assert_allclose(offset, payload["heldout_sensor_offsets"][0], atol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(predicted + offset - measured, axis=0)
                                / np.linalg.norm(measured, axis=0),
                                payload["heldout"]["after"], rtol=1e-9)
+    model = json.loads((out / "model.json").read_text())
+    assert model["offsets"] == [0.0] * 3 and len(model["sensor_offsets"]["heldout"]) == 1
 
 
 def test_an_effect_of_one_run_only_is_not_named_with_two():
@@ -213,6 +218,43 @@ def test_a_mujoco_friction_plant_at_two_seeds_names_its_effects_on_both():
         assert set(named) == set(truth), named
         for key, value in truth.items():
             assert named[key] == pytest.approx(value, rel=0.1), key
+
+
+def _generated(tmp_path, plant: str, seeds=(1, 2)) -> list[str]:
+    """Two runs of plant at the default sensor bias and a noise-free one (last)."""
+    from harness.data.generate import generate
+
+    files = []
+    for seed, noise in ((seeds[0], 0.05), (seeds[1], 0.05), (9, 0.0)):
+        files.append(str(tmp_path / f"{Path(plant).stem}{seed}.npz"))
+        mode = "measured" if plant.endswith(".xml") else "inverse"
+        np.savez(files[-1], **generate(plant, 1000, noise, seed, mode, 0.2).arrays())
+    return files
+
+
+def test_training_runs_sensor_offsets_are_not_carried_into_a_new_run(tmp_path):
+    """Runs of the declared robot itself, each with its own sensor offset: nothing is named,
+    and the new run's error is not made worse by the training runs' offsets."""
+    from harness.closeloop.runs import run_runs
+
+    files = _generated(tmp_path, "lynxmotion")
+    r = run_runs(",".join(files[:2]), None, validate=files[2])
+    assert r.loop.terms == () and not r.left.unexplained_joints
+    assert np.all(r.error_after <= r.error_before + 1e-6), (r.error_before, r.error_after)
+    assert r.model_json["offsets"] == [0.0] * 3
+    np.testing.assert_allclose(r.model_json["sensor_offsets"]["training"], r.loop.run_offsets)
+    assert len(r.loop.run_offsets) == 2
+
+
+def test_a_friction_plant_with_sensor_offsets_still_names_its_effects(tmp_path):
+    from harness.closeloop.runs import run_runs
+    from models import MODELS
+
+    files = _generated(tmp_path, str(MODELS / "lynxmotion" / "lynxmotion_friction.xml"))
+    r = run_runs(",".join(files[:2]), "lynxmotion", validate=files[2])
+    named = {(t.effect, t.joint) for t in r.loop.terms}
+    assert {("viscous", 1), ("coulomb", 2), ("viscous", 3)} <= named, named
+    assert np.all(r.error_after < 0.5 * r.error_before), (r.error_before, r.error_after)
 
 
 @pytest.mark.parametrize("args, message", [

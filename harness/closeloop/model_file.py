@@ -2,9 +2,12 @@
 
 {"kind": "closeloop", "dof", "robot": {"name", "hash"}, "declared": "pinocchio" (the
 robot's nominal URDF/MJCF model) or the declared MODEL.json's content, "inertial": the
-rigid-body correction (a MODEL.json on the robot's base atoms) or null, "offsets": per
-joint (N m), "effects": [{"joint", "effect", "coefficient", "unit", shape...}]}: read by
-`predict` and `plan` through harness.robots.torque_models.load_torque_model.
+rigid-body correction (a MODEL.json on the robot's base atoms) or null, "offsets": a
+constant torque per joint the model adds (N m; 0 as written by the loop), "effects": [{"joint",
+"effect", "coefficient", "unit", shape...}], "sensor_offsets": {"training", "heldout": per
+run, per joint (N m)}}: read by `predict` and `plan` through
+harness.robots.torque_models.load_torque_model. A sensor offset is a property of a run, not of
+the robot: reported under "sensor_offsets", never added to the torque a planner uses.
 """
 
 from __future__ import annotations
@@ -24,12 +27,16 @@ SHAPE = ("lead", "eps", "steepness", "shift")
 
 
 def model_payload(robot: str, declared: dict | str, inertial: KinematicModel | None,
-                  offsets, terms: tuple[EffectTerm, ...]) -> dict:
-    """The content of model.json (declared: 'pinocchio' or a MODEL.json's content)."""
+                  terms: tuple[EffectTerm, ...], training_offsets,
+                  heldout_offsets=()) -> dict:
+    """The content of model.json (declared: 'pinocchio' or a MODEL.json's content); the
+    runs' sensor offsets ((runs, dof) N m, training and held out) reported, not added."""
     chain = load_chain(robot)
     return {"kind": KIND, "dof": chain.dof, "robot": {"name": chain.name, "hash": chain.digest()},
             "declared": declared, "inertial": None if inertial is None else model_to_dict(inertial),
-            "offsets": [float(o) for o in offsets], "effects": [t.to_json() for t in terms]}
+            "offsets": [0.0] * chain.dof, "effects": [t.to_json() for t in terms],
+            "sensor_offsets": {"training": [[float(o) for o in c] for c in training_offsets],
+                               "heldout": [[float(o) for o in c] for c in heldout_offsets]}}
 
 
 def declared_model(spec: dict | str, robot: str, robot_library):

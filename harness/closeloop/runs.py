@@ -6,7 +6,8 @@ MODEL.json; with the nominal model the inertial candidate is the rigid-body corr
 of the physically consistent fit pulled toward it (identification.regression.consistent): a payload,
 a wrong mass or centre of mass, named as such rather than absorbed by springs and friction.
 Effects are chosen by identification.closeloop.runs; scores are on the --validate runs, or
-without them on the last --holdout of every run (the rest trains).
+without them on the last --holdout of every run (the rest trains), each scored run with its
+own sensor offset refitted, before and after alike (identification.closeloop.leftover).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from harness.robots.baseline import PinocchioModel
 from harness.robots.ellipsoids import robot_ellipsoids
 from harness.robots.registry import data_robot, load_chain, load_pinocchio
 from harness.robots.torque_models import load_torque_model, robot_library
-from identification.closeloop.leftover import LEFT, Leftover, leftover
+from identification.closeloop.leftover import LEFT, Leftover, leftover, offset_error, run_offsets
 from identification.closeloop.runs import (
     AGREE,
     MIN_GAIN,
@@ -36,7 +37,6 @@ from identification.closeloop.runs import (
 from identification.errors import IdentificationError
 from identification.identify import identify
 from identification.kinematic_model import KinematicModel
-from identification.metrics import rel_error
 from identification.regression.consistent import ConsistentRegressor
 
 JOINT_ATOMS = ("armature", "viscous", "coulomb")
@@ -82,6 +82,7 @@ class RunsRun:
     error_after: np.ndarray
     left: Leftover
     model_json: dict
+    heldout_offsets: np.ndarray  # (held runs, dof) N m, each refitted on the closed model
 
     def to_json(self) -> dict:
         r, left = self.loop, self.left
@@ -93,6 +94,8 @@ class RunsRun:
                "unexplained_detail": left.to_json(),
                "declared": self.declared, "robot": self.robot,
                "sensor_offsets": r.offsets.tolist(),
+               "training_sensor_offsets": r.run_offsets.tolist(),
+               "heldout_sensor_offsets": self.heldout_offsets.tolist(),
                "data": {"files": self.train_files},
                "selection": {"folds": r.folds, "path": [list(p) for p in r.path],
                              "not_named": [{"joint": j, "effect": e, "validation_gain": g,
@@ -109,7 +112,11 @@ class RunsRun:
                "error_definition": "relative error ||tau_hat - tau|| / ||tau|| per joint "
                                    "against the measured torque, on " + (
                                        "the --validate runs" if self.validate_files else
-                                       f"the last {self.holdout:.0%} of every run"),
+                                       f"the last {self.holdout:.0%} of every run") +
+                                   ", before and after alike with each scored run's own "
+                                   "sensor offset refitted (a constant per joint fitted on "
+                                   "that run's residual): an offset is the run's, not the "
+                                   "robot's",
                "model": "model.json"}
         if self.validate_files:
             out["heldout"] = {"files": self.validate_files, "before": out["error_before"],
@@ -149,10 +156,9 @@ def run_runs(data: str, robot: str | None, declared: str = "pinocchio",
         loop = close_loop_runs(model, train, inertial)
     except IdentificationError as exc:
         raise UserError(f"{data}: {exc}") from None
-    states = [np.concatenate([r[i] for r in held]) for i in range(4)]
-    before = rel_error(model.torque(*states[:3]), states[3])
-    after = rel_error(loop.model.torque(*states[:3]), states[3])
-    payload = model_payload(robot, spec, inertial, loop.offsets, loop.terms)
+    before, after = offset_error(model, held), offset_error(loop.model, held)
+    heldout_offsets = run_offsets(loop.model, held)
+    payload = model_payload(robot, spec, inertial, loop.terms, loop.run_offsets, heldout_offsets)
     name = "the robot's nominal model (URDF/MJCF)" if declared == "pinocchio" else declared
     return RunsRun(robot, name, files, vfiles, holdout, loop, before, after,
-                   leftover(loop.model, held), payload)
+                   leftover(loop.model, held), payload, heldout_offsets)

@@ -15,7 +15,12 @@ import re
 from pathlib import Path
 
 from harness.commands.plan_limits import link_radii, rate_limits, torque_limit, vector
-from harness.commands.plan_messages import BuildNotice, infeasible, torque_diagnosis
+from harness.commands.plan_messages import (
+    BuildNotice,
+    infeasible,
+    torque_diagnosis,
+    velocity_diagnosis,
+)
 from harness.errors import UserError
 from harness.io import write_json
 from harness.robots.arm import planner_config
@@ -270,14 +275,15 @@ def _run(args, notice: BuildNotice) -> int:
         raise UserError(f"model has {model.dof} joints, robot {args.robot} has "
                         f"{config.geometry.dof}")
     planner = Planner(model, config)
-    unreachable = torque_diagnosis(planner, scenario)  # before a long search that must fail
+    # before a long search that must fail
+    unreachable = velocity_diagnosis(config, scenario) or torque_diagnosis(planner, scenario)
     if unreachable:
         raise PlanningError(unreachable)
     config, result = executed(model, config, scenario, planner, replan=not args.no_replan,
                               realtime=args.realtime)
     notice.finish()
     if not result.feasible:
-        raise PlanningError(infeasible(result.problems, config))
+        raise PlanningError(infeasible(result.problems, config, scenario))
     write_json(args.out, to_json(result, scenario, config, args.model))
     if args.trajectory:
         write_trajectory(args.trajectory, control_trajectory(

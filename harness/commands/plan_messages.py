@@ -14,13 +14,48 @@ from planning.config import PlannerConfig, Scenario
 from planning.penalty.solver import Planner
 from planning.planners import uses_anytime
 
+SMOOTH_MARGIN = 1.5  # a smooth rest-to-rest motion (a cubic) peaks at 1.5 x its mean velocity
 
-def infeasible(problems, config: PlannerConfig) -> str:
-    """The error line of an execution that is not feasible; with the anytime SQP it says
+
+def velocity_duration(config: PlannerConfig, scenario: Scenario) -> tuple[float, int] | None:
+    """The shortest duration (s) the velocity limits allow, max over joints of
+    |goal - start| / limit (no motion covers more than limit x duration), and that joint
+    (0-based); None without velocity limits."""
+    if config.velocity_limit is None:
+        return None
+    needed = (np.abs(np.subtract(scenario.goal, scenario.start))
+              / np.asarray(config.velocity_limit, float))
+    j = int(np.argmax(needed))
+    return float(needed[j]), j
+
+
+def _longer_duration(config: PlannerConfig, scenario: Scenario) -> str:
+    shortest, j = velocity_duration(config, scenario)
+    return (f"a longer --duration may find one: joint {j + 1} at its velocity limit "
+            f"{config.velocity_limit[j]:g} rad/s needs >= {shortest:.3g} s, a smooth motion "
+            f"about {SMOOTH_MARGIN * shortest:.3g} s")
+
+
+def velocity_diagnosis(config: PlannerConfig, scenario: Scenario) -> str | None:
+    """A one-line reason when the velocity limits make the goal unreachable in the duration:
+    some joint would have to move faster than its limit even on a straight line."""
+    bound = velocity_duration(config, scenario)
+    if bound is None or bound[0] <= scenario.duration:
+        return None
+    return (f"goal not reachable in {scenario.duration:g} s within the velocity limits: "
+            + _longer_duration(config, scenario))
+
+
+def infeasible(problems, config: PlannerConfig, scenario: Scenario | None = None) -> str:
+    """The error line of an execution that is not feasible; when velocities exceed their
+    limits it suggests a longer duration (given the scenario); with the anytime SQP it says
     what its re-plans had: their quality is what that CPU buys on this machine
     (docs/realtime.md, 'harness.commands.plan')."""
     message = "no feasible plan: " + "; ".join(problems)
-    if uses_anytime(config):
+    if (scenario is not None and config.velocity_limit is not None
+            and any(" velocity " in p for p in problems)):
+        message += f" (the velocity limits: {_longer_duration(config, scenario)})"
+    elif uses_anytime(config):
         clock = "CPU" if config.anytime.iteration_ms is None else "nominal time"
         message += (f" (the anytime SQP re-planned within {config.anytime.replan_budget_ms:g} ms of "
                     f"{clock}: a larger --replan-budget-ms or --replanner fatrop may find one)")

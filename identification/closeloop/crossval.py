@@ -29,7 +29,8 @@ class Fold:
     held_effects: np.ndarray  # (h, dof, m)
 
 
-def _fold(base, target, effects, train: np.ndarray, held: np.ndarray) -> Fold:
+def _fold(base, target, effects, train: np.ndarray, held: np.ndarray,
+          refit_offset: bool = False) -> Fold:
     p, m = base.shape[2], effects.shape[2]
     q, r, perm = scipy.linalg.qr(base[train].reshape(-1, p), mode="economic", pivoting=True)
     diag = np.abs(np.diag(r))
@@ -40,6 +41,8 @@ def _fold(base, target, effects, train: np.ndarray, held: np.ndarray) -> Fold:
     proj = vt - q @ (q.T @ vt)
     vh = np.concatenate([target[held][:, :, None], effects[held]], axis=2)
     corrected = vh - (base[held][:, :, keep] @ coef)
+    if refit_offset:  # a constant per joint refitted on the held rows: every column demeaned
+        corrected = corrected - corrected.mean(axis=0)
     return Fold(proj[:, 0], proj[:, 1:], corrected[:, :, 0], corrected[:, :, 1:])
 
 
@@ -52,9 +55,12 @@ class BlockValidation:
 
     @classmethod
     def build(cls, base: np.ndarray, target: np.ndarray, effects: np.ndarray,
-              weights: np.ndarray, blocks: int | list[np.ndarray]) -> BlockValidation:
+              weights: np.ndarray, blocks: int | list[np.ndarray],
+              refit_offset: bool = False) -> BlockValidation:
         """base (n, dof, p), target (n, dof), effects (n, dof, m), weights (dof,) per joint;
-        blocks: how many contiguous blocks, or the sample indices of each (one run each)."""
+        blocks: how many contiguous blocks, or the sample indices of each (one run each);
+        refit_offset: each validation block scored with a constant per joint of its own
+        refitted (a held-out run's sensor offset, which the other runs cannot give)."""
         w = np.asarray(weights, float)
         base, target, effects = base * w[None, :, None], target * w, effects * w[None, :, None]
         n = len(target)
@@ -62,7 +68,7 @@ class BlockValidation:
         for block in (np.array_split(np.arange(n), blocks) if isinstance(blocks, int) else blocks):
             held = np.zeros(n, bool)
             held[block] = True
-            folds.append(_fold(base, target, effects, ~held, held))
+            folds.append(_fold(base, target, effects, ~held, held, refit_offset))
         return cls(tuple(folds), target.shape[1])
 
     def sse(self, subset: list[int]) -> np.ndarray:

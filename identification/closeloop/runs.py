@@ -5,7 +5,9 @@ something else does. So, with the declared model D (the robot's nominal model, o
 MODEL.json) and the training runs:
 
 1. Target: tau - D(q, qd, qdd) on every training run; the base refitted beside the effects
-   is a constant sensor offset per joint. Rows of joint j weigh 1 / (RMS of its target).
+   is a constant sensor offset per joint and run (an offset is the run's, not the robot's;
+   a held-out run in validation gets its own refitted). Rows of joint j weigh 1 / (RMS of
+   its target).
 2. Candidates, per joint: `viscous`, `coulomb`, `armature`, `spring` (the Coulomb shape
    fitted by variable projection, identification.closeloop.measured.candidates), and,
    when given, `inertial`: the rigid-body correction of the consistent fit pulled toward
@@ -20,7 +22,9 @@ MODEL.json) and the training runs:
    it: coloured residuals make the white-noise formula far too small), and, if it has no
    physical reading (a spring: an arm's joints have none; an armature above
    ARMATURE_PLAUSIBLE), it cuts the error power by >= STRONG_GAIN.
-4. The model: D + the named effects + the offsets, refitted jointly on all training runs.
+4. The model: D + the named effects, refitted jointly with the offsets on all training runs.
+   The offsets stay out of it: a sensor offset is a property of a run, not of the robot, so
+   a new run is scored with its own offset refitted (identification.closeloop.leftover).
 """
 
 from __future__ import annotations
@@ -106,9 +110,10 @@ class Named:
 class RunsLoop:
     """Outcome of the loop on training runs (scores are the caller's, on held-out runs)."""
 
-    model: ExtendedModel  # declared + named effects + offsets
+    model: ExtendedModel  # declared + named effects (no sensor offset: that is a run's)
     named: tuple[Named, ...]
-    offsets: np.ndarray  # (dof,) N m
+    offsets: np.ndarray  # (dof,) N m, run_offsets' mean over the training samples
+    run_offsets: np.ndarray  # (runs, dof) N m, each training run's, fitted with the effects
     folds: str  # "runs" (leave one run out) or "blocks" (one run: contiguous blocks)
     path: tuple[tuple[str, float], ...]  # (label added, weighted validation power after)
     not_named: tuple[tuple[int, str, float, str], ...]  # per joint: best left, gain, why
@@ -181,7 +186,9 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
     states = (q, qd, qdd)
     target = tau - declared.torque(*states)
     n = len(q)
-    base = np.broadcast_to(np.eye(dof), (n, dof, dof))
+    base = np.zeros((n, dof, dof * len(runs)))  # a sensor offset per joint and run
+    for r, rows in enumerate(run_rows):
+        base[rows, :, r * dof:(r + 1) * dof] = np.eye(dof)
     w = 1.0 / np.maximum(np.std(target, axis=0), 1e-12)
     project = _Projector(base, w)
     terms = candidates(project, project(target), states, dof, effects)
@@ -191,7 +198,8 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
         cols.append(inertial.torque(*states))
     cols = np.stack(cols, axis=2)
     several = len(runs) > 1
-    cv = BlockValidation.build(base, target, cols, w, run_rows if several else VALIDATION_BLOCKS)
+    cv = BlockValidation.build(base, target, cols, w, run_rows if several else VALIDATION_BLOCKS,
+                               refit_offset=several)
     chosen: list[int] = []
     sse = cv.sse_folds([])
     path = [("", float(np.sum(sse)))]
@@ -232,9 +240,11 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
         Named(replace(terms[i], coefficient=float(c)), tuple(map(float, pr)),
               tuple(map(float, ps)), g, physical_reading(replace(terms[i], coefficient=float(c))))
         for i, c, (g, pr, ps) in zip(chosen, coef, found, strict=True))
-    model = closed_model(declared, coef_base, tuple(x.term for x in named), inertial)
-    return RunsLoop(model, named, coef_base, "runs" if several else "blocks", tuple(path),
-                    _not_named(terms, chosen, rejected, trials))
+    model = closed_model(declared, np.zeros(dof), tuple(x.term for x in named), inertial)
+    run_offsets = coef_base.reshape(len(runs), dof)
+    mean = np.average(run_offsets, axis=0, weights=np.diff(lengths))
+    return RunsLoop(model, named, mean, run_offsets, "runs" if several else "blocks",
+                    tuple(path), _not_named(terms, chosen, rejected, trials))
 
 
 def _not_named(terms, chosen, rejected, trials) -> tuple[tuple[int, str, float, str], ...]:
