@@ -275,15 +275,15 @@ def _run(args, notice: BuildNotice) -> int:
         raise UserError(f"model has {model.dof} joints, robot {args.robot} has "
                         f"{config.geometry.dof}")
     planner = Planner(model, config)
-    # before a long search that must fail
-    unreachable = velocity_diagnosis(config, scenario) or torque_diagnosis(planner, scenario)
+    unreachable = velocity_diagnosis(config, scenario)  # before a search that must fail
     if unreachable:
         raise PlanningError(unreachable)
     config, result = executed(model, config, scenario, planner, replan=not args.no_replan,
                               realtime=args.realtime)
     notice.finish()
-    if not result.feasible:
-        raise PlanningError(infeasible(result.problems, config, scenario))
+    if not result.feasible:  # the torque limits' diagnosis builds IPOPT's NLP: only now
+        raise PlanningError(torque_diagnosis(planner, scenario)
+                            or infeasible(result.problems, config, scenario))
     write_json(args.out, to_json(result, scenario, config, args.model))
     if args.trajectory:
         write_trajectory(args.trajectory, control_trajectory(
