@@ -168,6 +168,12 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
         "start_velocity": scenario.start_velocity, "rest_at_goal": config.rest_at_goal,
         "model": model_name, "robot": config.geometry.name,
         "link_radii": config.geometry.link_radii,
+        # each link's capsule axis (a, b) in the frame of the joint moving it (m); null: the
+        # segments between joint origins
+        "link_ends": config.geometry.ends or None,
+        # m, obstacle centre to the nearest link capsule's surface; null without capsules
+        "min_surface_clearance": float(result.sample_clearance.min())
+        if scenario.obstacle and config.geometry.radii else None,
     }
 
 

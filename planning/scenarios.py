@@ -18,10 +18,10 @@ def paper_scenario() -> Scenario:
 
 
 def _link_ends(free: PolynomialTrajectory, geometry: ArmGeometry, t: float, link: int):
-    """Both ends (3,) of link `link` (index into geometry.links) of `free` at time t (s)."""
-    points = geometry.points(free.state(t)[0])[0]
-    i, j = geometry.links[link]
-    return points[i], points[j]
+    """Both ends (3,) of link `link`'s capsule axis (index into geometry.links) of `free` at
+    time t (s)."""
+    a, b = geometry.link_ends(free.state(t)[0])
+    return a[0, link], b[0, link]
 
 
 def crossing_scenario(free: PolynomialTrajectory, geometry: ArmGeometry, t_cross: float = 1.0,

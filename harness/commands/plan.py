@@ -14,7 +14,7 @@ import math
 import re
 from pathlib import Path
 
-from harness.commands.plan_limits import link_radii, rate_limits, torque_limit, vector
+from harness.commands.plan_limits import link_geometry, rate_limits, torque_limit, vector
 from harness.commands.plan_messages import (
     BuildNotice,
     infeasible,
@@ -97,10 +97,12 @@ def register(sub) -> None:
     p.add_argument("--accel-limit", default=None,
                    help="acceleration limit (rad/s^2): one for every joint or one per joint "
                         "(default: none)")
-    p.add_argument("--link-radius", default="0",
-                   help="capsule radius around every link (m; clearance is to its surface), or "
-                        "'collision': capsules fitted to the URDF's collision geometry (0 on "
-                        "links without); default 0: the links' centre lines (the paper's)")
+    p.add_argument("--link-radius", default="collision",
+                   help="capsule radius around every joint-origin segment (m; clearance is to "
+                        "its surface; 0: the centre lines, the paper's), or 'collision' (the "
+                        "default): capsules fitted to the URDF's collision (else visual) "
+                        "meshes, the centre lines on links without (a robot without meshes: "
+                        "all its links, as 0)")
     p.add_argument("--trajectory", default=None,
                    help="also write the executed motion at the control rate to this CSV: "
                         "t,q1..qn,qd1..qdn,qdd1..qddn,tau1..taun (s, rad, rad/s, rad/s^2, "
@@ -226,8 +228,7 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  power_breaks=args.power_breaks,
                                  torque_limit=None)
     dof = config.geometry.dof
-    config = dataclasses.replace(config, geometry=dataclasses.replace(
-        config.geometry, radii=link_radii(args, len(config.geometry.links))))
+    config = dataclasses.replace(config, geometry=link_geometry(args, config.geometry))
     config = dataclasses.replace(config, torque_limit=torque_limit(args, dof),
                                  **rate_limits(args, dof))
     if args.rate is not None and not (math.isfinite(args.rate) and args.rate > 0):

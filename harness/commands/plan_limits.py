@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 from harness.errors import UserError
 from harness.robots import arm
+from planning.formulation.kinematics import ArmGeometry
 
 
 def vector(text: str, name: str, length: int = 3) -> tuple[float, ...]:
@@ -30,14 +32,17 @@ def torque_limit(args, dof: int) -> tuple[float, ...] | None:
     return limit
 
 
-def link_radii(args, links: int) -> tuple[float, ...]:
-    """--link-radius: every link's capsule radius (m); () for the centre lines."""
+def link_geometry(args, geometry: ArmGeometry) -> ArmGeometry:
+    """geometry with the link capsules of --link-radius: 'collision', those fitted to the
+    robot's meshes (harness.robots.capsules; the centre lines without any), else one radius
+    (m) around every joint-origin segment (0: the centre lines)."""
     if args.link_radius.strip().lower() == "collision":
-        return arm.link_radii(args.robot)
+        fitted = arm.collision_capsules(args.robot)
+        return dataclasses.replace(geometry, ends=fitted.ends, radii=fitted.radii)
     radius = vector(args.link_radius, "link-radius", 1)[0]
     if radius < 0:
         raise UserError(f"--link-radius must be >= 0 m or 'collision', got '{args.link_radius}'")
-    return (radius,) * links if radius else ()
+    return dataclasses.replace(geometry, radii=(radius,) * len(geometry.links) if radius else ())
 
 
 def rate_limits(args, dof: int) -> dict:

@@ -63,10 +63,13 @@ def run(args) -> int:
     reference = plan_reference(plan)
     robot = data_robot(plan if isinstance(plan, dict) else {}, args.robot)
     geometry = arm_geometry(robot)
-    radii = plan.get("link_radii")
+    radii, ends = plan.get("link_radii"), plan.get("link_ends")
     if isinstance(radii, list) and len(radii) == len(geometry.links) and any(radii):
         geometry = dataclasses.replace(geometry, radii=tuple(float(r) for r in radii))
-    plant = replay_plant(args.plant, robot, geometry.radii)
+    if isinstance(ends, list) and len(ends) == len(geometry.links):  # the plan's capsules
+        geometry = dataclasses.replace(geometry, ends=tuple(
+            tuple(tuple(float(x) for x in end) for end in pair) for pair in ends))
+    plant = replay_plant(args.plant, robot, geometry.radii, geometry.ends)
     model = plant.model
     if geometry.dof != reference.dof:
         raise UserError(f"the plan has {reference.dof} joints, robot {robot} has {geometry.dof}")
@@ -79,7 +82,10 @@ def run(args) -> int:
     result, trace = replay(model, reference, plant.feedforward, geometry=geometry)
     write_json(args.out, {**result_json(result, plant.label, plant.feedforward_label),
                           "robot": robot, "links": geometry.link_names,
-                          "link_min_clearance": trace.clearance.min(axis=0)})
+                          "link_min_clearance": trace.clearance.min(axis=0),
+                          # m, mj_geomDistance of each link capsule to the obstacle sphere
+                          "link_min_surface_clearance": None if trace.surface is None
+                          else trace.surface.min(axis=0)})
     if args.video:
         from harness.replay.video import render_video
 

@@ -3,9 +3,11 @@
 Two measures, both in m, over every link the planner checks (planning.formulation.kinematics:
 segments between consecutive joint origins and to the flange, those that move):
 - centre-to-segment: distance from the obstacle centre to each link segment, its ends
-  read from MuJoCo (joint anchors `xanchor`, the flange site 'end_effector'); on the
-  Lynxmotion link 2 (shoulder->elbow) and link 3 (elbow->end effector), the paper's D1,
-  D2 (eq. 16, with the projection clamped to the segment);
+  read from MuJoCo (joint anchors `xanchor`, the flange site 'end_effector'; or, where the
+  planner's capsules have body-fixed axes, ArmGeometry.ends, those ends carried by the
+  joint's body: harness.robots.scene.link_axes), minus the capsule's radius: the planner's
+  own measure; on the Lynxmotion link 2 (shoulder->elbow) and link 3 (elbow->end
+  effector), the paper's D1, D2 (eq. 16, with the projection clamped to the segment);
 - surface: MuJoCo's `mj_geomDistance` between the link capsules 'link<j>' and the
   obstacle sphere 'obstacle' (centre distance minus radii), when the scene has them.
 """
@@ -18,6 +20,7 @@ import mujoco
 import numpy as np
 
 from harness.errors import UserError
+from harness.robots.scene import link_axes
 from planning.formulation.clearance import segment_distance
 from planning.formulation.kinematics import ArmGeometry, paper_arm
 
@@ -42,6 +45,9 @@ class ClearanceProbe:
     obstacle_geom: int  # -1 if the plant has no obstacle sphere
     obstacle_mocap: int  # -1 if the plant has no mocap obstacle body
     radii: tuple[float, ...] = ()  # m, each link's capsule (the planner's): none, lines
+    # body-fixed capsule axes (ArmGeometry.ends): body ids (links,), ends (links, 3) in m;
+    # None: the segments between the link points
+    axes: tuple | None = None
 
     @classmethod
     def of(cls, model: mujoco.MjModel, geometry: ArmGeometry | None = None) -> ClearanceProbe:
@@ -59,8 +65,10 @@ class ClearanceProbe:
         obstacle_geom = _id(model, mujoco.mjtObj.mjOBJ_GEOM, OBSTACLE)
         body = _id(model, mujoco.mjtObj.mjOBJ_BODY, OBSTACLE)
         mocap = int(model.body_mocapid[body]) if body >= 0 else -1
+        axes = link_axes(model, joints, geometry) if geometry.ends else None
         return cls(joints, flange, tuple(geometry.links),
-                   geoms if min(geoms) >= 0 else (), obstacle_geom, mocap, tuple(geometry.radii))
+                   geoms if min(geoms) >= 0 else (), obstacle_geom, mocap, tuple(geometry.radii),
+                   axes)
 
     def points(self, data: mujoco.MjData) -> np.ndarray:
         """Link points (dof + 1, 3) in m at the current kinematics."""
@@ -78,9 +86,15 @@ class ClearanceProbe:
     def centre_distances(self, data: mujoco.MjData, centre: np.ndarray) -> np.ndarray:
         """Distance (m) from centre to each link segment (to its capsule's surface where the
         planner's links have radii) at the current kinematics."""
-        points = self.points(data)
-        a = points[[i for i, _ in self.segments]]
-        b = points[[j for _, j in self.segments]]
+        if self.axes is None:
+            points = self.points(data)
+            a = points[[i for i, _ in self.segments]]
+            b = points[[j for _, j in self.segments]]
+        else:
+            bodies, first, second = self.axes
+            rotations, origins = data.xmat[bodies].reshape(-1, 3, 3), data.xpos[bodies]
+            a = origins + np.einsum("lij,lj->li", rotations, first)
+            b = origins + np.einsum("lij,lj->li", rotations, second)
         distance = segment_distance(np.broadcast_to(centre, a.shape), a, b)
         return distance - np.asarray(self.radii) if self.radii else distance
 

@@ -29,28 +29,30 @@ class ReplayPlant:
     feedforward_label: str
 
 
-def replay_plant(plant: str | None, robot: str, radii: tuple[float, ...] = ()) -> ReplayPlant:
+def replay_plant(plant: str | None, robot: str, radii: tuple[float, ...] = (),
+                 ends: tuple = ()) -> ReplayPlant:
     """The plant `replay --plant` names (None: the robot's replay scene), link capsules of
-    these radii (m) where a scene is built; UserError in one line when it cannot be one."""
+    these radii and axis ends (m, ArmGeometry's) where a scene is built; UserError in one
+    line when it cannot be one."""
     if plant is None:
-        return ReplayPlant(replay_scene(robot, tuple(radii)), PinocchioModel(load_pinocchio(robot)), robot,
-                           "pinocchio")
+        return ReplayPlant(replay_scene(robot, tuple(radii), tuple(ends)),
+                           PinocchioModel(load_pinocchio(robot)), robot, "pinocchio")
     path = Path(plant)
     if not path.is_file():
         raise UserError(f"plant file not found: {path}")
     if path.suffix.lower() == ".json":
-        return _identified(path, robot, radii)
+        return _identified(path, robot, radii, ends)
     if path.suffix.lower() == ".urdf":
-        return ReplayPlant(build_scene(str(path), radii).compile(),
+        return ReplayPlant(build_scene(str(path), radii, ends).compile(),
                            PinocchioModel(load_pinocchio(path)), str(path), f"pinocchio {path}")
     model = load_mujoco(path, scene=True)
     if model.nu:  # an MJCF scene with its own motors (and obstacle), simulated as it is
         return ReplayPlant(model, PinocchioModel(load_pinocchio(robot)), str(path), "pinocchio")
-    return ReplayPlant(build_scene(str(path), radii).compile(), PinocchioModel(load_pinocchio(path)),
+    return ReplayPlant(build_scene(str(path), radii, ends).compile(), PinocchioModel(load_pinocchio(path)),
                        str(path), f"pinocchio {path}")
 
 
-def _identified(path: Path, robot: str, radii: tuple[float, ...]) -> ReplayPlant:
+def _identified(path: Path, robot: str, radii: tuple[float, ...], ends: tuple) -> ReplayPlant:
     """The robot's scene with the bodies a MODEL.json identified, its own torque the
     feed-forward."""
     payload = read_json(path, "model")
@@ -60,5 +62,5 @@ def _identified(path: Path, robot: str, radii: tuple[float, ...]) -> ReplayPlant
                         f"{PARAMETERS_KEY}' or a consistent fit's metrics.physical): a model in "
                         "the robot's base atoms has no bodies; identify with --prior nominal|flat "
                         "or pass a URDF or MJCF with the identified inertials as --plant")
-    model = set_standard_parameters(build_scene(robot, radii).compile(), parameters)
+    model = set_standard_parameters(build_scene(robot, radii, ends).compile(), parameters)
     return ReplayPlant(model, load_torque_model(str(path), robot), str(path), str(path))

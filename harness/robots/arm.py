@@ -10,6 +10,7 @@ motor per joint, else the URDF's effort limits.
 
 from __future__ import annotations
 
+import dataclasses
 from functools import cache
 from pathlib import Path
 
@@ -57,17 +58,32 @@ def arm_geometry(robot: str) -> ArmGeometry:
                           robot_label(robot), bodies)
 
 
-def link_radii(robot: str, default: float = 0.0) -> tuple[float, ...]:
-    """Each planner link's capsule radius (m) fitted to the robot's URDF collision geometry
-    (harness.robots.collision); default for links without any (and for an MJCF)."""
-    from harness.robots.collision import link_radii as fitted
+@cache
+def collision_capsules(robot: str, default: float = 0.0) -> ArmGeometry:
+    """The robot's arm_geometry with each link's capsule fitted to its URDF collision (else
+    visual) geometry (harness.robots.capsules); a link without any keeps its joint-origin
+    segment and radius default (m); without any fitted capsule (an MJCF, a URDF without
+    meshes) the geometry's links stay the segments, with radius default (0: lines)."""
+    from harness.robots.capsules import link_capsules
 
     geometry, entry = arm_geometry(robot), robot_entry(robot)
+    lines = dataclasses.replace(geometry, radii=(default,) * len(geometry.links) if default
+                                else ())
     if entry.urdf is None:
-        return (default,) * len(geometry.links)
+        return lines
     packages = (erd_robots_dir().parent.parent,) if entry.source == "example-robot-data" else ()
-    radii = fitted(Path(entry.urdf), load_pinocchio(robot), geometry, packages)
-    return tuple(default if r is None else r for r in radii)
+    capsules = link_capsules(Path(entry.urdf), load_pinocchio(robot), geometry, packages)
+    if all(c is None for c in capsules):
+        return lines
+    ends = tuple(origin if c is None else (tuple(map(float, c.a)), tuple(map(float, c.b)))
+                 for c, origin in zip(capsules, geometry.origin_ends, strict=True))
+    radii = tuple(default if c is None else c.radius for c in capsules)
+    return dataclasses.replace(geometry, ends=ends, radii=radii)
+
+
+def link_radii(robot: str, default: float = 0.0) -> tuple[float, ...]:
+    """Each planner link's capsule radius (m) from collision_capsules."""
+    return tuple(float(r) for r in collision_capsules(robot, default).link_radii)
 
 
 def joint_limits(robot: str) -> tuple[tuple[float, ...], tuple[float, ...]]:

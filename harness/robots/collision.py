@@ -1,12 +1,9 @@
-"""Link radii from a robot's collision geometry: the capsule around each planner link.
+"""A robot's collision (or visual) geometry as points: what the link capsules
+(harness.robots.capsules) and the bodies' ellipsoids (harness.robots.ellipsoids) are fitted to.
 
-The planner's links are segments between joint origins (planning.formulation.kinematics);
-a link's radius is the largest distance from that segment to the collision geometry of the
-body carrying it (its URDF <collision> elements: STL meshes, boxes, cylinders, spheres, at
-q = 0, bodies fixed to it included), so the capsule holds the geometry and the distance to
-its surface is a lower bound of the distance to the link. A link whose body has no
-collision geometry the harness can read (no <collision>, an MJCF, a mesh format other than
-STL) has radius None: the caller's --link-radius.
+Each body's URDF <collision> (or <visual>) elements: STL meshes, boxes, cylinders, spheres,
+at q = 0, bodies fixed to it included. A body without geometry the harness can read (none,
+an MJCF, a mesh format other than STL) has no points.
 """
 
 from __future__ import annotations
@@ -16,9 +13,6 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
-
-from planning.formulation.clearance import segment_distance
-from planning.formulation.kinematics import ArmGeometry
 
 SPHERE_DIRECTIONS = 26  # points on a sphere or cylinder rim standing for its surface
 
@@ -111,24 +105,3 @@ def body_points(urdf: Path, model: pin.Model, packages: tuple[Path, ...] = (),
             out.setdefault(frame.parentJoint, []).append(
                 points @ placement.rotation.T + placement.translation)
     return {j: np.vstack(p) for j, p in out.items()}
-
-
-def link_radii(urdf: Path, model: pin.Model, geometry: ArmGeometry,
-               packages: tuple[Path, ...] = ()) -> tuple[float | None, ...]:
-    """Radius (m) of each of geometry.links from the URDF's collision geometry (module
-    docstring); model: the arm's Pinocchio model of that URDF; packages: folders that
-    package:// paths are relative to."""
-    data = model.createData()
-    pin.forwardKinematics(model, data, pin.neutral(model))
-    home = geometry.points(np.zeros(geometry.dof))[0]
-    owner = {i + 1: k for k, (i, _) in enumerate(geometry.links)}  # joint -> link
-    radii: list[float | None] = [None] * len(geometry.links)
-    for joint, points in body_points(urdf, model, packages).items():
-        k = owner.get(joint)
-        if k is None:
-            continue
-        placement = data.oMi[joint]
-        world = points @ placement.rotation.T + placement.translation
-        i, j = geometry.links[k]
-        radii[k] = float(segment_distance(world, home[i], home[j]).max())
-    return tuple(radii)

@@ -4,9 +4,11 @@ The arm's model (robot_spec: the URDF's arm joints without meshes, or the MJCF)
 gets what a replay needs, as the Lynxmotion's hand-written scene.xml has it: a floor, a
 light, a camera looking at the arm, the moving obstacle as a mocap body with a sphere, one
 motor per joint limited to the model's torque limits (gear 1), a site 'end_effector' at the
-flange and a capsule 'link<j>' along every link the planner checks (no contacts: they are
-for measuring distances, mj_geomDistance). The timestep and integrator are the
-Lynxmotion's (0.5 ms, implicitfast), so every arm is tracked at the same rate.
+flange and a capsule 'link<j>' around every link the planner checks, on the planner's own
+capsule axis (ArmGeometry.link_ends: body-fixed, fitted to the meshes, or the joint-origin
+segment) with its radius (no contacts: they are for measuring distances, mj_geomDistance).
+The timestep and integrator are the Lynxmotion's (0.5 ms, implicitfast), so every arm is
+tracked at the same rate.
 """
 
 from __future__ import annotations
@@ -45,21 +47,22 @@ def robot_spec(robot: str) -> mujoco.MjSpec:
 
 
 @cache
-def replay_scene(robot: str, radii: tuple[float, ...] = ()) -> mujoco.MjModel:
+def replay_scene(robot: str, radii: tuple[float, ...] = (), ends: tuple = ()) -> mujoco.MjModel:
     """The robot's replay scene: its own scene MJCF when registered with one (the
     Lynxmotion's), else one built around it (build_scene) with link capsules of these radii
-    (m, the plan's)."""
+    and axis ends (m, the plan's: ArmGeometry.radii and .ends)."""
     if robot in ROBOTS and get_robot(robot).scene is not None:
         return load_mujoco(robot, scene=True)
-    return build_scene(robot, radii).compile()
+    return build_scene(robot, radii, ends).compile()
 
 
-def build_scene(robot: str, radii: tuple[float, ...] = ()) -> mujoco.MjSpec:
+def build_scene(robot: str, radii: tuple[float, ...] = (), ends: tuple = ()) -> mujoco.MjSpec:
     """The robot's spec with floor, light, camera, mocap obstacle, motors, flange site and
-    link capsules (radii in m, the planner's; none or 0: LINK_RADIUS, drawn) added (see the
+    link capsules (radii and axis ends in m, the planner's ArmGeometry.radii and .ends; no
+    radius or 0: LINK_RADIUS, drawn; no ends: the joint-origin segments) added (see the
     module docstring)."""
     spec, geometry = robot_spec(robot), arm_geometry(robot)
-    geometry = dataclasses.replace(geometry, radii=tuple(radii))
+    geometry = dataclasses.replace(geometry, radii=tuple(radii), ends=tuple(ends))
     hinges = [j for j in spec.joints if j.type == mujoco.mjtJoint.mjJNT_HINGE]
     if len(hinges) != geometry.dof or len(spec.joints) != geometry.dof:
         raise UserError(f"robot {robot}: {len(spec.joints)} MuJoCo joints, the arm has "
@@ -88,33 +91,45 @@ def _add_motors(spec: mujoco.MjSpec, hinges, robot: str) -> None:
             motor.ctrlrange = [-limit[k], limit[k]]
 
 
+def link_axes(model: mujoco.MjModel, joints, geometry: ArmGeometry) -> tuple:
+    """Each link's capsule axis (ArmGeometry.link_ends at q = 0) in the frame of the MuJoCo
+    body its joint moves: the body ids (links,) and both ends (links, 3 each, m); joints:
+    the arm's hinge joint ids in order."""
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    first, second = (ends[0] for ends in geometry.link_ends(np.zeros(geometry.dof)))
+    bodies = np.array([model.jnt_bodyid[joints[i]] for i, _ in geometry.links], int)
+    def local(ends: np.ndarray) -> np.ndarray:
+        return np.array([data.xmat[body].reshape(3, 3).T @ (point - data.xpos[body])
+                         for body, point in zip(bodies, ends, strict=True)]).reshape(-1, 3)
+
+    return bodies, local(first), local(second)
+
+
 def _add_links(spec: mujoco.MjSpec, hinges, geometry: ArmGeometry) -> None:
-    """The flange site and one capsule per link, placed from the chain's points at q = 0
-    expressed in the frame of the body that carries them."""
+    """The flange site and one capsule per link (link_axes), at q = 0 expressed in the
+    frame of the body that carries them."""
     model = spec.compile()
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)
     home = geometry.points(np.zeros(geometry.dof))[0]
-    bodies = [model.jnt_bodyid[model.joint(j.name).id] for j in hinges]
-
-    def local(body: int, point: np.ndarray) -> np.ndarray:
-        return data.xmat[body].reshape(3, 3).T @ (point - data.xpos[body])
-
+    joints = [model.joint(j.name).id for j in hinges]
+    last = model.jnt_bodyid[joints[-1]]
     names = {s.name for s in spec.sites}
     if FLANGE_SITE not in names:
-        last = spec.body(model.body(bodies[-1]).name)
-        last.add_site(name=FLANGE_SITE, pos=local(bodies[-1], home[-1]), size=[0.005, 0, 0])
+        flange = data.xmat[last].reshape(3, 3).T @ (home[-1] - data.xpos[last])
+        spec.body(model.body(last).name).add_site(name=FLANGE_SITE, pos=flange,
+                                                  size=[0.005, 0, 0])
     geoms = {g.name for g in spec.geoms}
-    for (i, j), radius in zip(geometry.links, geometry.link_radii, strict=True):
+    for (i, _), body, a, b, radius in zip(geometry.links, *link_axes(model, joints, geometry),
+                                          geometry.link_radii, strict=True):
         name = f"link{i + 1}"
         if name in geoms:
             continue
-        body = spec.body(model.body(bodies[i]).name)
-        body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_CAPSULE,
-                      fromto=np.concatenate([local(bodies[i], home[i]),
-                                             local(bodies[i], home[j])]),
-                      size=[radius or LINK_RADIUS, 0, 0], contype=0, conaffinity=0, mass=0,
-                      rgba=[0.8, 0.3, 0.2, 0.6])
+        spec.body(model.body(body).name).add_geom(
+            name=name, type=mujoco.mjtGeom.mjGEOM_CAPSULE, fromto=np.concatenate([a, b]),
+            size=[radius or LINK_RADIUS, 0, 0], contype=0, conaffinity=0, mass=0,
+            rgba=[0.8, 0.3, 0.2, 0.6])
 
 
 def _add_surroundings(spec: mujoco.MjSpec, geometry: ArmGeometry) -> None:

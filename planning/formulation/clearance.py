@@ -1,9 +1,10 @@
 """Distance from an obstacle centre to the arm's link segments (paper eq. 16, as segments).
 
 The paper's code measured the distance to the infinite line through a link;
-here it is the distance to the segment (each moving link of planning.formulation.kinematics: between
-consecutive joint origins and to the flange; on the Lynxmotion shoulder-elbow and
-elbow-end effector),
+here it is the distance to the segment (each moving link's capsule axis,
+planning.formulation.kinematics.ArmGeometry.link_ends: between consecutive joint origins and
+to the flange, or body-fixed ends of a capsule fitted to the link's meshes; on the
+Lynxmotion shoulder-elbow and elbow-end effector), minus the capsule's radius,
 via the clamped projection. The distance to a segment is continuously
 differentiable away from the segment itself (the clamp only switches where
 its derivative does not matter), which is enough for IPOPT with a quadratic
@@ -28,7 +29,10 @@ def segment_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndar
 
 
 def symbolic_segment_distance(point, a, b, length: float):
-    """CasADi distance from point to segment a-b of known constant length (m)."""
+    """CasADi distance from point to segment a-b of known constant length (m; 0: the point
+    a)."""
+    if length == 0:
+        return ca.norm_2(point - a)
     ab = b - a
     t = ca.fmin(ca.fmax(ca.dot(point - a, ab) / length**2, 0.0), 1.0)
     return ca.norm_2(point - a - t * ab)
@@ -37,21 +41,20 @@ def symbolic_segment_distance(point, a, b, length: float):
 def link_clearances(geometry: ArmGeometry, q: np.ndarray, obstacle: np.ndarray) -> np.ndarray:
     """Distances (n, links) of obstacle centres (n, 3) or (3,) to each link of the arm
     (geometry.links: to its capsule's surface, geometry.radii) at joint angles q (n, dof)."""
-    points = geometry.points(q)
-    first, second = (np.asarray(index) for index in zip(*geometry.links, strict=True))
+    a, b = geometry.link_ends(q)
     centres = np.reshape(obstacle, (-1, 1, 3))  # (n or 1, 1, 3): one centre per row of q
-    distance = segment_distance(centres, points[:, first], points[:, second])
+    distance = segment_distance(centres, a, b)
     return distance - geometry.link_radii if geometry.radii else distance
 
 
 def symbolic_link_clearances(geometry: ArmGeometry, q, obstacle) -> list:
     """CasADi distances of an obstacle centre to each link (its capsule's surface) at joint
     vector q."""
-    points = geometry.symbolic_points(q)
-    return [symbolic_segment_distance(obstacle, points[i], points[j], length) - radius
-            if radius else symbolic_segment_distance(obstacle, points[i], points[j], length)
-            for (i, j), length, radius in zip(geometry.links, geometry.link_lengths,
-                                              geometry.link_radii, strict=True)]
+    return [symbolic_segment_distance(obstacle, a, b, length) - radius
+            if radius else symbolic_segment_distance(obstacle, a, b, length)
+            for (a, b), length, radius in zip(geometry.symbolic_link_ends(q),
+                                              geometry.link_lengths, geometry.link_radii,
+                                              strict=True)]
 
 
 def predicted_clearance(geometry: ArmGeometry, trajectory, forecast) -> float:

@@ -9,8 +9,10 @@ and 10 are a cross-check in the tests).
 
 The link points are the joint origins and the flange; a link is the segment between two
 consecutive points, kept when it has length and moves (an endpoint off an earlier joint's
-axis). One forward-kinematics recursion (`_points`) serves numpy arrays (vectorized over
-samples) and CasADi expressions (exact derivatives for the NLP).
+axis). Its capsule's axis (`link_ends`) is that segment, or, where `ends` gives them, two
+points fixed in the frame of the joint that moves the link (a capsule fitted to the body's
+meshes by the harness). One forward-kinematics recursion (`_points`) serves numpy arrays
+(vectorized over samples) and CasADi expressions (exact derivatives for the NLP).
 """
 
 from __future__ import annotations
@@ -35,7 +37,8 @@ class ArmGeometry:
     rotations (dof, 3, 3) and translations (dof, 3): joint j's frame in joint j-1's frame
     (joint 1: in the world) at q = 0; axes (dof, 3): unit joint axes in their own frames;
     flange (3,): the flange point in the last joint's frame; bodies: the name of the body
-    each joint moves (for reports); radii: each link's capsule (m).
+    each joint moves (for reports); radii: each link's capsule (m); ends: each link's capsule
+    axis ((a, b) points, m) in the frame of the joint moving it (link (i, i + 1): joint i + 1).
     """
 
     rotations: tuple
@@ -47,6 +50,8 @@ class ArmGeometry:
     # radius (m) of the capsule around each link (links order; empty: every link a line):
     # clearance is measured to the capsules' surfaces (planning.formulation.clearance)
     radii: tuple[float, ...] = ()
+    # the capsules' axes, body-fixed (links order; empty: the segments between the link points)
+    ends: tuple = ()
 
     @classmethod
     def of(cls, rotations, translations, axes, flange, name: str = "arm",
@@ -75,6 +80,46 @@ class ArmGeometry:
         """Link points (dof + 1 CasADi 3 x 1 expressions, m) at a CasADi joint vector q."""
         return _points(self, lambda j: (ca.cos(q[j]), ca.sin(q[j])), ca.DM.eye(3),
                        ca.DM.zeros(3, 1))
+
+    def link_ends(self, q) -> tuple[np.ndarray, np.ndarray]:
+        """Both ends (n, links, 3 each) in m of every link's capsule axis at joint angles q
+        (n, dof) or (dof,)."""
+        first, second = (list(index) for index in zip(*self.links, strict=True))
+        if not self.ends:
+            points = self.points(q)
+            return points[:, first], points[:, second]
+        origins, rotations = self.joint_frames(q)
+        a, b = (np.asarray([end[k] for end in self.ends], float) for k in (0, 1))
+        return (origins[:, first] + np.einsum("nlij,lj->nli", rotations[:, first], a),
+                origins[:, first] + np.einsum("nlij,lj->nli", rotations[:, first], b))
+
+    def joint_frames(self, q) -> tuple[np.ndarray, np.ndarray]:
+        """Joint frames at joint angles q (n, dof) or (dof,): origins (n, dof, 3) in m and
+        rotations (n, dof, 3, 3) to the world."""
+        q = np.atleast_2d(np.asarray(q, float))
+        c, s = np.cos(q)[:, :, None, None], np.sin(q)[:, :, None, None]
+        frames: list = []
+        points = _points(self, lambda j: (c[:, j], s[:, j]), np.eye(3), np.zeros(3), frames)
+        return (np.stack([np.broadcast_to(p, (len(q), 3)) for p in points[:-1]], axis=1),
+                np.stack([np.broadcast_to(r, (len(q), 3, 3)) for r in frames], axis=1))
+
+    def symbolic_link_ends(self, q) -> list:
+        """Both ends (CasADi 3 x 1 expressions, m) of every link's capsule axis at a CasADi
+        joint vector q."""
+        frames = []
+        points = _points(self, lambda j: (ca.cos(q[j]), ca.sin(q[j])), ca.DM.eye(3),
+                         ca.DM.zeros(3, 1), frames)
+        if not self.ends:
+            return [(points[i], points[j]) for i, j in self.links]
+        return [tuple(points[i] + _apply(frames[i], end) for end in ends)
+                for (i, _), ends in zip(self.links, self.ends, strict=True)]
+
+    @cached_property
+    def origin_ends(self) -> tuple:
+        """The `ends` of the segments between the link points (m): each link's capsule axis
+        when no capsule is fitted."""
+        nxt = [*self.translations[1:], self.flange]
+        return tuple(((0.0, 0.0, 0.0), tuple(nxt[i])) for i, _ in self.links)
 
     @cached_property
     def links(self) -> tuple[tuple[int, int], ...]:
@@ -106,7 +151,10 @@ class ArmGeometry:
 
     @cached_property
     def link_lengths(self) -> tuple[float, ...]:
-        """Length (m) of each link (constant: the chain is rigid between joints)."""
+        """Length (m) of each link's capsule axis (constant: the chain is rigid between
+        joints)."""
+        if self.ends:
+            return tuple(float(np.linalg.norm(np.subtract(b, a))) for a, b in self.ends)
         home = self.points(np.zeros(self.dof))[0]
         return tuple(float(np.linalg.norm(home[j] - home[i])) for i, j in self.links)
 
@@ -129,9 +177,10 @@ class ArmGeometry:
         return self.points(q)[:, -1]
 
 
-def _points(geometry: ArmGeometry, cos_sin, identity, origin) -> list:
+def _points(geometry: ArmGeometry, cos_sin, identity, origin, frames: list | None = None) -> list:
     """World positions of the joint origins and the flange: one recursion for numpy
-    batches (cos/sin of shape (n, 1, 1)) and CasADi scalars."""
+    batches (cos/sin of shape (n, 1, 1)) and CasADi scalars; frames, if given, gets each
+    joint frame's world rotation."""
     rotation, position, out = identity, origin, []
     for j in range(geometry.dof):
         position = position + _apply(rotation, geometry.translations[j])
@@ -139,6 +188,8 @@ def _points(geometry: ArmGeometry, cos_sin, identity, origin) -> list:
         c, s = cos_sin(j)
         rotation = rotation @ _constant(geometry.rotations[j], identity) @ _rodrigues(
             geometry.axes[j], c, s, identity)
+        if frames is not None:
+            frames.append(rotation)
     out.append(position + _apply(rotation, geometry.flange))
     return out
 
