@@ -168,13 +168,21 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
         "start_velocity": scenario.start_velocity, "rest_at_goal": config.rest_at_goal,
         "model": model_name, "robot": config.geometry.name,
         "link_radii": config.geometry.link_radii,
-        # each link's capsule axis (a, b) in the frame of the joint moving it (m); null: the
-        # segments between joint origins
-        "link_ends": config.geometry.ends or None,
+        "link_capsules": capsules(config.geometry),
         # m, obstacle centre to the nearest link capsule's surface; null without capsules
         "min_surface_clearance": float(result.sample_clearance.min())
         if scenario.obstacle and config.geometry.radii else None,
     }
+
+
+def capsules(geometry) -> list[dict] | None:
+    """Each link's capsule: the joint moving it (1-based), its axis ends a, b in that joint's
+    frame and its radius (m); None where the links are the joint-origin segments."""
+    if not geometry.ends:
+        return None
+    return [{"joint": i + 1, "a": a, "b": b, "radius": radius}
+            for (i, _), (a, b), radius in zip(geometry.links, geometry.ends,
+                                              geometry.link_radii.tolist(), strict=True)]
 
 
 TIMING_KEYS = ("solve_ms", "solve_cpu_ms", "timing")  # PLAN.json keys that vary run to run

@@ -12,7 +12,7 @@ import pinocchio as pin
 import pytest
 
 from harness.cli import main
-from harness.robots.arm import bench_motion, planner_config
+from harness.robots.arm import bench_motion, collision_capsules, planner_config
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import get_robot, load_pinocchio
 from harness.sections import replay
@@ -56,8 +56,9 @@ def test_ur5_plan_avoids_with_every_link_and_replays_as_planned(tmp_path, crossi
     assert q.shape[1] == 6 and plan["robot"] == ROBOT and plan["replans"] >= 1
     assert plan["closest_link"] == "link 3 (forearm_link)"
     assert plan["end_error"] <= 1e-6
-    # every link of the executed motion, recomputed here on the plan's own samples
-    geometry = planner_config(ROBOT).geometry
+    # every link's capsule (plan's default: fitted to the meshes), recomputed here on the
+    # plan's own samples
+    geometry = collision_capsules(ROBOT)
     clearance = link_clearances(geometry, q, np.asarray(plan["obstacle"]))
     assert clearance.shape[1] == 6
     assert clearance.min() >= plan["threshold"] - 2e-3

@@ -18,7 +18,7 @@ from scipy.spatial import ConvexHull
 from harness.cli import main
 from harness.replay.clearance import ClearanceProbe
 from harness.robots.arm import arm_geometry, collision_capsules, joint_limits
-from harness.robots.capsules import fit_capsule, link_capsules
+from harness.robots.capsules import body_meshes, fit_capsule, link_capsules
 from harness.robots.collision import body_points
 from harness.robots.registry import erd_robots_dir, load_pinocchio, robot_entry
 from harness.robots.scene import OBSTACLE_RADIUS, build_scene
@@ -41,7 +41,7 @@ def _link_points(robot: str) -> list[np.ndarray | None]:
     found = body_points(Path(entry.urdf), model, packages, "visual")
     found.update(body_points(Path(entry.urdf), model, packages, "collision"))
     out = []
-    for i, _ in arm_geometry(robot).links:
+    for i, _ in collision_capsules(robot).links:
         placement = data.oMi[i + 1]
         points = found.get(i + 1)
         out.append(None if points is None
@@ -109,16 +109,22 @@ def test_planner_distance_is_mujoco_geom_distance(robot):
 
 
 def test_fitted_capsules_are_the_link_capsules_of_every_link():
+    """The UR5's six links keep their joint-origin links; the Panda gains its link 5 (the
+    forearm, on a zero-length segment) and keeps link 1 out (it does not move)."""
     geometry = arm_geometry("ur5")
-    entry = robot_entry("ur5")
-    capsules = link_capsules(Path(entry.urdf), load_pinocchio("ur5"), geometry,
-                             (erd_robots_dir().parent.parent,))
+    meshes = body_meshes(Path(robot_entry("ur5").urdf), load_pinocchio("ur5"),
+                         (erd_robots_dir().parent.parent,))
+    capsules = link_capsules(meshes, load_pinocchio("ur5"), geometry)
     fitted = collision_capsules("ur5")
+    assert fitted.links == geometry.links and fitted.covered == ()
     assert len(capsules) == len(fitted.ends) == len(geometry.links)
     for capsule, (a, b), radius in zip(capsules, fitted.ends, fitted.radii, strict=True):
         np.testing.assert_array_equal(capsule.a, a)
         np.testing.assert_array_equal(capsule.b, b)
         assert capsule.radius == radius
+    panda = collision_capsules("panda")
+    assert panda.covered == (4,) and (4, 5) in panda.links and (0, 1) not in panda.links
+    assert len(panda.links) == len(arm_geometry("panda").links) + 1
 
 
 def test_robot_without_meshes_keeps_its_centre_lines():
@@ -134,7 +140,8 @@ def test_ur5_default_plan_keeps_the_surfaces_clear_in_replay(tmp_path):
     plan = json.loads(plan_path.read_text())
     geometry = collision_capsules("ur5")
     assert plan["link_radii"] == list(geometry.radii)
-    assert len(plan["link_ends"]) == len(geometry.links)
+    assert [c["joint"] for c in plan["link_capsules"]] == [j for _, j in geometry.links]
+    assert [c["radius"] for c in plan["link_capsules"]] == plan["link_radii"]
     assert plan["min_surface_clearance"] == plan["min_clearance"] > 0
     assert main(["replay", "--plan", str(plan_path), "--out", str(replay_path)]) == 0
     replayed = json.loads(replay_path.read_text())

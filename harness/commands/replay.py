@@ -63,13 +63,11 @@ def run(args) -> int:
     reference = plan_reference(plan)
     robot = data_robot(plan if isinstance(plan, dict) else {}, args.robot)
     geometry = arm_geometry(robot)
-    radii, ends = plan.get("link_radii"), plan.get("link_ends")
+    radii = plan.get("link_radii")
     if isinstance(radii, list) and len(radii) == len(geometry.links) and any(radii):
         geometry = dataclasses.replace(geometry, radii=tuple(float(r) for r in radii))
-    if isinstance(ends, list) and len(ends) == len(geometry.links):  # the plan's capsules
-        geometry = dataclasses.replace(geometry, ends=tuple(
-            tuple(tuple(float(x) for x in end) for end in pair) for pair in ends))
-    plant = replay_plant(args.plant, robot, geometry.radii, geometry.ends)
+    geometry = plan_capsules(plan.get("link_capsules"), geometry)
+    plant = replay_plant(args.plant, robot, geometry.radii, geometry)
     model = plant.model
     if geometry.dof != reference.dof:
         raise UserError(f"the plan has {reference.dof} joints, robot {robot} has {geometry.dof}")
@@ -92,6 +90,25 @@ def run(args) -> int:
         render_video(model, trace, args.video, required=True)
     print(summary(args.plan, plant.label, result))
     return 0
+
+
+def plan_capsules(capsules, geometry):
+    """geometry with the link capsules PLAN.json's `link_capsules` records (planning.result
+    .capsules), as it is without them."""
+    if not isinstance(capsules, list) or not capsules:
+        return geometry
+    try:
+        joints = [int(c["joint"]) for c in capsules]
+        ends = tuple((tuple(map(float, c["a"])), tuple(map(float, c["b"]))) for c in capsules)
+        radii = tuple(float(c["radius"]) for c in capsules)
+    except (KeyError, TypeError, ValueError):
+        raise UserError("PLAN.json's link_capsules must be {joint, a, b, radius} objects") from None
+    covered = tuple(j - 1 for j in joints if (j - 1, j) not in geometry.links)
+    planned = dataclasses.replace(geometry, covered=covered, ends=ends, radii=radii)
+    if list(planned.links) != [(j - 1, j) for j in joints]:
+        raise UserError(f"PLAN.json's link_capsules (joints {joints}) are not links of "
+                        f"{geometry.name}")
+    return planned
 
 
 def summary(plan: str, plant: str, result) -> str:

@@ -61,10 +61,11 @@ def arm_geometry(robot: str) -> ArmGeometry:
 @cache
 def collision_capsules(robot: str, default: float = 0.0) -> ArmGeometry:
     """The robot's arm_geometry with each link's capsule fitted to its URDF collision (else
-    visual) geometry (harness.robots.capsules); a link without any keeps its joint-origin
-    segment and radius default (m); without any fitted capsule (an MJCF, a URDF without
-    meshes) the geometry's links stay the segments, with radius default (0: lines)."""
-    from harness.robots.capsules import link_capsules
+    visual) geometry (harness.robots.capsules; a moving meshed body on a zero-length segment
+    becomes a link); a link without any keeps its joint-origin segment and radius default
+    (m); without any geometry (an MJCF, a URDF without meshes) the links stay the segments,
+    with radius default (0: lines)."""
+    from harness.robots.capsules import body_meshes, link_capsules
 
     geometry, entry = arm_geometry(robot), robot_entry(robot)
     lines = dataclasses.replace(geometry, radii=(default,) * len(geometry.links) if default
@@ -72,9 +73,16 @@ def collision_capsules(robot: str, default: float = 0.0) -> ArmGeometry:
     if entry.urdf is None:
         return lines
     packages = (erd_robots_dir().parent.parent,) if entry.source == "example-robot-data" else ()
-    capsules = link_capsules(Path(entry.urdf), load_pinocchio(robot), geometry, packages)
-    if all(c is None for c in capsules):
+    model = load_pinocchio(robot)
+    meshes = body_meshes(Path(entry.urdf), model, packages)
+    if not meshes:
         return lines
+    # a meshed body on a zero-length segment is a link too (if it moves)
+    extra = tuple(j - 1 for j in sorted(meshes) if (j - 1, j) not in geometry.links)
+    grown = dataclasses.replace(geometry, covered=extra)
+    geometry = dataclasses.replace(geometry, covered=tuple(
+        i for i in extra if (i, i + 1) in grown.links))
+    capsules = link_capsules(meshes, model, geometry)
     ends = tuple(origin if c is None else (tuple(map(float, c.a)), tuple(map(float, c.b)))
                  for c, origin in zip(capsules, geometry.origin_ends, strict=True))
     radii = tuple(default if c is None else c.radius for c in capsules)

@@ -8,7 +8,9 @@ axis through their centroid, a Nelder-Mead search tilts and shifts it, and for e
 the radius is the largest distance of a point to the axis line and the ends are the
 shortest span holding every point (so the capsule contains the mesh by construction). The
 axis ends are expressed in the frame of the joint moving the link (ArmGeometry.ends). A link
-without readable geometry keeps the segment between its joint origins.
+without readable geometry keeps the segment between its joint origins; a moving body whose
+joint-origin segment has no length (the Panda's link 5, its forearm) becomes a link
+(ArmGeometry.covered).
 """
 
 from __future__ import annotations
@@ -87,19 +89,27 @@ def fit_capsule(points: np.ndarray) -> Capsule:
     return Capsule(fitted.a, fitted.b, radius)
 
 
-def link_capsules(urdf: Path, model: pin.Model, geometry: ArmGeometry,
-                  packages: tuple[Path, ...] = ()) -> tuple[Capsule | None, ...]:
-    """Per link of geometry.links, the capsule fitted to its body's collision (else visual)
-    geometry in the frame of the joint moving it (m), None without any; model: the arm's
-    Pinocchio model of that URDF; packages: folders package:// paths are relative to."""
+def body_meshes(urdf: Path, model: pin.Model, packages: tuple[Path, ...] = ()
+                ) -> dict[int, np.ndarray]:
+    """Per joint of model (1-based) whose bodies have any, the points (n, 3) of their URDF
+    collision geometry, else of their visual geometry, in that joint's frame (m); packages:
+    folders package:// paths are relative to."""
+    found = body_points(urdf, model, packages, "visual")
+    found.update(body_points(urdf, model, packages, "collision"))
+    return found
+
+
+def link_capsules(meshes: dict[int, np.ndarray], model: pin.Model, geometry: ArmGeometry
+                  ) -> tuple[Capsule | None, ...]:
+    """Per link of geometry.links, the capsule fitted to its body's points (body_meshes) in
+    the frame of the joint moving it (m), None without any; model: the arm's Pinocchio
+    model the points were read with."""
     data = model.createData()
     pin.forwardKinematics(model, data, pin.neutral(model))
     origins, rotations = (x[0] for x in geometry.joint_frames(np.zeros(geometry.dof)))
-    found = body_points(urdf, model, packages, "visual")
-    found.update(body_points(urdf, model, packages, "collision"))
     capsules: list[Capsule | None] = []
     for i, _ in geometry.links:
-        points = found.get(i + 1)
+        points = meshes.get(i + 1)
         if points is None:
             capsules.append(None)
             continue

@@ -47,22 +47,23 @@ def robot_spec(robot: str) -> mujoco.MjSpec:
 
 
 @cache
-def replay_scene(robot: str, radii: tuple[float, ...] = (), ends: tuple = ()) -> mujoco.MjModel:
+def replay_scene(robot: str, radii: tuple[float, ...] = (),
+                 geometry: ArmGeometry | None = None) -> mujoco.MjModel:
     """The robot's replay scene: its own scene MJCF when registered with one (the
-    Lynxmotion's), else one built around it (build_scene) with link capsules of these radii
-    and axis ends (m, the plan's: ArmGeometry.radii and .ends)."""
+    Lynxmotion's), else one built around it (build_scene) with the plan's link capsules."""
     if robot in ROBOTS and get_robot(robot).scene is not None:
         return load_mujoco(robot, scene=True)
-    return build_scene(robot, radii, ends).compile()
+    return build_scene(robot, radii, geometry).compile()
 
 
-def build_scene(robot: str, radii: tuple[float, ...] = (), ends: tuple = ()) -> mujoco.MjSpec:
+def build_scene(robot: str, radii: tuple[float, ...] = (),
+                geometry: ArmGeometry | None = None) -> mujoco.MjSpec:
     """The robot's spec with floor, light, camera, mocap obstacle, motors, flange site and
-    link capsules (radii and axis ends in m, the planner's ArmGeometry.radii and .ends; no
-    radius or 0: LINK_RADIUS, drawn; no ends: the joint-origin segments) added (see the
-    module docstring)."""
-    spec, geometry = robot_spec(robot), arm_geometry(robot)
-    geometry = dataclasses.replace(geometry, radii=tuple(radii), ends=tuple(ends))
+    link capsules added (see the module docstring): those of geometry (the planner's: its
+    links, capsule axes and radii), else the robot's joint-origin segments with these radii
+    (m); no radius or 0: LINK_RADIUS, drawn."""
+    spec = robot_spec(robot)
+    geometry = geometry or dataclasses.replace(arm_geometry(robot), radii=tuple(radii))
     hinges = [j for j in spec.joints if j.type == mujoco.mjtJoint.mjJNT_HINGE]
     if len(hinges) != geometry.dof or len(spec.joints) != geometry.dof:
         raise UserError(f"robot {robot}: {len(spec.joints)} MuJoCo joints, the arm has "

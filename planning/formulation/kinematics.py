@@ -8,11 +8,12 @@ models); the paper's Lynxmotion arm is `paper_arm()`, one chain like any other (
 and 10 are a cross-check in the tests).
 
 The link points are the joint origins and the flange; a link is the segment between two
-consecutive points, kept when it has length and moves (an endpoint off an earlier joint's
-axis). Its capsule's axis (`link_ends`) is that segment, or, where `ends` gives them, two
-points fixed in the frame of the joint that moves the link (a capsule fitted to the body's
-meshes by the harness). One forward-kinematics recursion (`_points`) serves numpy arrays
-(vectorized over samples) and CasADi expressions (exact derivatives for the NLP).
+consecutive points, kept when it has length (or its body has a fitted capsule: `covered`)
+and moves (an endpoint off an earlier joint's axis). Its capsule's axis (`link_ends`) is
+that segment, or, where `ends` gives them, two points fixed in the frame of the joint that
+moves the link (a capsule fitted to the body's meshes by the harness). One
+forward-kinematics recursion (`_points`) serves numpy arrays (vectorized over samples) and
+CasADi expressions (exact derivatives for the NLP).
 """
 
 from __future__ import annotations
@@ -38,7 +39,8 @@ class ArmGeometry:
     (joint 1: in the world) at q = 0; axes (dof, 3): unit joint axes in their own frames;
     flange (3,): the flange point in the last joint's frame; bodies: the name of the body
     each joint moves (for reports); radii: each link's capsule (m); ends: each link's capsule
-    axis ((a, b) points, m) in the frame of the joint moving it (link (i, i + 1): joint i + 1).
+    axis ((a, b) points, m) in the frame of the joint moving it (link (i, i + 1): joint i + 1);
+    covered: joints kept as links though their segment has no length.
     """
 
     rotations: tuple
@@ -52,6 +54,9 @@ class ArmGeometry:
     radii: tuple[float, ...] = ()
     # the capsules' axes, body-fixed (links order; empty: the segments between the link points)
     ends: tuple = ()
+    # joints i (0-based) whose zero-length segment (i, i + 1) is a link all the same: a
+    # capsule fitted to the body they move gives it extent
+    covered: tuple[int, ...] = ()
 
     @classmethod
     def of(cls, rotations, translations, axes, flange, name: str = "arm",
@@ -127,7 +132,8 @@ class ArmGeometry:
         home = self.points(np.zeros(self.dof))[0]
         fixed = [self._fixed(i, home) for i in range(self.dof + 1)]
         return tuple((i, i + 1) for i in range(self.dof)
-                     if np.linalg.norm(home[i + 1] - home[i]) > AXIS_TOLERANCE
+                     if (np.linalg.norm(home[i + 1] - home[i]) > AXIS_TOLERANCE
+                         or i in self.covered)
                      and not (fixed[i] and fixed[i + 1]))
 
     @cached_property
