@@ -16,6 +16,8 @@ import pytest
 from scipy.spatial import ConvexHull
 
 from harness.cli import main
+from harness.commands.replay import plan_capsules
+from harness.errors import UserError
 from harness.replay.clearance import ClearanceProbe
 from harness.robots.arm import arm_geometry, collision_capsules, joint_limits
 from harness.robots.capsules import body_meshes, fit_capsule, link_capsules
@@ -27,6 +29,7 @@ from planning.formulation.clearance import (
     segment_distance,
     symbolic_link_clearances,
 )
+from planning.result import capsules
 
 RNG = np.random.default_rng(43)
 MESHED = ("ur5", "panda")
@@ -148,3 +151,17 @@ def test_ur5_default_plan_keeps_the_surfaces_clear_in_replay(tmp_path):
     assert replayed["surface_clearance"] > 0  # mj_geomDistance: capsules to the sphere
     assert min(replayed["link_min_surface_clearance"]) == replayed["surface_clearance"]
     assert replayed["min_clearance"] >= plan["threshold"] - 5e-3
+
+
+def test_replay_rebuilds_the_plans_capsules():
+    """PLAN.json's link_capsules (planning.result.capsules) give back the planner's geometry,
+    the Panda's extra link included; bad entries are one UserError."""
+    for robot in MESHED:
+        fitted = collision_capsules(robot)
+        recorded = json.loads(json.dumps(capsules(fitted)))
+        assert plan_capsules(recorded, arm_geometry(robot)) == fitted
+    assert plan_capsules(None, arm_geometry("lynxmotion")) == arm_geometry("lynxmotion")
+    recorded = json.loads(json.dumps(capsules(collision_capsules("ur5"))))
+    for change in ({"joint": 9}, {"a": [0, 0]}, {"radius": -1}, {"b": "x"}):
+        with pytest.raises(UserError):
+            plan_capsules([{**recorded[0], **change}, *recorded[1:]], arm_geometry("ur5"))

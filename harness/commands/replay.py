@@ -92,17 +92,28 @@ def run(args) -> int:
     return 0
 
 
+def _point(values) -> tuple[float, ...]:
+    point = tuple(float(v) for v in values)
+    if len(point) != 3 or not all(math.isfinite(v) for v in point):
+        raise ValueError(values)
+    return point
+
+
 def plan_capsules(capsules, geometry):
     """geometry with the link capsules PLAN.json's `link_capsules` records (planning.result
     .capsules), as it is without them."""
     if not isinstance(capsules, list) or not capsules:
         return geometry
+    bad = UserError("PLAN.json's link_capsules must be {joint, a, b, radius} objects (a, b: 3 "
+                    "finite numbers, radius >= 0)")
     try:
         joints = [int(c["joint"]) for c in capsules]
-        ends = tuple((tuple(map(float, c["a"])), tuple(map(float, c["b"]))) for c in capsules)
+        ends = tuple((_point(c["a"]), _point(c["b"])) for c in capsules)
         radii = tuple(float(c["radius"]) for c in capsules)
     except (KeyError, TypeError, ValueError):
-        raise UserError("PLAN.json's link_capsules must be {joint, a, b, radius} objects") from None
+        raise bad from None
+    if not all(math.isfinite(r) and r >= 0 for r in radii):
+        raise bad
     covered = tuple(j - 1 for j in joints if (j - 1, j) not in geometry.links)
     planned = dataclasses.replace(geometry, covered=covered, ends=ends, radii=radii)
     if list(planned.links) != [(j - 1, j) for j in joints]:
