@@ -88,7 +88,7 @@ def test_planner_distance_is_mujoco_geom_distance(robot):
     """The CasADi clearance row of every link, minus the obstacle sphere's radius, is
     mj_geomDistance between the scene's capsule and the sphere; the replay's probe agrees."""
     geometry = collision_capsules(robot)
-    model = build_scene(robot, geometry.radii, geometry.ends).compile()
+    model = build_scene(robot, geometry=geometry).compile()
     data = mujoco.MjData(model)
     probe = ClearanceProbe.of(model, geometry)
     assert probe.has_surface and probe.axes is not None

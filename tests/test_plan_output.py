@@ -15,7 +15,7 @@ import pinocchio as pin
 import pytest
 
 from harness.cli import main
-from harness.robots.arm import arm_geometry, joint_limits, link_radii
+from harness.robots.arm import arm_geometry, collision_capsules, joint_limits, link_radii
 from harness.robots.baseline import PinocchioModel
 from harness.robots.inertials import set_standard_parameters
 from harness.robots.registry import load_mujoco, load_pinocchio
@@ -86,7 +86,7 @@ def test_velocity_limit_holds_between_the_nlp_samples():
 def test_link_radii_from_the_collision_meshes():
     for robot in ("panda", "ur5"):
         radii = np.asarray(link_radii(robot))
-        assert len(radii) == len(arm_geometry(robot).links)
+        assert len(radii) == len(collision_capsules(robot).links)  # the Panda's: + link 5
         assert np.all(radii > 0.03) and np.all(radii < 0.3)  # arms, not points or rooms
     assert link_radii("lynxmotion", 0.012) == (0.012,) * 2  # no <collision>: the default
 
