@@ -38,7 +38,8 @@ def link_geometry(args, geometry: ArmGeometry) -> ArmGeometry:
     (m) around every joint-origin segment (0: the centre lines)."""
     if args.link_radius.strip().lower() == "collision":
         fitted = arm.collision_capsules(args.robot)
-        return dataclasses.replace(geometry, ends=fitted.ends, radii=fitted.radii)
+        return dataclasses.replace(geometry, covered=fitted.covered, ends=fitted.ends,
+                                   radii=fitted.radii)
     radius = vector(args.link_radius, "link-radius", 1)[0]
     if radius < 0:
         raise UserError(f"--link-radius must be >= 0 m or 'collision', got '{args.link_radius}'")
