@@ -43,5 +43,7 @@ def test_a_steep_consistent_fit_plans_on_a_7_dof_arm(tmp_path):
     here, whose build checked the slacks through the model's calls)."""
     model = _steep_consistent_fit(tmp_path, "panda", 2000)
     out = tmp_path / "plan.json"
+    # the default obstacle (the paper's, placed for the Lynxmotion) lies inside the Panda's
+    # fitted link capsules at the start: the centre lines, as this test was written for
     assert main(["plan", "--no-compile", "--robot", "panda", "--model", model,
-                 "--out", str(out)]) == 0
+                 "--link-radius", "0", "--out", str(out)]) == 0
