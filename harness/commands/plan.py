@@ -17,6 +17,7 @@ from pathlib import Path
 from harness.commands.plan_limits import link_geometry, rate_limits, torque_limit, vector
 from harness.commands.plan_messages import (
     BuildNotice,
+    default_obstacle_diagnosis,
     infeasible,
     torque_diagnosis,
     velocity_diagnosis,
@@ -276,7 +277,8 @@ def _run(args, notice: BuildNotice) -> int:
         raise UserError(f"model has {model.dof} joints, robot {args.robot} has "
                         f"{config.geometry.dof}")
     planner = Planner(model, config)
-    unreachable = velocity_diagnosis(config, scenario)  # before a search that must fail
+    unreachable = (default_obstacle_diagnosis(config, scenario, args.robot)  # before a search
+                   or velocity_diagnosis(config, scenario))  # that must fail
     if unreachable:
         raise PlanningError(unreachable)
     config, result = executed(model, config, scenario, planner, replan=not args.no_replan,

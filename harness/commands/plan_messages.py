@@ -10,7 +10,9 @@ import time
 
 import numpy as np
 
+from harness.robots.registry import DEFAULT_ROBOT
 from planning.config import PlannerConfig, Scenario
+from planning.formulation.clearance import link_clearances
 from planning.penalty.solver import Planner
 from planning.planners import uses_anytime
 
@@ -44,6 +46,25 @@ def velocity_diagnosis(config: PlannerConfig, scenario: Scenario) -> str | None:
         return None
     return (f"goal not reachable in {scenario.duration:g} s within the velocity limits: "
             + _longer_duration(config, scenario))
+
+
+def default_obstacle_diagnosis(config: PlannerConfig, scenario: Scenario, robot: str) -> str | None:
+    """A one-line reason when the default obstacle path (the Lynxmotion paper scenario's,
+    given no --obstacle-from/--obstacle-to) starts or ends within the threshold of another
+    robot's links: that path means nothing for it."""
+    obstacle, default = scenario.obstacle, Scenario().obstacle
+    if str(robot) == DEFAULT_ROBOT or obstacle is None or (
+            tuple(obstacle.start), tuple(obstacle.end)) != (default.start, default.end):
+        return None
+    ends = np.asarray([scenario.start, scenario.goal])
+    clearance = [link_clearances(config.geometry, ends[[k]], obstacle.position(t)).min()
+                 for k, t in ((0, 0.0), (1, scenario.duration))]
+    if min(clearance) >= config.threshold:
+        return None
+    which = "start" if clearance[0] < config.threshold else "goal"
+    return (f"the default obstacle path (the Lynxmotion paper scenario's) lies within the "
+            f"threshold of robot {robot}'s links at the {which} (clearance {min(clearance):.4f} m "
+            f"< {config.threshold:g} m): give --obstacle-from and --obstacle-to for this robot")
 
 
 def infeasible(problems, config: PlannerConfig, scenario: Scenario | None = None) -> str:
