@@ -26,11 +26,12 @@ def register(sub) -> None:
                    help=f"optimizer (SLSQP) iterations at most (default {ITERATIONS})")
     p.add_argument("--criterion", choices=sorted(CRITERIA), default="information",
                    help="information (the default): the largest log det of the regressor's Gram "
-                   "(D-optimal: large motions count; on generated Lynxmotion and UR5 data "
-                   "0.2-0.55x the default excitation's error at the same sensor noise); "
-                   "condition: the smallest condition number of the column-normalized "
-                   "regressor (blind to scale: its designs move little and generalize 2-10x "
-                   "worse; docs/identification.md, 'Excitation criteria')")
+                   "(D-optimal: large motions count; on generated Lynxmotion, UR5, Panda "
+                   "and xArm7 data 0.2-0.7x the default excitation's error at the same "
+                   "sensor noise); condition: the smallest condition number of the "
+                   "column-normalized regressor (blind to scale: its designs move little and "
+                   "generalize 1.2-6x worse; docs/identification.md, "
+                   "'identification.excitation.criteria')")
     p.add_argument("--out", required=True, help="output TRAJ.csv: t,q1..qn,qd1..qdn,qdd1..qddn")
     p.set_defaults(func=run)
 
