@@ -35,7 +35,7 @@ FIRST_PLAN_S = 30.0  # the issue's bar, compilation included
 # Panda's fitted link capsules at its start)
 ROBOTS = {False: ("panda", "--obstacle-from", "0.3,0.15,0.3", "--obstacle-to", "0.3,0.15,0.8"),
           True: ("double_pendulum", "--start", "0,0", "--goal", "1.2,-0.8",
-                                    "--obstacle-from", "0.1,0,0.3", "--obstacle-to", "0.1,0,-0.3")}
+                                    "--obstacle-from", "0.2,0,0.3", "--obstacle-to", "0.2,0,-0.3")}
 RUNS = (("first plan (quick build)", "quick", ()), ("second run", "quick", ()),
         ("first plan --realtime (optimized build)", "optimized", ("--realtime",)),
         ("default plan on the optimized build", "optimized", ()))
