@@ -6,7 +6,6 @@ surfaces clear in replay; a robot without meshes keeps its centre lines."""
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import casadi as ca
 import mujoco
@@ -20,9 +19,9 @@ from harness.commands.replay import plan_capsules
 from harness.errors import UserError
 from harness.replay.clearance import ClearanceProbe
 from harness.robots.arm import arm_geometry, collision_capsules, joint_limits
-from harness.robots.capsules import body_meshes, fit_capsule, link_capsules
-from harness.robots.collision import body_points
-from harness.robots.registry import erd_robots_dir, load_pinocchio, robot_entry
+from harness.robots.capsules import fit_capsule, link_capsules
+from harness.robots.collision import robot_body_points
+from harness.robots.registry import load_pinocchio
 from harness.robots.scene import OBSTACLE_RADIUS, build_scene
 from planning.formulation.clearance import (
     link_clearances,
@@ -37,12 +36,10 @@ MESHED = ("ur5", "panda")
 
 def _link_points(robot: str) -> list[np.ndarray | None]:
     """The mesh points (n, 3) of each link's body in the world at q = 0 (m)."""
-    entry, model = robot_entry(robot), load_pinocchio(robot)
+    model = load_pinocchio(robot)
     data = model.createData()
     pin.forwardKinematics(model, data, pin.neutral(model))
-    packages = (erd_robots_dir().parent.parent,)
-    found = body_points(Path(entry.urdf), model, packages, "visual")
-    found.update(body_points(Path(entry.urdf), model, packages, "collision"))
+    found = {j: points for j, (_, points) in robot_body_points(robot).items()}
     out = []
     for i, _ in collision_capsules(robot).links:
         placement = data.oMi[i + 1]
@@ -115,8 +112,7 @@ def test_fitted_capsules_are_the_link_capsules_of_every_link():
     """The UR5's six links keep their joint-origin links; the Panda gains its link 5 (the
     forearm, on a zero-length segment) and keeps link 1 out (it does not move)."""
     geometry = arm_geometry("ur5")
-    meshes = body_meshes(Path(robot_entry("ur5").urdf), load_pinocchio("ur5"),
-                         (erd_robots_dir().parent.parent,))
+    meshes = {j: points for j, (_, points) in robot_body_points("ur5").items()}
     capsules = link_capsules(meshes, load_pinocchio("ur5"), geometry)
     fitted = collision_capsules("ur5")
     assert fitted.links == geometry.links and fitted.covered == ()

@@ -20,7 +20,6 @@ import pinocchio as pin
 from harness.robots.plant import load_plant
 from harness.robots.registry import (
     ROBOTS,
-    erd_robots_dir,
     flange_frame,
     get_robot,
     load_chain,
@@ -65,18 +64,16 @@ def collision_capsules(robot: str, default: float = 0.0) -> ArmGeometry:
     becomes a link); a link without any keeps its joint-origin segment and radius default
     (m); without any geometry (an MJCF, a URDF without meshes) the links stay the segments,
     with radius default (0: lines)."""
-    from harness.robots.capsules import body_meshes, link_capsules
+    from harness.robots.capsules import link_capsules
+    from harness.robots.collision import robot_body_points
 
-    geometry, entry = arm_geometry(robot), robot_entry(robot)
+    geometry = arm_geometry(robot)
     lines = dataclasses.replace(geometry, radii=(default,) * len(geometry.links) if default
                                 else ())
-    if entry.urdf is None:
-        return lines
-    packages = (erd_robots_dir().parent.parent,) if entry.source == "example-robot-data" else ()
-    model = load_pinocchio(robot)
-    meshes = body_meshes(Path(entry.urdf), model, packages)
+    meshes = {j: points for j, (_, points) in robot_body_points(robot).items()}
     if not meshes:
         return lines
+    model = load_pinocchio(robot)
     # a meshed body on a zero-length segment is a link too (if it moves)
     extra = tuple(j - 1 for j in sorted(meshes) if (j - 1, j) not in geometry.links)
     grown = dataclasses.replace(geometry, covered=extra)

@@ -16,14 +16,12 @@ joint-origin segment has no length (the Panda's link 5, its forearm) becomes a l
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 from scipy.optimize import minimize
 from scipy.spatial import ConvexHull, QhullError
 
-from harness.robots.collision import body_points
 from planning.formulation.clearance import segment_distance
 from planning.formulation.kinematics import ArmGeometry
 
@@ -89,19 +87,10 @@ def fit_capsule(points: np.ndarray) -> Capsule:
     return Capsule(fitted.a, fitted.b, radius)
 
 
-def body_meshes(urdf: Path, model: pin.Model, packages: tuple[Path, ...] = ()
-                ) -> dict[int, np.ndarray]:
-    """Per joint of model (1-based) whose bodies have any, the points (n, 3) of their URDF
-    collision geometry, else of their visual geometry, in that joint's frame (m); packages:
-    folders package:// paths are relative to."""
-    found = body_points(urdf, model, packages, "visual")
-    found.update(body_points(urdf, model, packages, "collision"))
-    return found
-
-
 def link_capsules(meshes: dict[int, np.ndarray], model: pin.Model, geometry: ArmGeometry
                   ) -> tuple[Capsule | None, ...]:
-    """Per link of geometry.links, the capsule fitted to its body's points (body_meshes) in
+    """Per link of geometry.links, the capsule fitted to its body's points (per joint, as
+    harness.robots.collision.robot_body_points gives them) in
     the frame of the joint moving it (m), None without any; model: the arm's Pinocchio
     model the points were read with."""
     data = model.createData()

@@ -105,3 +105,20 @@ def body_points(urdf: Path, model: pin.Model, packages: tuple[Path, ...] = (),
             out.setdefault(frame.parentJoint, []).append(
                 points @ placement.rotation.T + placement.translation)
     return {j: np.vstack(p) for j, p in out.items()}
+
+
+def robot_body_points(robot: str) -> dict[int, tuple[str, np.ndarray]]:
+    """Per joint of the robot's arm (1-based) whose links carry any, which geometry
+    ("collision", else "visual") and its points (body_points); {} for an MJCF."""
+    from harness.robots.registry import erd_robots_dir, load_pinocchio, robot_entry
+
+    entry = robot_entry(robot)
+    if entry.urdf is None:
+        return {}
+    model = load_pinocchio(robot)
+    packages = (erd_robots_dir().parent.parent,) if entry.source == "example-robot-data" else ()
+    found: dict[int, tuple[str, np.ndarray]] = {}
+    for kind in ("visual", "collision"):  # collision where a body has both
+        found.update({j: (kind, p) for j, p in
+                      body_points(Path(entry.urdf), model, packages, kind).items()})
+    return found

@@ -13,13 +13,12 @@ body's); the consistent fit grows it again to hold its prior's body.
 from __future__ import annotations
 
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
-from harness.robots.collision import body_points
-from harness.robots.registry import erd_robots_dir, load_pinocchio, robot_entry
+from harness.robots.collision import robot_body_points
+from harness.robots.registry import load_pinocchio
 from identification.ellipsoids import Ellipsoid, enclosing, holding
 from identification.physical import pseudo_inertia
 
@@ -50,17 +49,12 @@ def segment_ellipsoid(model: pin.Model, joint: int) -> Ellipsoid:
 
 def robot_ellipsoids(robot: str) -> tuple[Ellipsoid, ...]:
     """Per body of the robot's arm, its bounding ellipsoid (its source says where from)."""
-    model, entry = load_pinocchio(robot), robot_entry(robot)
-    found: dict[str, dict[int, np.ndarray]] = {}
-    if entry.urdf is not None:
-        packages = (erd_robots_dir().parent.parent,) if entry.source == "example-robot-data" else ()
-        found = {kind: body_points(Path(entry.urdf), model, packages, kind)
-                 for kind in ("collision", "visual")}
+    model, found = load_pinocchio(robot), robot_body_points(robot)
     ellipsoids = []
     for joint in range(1, model.njoints):
-        kind = next((k for k in ("collision", "visual") if joint in found.get(k, {})), None)
-        bound = segment_ellipsoid(model, joint) if kind is None else replace(
-            enclosing(found[kind][joint]), source=f"smallest holding the links' {kind} geometry")
+        bound = segment_ellipsoid(model, joint) if joint not in found else replace(
+            enclosing(found[joint][1]),
+            source=f"smallest holding the links' {found[joint][0]} geometry")
         body = np.array(pseudo_inertia(model.inertias[joint].toDynamicParameters()))
         ellipsoids.append(holding(bound, body, "the URDF's body"))
     return tuple(ellipsoids)
