@@ -29,7 +29,7 @@ ERROR = ("{name} error on the other excitation's motion, trained along the desig
 QUICK_ITERATIONS = 20  # the design's SLSQP iterations in --quick
 
 
-def _along(robot: str, designed, fit, name: str, baseline, judge: Motion, draw: dict) -> dict:
+def along_design(robot: str, designed, fit, name: str, baseline, judge: Motion, draw: dict) -> dict:
     """One draw generated again along the design: errors per joint, and their median ratio to
     the same draw along the default excitation, with generate's noise and with the same
     sensor's (the default draw's noise on the design's torque: a sensor's noise does not grow
@@ -60,7 +60,7 @@ def excitation_comparison(robot: str, fit, name: str, baseline, judge: Motion, d
     except UserError as exc:  # e.g. no collision-free start: the targets are unmeasured
         return [Target(CONDITION, None, 1.0, note=str(exc)),
                 Target(error, None, 1.0, "x")], {"error": str(exc)}
-    along = [_along(robot, designed, fit, name, baseline, judge, d) for d in draws]
+    along = [along_design(robot, designed, fit, name, baseline, judge, d) for d in draws]
     ratio = float(np.median([a["median_ratio"] for a in along]))
     targets = [Target(CONDITION, designed.condition, designed.default_condition),
                Target(error, ratio, 1.0, "x")]

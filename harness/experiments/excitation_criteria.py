@@ -12,12 +12,10 @@ design's clean torque: a torque sensor's noise does not grow with the motion).
 from __future__ import annotations
 
 import sys
-from dataclasses import replace
-
-import numpy as np
 
 from harness.data.excite import design_for
 from harness.data.generate import SAMPLE_RATE, generate
+from harness.experiments.excitation import along_design
 from harness.experiments.identification import NOISE, SAMPLES, fixed_fit, score_draw, sines_motion
 from harness.robots.baseline import PinocchioModel
 from harness.robots.registry import load_pinocchio
@@ -36,13 +34,11 @@ def compare(robot: str) -> dict:
         designed = design_for(robot, SAMPLES / SAMPLE_RATE, SAMPLE_RATE, seed=1, criterion=criterion)
         rows = []
         for seed in SEEDS:
-            default = generate(robot, SAMPLES, NOISE, seed, "inverse")
-            along = generate(robot, SAMPLES, NOISE, seed, "inverse", excitation=designed.trajectory)
-            same = replace(along, tau=along.tau_clean + (default.tau - default.tau_clean))
-            error = {name: np.array(score_draw(d, {"fit": fit}, baseline, [judge])["fit"]["sines"])
-                     for name, d in (("default", default), ("bench", along), ("same", same))}
-            rows.append({"seed": seed, **{k: float(np.median(error[k] / error["default"]))
-                                           for k in ("bench", "same")}})
+            draw = score_draw(generate(robot, SAMPLES, NOISE, seed, "inverse"), {"fit": fit},
+                              baseline, [judge])
+            r = along_design(robot, designed, fit, "fit", baseline, judge, draw)
+            rows.append({"seed": seed, "bench": r["median_ratio"],
+                         "same": r["same_sensor_median_ratio"]})
         out[criterion] = {"condition": designed.condition,
                           "default_condition": designed.default_condition, "draws": rows}
     return out
