@@ -61,6 +61,9 @@ class AnytimeOptions:
     iteration_ms: float | None = None
     elastic_weight: float = 1e3  # J per m of clearance missed, per sample and link
     replan_starts: int = 0  # a re-plan also solves from this many cold start points
+    # the trust region's first radius in a warm re-plan (the box on the coefficients; a cold
+    # plan starts at planning.anytime.sqp.COLD_RADIUS)
+    warm_radius: float = 0.5
 
 
 @dataclass(frozen=True)

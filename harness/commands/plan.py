@@ -14,6 +14,7 @@ import math
 import re
 from pathlib import Path
 
+from harness.commands.plan_anytime import add_anytime_options, anytime_options
 from harness.commands.plan_limits import link_geometry, rate_limits, torque_limit, vector
 from harness.commands.plan_messages import (
     BuildNotice,
@@ -135,11 +136,7 @@ def register(sub) -> None:
                         f"loop, alpha raised until the plan keeps the threshold); default "
                         f"{PLANNER.replanner}, penalty with --free-end (it keeps the threshold "
                         "more often there: docs/realtime.md, 'harness.commands.plan')")
-    p.add_argument("--replan-budget-ms", type=float, default=PLANNER.anytime.replan_budget_ms,
-                   help="anytime: ms a re-plan may take (it returns its best iterate then): "
-                        "counted in SQP iterations of a fixed nominal cost per robot (the same "
-                        "plan on any machine and load; PLAN.json reports the real CPU beside), "
-                        "or CPU ms with --realtime")
+    add_anytime_options(p, PLANNER)
     p.add_argument("--realtime", action="store_true",
                    help="real CPU clocks, as on a robot: budgets and --deadline-ms count the "
                         "planning thread's CPU, a re-plan past its deadline is dropped (the arm "
@@ -202,9 +199,6 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                         "--energy-samples >= 1")
     if args.starts < 1 or not (math.isfinite(args.deadline_ms) and args.deadline_ms >= 0):
         raise UserError("--starts must be >= 1 and --deadline-ms a finite number >= 0")
-    if not (math.isfinite(args.replan_budget_ms) and args.replan_budget_ms > 0):
-        raise UserError(f"--replan-budget-ms must be a finite number > 0, got "
-                        f"{args.replan_budget_ms}")
     if args.replan_iterations < 0:
         raise UserError(f"--replan-iterations must be >= 0, got {args.replan_iterations}")
     if args.polish < 0 or (args.polish and not splits_evenly(args.polish_samples, args.power_breaks)):
@@ -240,7 +234,7 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  polish=args.polish, polish_samples=args.polish_samples,
                                  replan_iterations=args.replan_iterations or None)
     config = config.with_global_search(enabled=args.global_search)
-    config = dataclasses.replace(config.with_anytime(replan_budget_ms=args.replan_budget_ms),
+    config = dataclasses.replace(config.with_anytime(**anytime_options(args)),
                                  starts=args.starts, compile_code=not args.no_compile,
                                  # -O0 first where no CPU time decides the plan
                                  quick_build=not (args.realtime or args.deadline_ms),

@@ -131,6 +131,7 @@ class Anytime(ProblemNumbers):
             reference = warm.trajectory.restrict(t_begin, duration)
         torque = warm is not None and warm.layout[-1:] == (True,)
         check = self.check.against(times, centres, t_begin, duration)
+        radius = sqp.COLD_RADIUS if warm is None else config.anytime.warm_radius
         best, plan, iterations, last = None, None, 0, warm
         spent = self._solver_ms()
         for _ in range(self.round_cap):
@@ -150,7 +151,8 @@ class Anytime(ProblemNumbers):
             solution, count = problem.sqp.solve(start, p, lbg, ubg, lam_g, budget - reserve,
                                                 points.append, self.max_iterations,
                                                 lam_x0=lam_x, clock=clock,
-                                                per_point_ms=self.rounds.check_ms(clock))
+                                                per_point_ms=self.rounds.check_ms(clock),
+                                                radius=radius)
             solved = clock.ms()
             iterations += count
             chosen, checked = choose(points, lambda x: self.trajectory(

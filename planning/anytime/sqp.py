@@ -38,6 +38,9 @@ SETTLED_SHARE = 2e-4
 # energy is nearly flat along many motions, where steps of 1e-8 went on for 100+ iterations
 STEP_TOLERANCE = 1e-6
 PRIMAL_TOLERANCE = 1e-8  # L1 violation of the hard rows at a converged point
+# the trust region's first radius (the box on the trajectory's coefficients) in a cold plan;
+# a warm re-plan starts from AnytimeOptions.warm_radius
+COLD_RADIUS = 0.5
 HARD_WEIGHT = 1e6  # nu's floor: hard rows (goal, limits) weigh far above the clearance's L1
 
 
@@ -97,7 +100,7 @@ class AnytimeSQP:
         return Point(x, f, g, grad, jac, hess, 0.0)
 
     def solve(self, x0, p, lbg, ubg, lam_g0, budget_ms: float, accept, max_iter: int = 200,
-              radius: float = 0.5, lam_x0=None, clock: Clock | None = None,
+              radius: float = COLD_RADIUS, lam_x0=None, clock: Clock | None = None,
               per_point_ms: float = 0.0) -> tuple[Solution, int]:
         """Iterate from x0 (multipliers lam_g0 for the first Hessian) until the predicted
         decrease vanishes or the clock (default: CPU time from now) reaches budget_ms; no

@@ -1,0 +1,30 @@
+"""The anytime SQP's options of `torquebench plan` (planning.config.AnytimeOptions)."""
+
+from __future__ import annotations
+
+import math
+
+from harness.errors import UserError
+from planning.config import PlannerConfig
+
+
+def add_anytime_options(p, default: PlannerConfig) -> None:
+    p.add_argument("--replan-budget-ms", type=float, default=default.anytime.replan_budget_ms,
+                   help="anytime: ms a re-plan may take (it returns its best iterate then): "
+                        "counted in SQP iterations of a fixed nominal cost per robot (the same "
+                        "plan on any machine and load; PLAN.json reports the real CPU beside), "
+                        "or CPU ms with --realtime")
+    p.add_argument("--warm-radius", type=float, default=default.anytime.warm_radius,
+                   help="anytime: the trust region's first radius in a re-plan (a box on the "
+                        "trajectory's polynomial coefficients, rad); smaller keeps a re-plan "
+                        "nearer the plan it starts from (docs/realtime.md, 'Warm radius'; "
+                        f"default {default.anytime.warm_radius:g})")
+
+
+def anytime_options(args) -> dict:
+    """The AnytimeOptions fields the options set (PlannerConfig.with_anytime's keywords)."""
+    for name, value in (("--replan-budget-ms", args.replan_budget_ms),
+                        ("--warm-radius", args.warm_radius)):
+        if not (math.isfinite(value) and value > 0):
+            raise UserError(f"{name} must be a finite number > 0, got {value}")
+    return {"replan_budget_ms": args.replan_budget_ms, "warm_radius": args.warm_radius}
