@@ -105,3 +105,36 @@ def test_with_one_core_the_real_time_loop_runs_alone(baseline, config, monkeypat
     assert not planner.offers(0.5)
     assert "one core" in report(live, (first,))["mode"]
     assert planner.searches == 0
+
+
+def test_an_offer_enters_only_when_the_search_is_done(baseline, config, monkeypatch):
+    """On the nominal clock every search's plan is offered no earlier than its work allows:
+    at least `lag` obstacle samples after its forecast and at least its SQP iterations times
+    the nominal iteration cost later (the other core cannot hand over a plan sooner); with a
+    lag of one sample, shorter than any search, the work decides."""
+    config = config.with_global_search(lag=1)
+    records = []
+    search = MultiStart.search
+
+    def recorded(self, *args, **kwargs):
+        best, plans = search(self, *args, **kwargs)
+        records.append(sum(plan.iterations for plan in plans) * config.anytime.iteration_ms)
+        return best, plans
+
+    monkeypatch.setattr(MultiStart, "search", recorded)
+    launch = GlobalSearchPlanner._launch
+    checked = []
+
+    def launched(self, problem, warm):
+        before = len(records)
+        launch(self, problem, warm)
+        if len(records) > before and self._offer is not None:
+            period = float(problem.forecast.times[1] - problem.forecast.times[0])
+            waited = self._offer[0] - problem.t_begin
+            assert waited >= config.global_search.lag * period - 1e-9
+            assert waited >= records[-1] / 1e3 - 1e-9
+            checked.append(waited)
+
+    monkeypatch.setattr(GlobalSearchPlanner, "_launch", launched)
+    executed(baseline, config, Scenario())
+    assert checked and max(checked) > 0.02

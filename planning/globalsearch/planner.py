@@ -44,6 +44,7 @@ class GlobalSearchPlanner:
         self.check = self._search.check if lagged else SafetyCheck(model, config,
                                                                     config.compile_code)
         self.searches = self.adoptions = 0
+        self.offer_samples: list[int] = []  # per search offered (nominal): samples to its offer
         self._forget()
 
     @property
@@ -131,13 +132,22 @@ class GlobalSearchPlanner:
         if self._background is not None:
             self._background.submit(_segment(problem, warm, problem.t_begin), warm)
             return
-        # planned from where the plan followed will be at the offer: the plan re-solved
+        # planned from where the plan followed will be `lag` samples on: the plan re-solved
         # then starts near its own start
         period = float(forecast.times[1] - forecast.times[0])
+        end = problem.t_begin + problem.duration - period
         due = problem.t_begin + self.config.global_search.lag * period
-        if due >= problem.t_begin + problem.duration - period:
+        if due >= end:
             return
-        self._offer = (due, self._search.search(*_segment(problem, warm, due), warm)[0])
+        best, plans = self._search.search(*_segment(problem, warm, due), warm)
+        # the other core's work on the budgets' clock: the plan enters when it is done, if
+        # that is later (docs/realtime.md, 'Offers when the search is done')
+        samples = max(self.config.global_search.lag,
+                      math.ceil(sum(plan.clock_ms for plan in plans) / (1e3 * period) - 1e-9))
+        due = problem.t_begin + samples * period
+        if due < end:
+            self._offer = (due, best)
+            self.offer_samples.append(samples)
 
 
 def _rest(plan: SegmentPlan, problem: Segment):
@@ -160,8 +170,8 @@ def report(config: PlannerConfig, segments) -> dict | None:
     if not options.enabled or config.replanner != "anytime":
         return None
     if config.anytime.iteration_ms is not None or not options.background:
-        mode = (f"nominal: each search on a re-plan's forecast, offered {options.lag} "
-                "obstacle samples later")
+        mode = (f"nominal: each search on a re-plan's forecast, offered when its work on the "
+                f"budgets' clock is done, at least {options.lag} obstacle samples later")
     elif cores() > 1:
         mode = "another process, adopted when ready"
     else:
