@@ -20,7 +20,7 @@ def register(sub) -> None:
     p.add_argument("--accel-limit", dest="accel_limit", type=float, default=DEFAULT_ACCELERATION,
                    help=f"joint acceleration limit (rad/s^2, default {DEFAULT_ACCELERATION:g})")
     p.add_argument("--harmonics", type=int, default=None,
-                   help="harmonics per joint (default: the highest near 0.5 Hz, 5 to 10)")
+                   help="harmonics per joint (default: the highest near 1 Hz, 5 to 20)")
     p.add_argument("--seed", type=int, default=0, help="seed of the random starting candidates")
     p.add_argument("--iterations", type=int, default=ITERATIONS,
                    help=f"optimizer (SLSQP) iterations at most (default {ITERATIONS})")

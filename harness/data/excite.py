@@ -29,10 +29,11 @@ from identification.excitation.regressor import AtomRegressor
 
 CAPSULE_FRACTION = 0.05  # of the reach: about the UR5's and the Panda's link radii
 DEFAULT_ACCELERATION = 10.0  # rad/s^2
-ITERATIONS = 60  # SLSQP's, at most: about a minute for a 7-joint arm
-# the highest harmonic near 0.5 Hz: slower excitations left inertia weak against torque noise
-# scaled to the torque (docs/identification.md, 'Designed excitation')
-TOP_FREQUENCY, HARMONICS, MAX_HARMONICS = 0.5, (5, 10), 20  # Hz, default range, most allowed
+ITERATIONS = 60  # SLSQP's, at most: about two minutes for a 7-joint arm at 20 harmonics
+# the highest harmonic near 1 Hz, generate's default excitation's top: at 0.5 Hz the error
+# predicted on other motions was larger under both noise models, and slower excitations left
+# inertia weak against torque noise (docs/identification.md, 'Top frequency')
+TOP_FREQUENCY, HARMONICS, MAX_HARMONICS = 1.0, (5, 20), 20  # Hz, default range, most allowed
 CONDITION_POINTS = 200  # samples over the duration at which conditions are compared
 
 
