@@ -1,5 +1,6 @@
 """What `plan` says when the velocity limits block the goal: a longer --duration, with the
-shortest one the limits allow (max over joints of |goal - start| / limit)."""
+shortest one the limits allow (max over joints of |goal - start| / limit on a straight line,
+and the peak factor of the planner's polynomial beside)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,8 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.commands.plan_messages import infeasible, velocity_diagnosis, velocity_duration
+from harness.commands.plan_messages import (infeasible, peak_factor, polynomial_duration,
+                                            velocity_diagnosis, velocity_duration)
 from planning.config import PlannerConfig, Scenario
 
 LIMITED = PlannerConfig(velocity_limit=(0.5, 0.5, 0.5))
@@ -26,7 +28,7 @@ def test_a_too_short_duration_is_diagnosed_with_the_duration_needed():
     message = velocity_diagnosis(LIMITED, Scenario())
     assert "--duration" in message and f"{np.pi / 0.5:.3g} s" in message
     assert "replan-budget" not in message
-    assert velocity_diagnosis(LIMITED, dataclasses.replace(Scenario(), duration=7.0)) is None
+    assert velocity_diagnosis(LIMITED, dataclasses.replace(Scenario(), duration=9.5)) is None
 
 
 def test_velocity_problems_suggest_a_longer_duration():
@@ -43,3 +45,38 @@ def test_cli_velocity_limited_plan_says_duration(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert code != 0 and not out.exists()
     assert len(err) == 1 and "longer --duration" in err[0] and "6.28 s" in err[0], err
+
+
+def test_the_peak_factor_is_the_cubics_at_degree_4_and_no_polynomial_beats_it():
+    """Degree 4 from rest to rest: every such polynomial is the cubic 3s^2 - 2s^3 plus a
+    s^2 (1 - s)^2, whose speed at s = 1/2 is the cubic's 1.5 (closed form). At every degree,
+    random polynomials of the family (rest at the goal or not) never peak below the factor,
+    and the factor falls with the degree."""
+    assert peak_factor(4, True) == pytest.approx(1.5, abs=1e-6)
+    rng, s = np.random.default_rng(0), np.linspace(0.0, 1.0, 20001)
+    for degree in range(4, 10):
+        for rest in (True, False):
+            k = np.arange(2, degree + 1)
+            equal = np.vstack([np.ones(len(k))] + ([k] if rest else []))
+            target = np.r_[1.0, 0.0][: len(equal)]
+            particular = np.linalg.lstsq(equal, target, rcond=None)[0]
+            null = np.linalg.svd(equal)[2][len(equal):].T
+            for _ in range(200):
+                c = particular + null @ rng.normal(0.0, 2.0, null.shape[1])
+                peak = np.max(np.abs((k * s[:, None] ** (k - 1)) @ c))
+                assert peak >= peak_factor(degree, rest) - 1e-9
+    factors = [peak_factor(d, True) for d in range(4, 10)]
+    assert all(b <= a + 1e-12 for a, b in zip(factors, factors[1:], strict=False))
+
+
+def test_a_duration_the_straight_line_allows_but_no_plan_can_is_diagnosed():
+    """Within the straight line's bound (2 s > pi / 2) but below the degree-4 polynomial's
+    (1.5 x pi / 2 = 2.36 s): diagnosed before any search, with both durations."""
+    limited = PlannerConfig(velocity_limit=(2.0, 2.0, 2.0), rest_at_goal=True)  # plan's default
+    case = dataclasses.replace(Scenario(), duration=2.0)
+    assert velocity_duration(limited, case)[0] < 2.0
+    shortest, joint = polynomial_duration(limited, case)
+    assert joint == 0 and shortest == pytest.approx(1.5 * np.pi / 2.0, rel=1e-6)
+    message = velocity_diagnosis(limited, case)
+    assert "1.57 s on a straight line" in message and "2.36 s on the planner's degree-4" in message
+    assert velocity_diagnosis(limited, dataclasses.replace(case, duration=2.4)) is None

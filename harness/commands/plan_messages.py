@@ -7,16 +7,19 @@ import dataclasses
 import logging
 import sys
 import time
+from functools import cache
 
 import numpy as np
+from scipy.optimize import linprog
 
 from harness.robots.registry import DEFAULT_ROBOT
 from planning.config import PlannerConfig, Scenario
 from planning.formulation.clearance import link_clearances
+from planning.formulation.limits import LIMIT_TOLERANCE
 from planning.penalty.solver import Planner
 from planning.planners import uses_anytime
 
-SMOOTH_MARGIN = 1.5  # a smooth rest-to-rest motion (a cubic) peaks at 1.5 x its mean velocity
+PEAK_GRID = 2001  # points of [0, 1] at which peak_factor bounds the speed (a lower bound)
 
 
 def velocity_duration(config: PlannerConfig, scenario: Scenario) -> tuple[float, int] | None:
@@ -31,18 +34,54 @@ def velocity_duration(config: PlannerConfig, scenario: Scenario) -> tuple[float,
     return float(needed[j]), j
 
 
+@cache
+def peak_factor(degree: int, rest_at_goal: bool) -> float:
+    """The least peak speed, in units of the mean speed, of a polynomial of this degree from
+    rest (p(0) = p'(0) = 0) to p(1) = 1, at rest there too if rest_at_goal: a linear program
+    on the speed at PEAK_GRID points, so a lower bound (1.5 at degree 4 from rest to rest:
+    the cubic's)."""
+    s, k = np.linspace(0.0, 1.0, PEAK_GRID), np.arange(2, degree + 1)
+    speed = k * s[:, None] ** (k - 1)  # p'(s) per free coefficient
+    ones = np.ones((PEAK_GRID, 1))
+    equal = [np.r_[np.ones(len(k)), 0.0]] + ([np.r_[k, 0.0]] if rest_at_goal else [])
+    result = linprog(np.r_[np.zeros(len(k)), 1.0], A_ub=np.block([[speed, -ones], [-speed, -ones]]),
+                     b_ub=np.zeros(2 * PEAK_GRID), A_eq=np.array(equal),
+                     b_eq=[1.0] + [0.0] * rest_at_goal,
+                     bounds=[(None, None)] * len(k) + [(0.0, None)], method="highs")
+    return float(result.fun) if result.success else 1.0
+
+
 def _longer_duration(config: PlannerConfig, scenario: Scenario) -> str:
     shortest, j = velocity_duration(config, scenario)
-    return (f"a longer --duration may find one: joint {j + 1} at its velocity limit "
-            f"{config.velocity_limit[j]:g} rad/s needs >= {shortest:.3g} s, a smooth motion "
-            f"about {SMOOTH_MARGIN * shortest:.3g} s")
+    message = (f"a longer --duration may find one: joint {j + 1} at its velocity limit "
+               f"{config.velocity_limit[j]:g} rad/s needs >= {shortest:.3g} s on a straight line")
+    bound = polynomial_duration(config, scenario)
+    if bound is not None:
+        message += f", >= {bound[0]:.3g} s on the planner's degree-{config.degree} polynomial"
+    return message
+
+
+def polynomial_duration(config: PlannerConfig, scenario: Scenario) -> tuple[float, int] | None:
+    """The shortest duration (s) in which the first plan, one polynomial of config.degree
+    from the start at rest, can keep every joint within its velocity limit, and that joint;
+    None without velocity limits or from a moving start."""
+    if config.velocity_limit is None or np.any(np.asarray(scenario.start_velocity) != 0):
+        return None
+    needed = (peak_factor(config.degree, config.rest_at_goal)
+              * np.abs(np.subtract(scenario.goal, scenario.start))
+              / np.asarray(config.velocity_limit, float))
+    j = int(np.argmax(needed))
+    return float(needed[j]), j
 
 
 def velocity_diagnosis(config: PlannerConfig, scenario: Scenario) -> str | None:
     """A one-line reason when the velocity limits make the goal unreachable in the duration:
-    some joint would have to move faster than its limit even on a straight line."""
-    bound = velocity_duration(config, scenario)
-    if bound is None or bound[0] <= scenario.duration:
+    some joint would have to move faster than its limit on a straight line, or on the best
+    polynomial the first plan can be (polynomial_duration)."""
+    bounds = [b for b in (velocity_duration(config, scenario),
+                          polynomial_duration(config, scenario)) if b is not None]
+    # a plan may pass a limit by LIMIT_TOLERANCE: refuse only what exceeds it too
+    if all(bound[0] <= scenario.duration * (1.0 + LIMIT_TOLERANCE) for bound in bounds):
         return None
     return (f"goal not reachable in {scenario.duration:g} s within the velocity limits: "
             + _longer_duration(config, scenario))
