@@ -76,8 +76,9 @@ class GlobalSearchOptions:
 
     On the nominal clock (AnytimeOptions.iteration_ms) a search runs on the forecast of the
     re-plan at obstacle sample k and is offered at sample k + lag, or later when its own
-    iterations on that clock take longer (the same plan on any machine); under CPU clocks (plan --realtime) it runs in another process and is adopted
-    when ready (with one core the real-time loop runs alone)."""
+    iterations on that clock take longer (the same plan on any machine); under CPU clocks
+    (plan --realtime) it runs in another process and is adopted when ready (with one core
+    the real-time loop runs alone)."""
 
     enabled: bool = False
     # obstacle samples between a search's forecast and its offer at the least (the search

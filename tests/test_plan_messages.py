@@ -10,8 +10,13 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.commands.plan_messages import (infeasible, peak_factor, polynomial_duration,
-                                            velocity_diagnosis, velocity_duration)
+from harness.commands.plan_messages import (
+    infeasible,
+    peak_factor,
+    polynomial_duration,
+    velocity_diagnosis,
+    velocity_duration,
+)
 from planning.config import PlannerConfig, Scenario
 
 LIMITED = PlannerConfig(velocity_limit=(0.5, 0.5, 0.5))
