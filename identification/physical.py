@@ -35,6 +35,12 @@ from identification.friction import FrictionLaw, choose_law
 from identification.regression.base import run_centring
 
 LAMBDAS = (1e-6, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)  # ridge weights tried toward the nominal
+# how a body's distance from its nominal is measured: "ridge", the squared deviation of its
+# 10 parameters in units of the body's scale (ridge_scale); "entropic", the LogDet divergence
+# of its pseudo-inertia from the nominal's (Lee, Wensing & Park 2020), which keeps what the
+# data leave open a scaled copy of the nominal body, never a degenerate one
+# (docs/identification.md, 'Prior metric')
+PRIOR_METRICS = ("ridge", "entropic")
 TIE = 0.02  # a larger weight must predict the validation block this much better (relative
 # mean square), or a prior wins it by chance (docs/identification.md, 'identification.physical')
 CONSISTENT_TOL = 1e-8  # smallest pseudo-inertia eigenvalue still consistent (solver accuracy)
@@ -107,7 +113,29 @@ def ridge_scale(nominal: np.ndarray, dof: int) -> np.ndarray:
     return np.concatenate([per_body.ravel(), mass * rho2, np.ones(2 * dof)])
 
 
-def _solve(A, tau, law_cols, laws, scale, nominal, lam: float, used: list[str], bounds=None):
+def _prior_cost(x, y, nominal: np.ndarray, dof: int, metric: str):
+    """The prior's distance of the inertial and armature coefficients from the nominal (not
+    the friction's): PRIOR_METRICS. The entropic one, per body whose nominal pseudo-inertia
+    J0 is positive definite, tr(S J S) - log det(S J S) with S = J0^(-1/2) (the LogDet
+    divergence up to a constant; the body's ridge otherwise), the armature's ridge beside."""
+    if metric == "ridge":
+        return cp.sum_squares(y[:11 * dof])
+    cost = cp.sum_squares(y[10 * dof:11 * dof])
+    for k in range(dof):
+        j0 = np.array(pseudo_inertia(nominal[10 * k:10 * k + 10]), float)
+        w, v = np.linalg.eigh(j0)
+        if w.min() <= 1e-12 * max(1.0, w.max()):
+            cost = cost + cp.sum_squares(y[10 * k:10 * k + 10])
+            continue
+        root = (v / np.sqrt(w)) @ v.T  # J0^(-1/2): the nominal body becomes the identity
+        body = root @ cp.bmat(pseudo_inertia(x[10 * k:10 * k + 10])) @ root
+        body = (body + body.T) / 2
+        cost = cost + cp.trace(body) - cp.log_det(body)
+    return cost
+
+
+def _solve(A, tau, law_cols, laws, scale, nominal, lam: float, used: list[str], bounds=None,
+           metric: str = "ridge"):
     """The fit at ridge weight lam; the solver it took appended to used. bounds: per body a
     4x4 ellipsoid matrix Q (identification.ellipsoids) its mass must lie inside, or None."""
     n, dof, p = A.shape
@@ -126,7 +154,7 @@ def _solve(A, tau, law_cols, laws, scale, nominal, lam: float, used: list[str], 
     c = q.T @ (b / np.sqrt(len(b)))
     cost = cp.sum_squares(r @ cp.hstack([y, off, g]) - c)
     if lam > 0:
-        cost = cost + lam * cp.sum_squares(y[:11 * dof])  # inertial and armature, not friction
+        cost = cost + lam * _prior_cost(x, y, nominal, dof, metric)
     constraints = [(j + j.T) / (2 * ref[10 * k]) >> 0 for k, j in
                    enumerate(cp.bmat(pseudo_inertia(x[10 * k:10 * k + 10])) for k in range(dof))]
     constraints += [x[10 * dof:] >= 0, g >= 0]
@@ -179,14 +207,15 @@ def _rows(runs, n: int, validation: float) -> np.ndarray:
 
 def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np.ndarray,
                  lambdas=LAMBDAS, validation: float = 0.2, choose_friction: bool = True,
-                 runs=None, bounds=None) -> PhysicalFit:
+                 runs=None, bounds=None, metric: str = "ridge") -> PhysicalFit:
     """The consistent fit of tau (n, dof) on every atom's torque (n, dof, 13 dof), offsets and
     friction, pulled toward the nominal coefficients (13 dof) with the lam of `lambdas` that
     predicts the last `validation` fraction of each run best when fitted on the rest; each
     joint's friction law chosen on the same split (choose_friction); refitted on all.
     runs: (n,) run labels of several runs, each with its own sensor offset (the fit's
     offsets are their mean over the samples); None: one run. bounds: per body an ellipsoid
-    matrix Q (identification.ellipsoids) or None: the body's mass held inside (plausible)."""
+    matrix Q (identification.ellipsoids) or None: the body's mass held inside (plausible).
+    metric: the prior's distance from the nominal (PRIOR_METRICS)."""
     A, qd, tau, nominal = (np.asarray(x, float) for x in (atoms, qd, tau, nominal))
     n, dof, _ = A.shape
     several, centred = run_centring(runs)
@@ -198,13 +227,13 @@ def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np
     cols = centred(law_columns(laws, qd))
     errors = []
     for lam in lambdas:
-        fitted = _solve(A[fit], tau[fit], cols[fit], laws, scale, nominal, lam, used, bounds)
+        fitted = _solve(A[fit], tau[fit], cols[fit], laws, scale, nominal, lam, used, bounds, metric)
         pred = _predict(A[held], cols[held], fitted)
         errors.append(float(np.mean(((pred - tau[held]) / scale) ** 2)))
     lam = choose_weight(lambdas, errors)
     chosen = {}
     if choose_friction:
-        x = _solve(A[fit], tau[fit], cols[fit], laws, scale, nominal, lam, used, bounds)[0]
+        x = _solve(A[fit], tau[fit], cols[fit], laws, scale, nominal, lam, used, bounds, metric)[0]
         rigid = A[:, :, :11 * dof] @ x[:11 * dof]  # the rigid body and the armature
         coulomb = A[:, :, 12 * dof:].diagonal(axis1=1, axis2=2)
         picks = [choose_law(tau[:, j] - rigid[:, j], qd[:, j], coulomb[:, j])
@@ -213,7 +242,7 @@ def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np
         chosen = {"friction_errors": [{law.name: min(e for other, e in p[1] if other.name == law.name)
                                        for law, _ in p[1]} for p in picks]}
         cols = centred(law_columns(laws, qd))
-    x, off, g = _solve(A, tau, cols, laws, scale, nominal, lam, used, bounds)
+    x, off, g = _solve(A, tau, cols, laws, scale, nominal, lam, used, bounds, metric)
     if several:  # one offset for the model: the runs' mean
         off = np.mean(raw_tau - raw_A @ x - law_columns(laws, qd) * g, axis=0)
     return PhysicalFit(x, off, laws, g, lam, min_pseudo_eigenvalues(x[:10 * dof]),

@@ -204,3 +204,28 @@ def test_an_ellipsoid_grows_to_hold_the_nominal_body(lynx):
     tiny = Ellipsoid(np.zeros(3), np.full(3, 1e-3), np.eye(3), "test")
     grown = holding(tiny, pseudo)
     assert inside(pseudo, tiny) < 0 <= inside(pseudo, grown) and "grown" in grown.source
+
+
+def test_the_entropic_prior_is_the_logdet_divergence_of_the_pseudo_inertias():
+    """_prior_cost's entropic term at a body J against its nominal J0 equals, in closed form,
+    tr(J0^-1 J) - log det J + log det J0 (the LogDet divergence plus 4), for random bodies."""
+    import cvxpy as cp
+
+    from identification.physical import _prior_cost
+
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        bodies = []
+        for _ in range(2):
+            rotation = pin.Quaternion(rng.normal(size=4)).normalized().matrix()
+            second = rng.uniform(0.005, 0.1, 3)  # a mass distribution's second moments
+            inertia = rotation @ np.diag(second.sum() - second) @ rotation.T
+            bodies.append(pin.Inertia(rng.uniform(0.5, 3.0), rng.normal(0, 0.1, 3),
+                                      inertia).toDynamicParameters())
+        nominal, body = np.r_[bodies[0], np.zeros(3)], np.r_[bodies[1], np.zeros(3)]
+        x, y = cp.Parameter(13, value=body), cp.Parameter(13, value=np.zeros(13))
+        value = _prior_cost(x, y, nominal, 1, "entropic").value
+        j0, j = (np.array(pseudo_inertia(b), float) for b in (nominal, body))
+        expected = np.trace(np.linalg.solve(j0, j)) - np.linalg.slogdet(j)[1] \
+            + np.linalg.slogdet(j0)[1]
+        assert value == pytest.approx(expected, rel=1e-9)

@@ -14,6 +14,7 @@ from identification.choice import LIBRARIES, METHODS, PRIORS
 from identification.errors import IdentificationError
 from identification.identify import identify
 from identification.model import model_payload
+from identification.physical import PRIOR_METRICS
 
 
 def register(sub) -> None:
@@ -57,6 +58,12 @@ def register(sub) -> None:
                    "visual, geometry in the URDF; else about the segment to its child joint; "
                    "grown to hold the nominal body); MODEL.json's bodies say whether each is "
                    "plausible (default: on; --no-plausible: consistent only)")
+    p.add_argument("--prior-metric", choices=PRIOR_METRICS, default="ridge",
+                   help="with --prior nominal: how a body's distance from its nominal is "
+                   "measured: ridge (its parameters' squared deviation, in the body's scale; "
+                   "the default) or entropic (the LogDet divergence of its pseudo-inertia: "
+                   "what the data leave open stays a scaled copy of the nominal body, never a "
+                   "degenerate one; docs/identification.md, 'Prior metric')")
     p.set_defaults(func=run)
 
 
@@ -76,7 +83,8 @@ def run(args) -> int:
     dof = data["q"].shape[1]
     robot = data_robot(meta, args.robot)
     library, regressor = robot_identification(robot, dof, args.library, args.prior, args.method,
-                                              meta.get("mode") == "measured log", args.plausible)
+                                              meta.get("mode") == "measured log", args.plausible,
+                                              args.prior_metric)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         result = identify(data["q"], data["qd"], data["qdd"], data["tau"], library, holdout,
@@ -93,7 +101,8 @@ def run(args) -> int:
         p = result.physical
         plausible = ("" if "plausible" not in p else "; every body plausible (inside its link's "
                      f"ellipsoid): {'yes' if all(p['plausible']) else 'NO'}")
-        print(f"prior {p['prior']} (weight {p['lambda']:g}); every body physically consistent: "
+        print(f"prior {p['prior']} ({p['prior_metric']}, weight {p['lambda']:g}); every body "
+              "physically consistent: "
               f"{'yes' if p['consistent'] else 'NO'}{plausible}")
     else:
         print("physical consistency not imposed (sparse fit; --prior nominal or flat imposes it)")

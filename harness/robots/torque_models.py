@@ -94,16 +94,19 @@ def library_named(name: str, robot: str, dof: int | None = None):
 
 def robot_identification(robot: str, dof: int | None = None, library: str = "auto",
                          prior: str = "none", method: str = "auto", measured: bool = False,
-                         plausible: bool = True):
+                         plausible: bool = True, prior_metric: str = "ridge"):
     """(library, regressor) of an identification on robot, chosen by identification.choice
     from the names `identify --library/--prior/--method` take (measured: the data are a
     measured log); the robot's inputs (its libraries, its nominal inertias) made here.
     The CLI, the sweep and the bench all identify with this (the bench's perturbed prior
     alone builds its ConsistentRegressor per draw). plausible: a consistent fit keeps each
-    body inside its link's bounding ellipsoid (harness.robots.ellipsoids)."""
+    body inside its link's bounding ellipsoid (harness.robots.ellipsoids); prior_metric: its
+    prior's distance from the nominal (identification.physical.PRIOR_METRICS)."""
     lib = library_named(library_name(library, prior, robot_entry(robot).libraries), robot, dof)
     regressor = choose_fit(lib, choose_prior(prior, measured, lib), method,
                            lambda: PinocchioModel(load_pinocchio(robot)).atom_parameters())
+    if isinstance(regressor, ConsistentRegressor):
+        regressor = replace(regressor, prior_metric=prior_metric)
     if plausible and isinstance(regressor, ConsistentRegressor):
         from harness.robots.ellipsoids import robot_ellipsoids
 

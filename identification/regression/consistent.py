@@ -45,11 +45,13 @@ class ConsistentRegressor:
     the LMI). choose_friction False keeps viscous-Coulomb on every joint. ellipsoids: per
     body the Ellipsoid bounding its link (or None): each body's mass held inside it
     (plausible), the ellipsoid first grown to hold the nominal body (identification.ellipsoids.
-    holding); None: consistent only."""
+    holding); None: consistent only. prior_metric: how the prior measures a body's distance
+    from the nominal (identification.physical.PRIOR_METRICS)."""
 
     nominal: np.ndarray | None = None
     choose_friction: bool = True
     ellipsoids: tuple[Ellipsoid | None, ...] | None = None
+    prior_metric: str = "ridge"  # identification.physical.PRIOR_METRICS
     per_run_offsets = True  # fit(runs=...) gives each run its own sensor offset
 
     def min_samples(self, library: KinematicLibrary) -> int:
@@ -70,8 +72,10 @@ class ConsistentRegressor:
         fit = fit_physical(atoms, qd, tau, np.zeros(13 * dof) if nominal is None else nominal,
                            lambdas=(FLAT,) if nominal is None else LAMBDAS,
                            choose_friction=self.choose_friction, runs=runs,
-                           bounds=None if bounds is None else [b and b.matrix for b in bounds])
+                           bounds=None if bounds is None else [b and b.matrix for b in bounds],
+                           metric=self.prior_metric)
         physical = {"prior": "flat" if nominal is None else "nominal", "lambda": fit.lam,
+                    "prior_metric": self.prior_metric,
                     "solver": fit.validation["solver"],
                     "consistent": fit.consistent,
                     "min_pseudo_eigenvalues": fit.min_eigenvalues.tolist(),
