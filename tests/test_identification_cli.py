@@ -67,11 +67,12 @@ def _bad_cases(arrays):
         "holdout1": ({}, ["--holdout", "1"], "--holdout must be in (0, 1)"),
         "holdoutneg": ({}, ["--holdout", "-0.1"], "--holdout must be in (0, 1)"),
         "method": ({}, ["--library", "paper", "--method", "coupled"], "no Lagrangian atoms"),
+        "metric": ({}, ["--prior", "none", "--prior-metric", "entropic"], "--prior nominal"),
     }
 
 
 @pytest.mark.parametrize("case", ["nan", "missing", "shape", "few", "holdout", "holdout0",
-                                  "holdout1", "holdoutneg", "method", "nofile"])
+                                  "holdout1", "holdoutneg", "method", "metric", "nofile"])
 def test_bad_input_exits_2_with_one_line_and_no_file(tmp_path, arrays, case, capsys):
     out = tmp_path / "MODEL.json"
     if case == "nofile":

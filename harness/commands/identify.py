@@ -85,6 +85,10 @@ def run(args) -> int:
     library, regressor = robot_identification(robot, dof, args.library, args.prior, args.method,
                                               meta.get("mode") == "measured log", args.plausible,
                                               args.prior_metric)
+    if args.prior_metric != "ridge" and getattr(regressor, "nominal", None) is None:
+        raise IdentificationError(f"--prior-metric {args.prior_metric} measures the pull toward "
+                                  "the URDF's bodies: it needs the consistent fit with a prior "
+                                  "(--prior nominal)")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         result = identify(data["q"], data["qd"], data["qdd"], data["tau"], library, holdout,
