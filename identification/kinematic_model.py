@@ -72,7 +72,8 @@ class KinematicModel:
     def equations(self, digits: int = 4) -> list[str]:
         """Per joint: tau_j = sum of coefficient [unit] * Y_j[atom] (N m)."""
         out = []
-        own = {law.term(j + 1): law for j, law in enumerate(self.laws)}
+        # the laws with a column of their own (a viscous law's name is also its atom's)
+        own = {law.term(j + 1): law for j, law in enumerate(self.laws) if law.has_column}
         for j in range(self.dof):
             body = " + ".join(f"{c:.{digits}g} N m * {n}[{own[n].describe()}]" if n in own else
                               f"{c:.{digits}g} {atom_unit(n)} * Y{j + 1}[{n}]"

@@ -118,6 +118,12 @@ def test_consistent_model_reads_back_from_model_json(lynx):
     np.testing.assert_allclose(back.torque(judge.q, judge.qd, judge.qdd),
                                model.torque(judge.q, judge.qd, judge.qdd), rtol=1e-12, atol=1e-12)
     assert back.laws == model.laws and back.method == "consistent"
+    # each joint's equation names its viscous atom in its own unit (a viscous law's name is
+    # also that atom's: it is no column of the law's), and a law's own column in N m
+    for j, (equation, law) in enumerate(zip(model.equations(), model.laws, strict=True)):
+        kept = any(name == f"viscous{j + 1}" for name, _ in model.joint_terms(j))
+        assert (f"N m s/rad * Y{j + 1}[viscous{j + 1}]" in equation) == kept
+        assert (f"N m * {law.term(j + 1)}[" in equation) == law.has_column
 
 
 def test_a_fallback_to_scs_is_warned_and_recorded(lynx, monkeypatch):
