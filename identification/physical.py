@@ -18,9 +18,10 @@ body's largest, so a link with no nominal inertia is not pinned), and
 J_b = [[tr(I)/2 1 - I, h], [h^T, m]] the pseudo-inertia (Wensing, Wensing & Slotine 2017:
 a body's (m, h, I) is physically consistent iff J_b is positive semidefinite). lam = 0 is
 least squares under the LMI; lam > 0 pulls what the data leave open toward the nominal
-model. lam and each joint's friction law are chosen by validation inside the training data
-(the last contiguous block of each run), never on a scored part; several runs have an
-offset each. Solved by Clarabel (SCS if it fails).
+model (metric "entropic": by the LogDet divergence of each body's pseudo-inertia from the
+nominal's instead of the ridge, PRIOR_METRICS). lam and each joint's friction law are
+chosen by validation inside the training data (the last contiguous block of each run),
+never on a scored part; several runs have an offset each. Solved by Clarabel (SCS if it fails).
 """
 
 from __future__ import annotations
