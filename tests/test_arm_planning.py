@@ -141,3 +141,19 @@ def test_other_robot_needs_its_own_angles(tmp_path, capsys):
                  str(out)]) == 2  # no registered motion
     assert not out.exists()
     assert "--start is needed on robot double_pendulum: 2" in capsys.readouterr().err
+
+
+def test_another_robot_past_the_default_obstacle_is_told_so(tmp_path, capsys):
+    """A plan of another robot with no obstacle options goes past the Lynxmotion paper
+    scenario's obstacle path: written, with one note that it is not the robot's; with the
+    options given, no note."""
+    out = tmp_path / "plan.json"
+    angles = ["--start", "0.2,0.1", "--goal", "1.0,-0.5"]
+    assert main(["plan", "--no-compile", "--robot", "double_pendulum", "--model", "pinocchio",
+                 *angles, "--out", str(out)]) == 0
+    err = [line for line in capsys.readouterr().err.splitlines() if line.startswith("note:")]
+    assert out.exists() and len(err) == 1 and "--obstacle-from" in err[0]
+    assert main(["plan", "--no-compile", "--robot", "double_pendulum", "--model", "pinocchio",
+                 *angles, "--obstacle-from", "0.3,0.3,0.5", "--obstacle-to", "0.3,0.3,0.9",
+                 "--out", str(tmp_path / "own.json")]) == 0
+    assert "note:" not in capsys.readouterr().err

@@ -12,6 +12,7 @@ import dataclasses
 import logging
 import math
 import re
+import sys
 from pathlib import Path
 
 from harness.commands.plan_anytime import add_anytime_options, anytime_options
@@ -19,6 +20,7 @@ from harness.commands.plan_limits import link_geometry, rate_limits, torque_limi
 from harness.commands.plan_messages import (
     BuildNotice,
     default_obstacle_diagnosis,
+    default_obstacle_notice,
     infeasible,
     torque_diagnosis,
     velocity_diagnosis,
@@ -289,4 +291,7 @@ def _run(args, notice: BuildNotice) -> int:
           f"{result.sample_clearance.min():.4f} m (closest: "
           f"{closest_link(result, config)['closest_link']}), "
           f"{len(result.execution.segments) - 1} re-plans")
+    notice = default_obstacle_notice(scenario, args.robot)
+    if notice:
+        print(notice, file=sys.stderr)
     return 0

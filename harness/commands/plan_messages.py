@@ -87,14 +87,30 @@ def velocity_diagnosis(config: PlannerConfig, scenario: Scenario) -> str | None:
             + _longer_duration(config, scenario))
 
 
+def uses_the_default_obstacle(scenario: Scenario, robot: str) -> bool:
+    """Whether another robot than the Lynxmotion plans past the default obstacle path (the
+    Lynxmotion paper scenario's, given no --obstacle-from/--obstacle-to)."""
+    obstacle, default = scenario.obstacle, Scenario().obstacle
+    return str(robot) != DEFAULT_ROBOT and obstacle is not None and (
+        tuple(obstacle.start), tuple(obstacle.end)) == (default.start, default.end)
+
+
+def default_obstacle_notice(scenario: Scenario, robot: str) -> str | None:
+    """The line `plan` adds after a plan of another robot past the default obstacle path:
+    an obstacle placed for the Lynxmotion, which the plan's clearance is measured to."""
+    if not uses_the_default_obstacle(scenario, robot):
+        return None
+    return ("note: the obstacle is the Lynxmotion paper scenario's default path, not one of "
+            f"robot {robot}'s: give --obstacle-from and --obstacle-to to plan past yours")
+
+
 def default_obstacle_diagnosis(config: PlannerConfig, scenario: Scenario, robot: str) -> str | None:
     """A one-line reason when the default obstacle path (the Lynxmotion paper scenario's,
     given no --obstacle-from/--obstacle-to) starts or ends within the threshold of another
     robot's links: that path means nothing for it."""
-    obstacle, default = scenario.obstacle, Scenario().obstacle
-    if str(robot) == DEFAULT_ROBOT or obstacle is None or (
-            tuple(obstacle.start), tuple(obstacle.end)) != (default.start, default.end):
+    if not uses_the_default_obstacle(scenario, robot):
         return None
+    obstacle = scenario.obstacle
     ends = np.asarray([scenario.start, scenario.goal])
     clearance = [link_clearances(config.geometry, ends[[k]], obstacle.position(t)).min()
                  for k, t in ((0, 0.0), (1, scenario.duration))]
