@@ -181,7 +181,12 @@ def _solve(A, tau, law_cols, laws, scale, nominal, lam: float, used: list[str], 
         used.append("SCS")
     if y.value is None:
         raise ValueError(f"the consistent fit did not solve ({problem.status})")
-    return np.asarray(x.value), np.asarray(off.value), np.asarray(g.value)
+    # armature, friction and the laws' coefficients are >= 0 only to the solver's tolerance
+    # (-1.5e-11 N m seen): exactly, or an exported model is refused (Pinocchio reads a
+    # negative <dynamics friction> as min > max dry friction)
+    fitted = np.asarray(x.value)
+    fitted[10 * dof:] = np.maximum(fitted[10 * dof:], 0.0)
+    return fitted, np.asarray(off.value), np.maximum(np.asarray(g.value), 0.0)
 
 
 def _predict(A, law_cols, fitted) -> np.ndarray:
