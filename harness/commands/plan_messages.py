@@ -65,13 +65,10 @@ def polynomial_duration(config: PlannerConfig, scenario: Scenario) -> tuple[floa
     """The shortest duration (s) in which the first plan, one polynomial of config.degree
     from the start at rest, can keep every joint within its velocity limit, and that joint;
     None without velocity limits or from a moving start."""
-    if config.velocity_limit is None or np.any(np.asarray(scenario.start_velocity) != 0):
+    straight = velocity_duration(config, scenario)  # the same factor on every joint
+    if straight is None or np.any(np.asarray(scenario.start_velocity) != 0):
         return None
-    needed = (peak_factor(config.degree, config.rest_at_goal)
-              * np.abs(np.subtract(scenario.goal, scenario.start))
-              / np.asarray(config.velocity_limit, float))
-    j = int(np.argmax(needed))
-    return float(needed[j]), j
+    return peak_factor(config.degree, config.rest_at_goal) * straight[0], straight[1]
 
 
 def velocity_diagnosis(config: PlannerConfig, scenario: Scenario) -> str | None:

@@ -44,7 +44,6 @@ class GlobalSearchPlanner:
         self.check = self._search.check if lagged else SafetyCheck(model, config,
                                                                     config.compile_code)
         self.searches = self.adoptions = 0
-        self.offer_samples: list[int] = []  # per search offered (nominal): samples to its offer
         self._forget()
 
     @property
@@ -147,7 +146,6 @@ class GlobalSearchPlanner:
         due = problem.t_begin + samples * period
         if due < end:
             self._offer = (due, best)
-            self.offer_samples.append(samples)
 
 
 def _rest(plan: SegmentPlan, problem: Segment):
