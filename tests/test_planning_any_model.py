@@ -23,7 +23,12 @@ def _steep_consistent_fit(tmp_path, robot: str, samples: int) -> str:
     assert model["method"] == "consistent"
     for j, joint in enumerate(model["joints"]):
         model["friction"][j] = {"law": "sigmoid", "shape": [1e4, 0.0]}
-        joint["terms"][joint["terms"].index(f"coulomb{j + 1}")] = f"sigmoid{j + 1}"
+        terms, coulomb = joint["terms"], f"coulomb{j + 1}"
+        if coulomb in terms:
+            terms[terms.index(coulomb)] = f"sigmoid{j + 1}"
+        else:  # a Coulomb fitted to exactly 0 (its law dropped it) is not listed
+            terms.append(f"sigmoid{j + 1}")
+            joint["coefficients"].append(0.0)
     path.write_text(json.dumps(model))
     return str(path)
 
