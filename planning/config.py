@@ -75,15 +75,16 @@ class GlobalSearchOptions:
     the current forecast and keeps the clearance.
 
     On the nominal clock (AnytimeOptions.iteration_ms) a search runs on the forecast of the
-    re-plan at obstacle sample k and is offered at sample k + lag, or later when its own
-    iterations on that clock take longer (the same plan on any machine); under CPU clocks
+    re-plan at obstacle sample k, and each plan it finds better than those before is offered
+    at sample k + lag, or later when the search's iterations up to it on that clock take
+    longer (the same plan on any machine); under CPU clocks
     (plan --realtime) it runs in another process and is adopted when ready (with one core
     the real-time loop runs alone)."""
 
     enabled: bool = False
     # obstacle samples between a search's forecast and its offer at the least (the search
-    # planned from where the plan followed will be then); on the nominal clock the offer
-    # enters when the search's work on that clock is done, if that is later
+    # planned from where the plan followed will be then); on the nominal clock each offer
+    # enters when the search's work up to it on that clock is done, if that is later
     lag: int = 10
     random_starts: int = 4  # seeded random start points beside the detours
     # the detours: each of the first side_joints joints swung by +-detour_rad at mid-horizon

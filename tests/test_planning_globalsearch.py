@@ -108,33 +108,46 @@ def test_with_one_core_the_real_time_loop_runs_alone(baseline, config, monkeypat
 
 
 def test_an_offer_enters_only_when_the_search_is_done(baseline, config, monkeypatch):
-    """On the nominal clock every search's plan is offered no earlier than its work allows:
-    at least `lag` obstacle samples after its forecast and at least its SQP iterations times
-    the nominal iteration cost later (the other core cannot hand over a plan sooner); with a
-    lag of one sample, shorter than any search, the work decides."""
+    """On the nominal clock every plan a search offers enters no earlier than its work
+    allows: at least `lag` obstacle samples after the forecast and at least the SQP work of
+    the search up to that plan (its starts in order) on the nominal clock later (the other
+    core cannot hand it over sooner); each offer better than the one before, the last the
+    search's best. With a lag of one sample, shorter than any search, the work decides, and
+    a plan found early in a search enters before the search is done."""
     config = config.with_global_search(lag=1)
-    records = []
+    searches = []
     search = MultiStart.search
 
     def recorded(self, *args, **kwargs):
         best, plans = search(self, *args, **kwargs)
-        records.append(sum(plan.iterations for plan in plans) * config.anytime.iteration_ms)
+        searches.append((args, best, plans))
         return best, plans
 
     monkeypatch.setattr(MultiStart, "search", recorded)
     launch = GlobalSearchPlanner._launch
-    checked = []
+    checked, early = [], []
 
     def launched(self, problem, warm):
-        before = len(records)
+        before = len(searches)
         launch(self, problem, warm)
-        if len(records) > before and self._offer is not None:
-            period = float(problem.forecast.times[1] - problem.forecast.times[0])
-            waited = self._offer[0] - problem.t_begin
+        if len(searches) == before or not self._offers:
+            return
+        args, best, plans = searches[-1]
+        period = float(problem.forecast.times[1] - problem.forecast.times[0])
+        work = np.cumsum([plan.clock_ms for plan in plans]) / 1e3
+        scores = [objective(self.check, config, plan, args[2], args[3], args[5])
+                  for _, plan in self._offers]
+        assert scores == sorted(scores, reverse=True) and len(set(scores)) == len(scores)
+        assert scores[-1] == objective(self.check, config, best, args[2], args[3], args[5])
+        for due, plan in self._offers:
+            index = next(i for i, p in enumerate(plans) if p is plan)
+            waited = due - problem.t_begin
             assert waited >= config.global_search.lag * period - 1e-9
-            assert waited >= records[-1] / 1e3 - 1e-9
+            assert waited >= work[index] - 1e-9
             checked.append(waited)
+            early.append(waited < work[-1] - period)
 
     monkeypatch.setattr(GlobalSearchPlanner, "_launch", launched)
     executed(baseline, config, Scenario())
     assert checked and max(checked) > 0.02
+    assert any(early)

@@ -1,16 +1,18 @@
 """GlobalSearchPlanner: the real-time loop's planner (the anytime SQP) with a global search
 beside it (GlobalSearchOptions), a SegmentPlanner (planning.types) like the one it wraps.
 
-At a re-plan the latest forecast goes to the search (when none runs, the obstacle still
-shapes the plan and the forecast is new). Its plan is offered on the nominal clock at the
-re-plan `lag` obstacle samples later (the search computed then and there, synchronously:
-the same plans on any machine), under CPU clocks when the other process has it ready. A
-re-plan with an offer whose motion from now on scores better on the current forecast than
-the plan followed (multistart.objective: safe first, then the energy to go) goes on from it
-with the whole budget, and adopts the result (its status marked ADOPTED) if it keeps the
-clearance and spends less than the plan followed; otherwise the arm keeps that plan
-(Algorithm 2 re-plans from it at the next sample if it must). An offer that scores no
-better leaves the re-plan as it was."""
+After a re-plan the latest forecast goes to the search (when none runs, the obstacle still
+shapes the plan and the forecast is new), planned from the plan the arm now follows. On the
+nominal clock the search runs there and then, synchronously (the same plans on any machine),
+and every plan it finds better than those before it is offered at the re-plan where the
+search's work up to it is done, at least `lag` obstacle samples later; under CPU clocks the
+other process's best plan is offered when it is ready. A re-plan with an offer whose motion
+from now on scores better on the current forecast than the plan followed
+(multistart.objective: safe first, then the energy to go) goes on from it with the whole
+budget, and adopts the result (its status marked ADOPTED) if it keeps the clearance and
+spends less than the plan followed; otherwise the arm keeps that plan (Algorithm 2 re-plans
+from it at the next sample if it must). An offer that scores no better leaves the re-plan as
+it was."""
 
 from __future__ import annotations
 
@@ -59,7 +61,7 @@ class GlobalSearchPlanner:
         """Whether a search's plan is offered at sample time t (Algorithm 2 re-plans)."""
         if self._background is not None:
             return self._background.done()
-        return self._offer is not None and t >= self._offer[0] - SAMPLE_TOLERANCE
+        return bool(self._offers) and t >= self._offers[0][0] - SAMPLE_TOLERANCE
 
     def plan_cold(self, problem: Segment, starts: int | None = None
                   ) -> tuple[SegmentPlan, list[SegmentPlan]]:
@@ -71,7 +73,14 @@ class GlobalSearchPlanner:
             self._forget()
             return self.inner.plan(problem)
         offered = self._offered(problem.t_begin)
-        self._launch(problem, warm)
+        result = self._replan(problem, warm, offered)
+        # searched from the plan the arm follows now (the one it will be on when the offer
+        # enters)
+        self._launch(problem, result if result.success else warm)
+        return result
+
+    def _replan(self, problem: Segment, warm: SegmentPlan, offered: SegmentPlan | None
+                ) -> SegmentPlan:
         ours, other = (self._score(plan, problem) for plan in (warm, offered))
         if offered is None or other >= ours:  # nothing offered, or nothing promising
             return self.inner.plan(problem, warm)
@@ -98,7 +107,9 @@ class GlobalSearchPlanner:
                          problem.forecast)
 
     def _forget(self) -> None:
-        self._offer: tuple[float, SegmentPlan] | None = None
+        # the running search's plans still to be offered: (sample time, plan), each better
+        # than the ones before it, in the order the other core finds them
+        self._offers: list[tuple[float, SegmentPlan]] = []
         self._searched = None  # the forecast of the last search
         if self._background is not None:
             self._background.forget()
@@ -109,8 +120,9 @@ class GlobalSearchPlanner:
             return self._background.ready()
         if not self.offers(t):
             return None
-        plan, self._offer = self._offer[1], None
-        return plan
+        ready = [offer for offer in self._offers if offer[0] <= t + SAMPLE_TOLERANCE]
+        self._offers = self._offers[len(ready):]
+        return ready[-1][1]  # the best found so far
 
     def _launch(self, problem: Segment, warm: SegmentPlan) -> None:
         """Search this re-plan's forecast unless a search runs, the obstacle no longer comes
@@ -118,7 +130,7 @@ class GlobalSearchPlanner:
         same prediction."""
         forecast = problem.forecast
         if self.mode == "one core" or forecast is None or len(forecast.times) < 2 or \
-                self._offer is not None or \
+                self._offers or \
                 (self._background is not None and self._background.busy()):
             return
         if self._searched is not None and same_prediction(self._searched, forecast):
@@ -138,14 +150,33 @@ class GlobalSearchPlanner:
         due = problem.t_begin + self.config.global_search.lag * period
         if due >= end:
             return
-        best, plans = self._search.search(*_segment(problem, warm, due), warm)
-        # the other core's work on the budgets' clock: the plan enters when it is done, if
-        # that is later (docs/realtime.md, 'Offers when the search is done')
-        samples = max(self.config.global_search.lag,
-                      math.ceil(sum(plan.clock_ms for plan in plans) / (1e3 * period) - 1e-9))
-        due = problem.t_begin + samples * period
-        if due < end:
-            self._offer = (due, best)
+        segment = _segment(problem, warm, due)
+        _, plans = self._search.search(*segment, warm)
+        self._offers = self._progress(plans, segment, problem.t_begin, period, end)
+
+    def _progress(self, plans: list[SegmentPlan], segment: tuple, t: float, period: float,
+                  end: float) -> list[tuple[float, SegmentPlan]]:
+        """The search's offers, as the other core would hand them over: each plan better
+        (objective, on the search's segment) than all before it enters when the search's
+        work up to it on the budgets' clock is done, at least `lag` samples after t
+        (docs/realtime.md, 'Offers when the search is done', 'Offers as the search goes')."""
+        offers, best, work = [], (3, math.inf), 0.0
+        _, _, t_begin, duration, _, forecast = segment
+        for plan in plans:
+            work += plan.clock_ms
+            score = objective(self.check, self.config, plan, t_begin, duration, forecast)
+            if score >= best:
+                continue
+            best = score
+            samples = max(self.config.global_search.lag,
+                          math.ceil(work / (1e3 * period) - 1e-9))
+            due = t + samples * period
+            if due >= end:
+                break
+            if offers and offers[-1][0] >= due - SAMPLE_TOLERANCE:
+                offers.pop()  # a better plan is done by the same sample
+            offers.append((due, plan))
+        return offers
 
 
 def _rest(plan: SegmentPlan, problem: Segment):
