@@ -81,6 +81,8 @@ class GlobalSearchPlanner:
 
     def _replan(self, problem: Segment, warm: SegmentPlan, offered: SegmentPlan | None
                 ) -> SegmentPlan:
+        """The re-plan: from the offered plan if it scores better than warm (the plan
+        followed) on the current forecast, else from warm (the module's docstring)."""
         ours, other = (self._score(plan, problem) for plan in (warm, offered))
         if offered is None or other >= ours:  # nothing offered, or nothing promising
             return self.inner.plan(problem, warm)
