@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 
 import numpy as np
 import pytest
@@ -151,3 +152,28 @@ def test_an_offer_enters_only_when_the_search_is_done(baseline, config, monkeypa
     executed(baseline, config, Scenario())
     assert checked and max(checked) > 0.02
     assert any(early)
+
+
+def test_the_other_process_sends_its_best_plan_as_found(baseline, config):
+    """Under CPU clocks the search runs in a forked worker and sends back each plan better
+    than those before: once it is done the plan on offer, taken once, is the one the same
+    search finds in this process."""
+    live = config.with_anytime(iteration_ms=None)
+    numbers = Planner(baseline, live)
+    case, forecast = random_crossing(numbers, seed=3)
+    segment = (case.start, case.start_velocity, 0.0, case.duration, case.goal, forecast)
+    here, _ = MultiStart(baseline, live).search(*segment)
+    worker = background.Background(baseline, live)
+    try:
+        assert worker.submit(segment, None) and not worker.submit(segment, None)
+        for _ in range(6000):
+            if not worker.busy():
+                break
+            time.sleep(0.01)
+        assert not worker.busy() and worker.done()
+        there = worker.ready()
+        assert there is not None and worker.ready() is None
+        np.testing.assert_allclose(there.trajectory.coefficients,
+                                   here.trajectory.coefficients, atol=1e-9)
+    finally:
+        worker.close()

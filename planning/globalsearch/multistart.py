@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -38,28 +39,40 @@ class MultiStart:
 
     @collection_deferred
     def search(self, q0, qd0, t_begin: float, duration: float, goal,
-               forecast: ObstacleForecast | None, warm: SegmentPlan | None = None
+               forecast: ObstacleForecast | None, warm: SegmentPlan | None = None,
+               found: Callable[[SegmentPlan, bool], None] | None = None
                ) -> tuple[SegmentPlan, list[SegmentPlan]]:
         """The best plan (objective) from the warm plan's shape (if any) and every start
-        point, its times those of the whole search, and every plan."""
+        point, its times those of the whole search, and every plan. found(plan, better), if
+        given, sees every plan as it is solved, better: whether it scores better than all
+        before it (the search's offers as it goes)."""
         clock, solver = Stopwatch(), self.solver
         self.prepare(goal)
         segment = (q0, qd0, t_begin, duration, goal, forecast)
         points = all_starts(solver, q0, qd0, duration, goal, self.config)
         if warm is not None:
             points.insert(0, shape_of(warm, t_begin, duration))
-        def score(plan):
-            return objective(self.check, self.config, plan, t_begin, duration, forecast)
+        plans, scores = [], []
+
+        def solved(plan: SegmentPlan) -> SegmentPlan:
+            score = objective(self.check, self.config, plan, t_begin, duration, forecast)
+            if found is not None:
+                found(plan, score < min(scores, default=(3, math.inf)))
+            plans.append(plan)
+            scores.append(score)
+            return plan
 
         if isinstance(solver, IpoptElastic):
-            plans = [solver.solve(*segment, x0=x0) for x0 in points]
+            for x0 in points:
+                solved(solver.solve(*segment, x0=x0))
         else:  # every start a few iterations, the best FINALISTS on to convergence
             solver.max_iterations = SCREEN_ITERATIONS
-            plans = [solver.solve(*segment, None, x0=x0, budget_ms=math.inf)[0] for x0 in points]
+            for x0 in points:
+                solved(solver.solve(*segment, None, x0=x0, budget_ms=math.inf)[0])
             solver.max_iterations = 200
-            plans += [solver.solve(*segment, plan, budget_ms=math.inf)[0]
-                      for plan in sorted(plans, key=score)[:FINALISTS]]
-        best = min(plans, key=score)
+            for i in sorted(range(len(plans)), key=scores.__getitem__)[:FINALISTS]:
+                solved(solver.solve(*segment, plans[i], budget_ms=math.inf)[0])
+        best = plans[min(range(len(plans)), key=scores.__getitem__)]
         wall, cpu = clock.read()
         return _timed(best, wall, cpu), plans
 

@@ -5,8 +5,8 @@ After a re-plan the latest forecast goes to the search (when none runs, the obst
 shapes the plan and the forecast is new), planned from the plan the arm now follows. On the
 nominal clock the search runs there and then, synchronously (the same plans on any machine),
 and every plan it finds better than those before it is offered at the re-plan where the
-search's work up to it is done, at least `lag` obstacle samples later; under CPU clocks the
-other process's best plan is offered when it is ready. A re-plan with an offer whose motion
+search's work up to it is done, at least `lag` obstacle samples later; under CPU clocks each
+better plan the other process sends back is offered as it arrives. A re-plan with an offer whose motion
 from now on scores better on the current forecast than the plan followed
 (multistart.objective: safe first, then the energy to go) goes on from it with the whole
 budget, and adopts the result (its status marked ADOPTED) if it keeps the clearance and
@@ -152,33 +152,24 @@ class GlobalSearchPlanner:
         due = problem.t_begin + self.config.global_search.lag * period
         if due >= end:
             return
-        segment = _segment(problem, warm, due)
-        _, plans = self._search.search(*segment, warm)
-        self._offers = self._progress(plans, segment, problem.t_begin, period, end)
+        # each plan better than those before enters when the search's work up to it on the
+        # budgets' clock is done, if that is later (docs/realtime.md, 'Offers when the
+        # search is done', 'Offers as the search goes')
+        offers, work = [], [0.0]
 
-    def _progress(self, plans: list[SegmentPlan], segment: tuple, t: float, period: float,
-                  end: float) -> list[tuple[float, SegmentPlan]]:
-        """The search's offers, as the other core would hand them over: each plan better
-        (objective, on the search's segment) than all before it enters when the search's
-        work up to it on the budgets' clock is done, at least `lag` samples after t
-        (docs/realtime.md, 'Offers when the search is done', 'Offers as the search goes')."""
-        offers, best, work = [], (3, math.inf), 0.0
-        _, _, t_begin, duration, _, forecast = segment
-        for plan in plans:
-            work += plan.clock_ms
-            score = objective(self.check, self.config, plan, t_begin, duration, forecast)
-            if score >= best:
-                continue
-            best = score
+        def found(plan: SegmentPlan, better: bool) -> None:
+            work[0] += plan.clock_ms
             samples = max(self.config.global_search.lag,
-                          math.ceil(work / (1e3 * period) - 1e-9))
-            due = t + samples * period
-            if due >= end:
-                break
-            if offers and offers[-1][0] >= due - SAMPLE_TOLERANCE:
+                          math.ceil(work[0] / (1e3 * period) - 1e-9))
+            enters = problem.t_begin + samples * period
+            if not better or enters >= end:
+                return
+            if offers and offers[-1][0] >= enters - SAMPLE_TOLERANCE:
                 offers.pop()  # a better plan is done by the same sample
-            offers.append((due, plan))
-        return offers
+            offers.append((enters, plan))
+
+        self._search.search(*_segment(problem, warm, due), warm, found=found)
+        self._offers = offers
 
 
 def _rest(plan: SegmentPlan, problem: Segment):
