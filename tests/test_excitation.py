@@ -104,6 +104,22 @@ def test_generate_along_the_file_matches_rnea(ur5_file, tmp_path):
                  "--out", str(out)]) == 0 and out.is_file()
 
 
+
+def test_measured_along_the_file_tracks_it(ur5_file, tmp_path):
+    """--mode measured along the file: the simulated arm follows the file's motion (within
+    its tracking error), on the file's clock, and the sensed torque is Pinocchio's RNEA at
+    the states the simulator had."""
+    traj = read_trajectory(ur5_file[0], 6)
+    data = generate("ur5", len(traj.t), 0.0, 1, "measured", excitation=traj)
+    assert np.array_equal(data.t, traj.t) and data.meta["rate"] == pytest.approx(RATE)
+    assert np.max(np.abs(data.truth["q"] - traj.q)) < 5e-3
+    tau = PinocchioModel(load_plant("ur5").pinocchio()).torque(
+        data.truth["q"], data.truth["qd"], data.truth["qdd"])
+    assert np.max(np.abs(tau - data.tau_clean)) <= 1e-6 * np.max(np.abs(data.tau_clean))
+    out = tmp_path / "m.npz"
+    assert main(["generate", "--robot", "ur5", "--excitation", str(ur5_file[0]), "--mode",
+                 "measured", "--out", str(out)]) == 0 and out.is_file()
+
 def test_default_excitation_holds_the_velocity_limits():
     plant = load_plant("ur5")
     exc, _ = default_excitation(plant, "ur5", 400, 0)
@@ -166,8 +182,11 @@ def test_generate_excitation_bad_input(capsys, tmp_path, ur5_file):
     out = tmp_path / "d.npz"
     _fails(capsys, ["generate", "--robot", "panda", "--excitation", str(ur5_file[0]), "--out",
                     str(out)], out)  # 6 joints for a 7-joint robot
-    _fails(capsys, ["generate", "--robot", "ur5", "--excitation", str(ur5_file[0]), "--mode",
-                    "measured", "--out", str(out)], out)
+    late = tmp_path / "late.csv"
+    traj = read_trajectory(ur5_file[0], 6)
+    write_trajectory(late, type(traj)(traj.t + 1.0, traj.q, traj.qd, traj.qdd))
+    _fails(capsys, ["generate", "--robot", "ur5", "--excitation", str(late), "--mode",
+                    "measured", "--out", str(out)], out)  # measured mode starts at t = 0
     bad = tmp_path / "bad.csv"
     bad.write_text("time,a,b\n0,1,2\n")
     _fails(capsys, ["generate", "--robot", "ur5", "--excitation", str(bad), "--out", str(out)], out)
