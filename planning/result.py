@@ -88,7 +88,7 @@ def evaluate(execution: Execution, scenario: Scenario, model: TorqueModel,
     if limit > LIMIT_TOLERANCE:
         problems.append(f"joint limits exceeded by {limit:.2e} rad")
     peak_torque = np.abs(model.torque(q, qd, qdd)).max(axis=0)
-    problems += _torque_problems(peak_torque, config.torque_limit)
+    problems += torque_problems(peak_torque, config.torque_limit)
     peak_velocity = np.abs(qd).max(axis=0)
     problems += _rate_problems(peak_velocity, config.velocity_limit, "velocity", "rad/s")
     problems += _rate_problems(np.abs(qdd).max(axis=0), config.acceleration_limit,
@@ -101,7 +101,7 @@ def evaluate(execution: Execution, scenario: Scenario, model: TorqueModel,
                       execution, not problems, tuple(problems), peak_velocity)
 
 
-def _torque_problems(peak: np.ndarray, limit) -> list[str]:
+def torque_problems(peak: np.ndarray, limit) -> list[str]:
     """One line per joint whose peak torque (N m) exceeds its limit beyond the tolerance."""
     if limit is None:
         return []

@@ -8,6 +8,7 @@ import contextlib
 import io
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from harness.cli import main
@@ -16,6 +17,7 @@ from harness.data.excite import capsule_clearance, design_for
 from harness.data.generate import default_excitation, generate
 from harness.robots.baseline import PinocchioModel
 from harness.robots.plant import load_plant
+from harness.robots.registry import erd_robots_dir, load_pinocchio
 from harness.robots.torque_models import robot_library
 from identification.excitation.criteria import log_information
 from identification.excitation.fourier import design_excitation
@@ -102,6 +104,22 @@ def test_generate_along_the_file_matches_rnea(ur5_file, tmp_path):
                  "--out", str(out)]) == 0 and out.is_file()
 
 
+
+def test_measured_along_the_file_tracks_it(ur5_file, tmp_path):
+    """--mode measured along the file: the simulated arm follows the file's motion (within
+    its tracking error), on the file's clock, and the sensed torque is Pinocchio's RNEA at
+    the states the simulator had."""
+    traj = read_trajectory(ur5_file[0], 6)
+    data = generate("ur5", len(traj.t), 0.0, 1, "measured", excitation=traj)
+    assert np.array_equal(data.t, traj.t) and data.meta["rate"] == pytest.approx(RATE)
+    assert np.max(np.abs(data.truth["q"] - traj.q)) < 5e-3
+    tau = PinocchioModel(load_plant("ur5").pinocchio()).torque(
+        data.truth["q"], data.truth["qd"], data.truth["qdd"])
+    assert np.max(np.abs(tau - data.tau_clean)) <= 1e-6 * np.max(np.abs(data.tau_clean))
+    out = tmp_path / "m.npz"
+    assert main(["generate", "--robot", "ur5", "--excitation", str(ur5_file[0]), "--mode",
+                 "measured", "--out", str(out)]) == 0 and out.is_file()
+
 def test_default_excitation_holds_the_velocity_limits():
     plant = load_plant("ur5")
     exc, _ = default_excitation(plant, "ur5", 400, 0)
@@ -122,9 +140,30 @@ def _fails(capsys, args, out) -> None:
     assert not out.exists()
 
 
+def test_a_hanging_arm_is_told_of_the_floor_and_swings_below_it_without(capsys, tmp_path):
+    """A humanoid's arm (its base the shoulder, hanging at q = 0): the default floor z = 0
+    cuts its home pose, which excite says in one note; its joint origins (Pinocchio's
+    kinematics) stay above that floor, and with --floor none the excitation swings below."""
+    robot = str(erd_robots_dir() / "talos_data/robots/talos_left_arm.urdf")
+    model = load_pinocchio(robot)
+    data = model.createData()
+    lowest, notes = {}, {}
+    for floor in ("0", "none"):
+        out = tmp_path / f"{floor}.csv"
+        assert main(["excite", "--robot", robot, "--duration", str(DURATION), "--rate", str(RATE),
+                     "--iterations", "3", "--floor", floor, "--out", str(out)]) == 0
+        notes[floor] = [x for x in capsys.readouterr().err.splitlines() if x.startswith("note:")]
+        heights = []
+        for q in read_trajectory(out, model.nq).q:
+            pin.forwardKinematics(model, data, q)
+            heights += [data.oMi[j].translation[2] for j in range(2, model.njoints)]
+        lowest[floor] = min(heights)
+    assert len(notes["0"]) == 1 and "--floor none" in notes["0"][0] and not notes["none"]
+    assert lowest["0"] > 0 > lowest["none"], lowest
+
 @pytest.mark.parametrize("change", [
     {"--robot": "nosuchrobot"}, {"--duration": "0"}, {"--rate": "-1"}, {"--accel-limit": "0"},
-    {"--duration": "nan"}])
+    {"--duration": "nan"}, {"--floor": "nan"}])
 def test_excite_bad_input(capsys, tmp_path, change):
     out = tmp_path / "x.csv"
     options = {"--robot": "ur5", "--duration": "4", "--rate": "50", "--accel-limit": "10", **change}
@@ -143,8 +182,11 @@ def test_generate_excitation_bad_input(capsys, tmp_path, ur5_file):
     out = tmp_path / "d.npz"
     _fails(capsys, ["generate", "--robot", "panda", "--excitation", str(ur5_file[0]), "--out",
                     str(out)], out)  # 6 joints for a 7-joint robot
-    _fails(capsys, ["generate", "--robot", "ur5", "--excitation", str(ur5_file[0]), "--mode",
-                    "measured", "--out", str(out)], out)
+    late = tmp_path / "late.csv"
+    traj = read_trajectory(ur5_file[0], 6)
+    write_trajectory(late, type(traj)(traj.t + 1.0, traj.q, traj.qd, traj.qdd))
+    _fails(capsys, ["generate", "--robot", "ur5", "--excitation", str(late), "--mode",
+                    "measured", "--out", str(out)], out)  # measured mode starts at t = 0
     bad = tmp_path / "bad.csv"
     bad.write_text("time,a,b\n0,1,2\n")
     _fails(capsys, ["generate", "--robot", "ur5", "--excitation", str(bad), "--out", str(out)], out)

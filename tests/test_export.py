@@ -147,6 +147,37 @@ def test_replay_simulates_the_consistent_fits_bodies(fitted):
     assert np.array_equal(again.body_inertia, plant.body_inertia)
 
 
+
+def test_replay_simulates_an_exported_mjcf_named_mjcf(fitted):
+    """`replay --plant FILE.mjcf` on the export: the scene built around it has the bodies
+    MuJoCo's own loader reads from the file (MjSpec.from_file knew no `.mjcf` decoder)."""
+    from harness.replay.plants import replay_plant
+
+    code, _ = _export(fitted, "mjcf")
+    out = fitted / "exported.mjcf"
+    out.write_text((fitted / "m.mjcf").read_text())
+    plant = replay_plant(str(out), "ur5").model
+    own = mujoco.MjModel.from_xml_path(str(out))
+    names = [own.body(b).name for b in range(1, own.nbody)]
+    assert code == 0 and names
+    assert np.allclose([plant.body(n).mass[0] for n in names], own.body_mass[1:], rtol=1e-12)
+    assert np.allclose([plant.body(n).inertia for n in names], own.body_inertia[1:], rtol=1e-12)
+
+
+def test_an_mjcf_of_any_suffix_keeps_its_includes(tmp_path, monkeypatch):
+    """The Lynxmotion's scene (it includes its arm's file) read as `.mjcf` from another folder
+    compiles to what MuJoCo's loader makes of it."""
+    from harness.robots.scene import mjcf_spec
+    from models import MODELS
+
+    for name, target in (("lynxmotion.xml", "lynxmotion.xml"), ("scene.xml", "scene.mjcf")):
+        (tmp_path / target).write_text((MODELS / "lynxmotion" / name).read_text())
+    monkeypatch.chdir(tmp_path.parent)
+    spec = mjcf_spec(tmp_path / "scene.mjcf").compile()
+    own = mujoco.MjModel.from_xml_path(str(tmp_path / "scene.mjcf"))
+    assert (spec.nbody, spec.ngeom, spec.nu) == (own.nbody, own.ngeom, own.nu) and own.nu
+    assert np.allclose(spec.body_mass, own.body_mass, rtol=1e-12)
+
 def test_a_model_of_other_kinematics_is_refused(fitted, capsys):
     out = fitted / "other.csv"
     assert main(["export", "--model", str(fitted / "m.json"), "--robot", "lynxmotion",

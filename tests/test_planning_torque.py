@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from harness.cli import main
+from harness.commands.plan_messages import torque_diagnosis
 from harness.replay.checks import checks
 from harness.replay.reference import plan_reference
 from harness.replay.simulate import replay
@@ -59,6 +60,23 @@ def test_overdriving_plan_is_refused_without_file(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert "not reachable in 0.08 s within the torque limits" in err and len(err.splitlines()) == 1
 
+
+
+@pytest.mark.parametrize(("over", "blamed"), [(0.5 * TORQUE_TOLERANCE, False),
+                                              (5 * TORQUE_TOLERANCE, True)])
+def test_torque_diagnosis_counts_the_limits_as_a_plan_does(baseline, monkeypatch, over, blamed):
+    """The torque limits are blamed for an unreachable goal only when the torque-limited
+    motion passes them beyond the tolerance a plan's result allows (planning.result); a
+    motion within it reaches the goal, and the failure lies elsewhere (the clearance)."""
+    scenario = dataclasses.replace(Scenario(), duration=0.12, obstacle=None)
+    args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
+    motion = Planner(baseline, PlannerConfig(torque_limit=None)).solve(*args)
+    t = np.linspace(0.0, scenario.duration, 4001)
+    peak = np.abs(baseline.torque(*motion.trajectory.state(t))).max(axis=0)
+    planner = Planner(baseline, PlannerConfig(torque_limit=tuple(peak / (1 + over))))
+    monkeypatch.setattr(planner, "solve", lambda *a, **k: motion)  # the limited problem's
+    message = torque_diagnosis(planner, scenario)
+    assert motion.success and (message is not None) == blamed, message
 
 def test_default_plan_torque_within_limits(baseline):
     result = _plan(baseline, Scenario())

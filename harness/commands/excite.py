@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import argparse
 import os
+import sys
 from pathlib import Path
 
 from harness.data.excitation_file import write_trajectory
-from harness.data.excite import DEFAULT_ACCELERATION, ITERATIONS, design_for
+from harness.data.excite import DEFAULT_ACCELERATION, ITERATIONS, design_for, floor_below_home
 from harness.errors import UserError
 from identification.excitation.criteria import CRITERIA
 
@@ -32,6 +34,10 @@ def register(sub) -> None:
                    "column-normalized regressor (blind to scale: its designs move little and "
                    "generalize 1.2-6x worse; docs/identification.md, "
                    "'identification.excitation.criteria')")
+    p.add_argument("--floor", type=_height, default=0.0,
+                   help="height (m, in the robot's base frame) of the floor every moving link "
+                   "stays above, or 'none' for an arm not standing on one (a humanoid's; "
+                   "default 0: the base's plane)")
     p.add_argument("--out", required=True, help="output TRAJ.csv: t,q1..qn,qd1..qdn,qdd1..qddn")
     p.set_defaults(func=run)
 
@@ -40,8 +46,13 @@ def run(args) -> int:
     _check_writable(Path(args.out))
     if args.iterations < 0:
         raise UserError(f"--iterations must be >= 0, got {args.iterations}")
+    lowest = floor_below_home(args.robot, args.floor)
+    if lowest is not None:
+        print(f"note: at q = 0 the arm reaches z = {lowest:.3g} m, below the floor at "
+              f"{args.floor:g} m that the excitation will keep every moving link above: give "
+              "--floor HEIGHT (or --floor none) if the robot does not stand on it", file=sys.stderr)
     designed = design_for(args.robot, args.duration, args.rate, args.accel_limit, args.seed,
-                          args.iterations, args.harmonics, args.criterion)
+                          args.iterations, args.harmonics, args.criterion, args.floor)
     write_trajectory(args.out, designed.trajectory)
     n = len(designed.trajectory.t)
     print(f"wrote {args.out}: {n} samples at {args.rate:g} Hz over {args.duration:g} s, at rest at "
@@ -49,6 +60,16 @@ def run(args) -> int:
           f"{designed.default_condition:.3g}; the identification's atoms and offsets, columns "
           "normalized)")
     return 0
+
+
+def _height(text: str) -> float | None:
+    """--floor's value: a height (m) or None for 'none'."""
+    if text.strip().lower() == "none":
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a height (m) or 'none', got {text!r}") from None
 
 
 def _check_writable(out: Path) -> None:

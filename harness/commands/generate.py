@@ -23,7 +23,8 @@ def register(sub) -> None:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--mode", choices=["inverse", "measured"], default="inverse")
     p.add_argument("--excitation", default=None, metavar="TRAJ.csv",
-                   help="generate along this excitation (from `torquebench excite`; inverse mode)")
+                   help="generate along this excitation (from `torquebench excite`; measured mode "
+                   "tracks it from t = 0, as a robot would record it)")
     p.add_argument("--out", required=True, help="output .npz")
     p.set_defaults(func=run)
 

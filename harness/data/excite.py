@@ -6,8 +6,8 @@ base atoms with armature, viscous and Coulomb atoms, plus an offset per joint) a
 collision check. Collisions are checked on capsules along the planner's links (joint origin
 to joint origin; the registry's robots lose their meshes when loaded): radius
 CAPSULE_FRACTION of the arm's reach (at least the Lynxmotion's LINK_RADIUS), between links
-that share no joint and do not touch at q = 0, and against the floor z = 0 for every link
-end a joint moves.
+that share no joint and do not touch at q = 0, and against the floor (z = 0 unless given; none
+for an arm not standing on one, a humanoid's) for every link end a joint moves.
 """
 
 from __future__ import annotations
@@ -49,12 +49,18 @@ class DesignedExcitation:
     limits: ExcitationLimits
 
 
-def capsule_clearance(robot: str):
+def capsule_radius(robot: str) -> float:
+    """The radius (m) of the capsules the design keeps apart (see the module docstring)."""
+    return max(LINK_RADIUS, CAPSULE_FRACTION * float(sum(arm_geometry(robot).link_lengths)))
+
+
+def capsule_clearance(robot: str, floor: float | None = 0.0):
     """clearance(q (n, dof)) -> (n,): the smallest distance (m) between the robot's capsules
-    and between them and the floor (see the module docstring); <= 0: touching."""
+    and between them and the floor at height floor (m; None: no floor; see the module
+    docstring); <= 0: touching."""
     geometry = arm_geometry(robot)
     links = np.array(geometry.links)
-    radius = max(LINK_RADIUS, CAPSULE_FRACTION * float(sum(geometry.link_lengths)))
+    radius = capsule_radius(robot)
     home = geometry.points(np.zeros(geometry.dof))
     pairs = [(a, b) for a in range(len(links)) for b in range(a + 1, len(links))
              if not set(links[a]) & set(links[b])
@@ -63,7 +69,8 @@ def capsule_clearance(robot: str):
 
     def clearance(q: np.ndarray) -> np.ndarray:
         points = geometry.points(q)
-        gap = np.min(points[:, moving, 2], axis=1) - radius
+        gap = np.full(len(points), np.inf) if floor is None else \
+            np.min(points[:, moving, 2], axis=1) - floor - radius
         for a, b in pairs:
             gap = np.minimum(gap, _segment_distance(points, links[a], links[b]) - 2 * radius)
         return gap
@@ -97,14 +104,18 @@ def excitation_limits(plant: Plant, acceleration: float) -> ExcitationLimits:
 
 def design_for(robot: str, duration: float, rate: float, acceleration: float = DEFAULT_ACCELERATION,
                seed: int = 0, iterations: int = ITERATIONS,
-               harmonics: int | None = None, criterion: str = "information") -> DesignedExcitation:
+               harmonics: int | None = None, criterion: str = "information",
+               floor: float | None = 0.0) -> DesignedExcitation:
     """The robot's designed excitation sampled at rate (Hz) over [0, duration] s, ends
     included (both at rest), with `harmonics` (default default_harmonics(duration)), optimal
-    for `criterion` (identification.excitation.criteria.CRITERIA); UserError on bad input or if
-    it cannot be made collision-free."""
+    for `criterion` (identification.excitation.criteria.CRITERIA), every moving link above
+    the floor at height floor (m; None: no floor); UserError on bad input or if it cannot be
+    made collision-free."""
     for name, value in (("--duration", duration), ("--rate", rate), ("--accel-limit", acceleration)):
         if not np.isfinite(value) or value <= 0:
             raise UserError(f"{name} must be a finite number > 0, got {value:g}")
+    if floor is not None and not np.isfinite(floor):
+        raise UserError(f"--floor must be a finite height (m) or 'none', got {floor:g}")
     if duration * rate < 2:
         raise UserError(f"--duration x --rate must give at least 2 samples, got {duration * rate:g}")
     harmonics = default_harmonics(duration) if harmonics is None else harmonics
@@ -113,7 +124,7 @@ def design_for(robot: str, duration: float, rate: float, acceleration: float = D
     plant = load_plant(robot)
     limits = excitation_limits(plant, acceleration)
     regressor = AtomRegressor(robot_library(robot))
-    clearance = capsule_clearance(robot)
+    clearance = capsule_clearance(robot, floor)
     try:
         design = optimize_excitation(limits, duration, regressor, clearance, seed,
                                      harmonics=harmonics, iterations=iterations,
@@ -134,3 +145,15 @@ def design_for(robot: str, duration: float, rate: float, acceleration: float = D
     return DesignedExcitation(design, trajectory,
                               float(np.exp(log_condition(regressor, *design.excitation.evaluate(grid)))),
                               float(np.exp(log_condition(regressor, *default.evaluate(grid)))), limits)
+
+
+def floor_below_home(robot: str, floor: float | None) -> float | None:
+    """The height (m) of the lowest moving link end at q = 0 when it lies below the floor by
+    more than the capsule radius (the arm at home is not standing on that floor: a humanoid's
+    arm, one hung from a ceiling), else None."""
+    if floor is None:
+        return None
+    geometry = arm_geometry(robot)
+    moving = sorted(set(np.array(geometry.links).ravel()) - set(geometry.fixed_points))
+    lowest = float(np.min(geometry.points(np.zeros((1, geometry.dof)))[0, moving, 2]))
+    return lowest if lowest < floor - capsule_radius(robot) else None

@@ -62,10 +62,8 @@ def default_excitation(p: Plant, robot: str, samples: int, seed: int
 
 def _along(excitation: Trajectory, dof: int, samples: int, mode: str) -> tuple[np.ndarray, float]:
     """The times of a given excitation's first `samples` states and its rate (Hz); UserError
-    unless it fits the plant and inverse mode (measured mode tracks generate's own)."""
-    if mode != "inverse":
-        raise UserError("--excitation needs --mode inverse: measured mode tracks generate's own "
-                        "excitation")
+    unless it fits the plant, is evenly sampled and, tracked in measured mode (whose
+    simulation starts at rest at t = 0), starts at t = 0."""
     if excitation.q.shape[1] != dof:
         raise UserError(f"the excitation has {excitation.q.shape[1]} joints, the robot {dof}")
     if samples > len(excitation.t):
@@ -74,6 +72,8 @@ def _along(excitation: Trajectory, dof: int, samples: int, mode: str) -> tuple[n
     step = np.diff(t)
     if np.ptp(step) > 1e-6 * np.mean(step):
         raise UserError("the excitation's samples must be evenly spaced in t")
+    if mode == "measured" and abs(t[0]) > 1e-6 * np.mean(step):
+        raise UserError(f"--mode measured tracks an excitation from t = 0, got {t[0]:g} s")
     return t, float(1.0 / np.mean(step))
 
 
@@ -109,7 +109,8 @@ def generate(
     robot: str | None = None,
 ) -> Dataset:
     """One dataset of `samples` points at SAMPLE_RATE Hz; noise is a fraction of torque std.
-    With an excitation (inverse mode only): along its first `samples` states, at its rate.
+    With an excitation: along its first `samples` states, at its rate (measured: tracked from
+    its state at t = 0, its samples linearly interpolated between).
     robot: the registered robot plant is a variant of, whose entry's declared library the
     excitation and the report use (default: plant's own entry)."""
     _validate(samples, noise, bias)
@@ -130,7 +131,7 @@ def generate(
         tau_clean = inverse_torques(p.model, q, qd, qdd)
         truth: dict = {}
     elif mode == "measured":
-        q, qd, qdd, tau_clean, truth, stats = simulate_measured(p, exc, t, SAMPLE_RATE,
+        q, qd, qdd, tau_clean, truth, stats = simulate_measured(p, exc, t, rate,
                                                                 sensors or SensorConfig(), rng)
         meta.update(stats)
     else:

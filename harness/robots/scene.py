@@ -14,6 +14,7 @@ tracked at the same rate.
 from __future__ import annotations
 
 import dataclasses
+import re
 from functools import cache
 from pathlib import Path
 
@@ -22,7 +23,7 @@ import numpy as np
 
 from harness.errors import UserError
 from harness.robots.arm import arm_geometry, torque_limit
-from harness.robots.registry import ROBOTS, get_robot, load_mujoco
+from harness.robots.registry import ROBOTS, get_robot, load_mujoco, read_text
 from harness.robots.urdf import arm_urdf, strip_geometry
 from planning.formulation.kinematics import ArmGeometry
 
@@ -43,7 +44,25 @@ def robot_spec(robot: str) -> mujoco.MjSpec:
     path = Path(robot)
     if path.suffix.lower() == ".urdf":
         return mujoco.MjSpec.from_string(strip_geometry(arm_urdf(path.read_text(), robot)))
-    return mujoco.MjSpec.from_file(str(path))
+    return mjcf_spec(path)
+
+
+def mjcf_spec(path: Path) -> mujoco.MjSpec:
+    """The spec of the MJCF at path whatever its suffix, its includes and assets found beside
+    it, as MjModel.from_xml_path reads it (MjSpec.from_file picks a decoder by the suffix:
+    an exported `.mjcf` had none)."""
+    if path.suffix.lower() == ".xml":
+        return mujoco.MjSpec.from_file(str(path))
+    includes: dict[str, bytes] = {}
+    pending = [read_text(path)]
+    while pending:
+        for name in re.findall(r'<include\b[^>]*\bfile="([^"]+)"', pending.pop()):
+            if name not in includes:
+                includes[name] = (path.parent / name).read_bytes()
+                pending.append(includes[name].decode(errors="replace"))
+    spec = mujoco.MjSpec.from_string(read_text(path), include=includes)
+    spec.modelfiledir = str(path.parent.resolve()) + "/"
+    return spec
 
 
 @cache
