@@ -161,6 +161,10 @@ class PlannerConfig:
     # a re-plan still unfinished after this much CPU time of the planning thread (ms) is
     # abandoned and the arm keeps its last plan (Algorithm 2); None: no deadline
     replan_deadline_ms: float | None = None
+    # s before the end within which an unconverged plan (ITERATE) is followed as it is, not
+    # gone on from: a re-plan that short can only reshape the stop, into a violent one
+    # (docs/realtime.md, 'The last re-plans'); re-plans a dip below the threshold needs still run
+    settle_horizon: float = 0.2
     # how Algorithm 2 plans and re-plans (planning.planners.segment_planner)
     replanner: str = "penalty"
     penalty: PenaltyOptions = field(default_factory=PenaltyOptions)

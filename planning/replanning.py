@@ -85,7 +85,9 @@ def execute(planner: SegmentPlanner, scenario: Scenario, replan: bool = True,
     # or a real-time iterate, planning.penalty.realtime_iteration.ITERATE), the next re-plan's warm start
     for t in obstacle.sample_times[:-1]:
         forecast = forecast_at(obstacle, t)
-        iterating = plan.status.startswith(ITERATE)  # it stopped short: go on from it
+        # it stopped short: go on from it, unless too near the end to gain but a harder stop
+        iterating = plan.status.startswith(ITERATE) and \
+            T - t > planner.config.settle_horizon + 1e-12
         if not iterating and not planner.offers(t) and (not _stale(planner, plan, forecast)
                               or same_prediction(planned_with, forecast)):
             continue  # safe, or nothing new to plan with: the last plan already saw this

@@ -153,6 +153,7 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
         "replan_budget_ms": config.anytime.replan_budget_ms,
         "cold_budget_ms": config.anytime.cold_budget_ms,
         "warm_radius": config.anytime.warm_radius,
+        "settle_horizon": config.settle_horizon,
         "iteration_ms": config.anytime.iteration_ms,
         # the budgets' clock: "nominal" (iteration_ms per SQP iteration: the same plan on any
         # machine and load) or "cpu" (plan --realtime)

@@ -133,6 +133,11 @@ def test_plan_command_bad_input_exits_2_without_file(tmp_path, capsys):
     assert not out.exists()
     err = capsys.readouterr().err
     assert "--warm-radius must be" in err and len(err.strip().splitlines()) == 1
+    assert main(["plan", "--no-compile", "--model", "pinocchio", "--settle-horizon", "-0.1",
+                 "--out", str(out)]) == 2
+    assert not out.exists()
+    err = capsys.readouterr().err
+    assert "--settle-horizon must be" in err and len(err.strip().splitlines()) == 1
 
 
 def test_plan_command_with_the_anytime_sqp(tmp_path):

@@ -15,7 +15,7 @@ import re
 import sys
 from pathlib import Path
 
-from harness.commands.plan_anytime import add_anytime_options, anytime_options
+from harness.commands.plan_anytime import add_anytime_options, anytime_options, settle_horizon
 from harness.commands.plan_limits import link_geometry, rate_limits, torque_limit, vector
 from harness.commands.plan_messages import (
     BuildNotice,
@@ -241,6 +241,7 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  # -O0 first where no CPU time decides the plan
                                  quick_build=not (args.realtime or args.deadline_ms),
                                  replan_deadline_ms=args.deadline_ms or None,
+                                 settle_horizon=settle_horizon(args),
                                  replanner=args.replanner or ("penalty" if args.free_end
                                                               else PLANNER.replanner))
     path = (vector(args.obstacle_from, "obstacle-from"),

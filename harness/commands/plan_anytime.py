@@ -19,6 +19,12 @@ def add_anytime_options(p, default: PlannerConfig) -> None:
                         "trajectory's polynomial coefficients, rad); smaller keeps a re-plan "
                         "nearer the plan it starts from (docs/realtime.md, 'Warm radius'; "
                         f"default {default.anytime.warm_radius:g})")
+    p.add_argument("--settle-horizon", type=float, default=default.settle_horizon,
+                   help="s before the end within which an unconverged re-plan is followed as "
+                        "it is instead of gone on from at every sample (re-plans for a dip "
+                        "below the threshold still run): a re-plan that short can only make "
+                        "the stop harder (docs/realtime.md, 'The last re-plans'; default "
+                        f"{default.settle_horizon:g})")
 
 
 def anytime_options(args) -> dict:
@@ -28,3 +34,11 @@ def anytime_options(args) -> dict:
         if not (math.isfinite(value) and value > 0):
             raise UserError(f"{name} must be a finite number > 0, got {value}")
     return {"replan_budget_ms": args.replan_budget_ms, "warm_radius": args.warm_radius}
+
+
+def settle_horizon(args) -> float:
+    """--settle-horizon (s), checked."""
+    if not (math.isfinite(args.settle_horizon) and args.settle_horizon >= 0):
+        raise UserError(f"--settle-horizon must be a finite number >= 0, got "
+                        f"{args.settle_horizon}")
+    return args.settle_horizon
