@@ -162,8 +162,9 @@ class PlannerConfig:
     # abandoned and the arm keeps its last plan (Algorithm 2); None: no deadline
     replan_deadline_ms: float | None = None
     # s before the end within which an unconverged plan (ITERATE) is followed as it is, not
-    # gone on from: a re-plan that short can only reshape the stop, into a violent one
-    # (docs/realtime.md, 'The last re-plans'); re-plans a dip below the threshold needs still run
+    # gone on from, nor re-planned for a global search's offer: a re-plan that short can only
+    # reshape the stop, into a violent one (docs/realtime.md, 'The last re-plans'); a stale
+    # plan (a dip below the threshold, a detour left) is still re-planned
     settle_horizon: float = 0.2
     # how Algorithm 2 plans and re-plans (planning.planners.segment_planner)
     replanner: str = "penalty"

@@ -13,7 +13,8 @@ With real-time iterations (PenaltyOptions.replan_iterations) a re-plan is a capp
 feasible-SQP step from the last plan; while the plan followed is such an unconverged
 iterate, the arm re-plans at every sample, going on from it until it converges. So it is
 with the anytime SQP (PlannerConfig.replanner "anytime", planning.anytime): a re-plan that
-reached its CPU budget unconverged is followed and gone on from at the next sample.
+reached its CPU budget unconverged is followed and gone on from at the next sample, except
+in the last PlannerConfig.settle_horizon seconds, where only a stale plan is re-planned.
 Each segment is planned by a SegmentPlanner (planning.planners.segment_planner), whichever
 it is.
 """

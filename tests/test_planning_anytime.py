@@ -24,7 +24,7 @@ from planning.formulation.nlp import PlanningNLP
 from planning.formulation.obstacle import LinearObstacle
 from planning.formulation.trajectory import PolynomialTrajectory
 from planning.penalty.solver import Planner
-from planning.replanning import execute, forecast_at
+from planning.replanning import TRIGGER_TOLERANCE, execute, forecast_at
 from planning.result import TORQUE_TOLERANCE, evaluate
 from planning.starts import start_points
 from planning.types import ITERATE, ObstacleForecast, Segment
@@ -542,10 +542,11 @@ def test_a_quick_build_makes_the_torque_limited_nlp_when_a_plan_first_needs_it(b
 def test_no_unconverged_replan_is_gone_on_from_in_the_settle_horizon(baseline):
     """The paper's scenario with a 1 ms budget: every re-plan stops short (ITERATE) and,
     without a settle horizon, the arm re-plans at every sample to the last one. With one of
-    0.2 s a re-plan starts in the last 0.2 s only where the plan followed dips below the
-    threshold on that sample's forecast (recomputed here), and the execution is otherwise the
-    same: the same energy to 0.1 % and the same problems (at this budget the plans dip below
-    the threshold earlier, at 1.18 s, with or without the horizon)."""
+    0.2 s no re-plan starts in the last 0.2 s (the plan followed keeps the threshold of every
+    forecast there: Algorithm 2's own trigger, a dip, would still re-plan; recomputed here),
+    and the execution is otherwise the same: the same energy to 0.1 % and the same problems
+    (at this budget the plans dip below the threshold earlier, at 1.18 s, with or without
+    the horizon)."""
     case = Scenario()
     base = true_energy_config(compile_code=False, torque_limit=None).with_anytime(
         iteration_ms=0.5, replan_budget_ms=1.0).with_global_search(enabled=False)
@@ -556,13 +557,15 @@ def test_no_unconverged_replan_is_gone_on_from_in_the_settle_horizon(baseline):
         runs[horizon] = evaluate(execute(segments(planner), case), case, baseline, config)
     late = {h: [t for t in run.execution.replan_times if case.duration - t <= 0.2 + 1e-12]
             for h, run in runs.items()}
-    assert late[0.0] and all(s.status.startswith(ITERATE) for s in runs[0.0].execution.segments[1:])
+    assert len(late[0.0]) >= 15
+    assert all(s.status.startswith(ITERATE) for s in runs[0.0].execution.segments[1:])
+    assert late[0.2] == []
     settled = runs[0.2].execution
-    for t in late[0.2]:  # each a re-plan for a dip
-        k = settled.replan_times.index(t)
-        followed = settled.segments[k - 1].trajectory
-        forecast = forecast_at(case.obstacle, t)
-        assert predicted_clearance(base.geometry, followed, forecast) < base.threshold
-    assert len(late[0.2]) < len(late[0.0])
+    followed = settled.segments[-1].trajectory
+    for t in case.obstacle.sample_times:
+        if 1e-12 < case.duration - t <= 0.2 + 1e-12:
+            forecast = forecast_at(case.obstacle, t)
+            assert predicted_clearance(base.geometry, followed, forecast) >= \
+                base.threshold - TRIGGER_TOLERANCE
     assert runs[0.2].problems == runs[0.0].problems
     assert runs[0.2].energy == pytest.approx(runs[0.0].energy, rel=1e-3)

@@ -21,8 +21,8 @@ def add_anytime_options(p, default: PlannerConfig) -> None:
                         f"default {default.anytime.warm_radius:g})")
     p.add_argument("--settle-horizon", type=float, default=default.settle_horizon,
                    help="s before the end within which an unconverged re-plan is followed as "
-                        "it is instead of gone on from at every sample (re-plans for a dip "
-                        "below the threshold still run): a re-plan that short can only make "
+                        "it is instead of gone on from at every sample (a plan that dips below "
+                        "the threshold is still re-planned): a re-plan that short can only make "
                         "the stop harder (docs/realtime.md, 'The last re-plans'; default "
                         f"{default.settle_horizon:g})")
 

@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import queue
 from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 
 from planning.config import PlannerConfig
 from planning.globalsearch.multistart import MultiStart
@@ -27,23 +29,35 @@ def cores() -> int:
 
 class Background:
     """A one-worker pool running planning.globalsearch.multistart.MultiStart.search, its
-    better plans sent back on a queue as they are found."""
+    better plans sent back on a queue as they are found. A search that raised, or a worker
+    that died, is counted in `failures` and the loop goes on without it."""
 
     def __init__(self, model, config: PlannerConfig):
         context = multiprocessing.get_context("fork")
-        self._found = context.SimpleQueue()
+        # a Queue, not a SimpleQueue: its puts never block the worker on a full pipe
+        self._found = context.Queue()
         self._pool = ProcessPoolExecutor(1, context, _start, (model, config, self._found))
         self._future: Future | None = None
+        self._future_number = 0  # the number the running search was submitted with
         self._number = 0  # of the current search: plans of an older one are dropped
         self._latest: SegmentPlan | None = None  # the best found so far, not taken yet
+        self.received = 0  # plans of the current search received
+        self.failures = 0  # searches that raised, or a worker that died
+        self._broken = False
 
     def submit(self, segment: tuple, warm: SegmentPlan | None) -> bool:
-        """Start a search unless one is running; whether it started."""
-        if self.busy():
+        """Start a search unless one is running or a plan is still on offer; whether it
+        started."""
+        if self._broken or self.busy() or self.done():
             return False
-        self._drain()  # the last search's best, sent before it ended, stays on offer
         self._number += 1
-        self._future = self._pool.submit(_search, self._number, segment, warm)
+        self._future_number, self.received = self._number, 0
+        try:
+            self._future = self._pool.submit(_search, self._number, segment, warm)
+        except BrokenProcessPool:
+            self._broken, self._future = True, None
+            self.failures += 1
+            return False
         return True
 
     def ready(self) -> SegmentPlan | None:
@@ -58,31 +72,54 @@ class Background:
         return self._latest is not None
 
     def busy(self) -> bool:
-        return self._future is not None and not self._future.done()
+        """Whether a search runs, or its plans are still on their way (a put reaches the
+        pipe after the search has returned)."""
+        future = self._future
+        if future is None or not future.done():
+            return future is not None
+        if future.exception() is not None:  # counted once
+            self.failures += 1
+            self._broken = isinstance(future.exception(), BrokenProcessPool)
+        elif self._future_number == self._number:
+            self._drain()
+            if self.received < future.result():
+                return True
+        self._future = None
+        return False
 
     def forget(self) -> None:
         """Drop the running search's plans (a new motion begins)."""
         self._number += 1
-        self._future, self._latest = None, None
+        self._latest = None
 
     def close(self) -> None:
         self._pool.shutdown(wait=False, cancel_futures=True)
 
     def _drain(self) -> None:
-        while not self._found.empty():
-            number, plan = self._found.get()
+        while True:
+            try:
+                number, plan = self._found.get_nowait()
+            except queue.Empty:
+                return
             if number == self._number:
                 self._latest = plan
+                self.received += 1
 
 
 def _start(model, config: PlannerConfig, found) -> None:
     global _SEARCH, _FOUND
     _SEARCH, _FOUND = MultiStart(model, config), found
+    found.cancel_join_thread()  # the worker exits whatever the planning process left unread
 
 
-def _search(number: int, segment: tuple, warm: SegmentPlan | None) -> None:
+def _search(number: int, segment: tuple, warm: SegmentPlan | None) -> int:
+    """The search; how many plans it sent."""
+    sent = [0]
+
     def found(plan: SegmentPlan, better: bool) -> None:
         if better:
             _FOUND.put((number, plan))
+            sent[0] += 1
 
     _SEARCH.search(*segment, warm, found=found)
+    return sent[0]

@@ -44,8 +44,8 @@ class MultiStart:
                ) -> tuple[SegmentPlan, list[SegmentPlan]]:
         """The best plan (objective) from the warm plan's shape (if any) and every start
         point, its times those of the whole search, and every plan. found(plan, better), if
-        given, sees every plan as it is solved, better: whether it scores better than all
-        before it (the search's offers as it goes)."""
+        given, sees every plan as it is solved, better: whether it is usable and scores better
+        than all before it (the search's offers as it goes)."""
         clock, solver = Stopwatch(), self.solver
         self.prepare(goal)
         segment = (q0, qd0, t_begin, duration, goal, forecast)
@@ -53,11 +53,13 @@ class MultiStart:
         if warm is not None:
             points.insert(0, shape_of(warm, t_begin, duration))
         plans, scores = [], []
+        offered = [(2, math.inf)]  # an unusable plan (objective's 2) is never offered
 
         def solved(plan: SegmentPlan) -> SegmentPlan:
             score = objective(self.check, self.config, plan, t_begin, duration, forecast)
             if found is not None:
-                found(plan, score < min(scores, default=(3, math.inf)))
+                found(plan, score < offered[0])
+            offered[0] = min(offered[0], score)
             plans.append(plan)
             scores.append(score)
             return plan

@@ -58,7 +58,10 @@ class GlobalSearchPlanner:
             self._search.prepare(goal)
 
     def offers(self, t: float) -> bool:
-        """Whether a search's plan is offered at sample time t (Algorithm 2 re-plans)."""
+        """Whether a search's plan is offered at sample time t (Algorithm 2 re-plans); none
+        is within the settle horizon (PlannerConfig.settle_horizon) of the motion's end."""
+        if t > self._settle - SAMPLE_TOLERANCE:  # no re-plan for an offer there
+            return False
         if self._background is not None:
             return self._background.done()
         return bool(self._offers) and t >= self._offers[0][0] - SAMPLE_TOLERANCE
@@ -72,11 +75,12 @@ class GlobalSearchPlanner:
         if warm is None:
             self._forget()
             return self.inner.plan(problem)
+        self._settle = problem.t_begin + problem.duration - self.config.settle_horizon
         offered = self._offered(problem.t_begin)
         result = self._replan(problem, warm, offered)
-        # searched from the plan the arm follows now (the one it will be on when the offer
-        # enters)
-        self._launch(problem, result if result.success else warm)
+        # searched from the plan the arm will be on when the offer enters: the re-plan's if
+        # it succeeded, else the one it started from; the search starts once it is done
+        self._launch(problem, result if result.success else warm, result.clock_ms)
         return result
 
     def _replan(self, problem: Segment, warm: SegmentPlan, offered: SegmentPlan | None
@@ -113,6 +117,7 @@ class GlobalSearchPlanner:
         # than the ones before it, in the order the other core finds them
         self._offers: list[tuple[float, SegmentPlan]] = []
         self._searched = None  # the forecast of the last search
+        self._settle = math.inf  # offers enter before this time (the motion's settle horizon)
         if self._background is not None:
             self._background.forget()
 
@@ -126,14 +131,15 @@ class GlobalSearchPlanner:
         self._offers = self._offers[len(ready):]
         return ready[-1][1]  # the best found so far
 
-    def _launch(self, problem: Segment, warm: SegmentPlan) -> None:
+    def _launch(self, problem: Segment, warm: SegmentPlan, after_ms: float = 0.0) -> None:
         """Search this re-plan's forecast unless a search runs, the obstacle no longer comes
         near the plan followed (within NEAR above the threshold) or the last search saw the
-        same prediction."""
+        same prediction. after_ms: the re-plan's work on the budgets' clock, which the search
+        waits for."""
         forecast = problem.forecast
         if self.mode == "one core" or forecast is None or len(forecast.times) < 2 or \
-                self._offers or \
-                (self._background is not None and self._background.busy()):
+                self._offers or (self._background is not None and (
+                    self._background.busy() or self._background.done())):
             return
         if self._searched is not None and same_prediction(self._searched, forecast):
             return
@@ -143,19 +149,20 @@ class GlobalSearchPlanner:
         self._searched = forecast
         self.searches += 1
         if self._background is not None:
-            self._background.submit(_segment(problem, warm, problem.t_begin), warm)
+            if not self._background.submit(_segment(problem, warm, problem.t_begin), warm):
+                self.searches -= 1  # the worker failed: the loop goes on alone
             return
         # planned from where the plan followed will be `lag` samples on: the plan re-solved
         # then starts near its own start
         period = float(forecast.times[1] - forecast.times[0])
-        end = problem.t_begin + problem.duration - period
+        end = min(problem.t_begin + problem.duration - period, self._settle)
         due = problem.t_begin + self.config.global_search.lag * period
         if due >= end:
             return
         # each plan better than those before enters when the search's work up to it on the
         # budgets' clock is done, if that is later (docs/realtime.md, 'Offers when the
         # search is done', 'Offers as the search goes')
-        offers, work = [], [0.0]
+        offers, work = [], [after_ms]
 
         def found(plan: SegmentPlan, better: bool) -> None:
             work[0] += plan.clock_ms
@@ -192,10 +199,11 @@ def report(config: PlannerConfig, segments) -> dict | None:
     if not options.enabled or config.replanner != "anytime":
         return None
     if config.anytime.iteration_ms is not None or not options.background:
-        mode = (f"nominal: each search on a re-plan's forecast, offered when its work on the "
-                f"budgets' clock is done, at least {options.lag} obstacle samples later")
+        mode = (f"nominal: each search on a re-plan's forecast, each better plan offered when "
+                f"the search's work up to it on the budgets' clock is done, at least "
+                f"{options.lag} obstacle samples later")
     elif cores() > 1:
-        mode = "another process, adopted when ready"
+        mode = "another process, each better plan adopted when it arrives"
     else:
         mode = "one core: the real-time loop ran alone, no global search"
     return {"mode": mode, "adoptions": sum(s.status.endswith(ADOPTED) for s in segments),
