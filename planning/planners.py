@@ -66,14 +66,15 @@ def offline_planner(model: TorqueModel, config: PlannerConfig | None = None,
 
 
 def executed(model: TorqueModel, config: PlannerConfig, scenario: Scenario,
-             solver: Planner | None = None, replan: bool = True, realtime: bool = False
-             ) -> tuple[PlannerConfig, PlanResult]:
+             solver: Planner | None = None, replan: bool = True, realtime: bool = False,
+             either: bool = False) -> tuple[PlannerConfig, PlanResult]:
     """Algorithm 2 on the scenario, checked (planning.result.evaluate), and the configuration
     that planned it. Unless realtime the first plan is offline (offline_planner), and a plan
     followed throughout (replan False) that is not feasible is planned by the other method
     too and kept if that one is: found wherever either method finds one (its forecast at
-    t = 0, the obstacle standing still, can hide what the motion meets). The budgets count
-    CPU if realtime, else SQP iterations of the arm's nominal cost (nominal_iteration_ms)."""
+    t = 0, the obstacle standing still, can hide what the motion meets); so is an execution
+    with re-plans if `either` (the method not asked for by name). The budgets count CPU if
+    realtime, else SQP iterations of the arm's nominal cost (nominal_iteration_ms)."""
     config = config.with_anytime(iteration_ms=None if realtime else
                                  nominal_iteration_ms(config.geometry.dof))
     solver = Planner(model, config) if solver is None else solver
@@ -81,8 +82,8 @@ def executed(model: TorqueModel, config: PlannerConfig, scenario: Scenario,
     result = evaluate(execute(make(model, config, solver), scenario, replan=replan), scenario,
                       model, config)
     other = other_method(config)
-    if result.feasible or replan or realtime or other is None:
+    if result.feasible or (replan and not either) or realtime or other is None:
         return config, result
-    fallback = evaluate(execute(offline_planner(model, other, solver), scenario, replan=False),
+    fallback = evaluate(execute(offline_planner(model, other, solver), scenario, replan=replan),
                         scenario, model, other)
     return (other, fallback) if fallback.feasible else (config, result)

@@ -21,6 +21,7 @@ from harness.commands.plan_messages import (
     BuildNotice,
     default_obstacle_diagnosis,
     default_obstacle_notice,
+    fallback_note,
     infeasible,
     torque_diagnosis,
     velocity_diagnosis,
@@ -279,8 +280,9 @@ def _run(args, notice: BuildNotice) -> int:
     if unreachable:
         raise PlanningError(unreachable)
     config, result = executed(model, config, scenario, planner, replan=not args.no_replan,
-                              realtime=args.realtime)
+                              realtime=args.realtime, either=args.replanner is None)
     notice.finish()
+    fallback_note(planner.config.replanner, config.replanner, args.no_replan)
     if not result.feasible:  # the torque limits' diagnosis builds IPOPT's NLP: only now
         raise PlanningError(torque_diagnosis(planner, scenario)
                             or infeasible(result.problems, config, scenario))

@@ -13,7 +13,7 @@ import numpy as np
 from scipy.optimize import linprog
 
 from harness.robots.registry import DEFAULT_ROBOT
-from planning.config import PlannerConfig, Scenario
+from planning.config import JSON_NAMES, PlannerConfig, Scenario
 from planning.formulation.clearance import link_clearances
 from planning.formulation.limits import LIMIT_TOLERANCE
 from planning.penalty.solver import Planner
@@ -202,3 +202,13 @@ class BuildNotice(logging.Handler):
     def _head(self) -> str:
         joints = "" if self.joints is None else f" ({self.joints} joints)"
         return f"torquebench: compiling the planner for {self.robot}{joints}"
+
+
+def fallback_note(asked: str, used: str, followed: bool) -> None:
+    """One note on stderr when the execution with re-plans is the other re-planner's
+    (planning.planners.executed, either): the one asked for did not keep the threshold."""
+    if used != asked and not followed:
+        print(f"note: the {JSON_NAMES[asked]} re-planner's execution did not keep the "
+              f"threshold; this plan is the {JSON_NAMES[used]} re-planner's (its re-plans "
+              f"are not bounded in time; --replanner {JSON_NAMES[asked]} to get the error)",
+              file=sys.stderr)
