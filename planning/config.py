@@ -77,9 +77,9 @@ class GlobalSearchOptions:
     On the nominal clock (AnytimeOptions.iteration_ms) a search runs on the forecast of the
     re-plan at obstacle sample k, and each plan it finds better than those before is offered
     at sample k + lag, or later when the search's iterations up to it on that clock take
-    longer (the same plan on any machine); under CPU clocks
-    (plan --realtime) it runs in another process and is adopted when ready (with one core
-    the real-time loop runs alone)."""
+    longer (the same plan on any machine); under CPU clocks (plan --realtime) it runs in
+    another process, which sends each better plan back as it finds it (with one core the
+    real-time loop runs alone)."""
 
     enabled: bool = False
     # obstacle samples between a search's forecast and its offer at the least (the search

@@ -65,7 +65,7 @@ def capsule_clearance(robot: str, floor: float | None = 0.0):
     pairs = [(a, b) for a in range(len(links)) for b in range(a + 1, len(links))
              if not set(links[a]) & set(links[b])
              and _segment_distance(home, links[a], links[b])[0] > 2 * radius]
-    moving = sorted(set(links.ravel()) - set(geometry.fixed_points))
+    moving = _moving(geometry)
 
     def clearance(q: np.ndarray) -> np.ndarray:
         points = geometry.points(q)
@@ -154,6 +154,10 @@ def floor_below_home(robot: str, floor: float | None) -> float | None:
     if floor is None:
         return None
     geometry = arm_geometry(robot)
-    moving = sorted(set(np.array(geometry.links).ravel()) - set(geometry.fixed_points))
-    lowest = float(np.min(geometry.points(np.zeros((1, geometry.dof)))[0, moving, 2]))
+    lowest = float(np.min(geometry.points(np.zeros((1, geometry.dof)))[0, _moving(geometry), 2]))
     return lowest if lowest < floor - capsule_radius(robot) else None
+
+
+def _moving(geometry) -> list[int]:
+    """The link end points a joint moves (those the floor must stay below)."""
+    return sorted(set(np.array(geometry.links).ravel()) - set(geometry.fixed_points))
