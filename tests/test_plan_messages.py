@@ -112,3 +112,15 @@ def test_an_execution_the_anytime_sqp_cannot_keep_is_the_penalty_loops(tmp_path,
     assert not asked.exists()
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "no feasible plan: clearance" in err
+
+
+def test_a_failure_both_re_planners_had_does_not_suggest_the_other():
+    """When plain `plan` has run the penalty loop's execution after the anytime SQP's
+    (planning.planners.executed, either) and both missed, the error line says so instead of
+    suggesting --replanner fatrop; with the re-planner named it still suggests it."""
+    config = dataclasses.replace(PlannerConfig(), replanner="anytime")
+    problems = ("clearance 0.0730 m < threshold 0.08 m - 0.002 m",)
+    both, named = infeasible(problems, config, both=True), infeasible(problems, config)
+    assert "did not keep the threshold either" in both and "may find one;" in both
+    assert "or --replanner fatrop may find one" in named and "either" not in named
+    assert both.count("\n") == named.count("\n") == 0

@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 
 from harness.commands.plan_anytime import add_anytime_options, anytime_options, settle_horizon
-from harness.commands.plan_limits import link_geometry, rate_limits, torque_limit, vector
+from harness.commands.plan_limits import link_geometry, rate_limits, torque_limit, vector, vector_text
 from harness.commands.plan_messages import (
     BuildNotice,
     default_obstacle_diagnosis,
@@ -48,10 +48,6 @@ PLANNER = true_energy_config()
 SAMPLES = {"paper": 10, "gauss": PLANNER.energy_samples, "simpson": 21}  # split: 3 per interval
 
 
-def _csv(values) -> str:
-    return ",".join(repr(float(v)) for v in values)
-
-
 def register(sub) -> None:
     p = sub.add_parser("plan", help="energy-optimal trajectory avoiding a moving obstacle")
     p.add_argument("--model", required=True, help="MODEL.json or 'pinocchio'")
@@ -60,14 +56,14 @@ def register(sub) -> None:
                         "and its pinocchio baseline")
     p.add_argument("--start", default=None,
                    help="start angles, one per joint (rad); default: the robot's registered "
-                        "motion (on the Lynxmotion the paper's, " + _csv(DEFAULT.start) + ")")
+                        "motion (on the Lynxmotion the paper's, " + vector_text(DEFAULT.start) + ")")
     p.add_argument("--goal", default=None,
                    help="goal angles, one per joint (rad); default: the robot's registered "
-                        "motion (on the Lynxmotion the paper's, " + _csv(DEFAULT.goal) + ")")
+                        "motion (on the Lynxmotion the paper's, " + vector_text(DEFAULT.goal) + ")")
     p.add_argument("--duration", type=float, default=DEFAULT.duration, help="motion time (s)")
-    p.add_argument("--obstacle-from", default=_csv(DEFAULT.obstacle.start),
+    p.add_argument("--obstacle-from", default=vector_text(DEFAULT.obstacle.start),
                    help="obstacle centre at t = 0 (m)")
-    p.add_argument("--obstacle-to", default=_csv(DEFAULT.obstacle.end),
+    p.add_argument("--obstacle-to", default=vector_text(DEFAULT.obstacle.end),
                    help="obstacle centre at t = duration (m)")
     p.add_argument("--samples", type=int, default=DEFAULT.obstacle.samples,
                    help="obstacle samples K over the motion")
@@ -279,13 +275,14 @@ def _run(args, notice: BuildNotice) -> int:
                    or velocity_diagnosis(config, scenario))  # that must fail
     if unreachable:
         raise PlanningError(unreachable)
+    either = not args.realtime and (args.replanner is None or args.no_replan)  # both methods
     config, result = executed(model, config, scenario, planner, replan=not args.no_replan,
-                              realtime=args.realtime, either=args.replanner is None)
+                              realtime=args.realtime, either=either)
     notice.finish()
     fallback_note(planner.config.replanner, config.replanner, args.no_replan)
     if not result.feasible:  # the torque limits' diagnosis builds IPOPT's NLP: only now
         raise PlanningError(torque_diagnosis(planner, scenario)
-                            or infeasible(result.problems, config, scenario))
+                            or infeasible(result.problems, config, scenario, either))
     write_json(args.out, to_json(result, scenario, config, args.model))
     if args.trajectory:
         write_trajectory(args.trajectory, control_trajectory(

@@ -20,6 +20,11 @@ def vector(text: str, name: str, length: int = 3) -> tuple[float, ...]:
     return values
 
 
+def vector_text(values) -> str:
+    """The comma-separated text `vector` reads back."""
+    return ",".join(repr(float(v)) for v in values)
+
+
 def torque_limit(args, dof: int) -> tuple[float, ...] | None:
     """--torque-limit (N m), else the robot's."""
     if args.torque_limit is None:

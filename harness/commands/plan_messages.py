@@ -120,19 +120,24 @@ def default_obstacle_diagnosis(config: PlannerConfig, scenario: Scenario, robot:
             f"< {config.threshold:g} m): give --obstacle-from and --obstacle-to for this robot")
 
 
-def infeasible(problems, config: PlannerConfig, scenario: Scenario | None = None) -> str:
+def infeasible(problems, config: PlannerConfig, scenario: Scenario | None = None,
+               both: bool = False) -> str:
     """The error line of an execution that is not feasible; when velocities exceed their
     limits it suggests a longer duration (given the scenario); with the anytime SQP it says
     what its re-plans had: their quality is what that CPU buys on this machine
-    (docs/realtime.md, 'harness.commands.plan')."""
+    (docs/realtime.md, 'harness.commands.plan'), and whether the penalty loop was tried too
+    (both: planning.planners.executed's either)."""
     message = "no feasible plan: " + "; ".join(problems)
     if (scenario is not None and config.velocity_limit is not None
             and any(" velocity " in p for p in problems)):
         message += f" (the velocity limits: {_longer_duration(config, scenario)})"
     elif uses_anytime(config):
         clock = "CPU" if config.anytime.iteration_ms is None else "nominal time"
+        hint = ("a larger --replan-budget-ms may find one; the penalty loop's execution "
+                "(--replanner fatrop) did not keep the threshold either" if both else
+                "a larger --replan-budget-ms or --replanner fatrop may find one")
         message += (f" (the anytime SQP re-planned within {config.anytime.replan_budget_ms:g} ms of "
-                    f"{clock}: a larger --replan-budget-ms or --replanner fatrop may find one)")
+                    f"{clock}: {hint})")
     return message
 
 
