@@ -21,7 +21,7 @@ from harness.replay.clearance import ClearanceProbe
 from harness.robots.arm import arm_geometry, collision_capsules, joint_limits
 from harness.robots.capsules import fit_capsule, link_capsules
 from harness.robots.collision import robot_body_points
-from harness.robots.registry import load_pinocchio
+from harness.robots.registry import erd_robots_dir, load_pinocchio
 from harness.robots.scene import OBSTACLE_RADIUS, build_scene
 from planning.formulation.clearance import (
     link_clearances,
@@ -32,6 +32,7 @@ from planning.result import capsules
 
 RNG = np.random.default_rng(43)
 MESHED = ("ur5", "panda")
+UR3 = str(erd_robots_dir() / "ur_description" / "urdf" / "ur3_robot.urdf")
 
 
 def _link_points(robot: str) -> list[np.ndarray | None]:
@@ -80,10 +81,12 @@ def test_fit_is_exact_on_a_sampled_capsule():
     assert np.linalg.norm(capsule.b - capsule.a) == pytest.approx(0.2, abs=1e-3)
 
 
-@pytest.mark.parametrize("robot", MESHED)
+@pytest.mark.parametrize("robot", MESHED + (UR3,))
 def test_planner_distance_is_mujoco_geom_distance(robot):
     """The CasADi clearance row of every link, minus the obstacle sphere's radius, is
-    mj_geomDistance between the scene's capsule and the sphere; the replay's probe agrees."""
+    mj_geomDistance between the scene's capsule and the sphere; the replay's probe agrees.
+    The UR3 (example-robot-data) has links of zero length on its wrist: spheres in the scene
+    (MuJoCo refuses a capsule between coincident points; replay raised a traceback)."""
     geometry = collision_capsules(robot)
     model = build_scene(robot, geometry=geometry).compile()
     data = mujoco.MjData(model)

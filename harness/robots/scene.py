@@ -30,6 +30,7 @@ from planning.formulation.kinematics import ArmGeometry
 TIMESTEP = 0.0005  # s
 OBSTACLE_RADIUS = 0.02  # m, drawn only: clearance is measured to the centre
 LINK_RADIUS = 0.012  # m, the Lynxmotion's link capsules; drawn where the planner's links are lines
+ZERO_LENGTH = 1e-6  # m: a link axis shorter than this is drawn as a sphere
 FLANGE_SITE = "end_effector"
 
 
@@ -146,10 +147,14 @@ def _add_links(spec: mujoco.MjSpec, hinges, geometry: ArmGeometry) -> None:
         name = f"link{i + 1}"
         if name in geoms:
             continue
+        # a link of zero length (two joint origins at one point, as on the UR3's wrist) is
+        # the capsule's limit, a sphere: MuJoCo refuses a capsule between coincident points
+        shape = dict(type=mujoco.mjtGeom.mjGEOM_SPHERE, pos=a) if \
+            np.linalg.norm(np.subtract(b, a)) < ZERO_LENGTH else \
+            dict(type=mujoco.mjtGeom.mjGEOM_CAPSULE, fromto=np.concatenate([a, b]))
         spec.body(model.body(body).name).add_geom(
-            name=name, type=mujoco.mjtGeom.mjGEOM_CAPSULE, fromto=np.concatenate([a, b]),
-            size=[radius or LINK_RADIUS, 0, 0], contype=0, conaffinity=0, mass=0,
-            rgba=[0.8, 0.3, 0.2, 0.6])
+            name=name, **shape, size=[radius or LINK_RADIUS, 0, 0], contype=0, conaffinity=0,
+            mass=0, rgba=[0.8, 0.3, 0.2, 0.6])
 
 
 def _add_surroundings(spec: mujoco.MjSpec, geometry: ArmGeometry) -> None:
