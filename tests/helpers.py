@@ -3,8 +3,8 @@
 import numpy as np
 import pinocchio as pin
 
+from harness.robots.arm import Arm
 from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
 from identification.signals import multisine
 from identification.torque_model import Motion
 
@@ -25,7 +25,7 @@ def perturbed_model(seed: int = 0, spread: float = 0.05, shift: float = 0.005) -
     `shift` m, its rotational inertia scaled per principal axis (a common scale of every
     inertia would scale the torque, and the optimal plan would be the same plan)."""
     rng = np.random.default_rng(seed)
-    model = load_pinocchio("lynxmotion")
+    model = Arm.of("lynxmotion").pinocchio.copy()  # the Arm's model is shared: change a copy
     for j in range(1, model.njoints):
         inertia = model.inertias[j]
         axes = np.diag(1 + rng.uniform(-spread, spread, 3))

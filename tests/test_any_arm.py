@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.robots.torque_models import load_torque_model, robot_library
+from harness.robots.arm import Arm
+from harness.robots.torque_models import load_torque_model
 
 
 @pytest.fixture(scope="module", params=["ur5", "panda"])
@@ -30,7 +31,7 @@ def test_noise_free_data_are_identified_exactly(noise_free):
     payload = json.loads(model.read_text())
     assert payload["library"] == "kinematic" and payload["robot"]["name"] == robot
     assert max(payload["metrics"]["heldout_rel_rmse"]) <= 1e-6
-    assert payload["atoms"] == robot_library(robot).names
+    assert payload["atoms"] == Arm.of(robot).library.names
     for joint in payload["joints"]:  # the contract: terms and coefficients per joint
         assert len(joint["terms"]) == len(joint["coefficients"]) > 0
 
@@ -42,7 +43,7 @@ def test_predict_equals_the_clean_torque_and_the_symbolic_form(noise_free, tmp_p
     arrays = np.load(data)
     tau = np.load(out)["tau"]
     assert np.linalg.norm(tau - arrays["tau_clean"]) <= 1e-6 * np.linalg.norm(arrays["tau_clean"])
-    m = load_torque_model(str(model))
+    m = load_torque_model(str(model), Arm.of(robot))
     q, qd, qdd = (ca.SX.sym(s, m.dof) for s in ("q", "qd", "qdd"))
     f = ca.Function("f", [q, qd, qdd], [m.symbolic_torque(q, qd, qdd)])
     for k in (0, 500, 1100):
@@ -60,10 +61,19 @@ def test_a_model_of_another_robot_is_one_line_and_no_file(noise_free, tmp_path, 
     assert len(err) == 1 and f"identified for robot '{robot}'" in err[0] and not out.exists()
 
 
-def test_data_of_another_dof_are_one_line(noise_free, tmp_path, capsys):
-    _, data, _ = noise_free
+def test_data_of_another_robot_or_dof_are_one_line(noise_free, tmp_path, capsys):
+    """Data recording their robot name it; data recording none, their joint count."""
+    robot, data, _ = noise_free
     out = tmp_path / "MODEL.json"
     assert main(["identify", "--data", str(data), "--robot", "double_pendulum",
+                 "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"records robot '{robot}'" in err[0] and not out.exists()
+    assert "'double_pendulum'" in err[0]
+    anonymous = tmp_path / "anonymous.npz"
+    with np.load(data) as d:
+        np.savez(anonymous, **{k: d[k] for k in ("q", "qd", "qdd", "tau")})
+    assert main(["identify", "--data", str(anonymous), "--robot", "double_pendulum",
                  "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "robot double_pendulum has 2" in err[0] and not out.exists()
@@ -74,11 +84,10 @@ def test_identification_section_scores_the_generated_library_against_the_oracle(
     """The bench's identification section on the UR5 (quick: 2 draws): noise-free data
     identified exactly, and per draw the generated library's error against the oracle's on
     both judge motions, the summary computed from those numbers."""
-    from harness.robots.registry import get_robot
     from harness.sections import identification as section
     from harness.sections.base import Context
 
-    out = section.run(Context(get_robot("ur5"), tmp_path, quick=True))
+    out = section.run(Context(Arm.of("ur5"), tmp_path, quick=True))
     r = out.results
     assert all(c.passed for c in out.checks) and max(r["noise_free_heldout"]) <= 1e-6
     draws = r["draws"]["0.05"]
@@ -101,11 +110,10 @@ def test_closing_the_loop_on_the_ur5_names_every_effect_within_10_percent(tmp_pa
     Pinocchio model lacks: each is named on its joint with its coefficient within 10 %, nothing
     else is named, and no joint is worse after; the control plant names nothing; a tendon
     spring (outside the dictionary) is said unexplained."""
-    from harness.robots.registry import get_robot
     from harness.sections import closeloop as section
     from harness.sections.base import Context
 
-    result = section.run(Context(get_robot("ur5"), tmp_path))
+    result = section.run(Context(Arm.of("ur5"), tmp_path))
     out = {"results": result.results}
     assert all(c.passed for c in result.checks)
     assert [t.met for t in result.targets] == [True, True, True]
@@ -133,7 +141,7 @@ def test_plant_of_another_arm_is_one_line(tmp_path, capsys):
     from harness.closeloop.arm_plants import write_arm_variant
     from harness.closeloop.plants import Variant
 
-    plant = write_arm_variant("ur5", Variant(name="control"), tmp_path)
+    plant = write_arm_variant(Arm.of("ur5"), Variant(name="control"), tmp_path)
     out = tmp_path / "cl"
     assert main(["closeloop", "--plant", str(plant), "--robot", "panda", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
@@ -147,10 +155,10 @@ def test_a_plant_written_without_effects_carries_none(tmp_path, robot):
     from harness.closeloop.arm_plants import write_arm_variant
     from harness.closeloop.plants import Variant, true_effects
     from harness.closeloop.run import effects_reference
-    from harness.robots.plant import load_plant
 
-    plant = load_plant(write_arm_variant(robot, Variant(name="control"), tmp_path))
-    assert true_effects(plant.model, effects_reference(robot)) == ((), False)
-    loaded = load_plant(write_arm_variant(robot, Variant(payload=0.5, name="p"), tmp_path))
-    (payload,), _ = true_effects(loaded.model, effects_reference(robot))
+    arm = Arm.of(robot)
+    plant = Arm.of(write_arm_variant(arm, Variant(name="control"), tmp_path))
+    assert true_effects(plant.mujoco, effects_reference(arm)) == ((), False)
+    loaded = Arm.of(write_arm_variant(arm, Variant(payload=0.5, name="p"), tmp_path))
+    (payload,), _ = true_effects(loaded.mujoco, effects_reference(arm))
     assert payload.effect == "payload" and payload.coefficient == pytest.approx(0.5, abs=1e-12)

@@ -10,8 +10,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from harness.robots.arm import arm_geometry, joint_limits, torque_limit
-from harness.robots.registry import flange_frame, load_pinocchio
+from harness.robots.arm import Arm
+from harness.robots.registry import flange_frame
 from harness.robots.scene import replay_scene
 from planning.formulation.clearance import link_clearances, symbolic_link_clearances
 from planning.formulation.kinematics import paper_arm
@@ -22,7 +22,7 @@ ARMS = ("lynxmotion", "ur5", "panda")
 
 
 def _random_q(robot: str, n: int) -> np.ndarray:
-    lower, upper = joint_limits(robot)
+    lower, upper = Arm.of(robot).joint_limits
     return RNG.uniform(np.maximum(lower, -np.pi), np.minimum(upper, np.pi), (n, len(lower)))
 
 
@@ -52,15 +52,15 @@ def test_paper_arm_is_eqs_9_10_numeric_and_symbolic():
 
 def test_lynxmotion_model_chain_is_the_paper_arm():
     q = _random_q("lynxmotion", 20)
-    np.testing.assert_allclose(arm_geometry("lynxmotion").points(q), paper_arm().points(q),
+    np.testing.assert_allclose(Arm.of("lynxmotion").geometry.points(q), paper_arm().points(q),
                                atol=1e-15)
 
 
 @pytest.mark.parametrize("robot", ARMS)
 def test_points_are_pinocchio_joint_and_flange_frames(robot):
-    model = load_pinocchio(robot)
+    model = Arm.of(robot).pinocchio
     data = model.createData()
-    geometry = arm_geometry(robot)
+    geometry = Arm.of(robot).geometry
     flange = model.getFrameId(flange_frame(model), pin.FrameType.BODY)
     for q in _random_q(robot, 10):
         pin.forwardKinematics(model, data, q)
@@ -73,7 +73,7 @@ def test_points_are_pinocchio_joint_and_flange_frames(robot):
 @pytest.mark.parametrize("robot", ARMS)
 def test_points_are_mujoco_anchors_sites_and_capsules(robot):
     """The replay scene's joint anchors, flange site and link capsules sit on the chain."""
-    model, geometry = replay_scene(robot), arm_geometry(robot)
+    model, geometry = replay_scene(Arm.of(robot)), Arm.of(robot).geometry
     data = mujoco.MjData(model)
     for q in _random_q(robot, 10):
         data.qpos[:] = q
@@ -93,7 +93,7 @@ def test_points_are_mujoco_anchors_sites_and_capsules(robot):
 def test_links_are_the_segments_that_move(robot):
     """Every segment between consecutive points is a link unless it is a point or stays put
     (checked on random motions, independently of the axis test the chain uses)."""
-    geometry = arm_geometry(robot)
+    geometry = Arm.of(robot).geometry
     points = geometry.points(_random_q(robot, 30))
     for i in range(geometry.dof):
         length = np.linalg.norm(points[0, i + 1] - points[0, i])
@@ -105,7 +105,7 @@ def test_links_are_the_segments_that_move(robot):
 def test_fixed_points_are_the_link_ends_no_motion_moves(robot):
     """fixed_points (the axis test) are exactly the link ends that stay put on random
     motions."""
-    geometry = arm_geometry(robot)
+    geometry = Arm.of(robot).geometry
     points = geometry.points(_random_q(robot, 30))
     ends = sorted({i for link in geometry.links for i in link})
     still = tuple(i for i in ends if np.ptp(points[:, i], axis=0).max() < 1e-9)
@@ -114,7 +114,7 @@ def test_fixed_points_are_the_link_ends_no_motion_moves(robot):
 
 @pytest.mark.parametrize("robot", ("ur5", "panda"))
 def test_symbolic_points_derivatives_match_finite_differences(robot):
-    geometry = arm_geometry(robot)
+    geometry = Arm.of(robot).geometry
     x = ca.SX.sym("q", geometry.dof)
     points = ca.vertcat(*geometry.symbolic_points(x))
     jacobian = ca.Function("J", [x], [ca.jacobian(points, x)])
@@ -124,7 +124,7 @@ def test_symbolic_points_derivatives_match_finite_differences(robot):
 
 
 def test_symbolic_clearances_equal_numeric_on_ur5():
-    geometry = arm_geometry("ur5")
+    geometry = Arm.of("ur5").geometry
     x, centre = ca.SX.sym("q", 6), ca.SX.sym("c", 3)
     f = ca.Function("d", [x, centre], [ca.vertcat(*symbolic_link_clearances(geometry, x,
                                                                             centre))])
@@ -135,9 +135,9 @@ def test_symbolic_clearances_equal_numeric_on_ur5():
 
 
 def test_limits_come_from_the_models():
-    assert torque_limit("ur5") == (150.0, 150.0, 150.0, 28.0, 28.0, 28.0)  # URDF effort
-    assert torque_limit("lynxmotion") == (10.0, 10.0, 10.0)  # MJCF motors' ctrlrange
-    lower, upper = joint_limits("panda")
+    assert Arm.of("ur5").torque_limit == (150.0, 150.0, 150.0, 28.0, 28.0, 28.0)  # URDF effort
+    assert Arm.of("lynxmotion").torque_limit == (10.0, 10.0, 10.0)  # MJCF motors' ctrlrange
+    lower, upper = Arm.of("panda").joint_limits
     np.testing.assert_allclose(upper[3], -0.0698)
-    scene = replay_scene("panda")
-    np.testing.assert_allclose(scene.actuator_ctrlrange[:, 1], torque_limit("panda"))
+    scene = replay_scene(Arm.of("panda"))
+    np.testing.assert_allclose(scene.actuator_ctrlrange[:, 1], Arm.of("panda").torque_limit)

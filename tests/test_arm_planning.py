@@ -12,9 +12,8 @@ import pinocchio as pin
 import pytest
 
 from harness.cli import main
-from harness.robots.arm import bench_motion, collision_capsules, planner_config
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import get_robot, load_pinocchio
+from harness.plan.arm_config import bench_motion, planner_config
+from harness.robots.arm import Arm
 from harness.sections import replay
 from harness.sections.base import Context, SectionResult
 from planning.formulation.clearance import link_clearances
@@ -24,6 +23,7 @@ from planning.scenarios import crossing_scenario
 from tests.helpers import segments
 
 ROBOT = "ur5"
+ARM = Arm.of(ROBOT)
 
 
 def _csv(values) -> str:
@@ -33,9 +33,9 @@ def _csv(values) -> str:
 @pytest.fixture(scope="module")
 def crossing():
     """The bench's UR5 motion and an obstacle through the middle of its forearm at t = 1 s."""
-    base, link = bench_motion(ROBOT)
-    config = planner_config(ROBOT)
-    free = execute(segments(Planner(PinocchioModel(load_pinocchio(ROBOT)), config)), base, avoid=False)
+    base, link = bench_motion(ARM)
+    config = planner_config(ARM)
+    free = execute(segments(Planner(ARM.nominal, config)), base, avoid=False)
     return crossing_scenario(free.segments[0].trajectory, config.geometry, base=base, link=link)
 
 
@@ -58,7 +58,7 @@ def test_ur5_plan_avoids_with_every_link_and_replays_as_planned(tmp_path, crossi
     assert plan["end_error"] <= 1e-6
     # every link's capsule (plan's default: fitted to the meshes), recomputed here on the
     # plan's own samples
-    geometry = collision_capsules(ROBOT)
+    geometry = ARM.capsules()
     clearance = link_clearances(geometry, q, np.asarray(plan["obstacle"]))
     assert clearance.shape[1] == 6
     assert clearance.min() >= plan["threshold"] - 2e-3
@@ -70,7 +70,7 @@ def test_ur5_plan_avoids_with_every_link_and_replays_as_planned(tmp_path, crossi
     assert abs(replayed["energy"] / plan["energy"] - 1) <= 0.02
     assert replayed["min_clearance"] >= plan["threshold"] - 5e-3
     # the bench's replay section on the same plan: its checks, per-link figure
-    ctx = Context(get_robot(ROBOT), tmp_path, quick=True, video=False,
+    ctx = Context(ARM, tmp_path, quick=True, video=False,
                   earlier={"planning": SectionResult("", outputs={"plans": {"ur5_pinocchio": plan}})})
     section = replay.run(ctx)
     assert section.checks and all(c.passed for c in section.checks)
@@ -88,13 +88,13 @@ def test_ur5_plan_ends_at_rest_and_spends_what_it_descends(tmp_path):
     spends at least |V(T) - V(0) + dissipated| (the kinetic energy is zero at both ends);
     with --free-end (the paper's formulation, solved by its penalty loop) it may arrive
     moving."""
-    base, _ = bench_motion(ROBOT)
+    base, _ = bench_motion(ARM)
     args = ["plan", "--robot", ROBOT, "--model", "pinocchio", "--start", _csv(base.start),
             "--goal", _csv(base.goal), "--obstacle-from", "5,5,5", "--obstacle-to", "5,5,6"]
     rest, free = tmp_path / "rest.json", tmp_path / "free.json"
     assert main([*args, "--out", str(rest)]) == 0
     assert main([*args, "--free-end", "--out", str(free)]) == 0
-    model = load_pinocchio(ROBOT)
+    model = ARM.pinocchio
     for path in (rest, free):
         plan = json.loads(path.read_text())
         t, qd = np.asarray(plan["t"]), np.asarray(plan["qd"])
@@ -112,7 +112,7 @@ def test_ur5_plan_ends_at_rest_and_spends_what_it_descends(tmp_path):
 
 def _bad_inputs(scenario):
     start = np.asarray(scenario.start)
-    points = planner_config(ROBOT).geometry.points(start)[0]
+    points = planner_config(ARM).geometry.points(start)[0]
     elbow = _csv(points[2])  # an obstacle on the elbow joint at t = 0
     return {
         "start outside limits": (dict(start=_csv(start + [0, 0, 3.0, 0, 0, 0])),

@@ -24,7 +24,7 @@ import pytest
 
 from harness.cli import main
 from harness.commands.bench import Progress, run_one
-from harness.robots.registry import get_robot
+from harness.robots.arm import Arm
 from harness.sections import SECTIONS
 from harness.sections.base import Context, SectionResult
 from tests.result_files import incomplete_files, interrupt
@@ -104,7 +104,7 @@ def test_a_missed_target_does_not_change_the_exit_status(tmp_path, monkeypatch):
 
 def test_a_section_that_raises_is_recorded_as_failed(tmp_path, capsys):
     """The real replay section on a plan without time stamps: failed, with its error line."""
-    ctx = Context(get_robot("lynxmotion"), tmp_path, True, False, {
+    ctx = Context(Arm.of("lynxmotion"), tmp_path, True, False, {
         "planning": SectionResult("", outputs={"plans": {"broken": {"q": [[0.0, 0.0, 0.0]]}}})})
     from harness.sections import load_section
 

@@ -7,9 +7,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from harness.robots.arm import Arm
 from harness.robots.baseline import PinocchioModel
 from harness.robots.casadi_rnea import symbolic_rnea
-from harness.robots.registry import load_pinocchio
 
 
 def _function(model: pin.Model) -> ca.Function:
@@ -19,7 +19,7 @@ def _function(model: pin.Model) -> ca.Function:
 
 @pytest.mark.parametrize("robot", ["lynxmotion", "double_pendulum", "ur5"])
 def test_matches_pinocchio_rnea(robot):
-    model = load_pinocchio(robot)
+    model = Arm.of(robot).pinocchio
     baseline = PinocchioModel(model)
     rnea = _function(model)
     rng = np.random.default_rng(0)
@@ -30,7 +30,7 @@ def test_matches_pinocchio_rnea(robot):
 
 
 def test_armature_and_damping_are_included():
-    model = load_pinocchio("lynxmotion")
+    model = Arm.of("lynxmotion").pinocchio.copy()  # changed here: the Arm's is shared
     model.armature = np.array([0.01, 0.02, 0.03])
     model.damping = np.array([0.1, 0.2, 0.3])
     rnea = _function(model)
@@ -42,7 +42,7 @@ def test_armature_and_damping_are_included():
 
 @pytest.mark.parametrize("robot", ["lynxmotion", "ur5"])
 def test_derivatives_match_compute_rnea_derivatives(robot):
-    model = load_pinocchio(robot)
+    model = Arm.of(robot).pinocchio
     data = model.createData()
     q, qd, qdd = (ca.SX.sym(name, model.nv) for name in ("q", "qd", "qdd"))
     tau = symbolic_rnea(model, q, qd, qdd)

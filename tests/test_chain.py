@@ -8,8 +8,9 @@ import pinocchio as pin
 import pytest
 
 from harness.errors import UserError
+from harness.robots.arm import Arm
 from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import ROBOTS, load_chain, load_mujoco, load_pinocchio
+from harness.robots.registry import ROBOTS
 from identification.library.chain import KinematicChain, rnea
 from identification.library.kinematic import KinematicLibrary, random_states
 
@@ -40,14 +41,14 @@ def random_chain(seed: int, dof: int) -> pin.Model:
     return model
 
 
-MODELS = [(name, lambda name=name: load_pinocchio(name)) for name in ROBOTS] + [
+MODELS = [(name, lambda name=name: Arm.of(name).pinocchio) for name in ROBOTS] + [
     (f"random{dof}-{seed}", lambda s=seed, d=dof: random_chain(s, d))
     for seed, dof in ((1, 3), (2, 5), (3, 7))]
 
 
 @pytest.mark.parametrize("name", sorted(ROBOTS))
 def test_mujoco_and_pinocchio_agree_on_every_registered_arm(name):
-    pm, mm = load_pinocchio(name), load_mujoco(name)
+    pm, mm = Arm.of(name).pinocchio, Arm.of(name).mujoco
     assert mm.nv == pm.nv
     data, baseline = mujoco.MjData(mm), PinocchioModel(pm)
     q, qd, qdd = _states_within_limits(pm, 20, 3)
@@ -59,8 +60,8 @@ def test_mujoco_and_pinocchio_agree_on_every_registered_arm(name):
 
 
 def test_panda_fingers_are_held_fixed():
-    assert load_pinocchio("panda").nv == 7 and load_mujoco("panda").nv == 7
-    assert load_chain("panda").dof == 7
+    assert Arm.of("panda").pinocchio.nv == 7 and Arm.of("panda").mujoco.nv == 7
+    assert Arm.of("panda").chain.dof == 7
 
 
 @pytest.mark.parametrize("name,build", MODELS, ids=[m[0] for m in MODELS])
@@ -118,13 +119,13 @@ def test_bad_arms_are_one_clear_error(tmp_path, t1, t2, message):
     path = tmp_path / "arm.urdf"
     path.write_text(ARM.format(t1=t1, t2=t2))
     with pytest.raises(UserError, match=message):
-        load_chain(path)
+        _ = Arm.of(path).chain
 
 
 def test_a_gripper_jaw_is_held_fixed(tmp_path):
     path = tmp_path / "arm.urdf"
     path.write_text(ARM.format(t1="revolute", t2="prismatic"))
-    assert load_chain(path).dof == 1 and load_mujoco(path).nv == 1
+    assert Arm.of(path).chain.dof == 1 and Arm.of(path).mujoco.nv == 1
 
 
 def test_a_closed_chain_is_one_clear_error(tmp_path):
@@ -135,7 +136,7 @@ def test_a_closed_chain_is_one_clear_error(tmp_path):
         </body></body></worldbody>
       <equality><joint joint1="j1" joint2="j2"/></equality></mujoco>""")
     with pytest.raises(UserError, match="close the chain"):
-        load_chain(path)
+        _ = Arm.of(path).chain
 
 
 def test_model_json_records_its_robot_and_refuses_another(tmp_path, capsys):
@@ -149,7 +150,7 @@ def test_model_json_records_its_robot_and_refuses_another(tmp_path, capsys):
     assert main(["generate", "--samples", "1200", "--noise", "0.01", "--out", str(data)]) == 0
     assert main(["identify", "--data", str(data), "--out", str(model)]) == 0
     record = json.loads(model.read_text())["robot"]
-    assert record == {"name": "lynxmotion", "hash": load_chain("lynxmotion").digest()}
+    assert record == {"name": "lynxmotion", "hash": Arm.of("lynxmotion").chain.digest()}
     out = tmp_path / "p.npz"
     assert main(["predict", "--model", str(model), "--data", str(data), "--out", str(out)]) == 0
     capsys.readouterr()

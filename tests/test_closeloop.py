@@ -12,6 +12,7 @@ from harness.cli import main
 from harness.closeloop.acceptance import absorbed_joints, checks, coefficient_errors, meets_noise_bar
 from harness.closeloop.plants import DECLARED_MJCF, Variant, write_variant
 from harness.closeloop.run import run_closeloop
+from harness.robots.arm import Arm
 from identification.closeloop.effects import Effect
 from identification.closeloop.extended import ExtendedModel
 from identification.closeloop.loop import projected_dictionary
@@ -33,6 +34,11 @@ EVERY_JOINT = [Variant(((e, j, v),), name=f"{e}{j}") for e, v in
                for j in (1, 2, 3)]
 
 
+def _loop(plant, **options):
+    """The loop on the plant file, a variant of the Lynxmotion."""
+    return run_closeloop(Arm.of(plant), Arm.of("lynxmotion"), **options)
+
+
 def _assert_accepted(loop):
     ok = checks(loop)
     assert all(ok.values()), (ok, coefficient_errors(loop), loop.to_json()["effects"])
@@ -40,7 +46,7 @@ def _assert_accepted(loop):
 
 @pytest.mark.parametrize("variant", SINGLE, ids=lambda v: v.name)
 def test_single_effect_named_on_its_joint(tmp_path, variant):
-    loop = run_closeloop(write_variant(variant, tmp_path))
+    loop = _loop(write_variant(variant, tmp_path))
     assert not loop.result.unexplained
     assert [(t.effect, t.joint) for t in loop.result.terms] == [
         (t.effect, t.joint) for t in loop.truth]
@@ -48,13 +54,13 @@ def test_single_effect_named_on_its_joint(tmp_path, variant):
 
 
 def test_control_plant_names_nothing():
-    loop = run_closeloop(DECLARED_MJCF)
+    loop = _loop(DECLARED_MJCF)
     assert loop.result.terms == ()
     assert loop.result.unexplained is False
 
 
 def test_effect_outside_dictionary_is_unexplained():
-    loop = run_closeloop(COUPLED)
+    loop = _loop(COUPLED)
     assert loop.outside_dictionary
     assert loop.result.unexplained is True
     assert loop.result.terms == ()
@@ -67,7 +73,7 @@ def test_tendon_names_no_stand_ins_and_is_never_worse(seed):
     armatures, a payload) are screened out as candidates with a reason, and no joint's
     held-out error gets worse (seed 2 joint 1 went 0.0014 -> 0.119, seed 3 joint 3
     0.64 -> 1.05 when they were named)."""
-    loop = run_closeloop(COUPLED, seed=seed, compare=True)
+    loop = _loop(COUPLED, seed=seed, compare=True)
     for run in (loop, *loop.others):
         r = run.result
         assert r.unexplained is True, run.declared
@@ -84,7 +90,7 @@ def test_tendon_with_an_effect_in_the_dictionary_names_that_effect(tmp_path):
     """Viscous friction on joint 1 beside the tendon: named, at the plant's value, and the
     tendon's structure still reported as unexplained."""
     v = Variant((("viscous", 1, 0.02),), coupling=0.3, name="viscous1_tendon")
-    loop = run_closeloop(write_variant(v, tmp_path), samples=3000)
+    loop = _loop(write_variant(v, tmp_path), samples=3000)
     r = loop.result
     assert [(t.effect, t.joint) for t in r.terms] == [("viscous", 1)]
     assert r.terms[0].coefficient == pytest.approx(0.02, rel=0.1)
@@ -103,7 +109,7 @@ def _clean_error(loop, terms):
 def test_noise_bar_fails_for_a_missing_or_wrong_effect():
     """The bar (error against the clean torque within 1.5x of the noise floor: the true effect
     set refitted) holds for the named effects and fails when one is missing or wrong."""
-    loop = run_closeloop(DECLARED_MJCF.parent / "lynxmotion_friction.xml", samples=3000)
+    loop = _loop(DECLARED_MJCF.parent / "lynxmotion_friction.xml", samples=3000)
     r, d = loop.result, loop.data
     truth = loop.noise_floor
     assert checks(loop)["noise_bar"]
@@ -140,24 +146,30 @@ def test_cli_writes_contract(tmp_path):
 
 TWO_JOINTS = ('<mujoco><worldbody><body><joint type="hinge"/><geom size="0.1"/><body>'
               '<joint type="hinge"/><geom size="0.1"/></body></body></worldbody></mujoco>')
+TWO_NAMED = ('<mujoco><worldbody><body name="upper"><joint name="a" axis="0 1 0"/>'
+             '<geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>'
+             '<body name="lower" pos="0.3 0 0"><joint name="b" axis="0 1 0"/>'
+             '<geom type="capsule" fromto="0 0 0 0.25 0 0" size="0.02"/></body></body>'
+             '</worldbody></mujoco>')
 FREE_BODY = '<mujoco><worldbody><body><freejoint/><geom size="0.1"/></body></worldbody></mujoco>'
 OTHER_ARM = DECLARED_MJCF.read_text().replace('axis="0 -1 0" range="-3.14', 'axis="0 0 1" range="-3.14')
 
 
-@pytest.mark.parametrize("text,message", [
-    (None, "plant file not found"),
-    ("<mujoco><worldbody><body>", "invalid MJCF"),
-    ("", "invalid MJCF"),
-    (TWO_JOINTS, "has 2 joints; the declared lynxmotion model has 3"),
-    (FREE_BODY, "needs 1-DOF joints only"),
-    (OTHER_ARM, "joint 3 differs from lynxmotion's"),
+@pytest.mark.parametrize("text,robot,message", [
+    (None, None, "plant file not found"),
+    ("<mujoco><worldbody><body>", None, "invalid MJCF"),
+    ("", None, "invalid MJCF"),
+    (TWO_JOINTS, "lynxmotion", "has 2 joints; the declared lynxmotion model has 3"),
+    (FREE_BODY, None, "needs 1-DOF joints only"),
+    (OTHER_ARM, "lynxmotion", "joint 3 differs from lynxmotion's"),
 ], ids=["missing", "malformed", "empty", "wrong-dof", "free-joint", "other-arm"])
-def test_cli_bad_plant_is_one_line_and_no_output(tmp_path, capsys, text, message):
+def test_cli_bad_plant_is_one_line_and_no_output(tmp_path, capsys, text, robot, message):
     plant = tmp_path / "plant.xml"
     if text is not None:
         plant.write_text(text)
     out = tmp_path / "o"
-    rc = main(["closeloop", "--plant", str(plant), "--out", str(out)])
+    rc = main(["closeloop", "--plant", str(plant), "--out", str(out),
+               *(["--robot", robot] if robot else [])])
     assert rc == 2
     captured = capsys.readouterr()
     err = captured.err.strip().splitlines()
@@ -166,12 +178,45 @@ def test_cli_bad_plant_is_one_line_and_no_output(tmp_path, capsys, text, message
     assert not (out / "closeloop.json").exists()
 
 
+def test_cli_plant_of_another_arm_closes_the_loop_on_that_arm(tmp_path, capsys):
+    """A UR5 plant without --robot: the loop runs on the UR5 it is a variant of (its six
+    joints, its nominal model), not on the default Lynxmotion; with --robot another arm's
+    plant is refused in one line."""
+    from harness.closeloop.arm_plants import write_arm_variant
+
+    plant = write_arm_variant(Arm.of("ur5"), Variant((("viscous", 2, 0.8),), name="viscous2"),
+                              tmp_path)
+    for robot in ("lynxmotion", "panda"):
+        assert main(["closeloop", "--plant", str(plant), "--robot", robot,
+                     "--out", str(tmp_path / robot)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "not a variant of this robot" in err[0], err
+    out = tmp_path / "cl"
+    assert main(["closeloop", "--plant", str(plant), "--out", str(out), "--samples", "2000"]) == 0
+    report = json.loads((out / "closeloop.json").read_text())
+    assert len(report["error_before"]) == 6 and set(report["declared_models"]) == {"pinocchio"}
+    assert {(e["effect"], e["joint"]) for e in report["plant_effects"]} == {("viscous", 2)}
+    assert ("viscous", 2) in {(e["effect"], e["joint"]) for e in report["effects"]}
+
+
+def test_cli_plant_of_no_registered_arm_is_its_own_arm(tmp_path, capsys):
+    """A 2-joint MJCF of no registered robot's kinematics, without --robot: the loop runs on
+    the plant itself (its own file the declared model: nothing to name), not on the
+    Lynxmotion, whose 3 joints it does not have."""
+    plant = tmp_path / "two.xml"
+    plant.write_text(TWO_NAMED)
+    out = tmp_path / "cl"
+    assert main(["closeloop", "--plant", str(plant), "--out", str(out), "--samples", "1000"]) == 0
+    report = json.loads((out / "closeloop.json").read_text())
+    assert len(report["error_before"]) == 2 and report["plant_effects"] == []
+
+
 @pytest.mark.slow
 def test_identified_declared_model_refits_jointly():
     """Declared = the sparse model identified on the same training data: the friction plant's
     effects are named at the plant's values (not split with the model's own terms), and the
     Pinocchio numbers are reported beside them."""
-    loop = run_closeloop(DECLARED_MJCF.parent / "lynxmotion_friction.xml", samples=3000,
+    loop = _loop(DECLARED_MJCF.parent / "lynxmotion_friction.xml", samples=3000,
                          declared="identified", compare=True)
     _assert_accepted(loop)
     report = loop.to_json()
@@ -185,14 +230,14 @@ def test_identified_declared_model_refits_jointly():
 @pytest.mark.slow
 @pytest.mark.parametrize("variant", EVERY_JOINT, ids=lambda v: v.name)
 def test_every_effect_on_every_joint(tmp_path, variant):
-    _assert_accepted(run_closeloop(write_variant(variant, tmp_path)))
+    _assert_accepted(_loop(write_variant(variant, tmp_path)))
 
 
 @pytest.mark.slow
 def test_identified_model_carries_what_its_terms_span():
     """Payload and armature lie in the identified model's span: absorbed, not named; the
     spring it cannot span is named on joint 3."""
-    loop = run_closeloop(DECLARED_MJCF.parent / "lynxmotion_payload.xml", declared="identified")
+    loop = _loop(DECLARED_MJCF.parent / "lynxmotion_payload.xml", declared="identified")
     assert set(loop.absorbed) == {"payload", "armature@3"}
     assert [(t.effect, t.joint) for t in loop.result.terms] == [("spring", 3)]
     assert absorbed_joints(loop) == [0, 1]  # reported and checked, not dropped
@@ -204,7 +249,7 @@ def test_identified_model_carries_what_its_terms_span():
 def test_combination_of_five_effects(tmp_path):
     v = Variant((("viscous", 1, 0.01), ("coulomb", 2, 0.05), ("armature", 3, 0.005),
                  ("spring", 3, 0.1)), payload=0.05, name="combo")
-    _assert_accepted(run_closeloop(write_variant(v, tmp_path)))
+    _assert_accepted(_loop(write_variant(v, tmp_path)))
 
 
 COMBOS = [
@@ -226,4 +271,4 @@ def test_friction_combinations_both_declared_models(tmp_path, request, variant, 
         # 0.20 % noise floor (2.6x > 1.5x). Against the measured torque the old bar read 1.004.
         request.applymarker(pytest.mark.xfail(strict=True, reason="joint 2 at 2.6x the noise "
                                               "floor after falling back to the biased model"))
-    _assert_accepted(run_closeloop(write_variant(variant, tmp_path), declared=declared))
+    _assert_accepted(_loop(write_variant(variant, tmp_path), declared=declared))

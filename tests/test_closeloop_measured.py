@@ -16,8 +16,7 @@ import pytest
 
 from harness.cli import main
 from harness.closeloop.measured import rigid_library
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 from identification.closeloop.measured import close_loop_measured
 from identification.friction import sigmoid_friction
 from tests.helpers import lynxmotion_motion
@@ -25,11 +24,12 @@ from tests.helpers import lynxmotion_motion
 SIGMOID = (0.08, 15.0, 0.03)  # phi1 N m, phi2 s/rad, phi3 rad/s on joint 1
 VISCOUS = 0.05  # N m s/rad on joint 2
 COGGING = 0.02  # N m, sin(12 q3) on joint 3
+LYNX = Arm.of("lynxmotion")
 
 
 def _log(cogging: float = COGGING, seed: int = 0):
     m = lynxmotion_motion(2400, seed=seed)
-    tau = PinocchioModel(load_pinocchio("lynxmotion")).torque(m.q, m.qd, m.qdd)
+    tau = LYNX.nominal.torque(m.q, m.qd, m.qdd)
     tau[:, 0] += SIGMOID[0] * sigmoid_friction(m.qd[:, 0], *SIGMOID[1:])
     tau[:, 1] += VISCOUS * m.qd[:, 1]
     tau[:, 2] += cogging * np.sin(12 * m.q[:, 2])
@@ -41,7 +41,7 @@ def _log(cogging: float = COGGING, seed: int = 0):
 @pytest.fixture(scope="module")
 def loop():
     m, tau, _ = _log()
-    return close_loop_measured(rigid_library("lynxmotion"), m.q, m.qd, m.qdd, tau)
+    return close_loop_measured(rigid_library(LYNX), m.q, m.qd, m.qdd, tau)
 
 
 def test_the_true_effects_are_named_with_their_coefficients(loop):
@@ -61,7 +61,7 @@ def test_structure_outside_the_dictionary_is_unexplained(loop):
 
 def test_a_log_with_only_dictionary_effects_is_fully_explained():
     m, tau, clean = _log(cogging=0.0, seed=1)
-    r = close_loop_measured(rigid_library("lynxmotion"), m.q, m.qd, m.qdd, tau)
+    r = close_loop_measured(rigid_library(LYNX), m.q, m.qd, m.qdd, tau)
     assert not r.unexplained
     # after: the held-out error against the measured torque is the noise's
     held = slice(r.split, None)
@@ -110,16 +110,14 @@ def test_a_mujoco_friction_plant_log_names_its_true_effects():
     0.02 N m s/rad on joints 1 and 3, frictionloss 0.05 N m on joint 2, read from its MJCF
     here only to score): the loop on the data alone names exactly those, within 5 %."""
     from harness.closeloop.plants import true_effects
-    from harness.closeloop.run import declared_mujoco
     from harness.data.generate import generate
-    from harness.robots.plant import load_plant
     from models import MODELS
 
-    plant = MODELS / "lynxmotion" / "lynxmotion_friction.xml"
-    d = generate(str(plant), 4000, 0.05, 0, "measured", 0.0)
-    r = close_loop_measured(rigid_library("lynxmotion"), d.q, d.qd, d.qdd, d.tau)
+    plant = Arm.of(MODELS / "lynxmotion" / "lynxmotion_friction.xml")
+    d = generate(plant, 4000, 0.05, 0, "measured", 0.0)
+    r = close_loop_measured(rigid_library(LYNX), d.q, d.qd, d.qdd, d.tau)
     truth = {(t.effect, t.joint): t.coefficient
-             for t in true_effects(load_plant(plant).model, declared_mujoco("lynxmotion"))[0]}
+             for t in true_effects(plant.mujoco, LYNX.mujoco)[0]}
     named = {(t.effect, t.joint): t.coefficient for t in r.terms}
     assert set(named) == set(truth) == {("viscous", 1), ("coulomb", 2), ("viscous", 3)}
     for key, value in truth.items():
@@ -143,7 +141,7 @@ def test_the_extended_model_symbolic_form_equals_its_torque(loop):
 
 def _run_file(path, seed: int, viscous: float = VISCOUS, samples: int = 1200, robot="lynxmotion"):
     m = lynxmotion_motion(samples, seed=seed)
-    tau = PinocchioModel(load_pinocchio("lynxmotion")).torque(m.q, m.qd, m.qdd)
+    tau = LYNX.nominal.torque(m.q, m.qd, m.qdd)
     tau[:, 1] += viscous * m.qd[:, 1]
     tau += 0.005 * np.random.default_rng(seed).normal(size=tau.shape) + np.array([0.01, 0, 0])
     np.savez(path, t=m.t, q=m.q, qd=m.qd, qdd=m.qdd, tau=tau,
@@ -183,7 +181,7 @@ def test_runs_and_validate_write_heldout_and_a_model_predict_reads(tmp_path, cap
 def test_an_effect_of_one_run_only_is_not_named_with_two():
     from identification.closeloop.runs import close_loop_runs
 
-    declared = PinocchioModel(load_pinocchio("lynxmotion"))
+    declared = LYNX.nominal
     runs = []
     for seed, viscous in ((20, 0.05), (21, 0.0)):
         m = lynxmotion_motion(1200, seed=seed)
@@ -200,18 +198,16 @@ def test_a_mujoco_friction_plant_at_two_seeds_names_its_effects_on_both():
     """The Lynxmotion friction plant (damping on joints 1 and 3, frictionloss on joint 2)
     generated at two seeds: each run alone and both together name exactly those, within 10 %."""
     from harness.closeloop.plants import true_effects
-    from harness.closeloop.run import declared_mujoco
     from harness.data.generate import generate
-    from harness.robots.plant import load_plant
     from identification.closeloop.runs import close_loop_runs
     from models import MODELS
 
-    plant = MODELS / "lynxmotion" / "lynxmotion_friction.xml"
-    runs = [generate(str(plant), 3000, 0.05, seed, "measured", 0.0) for seed in (0, 1)]
+    plant = Arm.of(MODELS / "lynxmotion" / "lynxmotion_friction.xml")
+    runs = [generate(plant, 3000, 0.05, seed, "measured", 0.0) for seed in (0, 1)]
     runs = [(d.q, d.qd, d.qdd, d.tau) for d in runs]
     truth = {(t.effect, t.joint): t.coefficient
-             for t in true_effects(load_plant(plant).model, declared_mujoco("lynxmotion"))[0]}
-    declared = PinocchioModel(load_pinocchio("lynxmotion"))
+             for t in true_effects(plant.mujoco, LYNX.mujoco)[0]}
+    declared = LYNX.nominal
     for subset in (runs[:1], runs[1:], runs):
         named = {(t.effect, t.joint): t.coefficient
                  for t in close_loop_runs(declared, subset).terms}
@@ -228,17 +224,18 @@ def _generated(tmp_path, plant: str, seeds=(1, 2)) -> list[str]:
     for seed, noise in ((seeds[0], 0.05), (seeds[1], 0.05), (9, 0.0)):
         files.append(str(tmp_path / f"{Path(plant).stem}{seed}.npz"))
         mode = "measured" if plant.endswith(".xml") else "inverse"
-        np.savez(files[-1], **generate(plant, 1000, noise, seed, mode, 0.2).arrays())
+        np.savez(files[-1], **generate(Arm.of(plant), 1000, noise, seed, mode, 0.2).arrays())
     return files
 
 
 def test_training_runs_sensor_offsets_are_not_carried_into_a_new_run(tmp_path):
     """Runs of the declared robot itself, each with its own sensor offset: nothing is named,
     and the new run's error is not made worse by the training runs' offsets."""
-    from harness.closeloop.runs import run_runs
+    from harness.closeloop.runs import read_runs, run_runs
 
     files = _generated(tmp_path, "lynxmotion")
-    r = run_runs(",".join(files[:2]), None, validate=files[2])
+    train, held = read_runs(",".join(files[:2]), files[2])
+    r = run_runs(train, LYNX, validate=held)
     assert r.loop.terms == () and not r.left.unexplained_joints
     assert np.all(r.error_after <= r.error_before + 1e-6), (r.error_before, r.error_after)
     assert r.model_json["offsets"] == [0.0] * 3
@@ -247,11 +244,12 @@ def test_training_runs_sensor_offsets_are_not_carried_into_a_new_run(tmp_path):
 
 
 def test_a_friction_plant_with_sensor_offsets_still_names_its_effects(tmp_path):
-    from harness.closeloop.runs import run_runs
+    from harness.closeloop.runs import read_runs, run_runs
     from models import MODELS
 
     files = _generated(tmp_path, str(MODELS / "lynxmotion" / "lynxmotion_friction.xml"))
-    r = run_runs(",".join(files[:2]), "lynxmotion", validate=files[2])
+    train, held = read_runs(",".join(files[:2]), files[2])
+    r = run_runs(train, LYNX, validate=held)
     named = {(t.effect, t.joint) for t in r.loop.terms}
     assert {("viscous", 1), ("coulomb", 2), ("viscous", 3)} <= named, named
     assert np.all(r.error_after < 0.5 * r.error_before), (r.error_before, r.error_after)
@@ -259,8 +257,8 @@ def test_a_friction_plant_with_sensor_offsets_still_names_its_effects(tmp_path):
 
 @pytest.mark.parametrize("args, message", [
     (["--data", "a.npz,missing.npz"], "not found"),
-    (["--data", "a.npz,b.npz"], "different robots"),
-    (["--data", "a.npz", "--validate", "b.npz"], "of another robot"),
+    (["--data", "a.npz,b.npz"], "b.npz records robot 'panda'"),
+    (["--data", "a.npz", "--validate", "b.npz"], "b.npz records robot 'panda'"),
     (["--data", "a.npz", "--declared", "other.json"], "identified for robot"),
     (["--data", "a.npz,a.npz", "--declared", "identified"], "takes one --data log"),
 ])
@@ -275,3 +273,19 @@ def test_closeloop_runs_errors_are_one_line(tmp_path, capsys, monkeypatch, args,
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0], err
     assert not (tmp_path / "cl" / "closeloop.json").exists()
+
+
+@pytest.mark.parametrize("declared", ["pinocchio", "identified"])
+def test_data_of_another_robot_is_refused_in_one_line(tmp_path, capsys, declared):
+    """UR5 data closed on the Panda: the data's record (robot and kinematics) refuses it
+    before anything runs, whatever the declared model."""
+    from harness.data.generate import generate
+
+    data = tmp_path / "ur5.npz"
+    np.savez(data, **generate(Arm.of("ur5"), 200, 0.05, 0, "inverse", 0.0).arrays())
+    out = tmp_path / "cl"
+    assert main(["closeloop", "--data", str(data), "--robot", "panda", "--declared", declared,
+                 "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "records robot 'ur5'" in err[0] and "not 'panda'" in err[0], err
+    assert not (out / "closeloop.json").exists()

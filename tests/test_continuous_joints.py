@@ -15,20 +15,20 @@ import pytest
 
 from harness.cli import main
 from harness.experiments.identification import closed_form_gap, sines_motion
-from harness.robots.registry import load_mujoco, load_pinocchio
+from harness.robots.arm import Arm
 
 URDF = str(Path(__file__).resolve().parent / "data" / "gen3_like.urdf")
 START, GOAL = "0,0.3,0,1.5,0,1.0,0", "1.0,0.5,0.3,1.2,0.2,0.8,0.5"
 
 
 def test_continuous_joints_are_one_angle_each_in_both_engines():
-    model, mj = load_pinocchio(URDF), load_mujoco(URDF)
+    model, mj = Arm.of(URDF).pinocchio, Arm.of(URDF).mujoco
     assert model.nq == model.nv == mj.nq == mj.nv == 7
     continuous = [0, 2, 4, 6]
     np.testing.assert_allclose(mj.jnt_range[continuous], [[-pi, pi]] * 4)
     np.testing.assert_allclose(model.upperPositionLimit[continuous], pi)
     np.testing.assert_allclose(model.effortLimit, [39] * 4 + [9] * 3)  # the file's own
-    assert closed_form_gap(URDF, sines_motion(URDF, 400, 3)) <= 1e-12
+    assert closed_form_gap(Arm.of(URDF), sines_motion(Arm.of(URDF), 400, 3)) <= 1e-12
 
 
 @pytest.mark.slow

@@ -11,8 +11,8 @@ import pytest
 from harness.closeloop.payload import PayloadTorque
 from harness.closeloop.plants import Variant, variant_text
 from harness.data.generate import inverse_torques
+from harness.robots.arm import Arm
 from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
 from identification.closeloop.effects import EffectTerm, build_dictionary, effect_torque
 from identification.closeloop.extended import ExtendedModel
 from identification.closeloop.residual import ljung_box, noise_sigma
@@ -32,7 +32,7 @@ def _states(n=600, seed=0):
 
 @pytest.fixture(scope="module")
 def pmodel():
-    return load_pinocchio("lynxmotion")
+    return Arm.of("lynxmotion").pinocchio
 
 
 def test_payload_torque_matches_mujoco_payload_body(pmodel):

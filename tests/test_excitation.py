@@ -15,10 +15,8 @@ from harness.cli import main
 from harness.data.excitation_file import header, read_trajectory, write_trajectory
 from harness.data.excite import capsule_clearance, design_for
 from harness.data.generate import default_excitation, generate
-from harness.robots.baseline import PinocchioModel
-from harness.robots.plant import load_plant
-from harness.robots.registry import erd_robots_dir, load_pinocchio
-from harness.robots.torque_models import robot_library
+from harness.robots.arm import Arm
+from harness.robots.registry import erd_robots_dir
 from identification.excitation.criteria import log_information
 from identification.excitation.fourier import design_excitation
 from identification.excitation.regressor import AtomRegressor
@@ -52,11 +50,11 @@ def test_csv_contract(ur5_file):
 
 def test_limits_rest_and_derivatives(ur5_file):
     traj = read_trajectory(ur5_file[0], 6)
-    plant = load_plant("ur5")
-    lo, hi = plant.limits()
+    arm = Arm.of("ur5")
+    lo, hi = arm.position_limits
     pad = 0.05 * (hi - lo)
     assert np.all(traj.q >= lo + pad) and np.all(traj.q <= hi - pad)
-    assert np.all(np.abs(traj.qd) <= plant.velocity_limits())
+    assert np.all(np.abs(traj.qd) <= arm.speed_bounds)
     assert np.all(np.abs(traj.qdd) <= ACCEL)
     for x in (traj.qd, traj.qdd):  # at rest at both ends
         assert np.max(np.abs(x[[0, -1]])) < 1e-9
@@ -64,40 +62,40 @@ def test_limits_rest_and_derivatives(ur5_file):
     for x, dx in ((traj.q, traj.qd), (traj.qd, traj.qdd)):
         fd = np.gradient(x, traj.t, axis=0)[1:-1]
         assert np.max(np.abs(fd - dx[1:-1])) < 0.02 * np.max(np.abs(dx)) + 1e-9
-    assert np.all(capsule_clearance("ur5")(traj.q) > 0)
+    assert np.all(capsule_clearance(arm)(traj.q) > 0)
 
 
 def test_designed_more_informative_than_default_ur5(ur5_file):
     """The default criterion (D-optimal) at the file's samples: a larger log det of the
     regressor's Gram than generate's default excitation over the same duration."""
     traj = read_trajectory(ur5_file[0], 6)
-    plant = load_plant("ur5")
-    regressor = AtomRegressor(robot_library("ur5"))
-    default, _ = default_excitation(plant, "ur5", int(DURATION * 200), 0)
+    arm = Arm.of("ur5")
+    regressor = AtomRegressor(arm.library)
+    default, _ = default_excitation(arm, int(DURATION * 200), 0)
     grid = np.linspace(0, DURATION, 200, endpoint=False)
     designed, ours = (log_information(regressor, *e.evaluate(grid)) for e in (traj, default))
     assert designed < ours
 
 
 def test_condition_design_better_conditioned_than_default_ur5():
-    designed = design_for("ur5", DURATION, RATE, ACCEL, seed=0, iterations=ITERATIONS,
+    designed = design_for(Arm.of("ur5"), DURATION, RATE, ACCEL, seed=0, iterations=ITERATIONS,
                           criterion="condition")
     assert designed.condition < designed.default_condition
 
 
 @pytest.mark.slow
 def test_designed_better_conditioned_than_default_panda():
-    designed = design_for("panda", DURATION, RATE, ACCEL, seed=0, iterations=ITERATIONS,
+    designed = design_for(Arm.of("panda"), DURATION, RATE, ACCEL, seed=0, iterations=ITERATIONS,
                           criterion="condition")
     assert designed.condition < designed.default_condition
 
 
 def test_generate_along_the_file_matches_rnea(ur5_file, tmp_path):
     traj = read_trajectory(ur5_file[0], 6)
-    data = generate("ur5", len(traj.t), 0.0, 1, "inverse", excitation=traj)
+    data = generate(Arm.of("ur5"), len(traj.t), 0.0, 1, "inverse", excitation=traj)
     assert np.array_equal(data.q, traj.q) and np.array_equal(data.qdd, traj.qdd)
     assert data.meta["rate"] == pytest.approx(RATE)
-    tau = PinocchioModel(load_plant("ur5").pinocchio()).torque(data.q, data.qd, data.qdd)
+    tau = Arm.of("ur5").nominal.torque(data.q, data.qd, data.qdd)
     assert np.max(np.abs(tau - data.tau_clean)) <= 1e-9 * np.max(np.abs(data.tau_clean))
     out = tmp_path / "d.npz"
     assert main(["generate", "--robot", "ur5", "--excitation", str(ur5_file[0]), "--samples", "100",
@@ -110,10 +108,10 @@ def test_measured_along_the_file_tracks_it(ur5_file, tmp_path):
     its tracking error), on the file's clock, and the sensed torque is Pinocchio's RNEA at
     the states the simulator had."""
     traj = read_trajectory(ur5_file[0], 6)
-    data = generate("ur5", len(traj.t), 0.0, 1, "measured", excitation=traj)
+    data = generate(Arm.of("ur5"), len(traj.t), 0.0, 1, "measured", excitation=traj)
     assert np.array_equal(data.t, traj.t) and data.meta["rate"] == pytest.approx(RATE)
     assert np.max(np.abs(data.truth["q"] - traj.q)) < 5e-3
-    tau = PinocchioModel(load_plant("ur5").pinocchio()).torque(
+    tau = Arm.of("ur5").nominal.torque(
         data.truth["q"], data.truth["qd"], data.truth["qdd"])
     assert np.max(np.abs(tau - data.tau_clean)) <= 1e-6 * np.max(np.abs(data.tau_clean))
     out = tmp_path / "m.npz"
@@ -121,15 +119,15 @@ def test_measured_along_the_file_tracks_it(ur5_file, tmp_path):
                  "measured", "--out", str(out)]) == 0 and out.is_file()
 
 def test_default_excitation_holds_the_velocity_limits():
-    plant = load_plant("ur5")
-    exc, _ = default_excitation(plant, "ur5", 400, 0)
+    arm = Arm.of("ur5")
+    exc, _ = default_excitation(arm, 400, 0)
     _, qd, _ = exc.evaluate(np.arange(4000) / 200.0)
-    assert np.all(np.abs(qd) <= plant.velocity_limits())
-    lynx = load_plant("lynxmotion")  # within its limits: the excitation it always had
-    lo, hi = lynx.limits()
+    assert np.all(np.abs(qd) <= arm.speed_bounds)
+    lynx = Arm.of("lynxmotion")  # within its limits: the excitation it always had
+    lo, hi = lynx.position_limits
     same, _ = design_excitation(lo, hi, 3, lambda exc: float(np.sum(exc.sin_coef)), candidates=4)
     held, _ = design_excitation(lo, hi, 3, lambda exc: float(np.sum(exc.sin_coef)), candidates=4,
-                                velocity=lynx.velocity_limits())
+                                velocity=lynx.speed_bounds)
     assert np.array_equal(same.sin_coef, held.sin_coef) and np.array_equal(same.centre, held.centre)
 
 
@@ -145,7 +143,7 @@ def test_a_hanging_arm_is_told_of_the_floor_and_swings_below_it_without(capsys, 
     cuts its home pose, which excite says in one note; its joint origins (Pinocchio's
     kinematics) stay above that floor, and with --floor none the excitation swings below."""
     robot = str(erd_robots_dir() / "talos_data/robots/talos_left_arm.urdf")
-    model = load_pinocchio(robot)
+    model = Arm.of(robot).pinocchio
     data = model.createData()
     lowest, notes = {}, {}
     for floor in ("0", "none"):
@@ -199,7 +197,7 @@ def test_generate_excitation_bad_input(capsys, tmp_path, ur5_file):
 def test_the_information_gradient_matches_finite_differences():
     """log_information's gradient (through the regressor's vector-Jacobian product) against
     central differences of its value, at random UR5 states."""
-    regressor = AtomRegressor(robot_library("ur5"))
+    regressor = AtomRegressor(Arm.of("ur5").library)
     rng = np.random.default_rng(8)
     q, qd, qdd = (rng.normal(size=(40, 6)) for _ in range(3))
     _, grads = log_information(regressor, q, qd, qdd, gradient=True)
@@ -217,9 +215,9 @@ def test_the_information_gradient_matches_finite_differences():
 def test_an_information_design_holds_more_information_than_a_condition_design():
     """excite --criterion information: the log det of its Gram beats the condition design's,
     both within the limits and at rest at both ends."""
-    regressor = AtomRegressor(robot_library("lynxmotion"))
+    regressor = AtomRegressor(Arm.of("lynxmotion").library)
     grid = np.linspace(0.0, 6.0, 120, endpoint=False)
-    designs = {c: design_for("lynxmotion", 6.0, 50.0, seed=0, iterations=20, criterion=c)
+    designs = {c: design_for(Arm.of("lynxmotion"), 6.0, 50.0, seed=0, iterations=20, criterion=c)
                for c in ("condition", "information")}
     info = {c: log_information(regressor, *d.design.excitation.evaluate(grid)) for c, d in designs.items()}
     assert info["information"] < info["condition"]

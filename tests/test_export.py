@@ -15,7 +15,7 @@ import pytest
 from harness.cli import main
 from harness.data.generate import generate
 from harness.io import write_npz
-from harness.robots.registry import load_pinocchio, robot_entry
+from harness.robots.arm import Arm
 from harness.robots.torque_models import load_torque_model
 
 TOL = 1e-3  # relative, on the torque vector's norm
@@ -25,7 +25,7 @@ TOL = 1e-3  # relative, on the torque vector's norm
 def fitted(tmp_path_factory):
     """A UR5 model fitted consistently with the nominal prior, and the data it came from."""
     folder = tmp_path_factory.mktemp("export")
-    write_npz(folder / "d.npz", **generate("ur5", 1500, 0.02, 1, "inverse").arrays())
+    write_npz(folder / "d.npz", **generate(Arm.of("ur5"), 1500, 0.02, 1, "inverse").arrays())
     assert main(["identify", "--data", str(folder / "d.npz"), "--prior", "nominal", "--robot",
                  "ur5", "--out", str(folder / "m.json")]) == 0
     return folder
@@ -47,7 +47,7 @@ def test_the_urdf_gives_the_models_gravity(fitted):
     assert code == 0
     exported = pin.buildModelFromUrdf(str(out))
     data = exported.createData()
-    model = load_torque_model(str(fitted / "m.json"), "ur5")  # its torque leaves offsets out
+    model = load_torque_model(str(fitted / "m.json"), Arm.of("ur5"))  # its torque leaves offsets out
     rng = np.random.default_rng(3)
     zero = np.zeros(exported.nv)
     for q in rng.uniform(-np.pi, np.pi, (10, exported.nv)):
@@ -57,7 +57,7 @@ def test_the_urdf_gives_the_models_gravity(fitted):
 def test_the_joint_frame_is_the_child_links_frame():
     """Why the urdf export can write a body's parameters about its joint's frame as the child
     link's <inertial>: Pinocchio puts the joint's frame at the child link's origin."""
-    model = load_pinocchio("ur5")
+    model = Arm.of("ur5").pinocchio
     data = model.createData()
     q = np.random.default_rng(0).uniform(-1, 1, model.nq)
     pin.forwardKinematics(model, data, q)
@@ -80,7 +80,7 @@ def test_the_mjcf_gives_the_models_inverse_dynamics(fitted):
         joint["coefficients"] = [0.0 if t.startswith("coulomb") else c
                                  for t, c in zip(joint["terms"], joint["coefficients"], strict=True)]
     (fitted / "no_coulomb.json").write_text(json.dumps(payload))
-    model = load_torque_model(str(fitted / "no_coulomb.json"), "ur5")
+    model = load_torque_model(str(fitted / "no_coulomb.json"), Arm.of("ur5"))
     data = mujoco.MjData(exported)
     rng = np.random.default_rng(4)
     for _ in range(10):
@@ -126,7 +126,7 @@ def test_bad_input_is_one_line(fitted, capsys):
                  "--format", "urdf", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and not out.exists()
-    assert robot_entry("ur5").urdf is not None
+    assert Arm.of("ur5").entry.urdf is not None
 
 
 def test_replay_simulates_the_consistent_fits_bodies(fitted):
@@ -135,7 +135,7 @@ def test_replay_simulates_the_consistent_fits_bodies(fitted):
 
     payload = json.loads((fitted / "m.json").read_text())
     physical = payload["metrics"]["physical"]
-    plant = replay_plant(str(fitted / "m.json"), "ur5").model
+    plant = replay_plant(str(fitted / "m.json"), Arm.of("ur5")).model
     masses = physical["standard_parameters"][::10]
     bodies = [plant.jnt_bodyid[j] for j in range(plant.njnt)]
     assert np.allclose(plant.body_mass[bodies], masses, rtol=1e-9)
@@ -143,7 +143,7 @@ def test_replay_simulates_the_consistent_fits_bodies(fitted):
     explicit = {**payload, "body_parameters": [*physical["standard_parameters"], *(
         v for k in ("armature", "viscous", "coulomb") for v in physical["joint_parameters"][k])]}
     (fitted / "explicit.json").write_text(json.dumps(explicit))
-    again = replay_plant(str(fitted / "explicit.json"), "ur5").model
+    again = replay_plant(str(fitted / "explicit.json"), Arm.of("ur5")).model
     assert np.array_equal(again.body_inertia, plant.body_inertia)
 
 
@@ -156,7 +156,7 @@ def test_replay_simulates_an_exported_mjcf_named_mjcf(fitted):
     code, _ = _export(fitted, "mjcf")
     out = fitted / "exported.mjcf"
     out.write_text((fitted / "m.mjcf").read_text())
-    plant = replay_plant(str(out), "ur5").model
+    plant = replay_plant(str(out), Arm.of("ur5")).model
     own = mujoco.MjModel.from_xml_path(str(out))
     names = [own.body(b).name for b in range(1, own.nbody)]
     assert code == 0 and names
@@ -189,13 +189,12 @@ def test_a_model_of_other_kinematics_is_refused(fitted, capsys):
 def test_a_gripper_held_fixed_is_left_massless(tmp_path):
     """The Panda's fingers were held fixed (their mass is in the hand's parameters): its URDF
     with the nominal parameters written back gives the nominal gravity, fingers moving or not."""
-    from harness.robots.baseline import PinocchioModel
     from harness.robots.export import export_model
 
-    nominal = load_pinocchio("panda")
+    arm = Arm.of("panda")
+    nominal = arm.pinocchio
     out = tmp_path / "panda.urdf"
-    export_model({"body_parameters": PinocchioModel(nominal).atom_parameters().tolist()},
-                 "panda", "urdf", out)
+    export_model({"body_parameters": arm.nominal.atom_parameters().tolist()}, arm, "urdf", out)
     exported = pin.buildModelFromUrdf(str(out))
     assert exported.nv == nominal.nv + 2
     q = np.random.default_rng(5).uniform(-1, 1, exported.nq)

@@ -5,11 +5,12 @@ oracle; a Coulomb coefficient fitted to noise on a joint without friction made i
 from __future__ import annotations
 
 from harness.experiments.generalization import FLAT, PRIOR, generalization
+from harness.robots.arm import Arm
 from harness.studies.generalization import JOINT_TARGET, MEDIAN_TARGET
 
 
 def test_consistent_fit_generalizes_from_another_excitation():
-    result = generalization("ur5", (701,))
+    result = generalization(Arm.of("ur5"), (701,))
     for fit in (PRIOR, FLAT):
         fresh = result["summary"][fit]["fresh"]
         assert fresh["worst_median"] <= MEDIAN_TARGET, (fit, fresh)

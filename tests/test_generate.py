@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 
 from harness.data.generate import generate
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 from identification.excitation.fourier import random_excitation
 
 
@@ -32,8 +31,8 @@ def test_excitation_derivatives_match_finite_differences():
 
 
 def test_inverse_mode_torques_are_pinocchio_rnea_and_noise_is_as_declared():
-    ds = generate("lynxmotion", samples=4000, noise=0.05, seed=0, mode="inverse", bias=0.2)
-    baseline = PinocchioModel(load_pinocchio("lynxmotion"))
+    ds = generate(Arm.of("lynxmotion"), samples=4000, noise=0.05, seed=0, mode="inverse", bias=0.2)
+    baseline = Arm.of("lynxmotion").nominal
     np.testing.assert_allclose(ds.tau_clean, baseline.torque(ds.q, ds.qd, ds.qdd), atol=1e-9)
     noise = ds.tau - ds.tau_clean
     sigma = 0.05 * ds.tau_clean.std(axis=0)
@@ -47,10 +46,10 @@ def test_inverse_mode_torques_are_pinocchio_rnea_and_noise_is_as_declared():
 
 
 def test_measured_mode_estimates_states_well_enough_for_torque():
-    ds = generate("lynxmotion", samples=2000, noise=0.05, seed=1, mode="measured")
+    ds = generate(Arm.of("lynxmotion"), samples=2000, noise=0.05, seed=1, mode="measured")
     assert set(ds.truth) == {"q", "qd", "qdd"}
     # independent recomputation of the acceptance figure from the returned arrays
-    baseline = PinocchioModel(load_pinocchio("lynxmotion"))
+    baseline = Arm.of("lynxmotion").nominal
     tau_est = baseline.torque(ds.q, ds.qd, ds.qdd)
     tau_true = baseline.torque(ds.truth["q"], ds.truth["qd"], ds.truth["qdd"])
     err = np.linalg.norm(tau_est - tau_true, axis=0) / np.linalg.norm(tau_true, axis=0)
@@ -70,12 +69,13 @@ def test_generate_cli_writes_the_contract(tmp_path):
         meta = json.loads(str(npz["meta"]))
         assert npz["tau"].shape == (300, 3)
     assert meta["plant"] == "lynxmotion" and meta["mode"] == "inverse" and meta["dof"] == 3
+    assert meta["robot_hash"] == Arm.of("lynxmotion").record["hash"]
     assert meta["noise"] == 0.01 and meta["seed"] == 4 and "library_condition" in meta
     assert "condition" in res.stdout
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--plant", "missing.xml"], "plant file not found"),
+    (["--plant", "missing.xml"], "robot file not found: missing.xml"),
     (["--plant", "no_such_robot"], "unknown robot"),
     (["--plant", "BAD"], "invalid MJCF"),
     (["--noise", "-0.1"], "--noise"),
@@ -127,7 +127,7 @@ def test_output_path_errors_are_one_line(tmp_path):
 
 
 def test_library_condition_is_reported_for_other_robots():
-    ds = generate("double_pendulum", samples=4000, noise=0.0, seed=0)
+    ds = generate(Arm.of("double_pendulum"), samples=4000, noise=0.0, seed=0)
     assert ds.meta["library"].startswith("kinematic-")  # base atoms of its kinematics
     assert np.isfinite(ds.meta["library_condition"])
     assert ds.meta["library_rank"] == ds.meta["library_size"]

@@ -8,8 +8,7 @@ import casadi
 import numpy as np
 import pytest
 
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 from identification.identify import identify
 from identification.library.prior_knowledge import Atom, Combination, arm_atoms, prior_knowledge_library
 from identification.regression.coupled import AtomBasis
@@ -19,7 +18,7 @@ from tests.helpers import lynxmotion_motion
 @pytest.fixture(scope="module")
 def motion():
     m = lynxmotion_motion(1500, seed=3)
-    return m, PinocchioModel(load_pinocchio("lynxmotion")).regressor(m.q, m.qd, m.qdd)
+    return m, Arm.of("lynxmotion").nominal.regressor(m.q, m.qd, m.qdd)
 
 
 def _casadi_lagrangian(atom, q, qd):
@@ -91,7 +90,7 @@ def test_tied_atoms_are_a_restriction_that_keeps_rotor_inertia(motion):
 
 def test_tied_library_fits_the_arm_exactly_with_fewer_coefficients(motion):
     m, _ = motion
-    tau = PinocchioModel(load_pinocchio("lynxmotion")).torque(m.q, m.qd, m.qdd)
+    tau = Arm.of("lynxmotion").nominal.torque(m.q, m.qd, m.qdd)
     tied, untied = prior_knowledge_library(3), prior_knowledge_library(3, rigid_links=False)
     assert tied.names == untied.names and len(tied.atoms) < len(untied.atoms)
     r = identify(m.q, m.qd, m.qdd, tau, tied, holdout=0.25)

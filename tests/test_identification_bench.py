@@ -9,6 +9,7 @@ from threadpoolctl import threadpool_limits
 
 from harness.data.generate import generate
 from harness.paper.studies.paper_identification import denoising, robustness, study
+from harness.robots.arm import Arm
 
 
 @pytest.fixture(scope="module")
@@ -19,7 +20,7 @@ def ctx():
 def test_five_percent_draw_is_the_default_data(ctx):
     d = study.noisy(ctx["clean"], 0.05, study.NOISE_SEEDS[0.05])
     with threadpool_limits(limits=1, user_api="blas"):  # generate's small SVDs: one thread is faster
-        default = generate("lynxmotion", 4000, 0.05, seed=0)
+        default = generate(Arm.of("lynxmotion"), 4000, 0.05, seed=0)
     np.testing.assert_array_equal(d.tau, default.tau)
 
 

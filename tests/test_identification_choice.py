@@ -6,8 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from harness.identify.fits import arm_identification
 from harness.paper.identification.published_library import paper_library
-from harness.robots.torque_models import robot_identification, robot_library
+from harness.robots.arm import Arm
 from identification.choice import choose_fit, choose_prior, choose_regressor, library_name
 from identification.errors import IdentificationError
 from identification.library.prior_knowledge import prior_knowledge_library
@@ -32,7 +33,7 @@ def test_the_regressor_follows_the_library_and_method():
     assert isinstance(choose_regressor(atoms), CoupledRegressor)
     assert isinstance(choose_regressor(atoms, "jointwise"), JointwiseRegressor)
     assert isinstance(choose_regressor(paper_library()), PerJointRegressor)
-    assert isinstance(choose_regressor(robot_library("lynxmotion"), "per-joint"),
+    assert isinstance(choose_regressor(Arm.of("lynxmotion").library, "per-joint"),
                       BaseAtomRegressor)
     with pytest.raises(IdentificationError, match="method must be"):
         choose_regressor(atoms, "joint")
@@ -41,7 +42,7 @@ def test_the_regressor_follows_the_library_and_method():
 
 
 def test_the_prior_by_data_kind_and_library():
-    kinematic, features = robot_library("lynxmotion"), prior_knowledge_library(3)
+    kinematic, features = Arm.of("lynxmotion").library, prior_knowledge_library(3)
     assert choose_prior("auto", True, kinematic) == "nominal"
     assert choose_prior("auto", False, kinematic) == "none"
     assert choose_prior("auto", True, features) == "none"
@@ -50,7 +51,7 @@ def test_the_prior_by_data_kind_and_library():
 
 
 def test_the_nominal_is_computed_only_for_the_nominal_prior():
-    kinematic = robot_library("lynxmotion")
+    kinematic = Arm.of("lynxmotion").library
 
     def never():
         raise AssertionError("nominal computed")
@@ -63,8 +64,8 @@ def test_the_nominal_is_computed_only_for_the_nominal_prior():
 
 
 def test_robot_identification_passes_the_robots_inputs_in():
-    library, regressor = robot_identification("lynxmotion")
+    library, regressor = arm_identification(Arm.of("lynxmotion"))
     assert library.name.startswith("prior") and isinstance(regressor, CoupledRegressor)
-    library, regressor = robot_identification("lynxmotion", prior="nominal")
-    assert library is robot_library("lynxmotion") and isinstance(regressor, ConsistentRegressor)
+    library, regressor = arm_identification(Arm.of("lynxmotion"), prior="nominal")
+    assert library is Arm.of("lynxmotion").library and isinstance(regressor, ConsistentRegressor)
     assert regressor.nominal.shape == (39,)

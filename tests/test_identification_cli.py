@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 from identification.model import load_model
 from tests.helpers import lynxmotion_motion
 
@@ -17,7 +16,7 @@ from tests.helpers import lynxmotion_motion
 @pytest.fixture(scope="module")
 def arrays():
     m = lynxmotion_motion(1600, seed=4)
-    tau = PinocchioModel(load_pinocchio("lynxmotion")).torque(m.q, m.qd, m.qdd)
+    tau = Arm.of("lynxmotion").nominal.torque(m.q, m.qd, m.qdd)
     rng = np.random.default_rng(2)
     noisy = tau + 0.01 * tau.std(axis=0) * (rng.normal(size=tau.shape) + 0.2)
     return {"t": m.t, "q": m.q, "qd": m.qd, "qdd": m.qdd, "tau": noisy, "tau_clean": tau}
@@ -151,7 +150,7 @@ def _generated(tmp_path, name, seed, noise=0.05, clean=True, bias=0.2):
     from harness.data.generate import generate
     from harness.io import write_npz
 
-    d = generate("ur5", 1500, noise, seed, "inverse", bias=bias)
+    d = generate(Arm.of("ur5"), 1500, noise, seed, "inverse", bias=bias)
     arrays = d.arrays()
     if not clean:  # as a measured log: no clean torque
         arrays.pop("tau_clean")
@@ -173,7 +172,7 @@ def test_several_runs_in_another_out(tmp_path):
     assert metrics["heldout"] == {"kind": "logs", "logs": [str(c)], "fitted_on": [str(a), str(b)],
                                   "samples": 1500}
     assert metrics["scored_against"] == "tau_clean"
-    model, judge = load_torque_model(str(out), "ur5"), np.load(c)
+    model, judge = load_torque_model(str(out), Arm.of("ur5")), np.load(c)
     mine = rel_error(model.torque(judge["q"], judge["qd"], judge["qdd"]), judge["tau_clean"])
     np.testing.assert_allclose(metrics["heldout_rel_rmse"], mine, rtol=1e-9)
     # the same model fitted on A alone differs: B was used in fitting
@@ -237,13 +236,12 @@ def test_predict_on_a_measured_log_reads_like_its_sensor(tmp_path):
 def test_predict_takes_the_robot_the_data_record_and_refuses_another_robots_model(tmp_path, capsys,
                                                                                   arrays):
     """Without --robot, predict works on the robot the log records (a 6-joint UR5 log: not
-    the 3-joint default arm); a model identified for the Lynxmotion is one error line on it,
-    exit 2, no file. Its error against the log's torque is Pinocchio's RNEA written out."""
+    the 3-joint default arm); a model identified for the Lynxmotion is one error line on it
+    naming the log's robot, exit 2, no file. Its error against the log's torque is Pinocchio's
+    RNEA written out."""
     import pinocchio as pin
 
-    from harness.robots.registry import load_pinocchio
-
-    model = load_pinocchio("ur5")
+    model = Arm.of("ur5").pinocchio
     data = pin.Model.createData(model)
     rng = np.random.default_rng(3)
     q, qd, qdd = (rng.uniform(-1, 1, (40, 6)) for _ in range(3))
@@ -264,4 +262,26 @@ def test_predict_takes_the_robot_the_data_record_and_refuses_another_robots_mode
     bad = tmp_path / "bad.npz"
     assert main(["predict", "--model", str(lynx_model), "--data", str(log), "--out", str(bad)]) == 2
     err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and "identified for robot" in err and not bad.exists()
+    assert len(err.splitlines()) == 1 and "records robot 'ur5'" in err and "'lynxmotion'" in err
+    assert not bad.exists()
+
+
+def test_data_or_a_model_of_another_robot_is_one_line_naming_it(tmp_path, capsys):
+    """identify --robot panda on a UR5's data, and predict with a UR5's model on a Panda's
+    data: exit 2, one line naming the robot the data record (not only a joint count that
+    does not fit), no file."""
+    ur5 = _generated(tmp_path, "ur5.npz", 1)
+    panda, model = tmp_path / "panda.npz", tmp_path / "ur5.json"
+    assert main(["generate", "--robot", "panda", "--samples", "300", "--out", str(panda)]) == 0
+    assert main(["identify", "--data", str(ur5), "--out", str(model)]) == 0
+    capsys.readouterr()
+    out = tmp_path / "m.json"
+    assert main(["identify", "--data", str(ur5), "--robot", "panda", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "records robot 'ur5'" in err[0] and "'panda'" in err[0], err
+    assert not out.exists()
+    pred = tmp_path / "p.npz"
+    assert main(["predict", "--model", str(model), "--data", str(panda), "--out", str(pred)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "records robot 'panda'" in err[0] and "'ur5'" in err[0], err
+    assert not pred.exists()

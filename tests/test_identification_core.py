@@ -10,8 +10,7 @@ import numpy as np
 import pytest
 
 from harness.paper.identification.published_library import paper_library
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 from identification.errors import IdentificationError, LibraryRankWarning
 from identification.identify import identify
 from identification.library.features import parse_feature
@@ -25,7 +24,7 @@ from tests.helpers import lynxmotion_motion
 @pytest.fixture(scope="module")
 def clean():
     m = lynxmotion_motion(2000, seed=3)
-    pm = PinocchioModel(load_pinocchio("lynxmotion"))
+    pm = Arm.of("lynxmotion").nominal
     return m, pm.torque(m.q, m.qd, m.qdd), pm
 
 

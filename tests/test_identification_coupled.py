@@ -11,8 +11,7 @@ import pytest
 
 from harness.data.generate import generate
 from harness.paper.identification.published_library import paper_library
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 from identification.errors import IdentificationError
 from identification.identify import identify
 from identification.library.prior_knowledge import absolute_chain_atoms, arm_atoms, prior_knowledge_library
@@ -25,7 +24,7 @@ from tests.helpers import lynxmotion_motion
 @pytest.fixture(scope="module")
 def clean():
     m = lynxmotion_motion(2000, seed=3)
-    pm = PinocchioModel(load_pinocchio("lynxmotion"))
+    pm = Arm.of("lynxmotion").nominal
     return m, pm.torque(m.q, m.qd, m.qdd), pm
 
 
@@ -85,18 +84,18 @@ def test_collinear_atoms_fold_into_base_atoms(clean):
     assert len(base) + len(folded) == len(basis.atoms) and len(folded) >= 5
     # qd3^2 has no signature at all; the others equal base atoms' signatures once q3 = 0
     assert {"qd3^2", "qd1^2*cos(2*q2+q3)", "qd2^2*cos(q3)", "qd2*qd3*cos(q3)"} <= folded_names
-    pm = PinocchioModel(load_pinocchio("lynxmotion"))
+    pm = Arm.of("lynxmotion").nominal
     reg = CoupledRegression().fit(design, pm.torque(q, qd, qdd))
     np.testing.assert_allclose(reg.predict(design), pm.torque(q, qd, qdd), atol=1e-9)
 
 
 def test_coupled_beats_per_joint_and_oracle_at_five_percent():
     """Issue #3 on the default data: generate('lynxmotion', 4000, 0.05, seed=0), last 25 %."""
-    d = generate("lynxmotion", 4000, 0.05, seed=0)
+    d = generate(Arm.of("lynxmotion"), 4000, 0.05, seed=0)
     lib = prior_knowledge_library(3)
     coupled = identify(d.q, d.qd, d.qdd, d.tau, lib, 0.25, d.tau_clean)
     per_joint = identify(d.q, d.qd, d.qdd, d.tau, lib, 0.25, d.tau_clean, method="per-joint")
-    y = PinocchioModel(load_pinocchio("lynxmotion")).regressor(d.q, d.qd, d.qdd)
+    y = Arm.of("lynxmotion").nominal.regressor(d.q, d.qd, d.qdd)
     fit = fit_base_parameters(y[:3000], d.tau[:3000])
     oracle = np.linalg.norm(fit.predict(y[3000:]) - d.tau_clean[3000:], axis=0) / np.linalg.norm(
         d.tau_clean[3000:], axis=0)

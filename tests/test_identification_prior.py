@@ -13,11 +13,12 @@ import pytest
 from harness.cli import main
 from harness.data.generate import generate
 from harness.io import write_npz
+from harness.robots.arm import Arm
 from harness.robots.torque_models import load_torque_model
 
 
 def _log(tmp_path, measured: bool):
-    d = generate("ur5", 1500, 0.05, 11, "inverse")
+    d = generate(Arm.of("ur5"), 1500, 0.05, 11, "inverse")
     arrays = d.arrays()
     if measured:  # as `ingest` writes it: no clean torque, the mode named
         arrays.pop("tau_clean")
@@ -52,7 +53,7 @@ def test_the_prior_by_data_kind(tmp_path, capsys, measured, prior, expected):
 
 
 def test_the_prior_needs_the_robots_atoms(tmp_path, capsys):
-    d = generate("lynxmotion", 800, 0.02, 3, "inverse")
+    d = generate(Arm.of("lynxmotion"), 800, 0.02, 3, "inverse")
     write_npz(tmp_path / "d.npz", **d.arrays())
     out = tmp_path / "m.json"
     assert main(["identify", "--data", str(tmp_path / "d.npz"), "--prior", "nominal",
@@ -75,7 +76,7 @@ def test_a_consistent_model_with_a_friction_law_is_what_the_planner_differentiat
     payload["joints"][1]["terms"].append("sigmoid2")
     payload["joints"][1]["coefficients"].append(0.7)
     out.write_text(json.dumps(payload))
-    model = load_torque_model(str(out), "ur5")
+    model = load_torque_model(str(out), Arm.of("ur5"))
     rng = np.random.default_rng(0)
     q, qd, qdd = (rng.normal(size=6) for _ in range(3))
     x = [ca.SX.sym(s, 6) for s in ("q", "qd", "qdd")]

@@ -18,8 +18,7 @@ from data import DATA
 from harness.cli import main
 from harness.data.derivatives import savgol_window_derivatives
 from harness.data.ingest import POLYORDER, ingest, resample, uniform_grid
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 
 FREQS = np.array([0.1, 0.2, 0.3, 0.5, 0.8])  # Hz, the harmonics of the simulated excitation
 DOF = 3
@@ -46,7 +45,7 @@ def log():
     t = np.concatenate([[0.0], np.cumsum(steps)])
     t = t[t <= 12.0]
     q, qd, qdd = _motion(t)
-    tau = PinocchioModel(load_pinocchio("lynxmotion")).torque(q, qd, qdd)
+    tau = Arm.of("lynxmotion").nominal.torque(q, qd, qdd)
     noisy = {"q": q + rng.normal(scale=2e-5, size=q.shape),
              "qd": qd + rng.normal(scale=2e-3, size=q.shape),
              "tau": tau + rng.normal(scale=0.002, size=q.shape)}
@@ -69,7 +68,7 @@ def _rel(a, b):
 def test_estimated_derivatives_match_the_closed_form(tmp_path, log, logged):
     t, noisy, exact = log
     path = _csv(tmp_path / "log.csv", t, {g: noisy[g] for g in logged})
-    data = ingest(path, DOF, "lynxmotion")
+    data = ingest(path, Arm.of("lynxmotion"))
     d = data.meta["derivatives"]
     assert d["source"] == logged[-2] and d["estimated"] == [g for g in ("qd", "qdd") if g not in logged]
     grid = data.arrays["t"]
@@ -79,7 +78,7 @@ def test_estimated_derivatives_match_the_closed_form(tmp_path, log, logged):
     assert np.all(_rel(data.arrays["qdd"][inner], qdd[inner]) < 0.01)
     assert np.all(_rel(data.arrays["qd"][inner], qd[inner]) < 0.005)  # logged: its noise
     # the torque of the handed-over states: Pinocchio's at them vs at the exact states
-    model = PinocchioModel(load_pinocchio("lynxmotion"))
+    model = Arm.of("lynxmotion").nominal
     tau = model.torque(data.arrays["q"], data.arrays["qd"], data.arrays["qdd"])
     assert np.all(_rel(tau[inner], model.torque(q, qd, qdd)[inner]) < 0.01)
 
@@ -89,7 +88,7 @@ def test_the_window_chosen_from_the_data_is_near_the_best_of_a_sweep(tmp_path, l
     windows (each scored against the exact acceleration, which the choice never sees)."""
     t, noisy, _ = log
     data = ingest(_csv(tmp_path / "log.csv", t, {g: noisy[g] for g in ("q", "qd", "tau")}),
-                  DOF, "lynxmotion")
+                  Arm.of("lynxmotion"))
     grid, rate = uniform_grid(t)
     qd = resample(t, noisy["qd"], grid)
     exact = _motion(grid)[2]
@@ -118,13 +117,14 @@ def test_cli_writes_the_contract_and_decimates(tmp_path, log, capsys):
         meta = json.loads(str(d["meta"]))
         assert d["q"].shape == (meta["samples"], DOF) and d["t"].shape == (meta["samples"],)
         assert np.allclose(np.diff(d["t"]), 0.01, rtol=0.01)
-        full = ingest(path, DOF, "lynxmotion")
+        full = ingest(path, Arm.of("lynxmotion"))
         np.testing.assert_allclose(d["qdd"], full.arrays["qdd"][::meta["resampling"]["decimation"]])
-    assert meta["plant"] == "lynxmotion" and meta["derivatives"]["window_samples"] > 1
+    assert meta["plant"] == meta["robot"] == "lynxmotion" and meta["derivatives"]["window_samples"] > 1
+    assert meta["robot_hash"] == Arm.of("lynxmotion").record["hash"]
 
 
 def test_the_shipped_panda_log_reads(tmp_path):
-    data = ingest(DATA / "panda_gaz2019" / "panda_gaz2019.csv.gz", 7, "panda", rate=100)
+    data = ingest(DATA / "panda_gaz2019" / "panda_gaz2019.csv.gz", Arm.of("panda"), rate=100)
     assert data.meta["raw_samples"] == 20544 and data.meta["logged"] == ["q", "qd", "tau"]
     assert data.arrays["q"].shape == (2100, 7) and np.all(np.isfinite(data.arrays["qdd"]))
     assert (DATA / "panda_gaz2019" / "LICENSE").read_text().startswith("                    GNU")

@@ -10,15 +10,17 @@ from __future__ import annotations
 import numpy as np
 
 from harness.experiments.identification import closed_form_gap, sines_motion
-from harness.robots.registry import erd_robots_dir, load_mujoco, load_pinocchio
+from harness.robots.arm import Arm
+from harness.robots.registry import erd_robots_dir
 
-Z1 = str(erd_robots_dir() / "z1_description" / "urdf" / "z1.urdf")
+Z1 = erd_robots_dir() / "z1_description" / "urdf" / "z1.urdf"
 
 
 def test_damping_is_in_both_engines_and_coulomb_friction_in_neither():
-    model, mj = load_pinocchio(Z1), load_mujoco(Z1)
+    arm = Arm.of(Z1)
+    model, mj = arm.pinocchio, arm.mujoco
     assert model.nv == mj.nv == 7  # six arm joints and the gripper's revolute jaw
     np.testing.assert_allclose(model.damping, [1, 2, 1, 1, 1, 1, 1])  # the file's own
     np.testing.assert_allclose(mj.dof_damping, model.damping)
     assert not np.any(model.friction) and not np.any(mj.dof_frictionloss)
-    assert closed_form_gap(Z1, sines_motion(Z1, 400, 3)) <= 1e-9
+    assert closed_form_gap(arm, sines_motion(arm, 400, 3)) <= 1e-9

@@ -7,15 +7,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from harness.robots.arm import Arm
 from harness.robots.registry import erd_robots_dir
-from harness.robots.torque_models import robot_library
 from identification.library.kinematic import N_STATES, RANK_TOL, random_states
 
 XARM7 = str(erd_robots_dir() / "xarm_description" / "urdf" / "xarm7.urdf")
 
 
 def test_no_two_base_atoms_of_the_xarm7_are_nearly_one():
-    library = robot_library(XARM7)
+    library = Arm.of(XARM7).library
     atoms = library.evaluate(*random_states(library.dof, N_STATES, seed=3))
     flat = atoms.reshape(-1, atoms.shape[2])
     flat = flat / np.linalg.norm(flat, axis=0)

@@ -18,10 +18,9 @@ from harness.cli import main
 from harness.commands.replay import plan_capsules
 from harness.errors import UserError
 from harness.replay.clearance import ClearanceProbe
-from harness.robots.arm import arm_geometry, collision_capsules, joint_limits
+from harness.robots.arm import Arm
 from harness.robots.capsules import fit_capsule, link_capsules
-from harness.robots.collision import robot_body_points
-from harness.robots.registry import erd_robots_dir, load_pinocchio
+from harness.robots.registry import erd_robots_dir
 from harness.robots.scene import OBSTACLE_RADIUS, build_scene
 from planning.formulation.clearance import (
     link_clearances,
@@ -37,12 +36,12 @@ UR3 = str(erd_robots_dir() / "ur_description" / "urdf" / "ur3_robot.urdf")
 
 def _link_points(robot: str) -> list[np.ndarray | None]:
     """The mesh points (n, 3) of each link's body in the world at q = 0 (m)."""
-    model = load_pinocchio(robot)
+    model = Arm.of(robot).pinocchio
     data = model.createData()
     pin.forwardKinematics(model, data, pin.neutral(model))
-    found = {j: points for j, (_, points) in robot_body_points(robot).items()}
+    found = {j: points for j, (_, points) in Arm.of(robot).body_points.items()}
     out = []
-    for i, _ in collision_capsules(robot).links:
+    for i, _ in Arm.of(robot).capsules().links:
         placement = data.oMi[i + 1]
         points = found.get(i + 1)
         out.append(None if points is None
@@ -52,7 +51,7 @@ def _link_points(robot: str) -> list[np.ndarray | None]:
 
 @pytest.mark.parametrize("robot", MESHED)
 def test_capsules_hold_every_mesh_point_and_are_snug(robot):
-    geometry = collision_capsules(robot)
+    geometry = Arm.of(robot).capsules()
     a, b = (x[0] for x in geometry.link_ends(np.zeros(geometry.dof)))
     for k, points in enumerate(_link_points(robot)):
         assert points is not None  # every link of these arms has meshes
@@ -87,15 +86,15 @@ def test_planner_distance_is_mujoco_geom_distance(robot):
     mj_geomDistance between the scene's capsule and the sphere; the replay's probe agrees.
     The UR3 (example-robot-data) has links of zero length on its wrist: spheres in the scene
     (MuJoCo refuses a capsule between coincident points; replay raised a traceback)."""
-    geometry = collision_capsules(robot)
-    model = build_scene(robot, geometry=geometry).compile()
+    geometry = Arm.of(robot).capsules()
+    model = build_scene(Arm.of(robot), geometry=geometry).compile()
     data = mujoco.MjData(model)
     probe = ClearanceProbe.of(model, geometry)
     assert probe.has_surface and probe.axes is not None
     q, centre = ca.SX.sym("q", geometry.dof), ca.SX.sym("c", 3)
     rows = ca.Function("rows", [q, centre],
                        [ca.vertcat(*symbolic_link_clearances(geometry, q, centre))])
-    lower, upper = joint_limits(robot)
+    lower, upper = Arm.of(robot).joint_limits
     for _ in range(20):
         angles = RNG.uniform(np.maximum(lower, -np.pi), np.minimum(upper, np.pi))
         mid = geometry.link_ends(angles)[0][0, RNG.integers(len(geometry.links))]
@@ -114,23 +113,23 @@ def test_planner_distance_is_mujoco_geom_distance(robot):
 def test_fitted_capsules_are_the_link_capsules_of_every_link():
     """The UR5's six links keep their joint-origin links; the Panda gains its link 5 (the
     forearm, on a zero-length segment) and keeps link 1 out (it does not move)."""
-    geometry = arm_geometry("ur5")
-    meshes = {j: points for j, (_, points) in robot_body_points("ur5").items()}
-    capsules = link_capsules(meshes, load_pinocchio("ur5"), geometry)
-    fitted = collision_capsules("ur5")
+    geometry = Arm.of("ur5").geometry
+    meshes = {j: points for j, (_, points) in Arm.of("ur5").body_points.items()}
+    capsules = link_capsules(meshes, Arm.of("ur5").pinocchio, geometry)
+    fitted = Arm.of("ur5").capsules()
     assert fitted.links == geometry.links and fitted.covered == ()
     assert len(capsules) == len(fitted.ends) == len(geometry.links)
     for capsule, (a, b), radius in zip(capsules, fitted.ends, fitted.radii, strict=True):
         np.testing.assert_array_equal(capsule.a, a)
         np.testing.assert_array_equal(capsule.b, b)
         assert capsule.radius == radius
-    panda = collision_capsules("panda")
+    panda = Arm.of("panda").capsules()
     assert panda.covered == (4,) and (4, 5) in panda.links and (0, 1) not in panda.links
-    assert len(panda.links) == len(arm_geometry("panda").links) + 1
+    assert len(panda.links) == len(Arm.of("panda").geometry.links) + 1
 
 
 def test_robot_without_meshes_keeps_its_centre_lines():
-    assert collision_capsules("lynxmotion") == arm_geometry("lynxmotion")
+    assert Arm.of("lynxmotion").capsules() == Arm.of("lynxmotion").geometry
 
 
 @pytest.mark.slow
@@ -140,7 +139,7 @@ def test_ur5_default_plan_keeps_the_surfaces_clear_in_replay(tmp_path):
                  "0.37,-0.06,0.15", "--obstacle-to", "0.37,-0.06,0.65",
                  "--out", str(plan_path)]) == 0
     plan = json.loads(plan_path.read_text())
-    geometry = collision_capsules("ur5")
+    geometry = Arm.of("ur5").capsules()
     assert plan["link_radii"] == list(geometry.radii)
     assert [c["joint"] for c in plan["link_capsules"]] == [j for _, j in geometry.links]
     assert [c["radius"] for c in plan["link_capsules"]] == plan["link_radii"]
@@ -156,11 +155,11 @@ def test_replay_rebuilds_the_plans_capsules():
     """PLAN.json's link_capsules (planning.result.capsules) give back the planner's geometry,
     the Panda's extra link included; bad entries are one UserError."""
     for robot in MESHED:
-        fitted = collision_capsules(robot)
+        fitted = Arm.of(robot).capsules()
         recorded = json.loads(json.dumps(capsules(fitted)))
-        assert plan_capsules(recorded, arm_geometry(robot)) == fitted
-    assert plan_capsules(None, arm_geometry("lynxmotion")) == arm_geometry("lynxmotion")
-    recorded = json.loads(json.dumps(capsules(collision_capsules("ur5"))))
+        assert plan_capsules(recorded, Arm.of(robot).geometry) == fitted
+    assert plan_capsules(None, Arm.of("lynxmotion").geometry) == Arm.of("lynxmotion").geometry
+    recorded = json.loads(json.dumps(capsules(Arm.of("ur5").capsules())))
     for change in ({"joint": 9}, {"a": [0, 0]}, {"radius": -1}, {"b": "x"}):
         with pytest.raises(UserError):
-            plan_capsules([{**recorded[0], **change}, *recorded[1:]], arm_geometry("ur5"))
+            plan_capsules([{**recorded[0], **change}, *recorded[1:]], Arm.of("ur5").geometry)

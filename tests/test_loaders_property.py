@@ -27,8 +27,7 @@ from harness.data.dataset import load_arrays
 from harness.data.generate import generate
 from harness.errors import UserError
 from harness.io import write_npz
-from harness.robots.plant import load_plant
-from harness.robots.registry import load_chain
+from harness.robots.arm import Arm
 from models import MODELS
 from tests.result_files import incomplete_files
 
@@ -40,7 +39,7 @@ SAMPLES = 300  # identify needs > 200 training samples: some mutants get that fa
 def valid(tmp_path_factory):
     """A valid dataset, two identified models of it (prior and kinematic), a short plan."""
     root = tmp_path_factory.mktemp("valid")
-    data = generate("lynxmotion", SAMPLES, 0.05, seed=3)
+    data = generate(Arm.of("lynxmotion"), SAMPLES, 0.05, seed=3)
     arrays = {k: v for k, v in data.arrays().items() if k in (*KEYS, "meta")}
     write_npz(root / "data.npz", **arrays)
     models = []
@@ -286,7 +285,8 @@ def test_robot_file_mutated(valid, capfd, data):
     suffix = data.draw(st.sampled_from(sorted(ROBOT_FILES)))
     path, out = _fresh(suffix)
     path.write_text(data.draw(mutated_robot(ROBOT_FILES[suffix])))
-    for load in (load_plant, lambda p: load_plant(p).pinocchio(), load_chain):
+    for load in (lambda p: Arm.of(p).mujoco, lambda p: Arm.of(p).pinocchio,
+                 lambda p: Arm.of(p).chain):  # a fresh path each draw: Arm.of caches by path
         try:
             load(str(path))
         except UserError as exc:  # the loader's own message is one line, not only the CLI's

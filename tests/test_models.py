@@ -7,8 +7,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import MODELS, ROBOTS, get_robot, load_mujoco, load_pinocchio
+from harness.robots.arm import Arm
+from harness.robots.registry import MODELS, ROBOTS, get_robot
 
 D1, L2, L3 = 0.086, 0.146, 0.187
 
@@ -26,9 +26,9 @@ def random_states(model: mujoco.MjModel, n: int, seed: int = 0):
 @pytest.mark.parametrize("name", sorted(ROBOTS))
 def test_mj_inverse_matches_pinocchio_rnea(name):
     """mj_inverse (MJCF or URDF in MuJoCo) vs RNEA (+ URDF damping) on the URDF."""
-    model = load_mujoco(name)
+    model = Arm.of(name).mujoco
     data = mujoco.MjData(model)
-    baseline = PinocchioModel(load_pinocchio(name))
+    baseline = Arm.of(name).nominal
     q, qd, qdd = random_states(model, 1000)
     tau_mj = np.empty_like(q)
     for k in range(len(q)):
@@ -52,9 +52,9 @@ def paper_positions(q):
 
 
 def test_lynxmotion_kinematics_match_paper_eqs_9_10():
-    model = load_mujoco("lynxmotion")
+    model = Arm.of("lynxmotion").mujoco
     data = mujoco.MjData(model)
-    pmodel = load_pinocchio("lynxmotion")
+    pmodel = Arm.of("lynxmotion").pinocchio
     pdata = pmodel.createData()
     ee = pmodel.getFrameId("end_effector", pin.FrameType.BODY)
     q_all, _, _ = random_states(model, 500, seed=1)
@@ -72,7 +72,7 @@ def test_lynxmotion_kinematics_match_paper_eqs_9_10():
 
 
 def test_lynxmotion_parameters_are_the_papers():
-    model = load_mujoco("lynxmotion")
+    model = Arm.of("lynxmotion").mujoco
     assert model.body("link1").mass[0] == pytest.approx(0.3)
     assert model.body("link2").mass[0] == pytest.approx(0.2)
     assert model.body("link3").mass[0] == pytest.approx(0.5)
@@ -91,7 +91,7 @@ def scene_files() -> list[Path]:
 
 @pytest.mark.parametrize("target", [str(p) for p in scene_files()] + sorted(ROBOTS))
 def test_every_scene_simulates_one_second_without_warning(target, capfd):
-    model = load_mujoco(target)
+    model = Arm.of(target).mujoco
     data = mujoco.MjData(model)
     if model.nkey:
         mujoco.mj_resetDataKeyframe(model, data, 0)
@@ -116,7 +116,7 @@ def test_a_urdf_path_loads_like_the_registered_robot_and_leaves_no_mujoco_log(tm
     (a warning would write MUJOCO_LOG.TXT into the working directory)."""
     monkeypatch.chdir(tmp_path)
     urdf = get_robot("double_pendulum").urdf
-    by_path, by_name = load_mujoco(urdf), load_mujoco("double_pendulum")
+    by_path, by_name = Arm.of(urdf).mujoco, Arm.of("double_pendulum").mujoco
     assert by_path.nv == by_name.nv == 2
     np.testing.assert_array_equal(by_path.body_mass, by_name.body_mass)
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()

@@ -10,18 +10,18 @@ import pytest
 
 from harness.experiments.next_run import RULE_RMS, law_torque, next_run, rule_targets, two_runs
 from harness.experiments.peers import joint_friction_columns
+from harness.robots.arm import Arm
 from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
 from identification.metrics import rel_error
 
 
 def test_next_run_scores_what_it_says():
-    robot, seed = "ur5", 7
-    out = next_run(robot, seed, samples=1500)
+    arm, seed = Arm.of("ur5"), 7
+    out = next_run(arm, seed, samples=1500)
     errors = {k: np.array(v) for k, v in out["errors"].items()}
     # the nominal is the perturbed URDF's RNEA: Pinocchio on a model with those inertias
-    runs = two_runs(robot, seed, samples=1500)
-    model = load_pinocchio(robot)
+    runs = two_runs(arm, seed, samples=1500)
+    model = arm.pinocchio.copy()
     for j in range(1, model.njoints):
         model.inertias[j] = pin.Inertia.FromDynamicParameters(runs.nominal[10 * (j - 1):10 * j])
     s = runs.second
@@ -31,7 +31,7 @@ def test_next_run_scores_what_it_says():
     # (not the library's atoms) plus the friction columns, on both runs, scored here
     first, n = runs.first, len(runs.first.q)
     states = [np.r_[a, b] for a, b in ((first.q, s.q), (first.qd, s.qd), (first.qdd, s.qdd))]
-    X = np.concatenate([PinocchioModel(load_pinocchio(robot)).regressor(*states),
+    X = np.concatenate([arm.nominal.regressor(*states),
                         joint_friction_columns(states[1])], axis=2)
     tau = np.r_[runs.tau_first, runs.tau_second]
     coef, *_ = np.linalg.lstsq(X[:n].reshape(-1, X.shape[2]), tau[:n].ravel(), rcond=None)
@@ -62,7 +62,7 @@ def test_friction_law_is_odd_around_its_shift_and_offset():
 def test_the_rule_judges_a_small_arm_too():
     """On the Lynxmotion, whose joints all stay below RULE_RMS, the rule still judges the
     joints that carry its load, so its target can be missed (it read '>= 0 joints')."""
-    out = next_run("lynxmotion", 3, samples=1500)
+    out = next_run(Arm.of("lynxmotion"), 3, samples=1500)
     assert max(out["torque_rms"]) < RULE_RMS and out["rule_joints"]
     target = rule_targets([out])[0]
     assert target.target == len(out["rule_joints"]) >= 1 and target.measured is not None

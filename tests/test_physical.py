@@ -14,9 +14,7 @@ import pytest
 
 from harness.data.generate import generate
 from harness.experiments.identification import perturbed_nominal, sines_motion
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
-from harness.robots.torque_models import robot_library
+from harness.robots.arm import Arm
 from identification.ellipsoids import Ellipsoid, enclosing, holding, inside
 from identification.friction import FrictionLaw, choose_law
 from identification.identify import identify
@@ -38,15 +36,15 @@ def test_pseudo_inertia_says_which_bodies_are_physical():
 
 @pytest.fixture(scope="module")
 def lynx():
-    library = robot_library("lynxmotion")
-    return library, PinocchioModel(load_pinocchio("lynxmotion")), sines_motion("lynxmotion", 600, 9)
+    library = Arm.of("lynxmotion").library
+    return library, Arm.of("lynxmotion").nominal, sines_motion(Arm.of("lynxmotion"), 600, 9)
 
 
 def test_noise_free_truth_recovered_on_another_motion(lynx):
     """MuJoCo's torque (armature and damping included) is in the atoms' span: with or without
     the true nominal, the fit predicts a motion of another family to 1e-3."""
     library, base, judge = lynx
-    data = generate("lynxmotion", 1500, 0.0, 3, "inverse")
+    data = generate(Arm.of("lynxmotion"), 1500, 0.0, 3, "inverse")
     atoms = library.evaluate_every(data.q, data.qd, data.qdd)
     judged = library.evaluate_every(judge.q, judge.qd, judge.qdd)
     for nominal in (base.atom_parameters(), np.zeros(39)):
@@ -63,7 +61,7 @@ def test_a_wrong_nominal_is_not_followed_where_the_data_speak(lynx):
     """5 % noise, a nominal 30 % heavy: the fit predicts an unseen motion far better than the
     nominal model itself, and its folded model predicts exactly what the fit does."""
     library, base, judge = lynx
-    data = generate("lynxmotion", 1500, 0.05, 3, "inverse")
+    data = generate(Arm.of("lynxmotion"), 1500, 0.05, 3, "inverse")
     wrong = base.atom_parameters() * 1.3
     result = identify(data.q, data.qd, data.qdd, data.tau, library, 0.25, data.tau_clean,
                       ConsistentRegressor(wrong))
@@ -114,7 +112,7 @@ def test_friction_law_columns_agree_in_casadi_and_round_trip():
 
 def test_consistent_model_reads_back_from_model_json(lynx):
     library, base, judge = lynx
-    data = generate("lynxmotion", 1500, 0.02, 5, "inverse")
+    data = generate(Arm.of("lynxmotion"), 1500, 0.02, 5, "inverse")
     model = identify(data.q, data.qd, data.qdd, data.tau, library, 0.25, data.tau_clean,
                      ConsistentRegressor(perturbed_nominal(base, 2))).model
     back = model_from_dict(model_to_dict(model), lambda: library)
@@ -135,7 +133,7 @@ def test_a_fallback_to_scs_is_warned_and_recorded(lynx, monkeypatch):
     import cvxpy as cp
 
     library, _, _ = lynx
-    data = generate("lynxmotion", 600, 0.01, 3, "inverse")
+    data = generate(Arm.of("lynxmotion"), 600, 0.01, 3, "inverse")
     atoms = library.evaluate_every(data.q, data.qd, data.qdd)
     fit = fit_physical(atoms, data.qd, data.tau, np.zeros(39), lambdas=(1e-6,),
                        choose_friction=False)
@@ -157,7 +155,7 @@ def test_a_fallback_to_scs_is_warned_and_recorded(lynx, monkeypatch):
 def test_the_solver_is_in_the_metrics(lynx):
     """MODEL.json's metrics.physical names the solver the consistent fit took (issue #45)."""
     library, _, _ = lynx
-    data = generate("lynxmotion", 600, 0.01, 3, "inverse")
+    data = generate(Arm.of("lynxmotion"), 600, 0.01, 3, "inverse")
     result = identify(data.q, data.qd, data.qdd, data.tau, library, 0.25, data.tau_clean,
                       ConsistentRegressor(None, choose_friction=False))
     assert result.metrics()["physical"]["solver"] == "CLARABEL"
@@ -168,7 +166,7 @@ def test_the_ellipsoid_row_keeps_a_body_inside(lynx):
     mass outside (tr(J Q) < 0), the fit with it inside (tr(J Q) >= 0), still consistent."""
     library, base, _ = lynx
     nominal = base.atom_parameters()
-    data = generate("lynxmotion", 800, 0.0, 3, "inverse")
+    data = generate(Arm.of("lynxmotion"), 800, 0.0, 3, "inverse")
     atoms = library.evaluate_every(data.q, data.qd, data.qdd)
     c = nominal[11:14] / nominal[10]  # body 2's centre of mass
     bound = Ellipsoid(c + 0.5 * np.linalg.norm(c) + 0.02, np.full(3, 0.3 * np.linalg.norm(c) + 0.01),

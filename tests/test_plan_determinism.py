@@ -15,8 +15,7 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 from planning.anytime.budget import Clock
 from planning.anytime.planner import AnytimePlanner
 from planning.config import nominal_iteration_ms, true_energy_config
@@ -28,7 +27,7 @@ from tests.helpers import random_crossing
 
 @pytest.fixture(scope="module")
 def baseline():
-    return PinocchioModel(load_pinocchio("lynxmotion"))
+    return Arm.of("lynxmotion").nominal
 
 
 @pytest.fixture(scope="module")

@@ -5,6 +5,7 @@ feed-forward torque), velocity limits in the NLP, link radii from collision geom
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import json
 import re
@@ -15,10 +16,8 @@ import pinocchio as pin
 import pytest
 
 from harness.cli import main
-from harness.robots.arm import arm_geometry, collision_capsules, joint_limits, link_radii
-from harness.robots.baseline import PinocchioModel
+from harness.robots.arm import Arm
 from harness.robots.inertials import set_standard_parameters
-from harness.robots.registry import load_mujoco, load_pinocchio
 from harness.trajectory import read_trajectory
 from models import MODELS
 from planning.config import PlannerConfig, Scenario
@@ -51,9 +50,9 @@ def test_trajectory_columns_rate_and_rest_at_goal(planned):
 
 def test_trajectory_keeps_the_urdf_limits(planned):
     plan, (_, rows), _ = planned
-    model = load_pinocchio("lynxmotion")
+    model = Arm.of("lynxmotion").pinocchio
     q, qd, tau = rows[:, 1:4], rows[:, 4:7], rows[:, 10:13]
-    lower, upper = (np.asarray(b) for b in joint_limits("lynxmotion"))
+    lower, upper = Arm.of("lynxmotion").position_limits
     assert np.all(q >= lower - 1e-6) and np.all(q <= upper + 1e-6)
     assert np.all(np.abs(qd) <= model.velocityLimit) and plan["velocity_limit"] is not None
     assert np.all(np.abs(tau) <= np.asarray(plan["torque_limit"]))
@@ -61,7 +60,7 @@ def test_trajectory_keeps_the_urdf_limits(planned):
 
 def test_feedforward_is_pinocchio_rnea_at_the_rows(planned):
     _, (_, rows), _ = planned
-    model = load_pinocchio("lynxmotion")
+    model = Arm.of("lynxmotion").pinocchio
     data = model.createData()
     for row in rows[::37]:
         q, qd, qdd = row[1:4], row[4:7], row[7:10]
@@ -71,7 +70,7 @@ def test_feedforward_is_pinocchio_rnea_at_the_rows(planned):
 
 def test_velocity_limit_holds_between_the_nlp_samples():
     scenario = Scenario(obstacle=None)
-    model = PinocchioModel(load_pinocchio("lynxmotion"))
+    model = Arm.of("lynxmotion").nominal
     free = Planner(model, PlannerConfig(rest_at_goal=True)).solve(
         scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
     t = np.linspace(0, scenario.duration, 2001)
@@ -85,23 +84,26 @@ def test_velocity_limit_holds_between_the_nlp_samples():
 
 def test_link_radii_from_the_collision_meshes():
     for robot in ("panda", "ur5"):
-        radii = np.asarray(link_radii(robot))
-        assert len(radii) == len(collision_capsules(robot).links)  # the Panda's: + link 5
+        fitted = Arm.of(robot).capsules()
+        radii = np.asarray(fitted.link_radii)
+        assert len(radii) == len(fitted.links)  # the Panda's: + link 5
         assert np.all(radii > 0.03) and np.all(radii < 0.3)  # arms, not points or rooms
-    assert link_radii("lynxmotion", 0.012) == (0.012,) * 2  # no <collision>: the default
+    # no <collision>: the default
+    assert tuple(Arm.of("lynxmotion").capsules(0.012).link_radii) == (0.012,) * 2
 
 
 def test_clearance_is_to_the_capsules_surfaces():
-    geometry = arm_geometry("ur5")
-    fat = dataclasses.replace(geometry, radii=link_radii("ur5"))
+    geometry = Arm.of("ur5").geometry
+    fat = dataclasses.replace(geometry, radii=tuple(map(float, Arm.of("ur5").capsules().link_radii)))
     q, centre = np.zeros((1, 6)), np.array([0.3, 0.2, 0.4])
     assert np.allclose(link_clearances(fat, q, centre),
                        link_clearances(geometry, q, centre) - np.asarray(fat.radii))
 
 
 def test_standard_parameters_rebuild_the_same_plant():
-    parameters = PinocchioModel(load_pinocchio("panda")).atom_parameters()
-    lower, upper = (np.asarray(b) for b in joint_limits("panda"))
+    panda = Arm.of("panda")
+    parameters = panda.nominal.atom_parameters()
+    lower, upper = panda.position_limits
     state = np.random.default_rng(3).uniform(size=(3, 7))
     state[0] = lower + (upper - lower) * state[0]  # inside the limits: no limit forces
 
@@ -111,8 +113,9 @@ def test_standard_parameters_rebuild_the_same_plant():
         mujoco.mj_inverse(model, data)
         return data.qfrc_inverse.copy()
 
-    own = inverse(load_mujoco("panda"))
-    assert np.allclose(inverse(set_standard_parameters(load_mujoco("panda"), parameters)), own,
+    own = inverse(panda.mujoco)
+    # a copy: the Arm's model is shared by everything in this process
+    assert np.allclose(inverse(set_standard_parameters(copy.deepcopy(panda.mujoco), parameters)), own,
                        rtol=1e-6, atol=1e-6)
 
 

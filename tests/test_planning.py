@@ -6,8 +6,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_mujoco, load_pinocchio
+from harness.robots.arm import Arm
 from planning.config import PlannerConfig
 from planning.formulation.clearance import link_clearances, segment_distance
 from planning.formulation.kinematics import paper_arm
@@ -22,7 +21,7 @@ RNG = np.random.default_rng(7)
 
 
 def test_forward_kinematics_matches_mujoco_sites():
-    model = load_mujoco("lynxmotion")
+    model = Arm.of("lynxmotion").mujoco
     data = mujoco.MjData(model)
     geometry = paper_arm()
     for q in RNG.uniform([-1.5, 0, -3], [1.5, 3, 0], (10, 3)):
@@ -79,7 +78,7 @@ def test_linear_prediction_is_exact_for_a_linear_obstacle():
 
 @pytest.fixture(scope="module")
 def nlp_functions():
-    model = PinocchioModel(load_pinocchio("lynxmotion"))
+    model = Arm.of("lynxmotion").nominal
     config = PlannerConfig(obstacle_slots=8)
     planner = Planner(model, config)
     q0, goal = np.array([1.2, 0.6, -0.8]), np.array([-1.0, 1.2, -1.0])

@@ -10,8 +10,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 from planning.anytime import elastic_qp, local_model, sqp
 from planning.anytime.planner import AnytimePlanner
 from planning.anytime.safety import SafetyCheck
@@ -36,7 +35,7 @@ IPOPT = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "ipopt.
 
 @pytest.fixture(scope="module")
 def baseline():
-    return PinocchioModel(load_pinocchio("lynxmotion"))
+    return Arm.of("lynxmotion").nominal
 
 
 @pytest.fixture(scope="module")
@@ -225,11 +224,11 @@ def test_the_local_derivatives_through_the_sites_are_casadis_through_the_rows(ro
     rows, their Jacobian and the Lagrangian's Hessian are CasADi's AD of the whole rows (the
     torque model copied into them on the Lynxmotion, called on the UR5), with torque limits
     (torque sites at the energy nodes, the start and the obstacle samples)."""
-    from harness.robots.arm import planner_config
+    from harness.plan.arm_config import planner_config
 
-    config = planner_config(robot, replanner="anytime", compile_code=False)
+    config = planner_config(Arm.of(robot), replanner="anytime", compile_code=False)
     assert config.torque_limit is not None
-    model = PinocchioModel(load_pinocchio(robot))
+    model = Arm.of(robot).nominal
     nlp = PlanningNLP(model, config, (0,), elastic=True)
     kinds = {site.kind for site in nlp.sites}
     assert kinds == {"torque", "distances"} and nlp.inline == (robot == "lynxmotion")

@@ -10,8 +10,7 @@ import pytest
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 from planning.config import PenaltyOptions, PlannerConfig
 from planning.formulation.breaks import power_breaks, settled, sign_changes
 from planning.formulation.energy import dense_energy, power
@@ -26,7 +25,7 @@ from tests.helpers import random_crossing
 
 @pytest.fixture(scope="module")
 def baseline():
-    return PinocchioModel(load_pinocchio("lynxmotion"))
+    return Arm.of("lynxmotion").nominal
 
 
 def test_split_rule_is_exact_for_a_polynomial_with_kinks_at_its_breaks():

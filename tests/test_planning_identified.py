@@ -7,8 +7,7 @@ import json
 import numpy as np
 
 from harness.cli import main
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 from planning.formulation.energy import absolute_energy
 
 
@@ -17,7 +16,7 @@ def test_identified_plan_energy_matches_pinocchio_plan(tmp_path):
     assert main(["generate", "--plant", "lynxmotion", "--samples", "4000", "--noise", "0.05",
                  "--seed", "0", "--mode", "inverse", "--out", str(data)]) == 0
     assert main(["identify", "--data", str(data), "--out", str(model)]) == 0
-    baseline = PinocchioModel(load_pinocchio("lynxmotion"))
+    baseline = Arm.of("lynxmotion").nominal
     energies = []
     for spec in ("pinocchio", str(model)):
         out = tmp_path / "plan.json"

@@ -7,8 +7,7 @@ import casadi as ca
 import numpy as np
 
 import planning.formulation.nlp as nlp_module
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 from planning.config import true_energy_config
 from planning.formulation.nlp import PlanningNLP
 
@@ -22,7 +21,7 @@ def _derivatives(nlp: PlanningNLP) -> ca.Function:
 
 
 def test_called_torque_model_is_the_inlined_one(monkeypatch):
-    model = PinocchioModel(load_pinocchio("lynxmotion"))
+    model = Arm.of("lynxmotion").nominal
     config = true_energy_config(obstacle_slots=6, energy_samples=8)
     inlined = PlanningNLP(model, config)
     monkeypatch.setattr(nlp_module, "INLINE_INSTRUCTIONS", 0)
@@ -47,7 +46,7 @@ def test_goal_limit_rows_are_built_only_where_the_goal_is_on_a_limit():
     from planning.config import PenaltyOptions, PlannerConfig
     from planning.penalty.solver import Planner
 
-    model = PinocchioModel(load_pinocchio("lynxmotion"))
+    model = Arm.of("lynxmotion").nominal
     planner = Planner(model, PlannerConfig(penalty=PenaltyOptions(solver="ipopt")))
     start, goal = (1.0, 0.6, -0.8), (-0.5, 1.2, -1.4)
     plan = planner.solve(start, (0.0, 0.0, 0.0), 2.0, goal)

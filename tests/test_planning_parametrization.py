@@ -11,8 +11,8 @@ import pytest
 from scipy.integrate import quad
 
 from harness.paper.planning.baselines import MinimumJerk
+from harness.robots.arm import Arm
 from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
 from planning.config import PlannerConfig
 from planning.formulation.energy import absolute_energy, net_work, power
 from planning.formulation.obstacle import SwayingObstacle, predict_linear
@@ -34,7 +34,7 @@ Q0, GOAL = np.array([1.2, 0.6, -0.8]), np.array([-1.0, 1.2, -1.0])
 
 @pytest.fixture(scope="module")
 def pin_model():
-    return load_pinocchio("lynxmotion")
+    return Arm.of("lynxmotion").pinocchio
 
 
 @pytest.fixture(scope="module")
@@ -117,7 +117,7 @@ def test_degree_five_rest_to_rest_is_minimum_jerk():
     # the planner's degree-5 NLP with rest at the goal: minimum jerk satisfies its equalities
     config = PlannerConfig(degree=5, energy_quadrature="gauss", energy_samples=6,
                            rest_at_goal=True, power_smoothing=1e-3)
-    planner = Planner(PinocchioModel(load_pinocchio("lynxmotion")), config)
+    planner = Planner(Arm.of("lynxmotion").nominal, config)
     _, constraints, _ = planner.nlp.functions()
     g = np.asarray(constraints(c[:, 2:].ravel(), planner.parameters(
         Q0, np.zeros(3), 2.0, GOAL, None))[0]).ravel()

@@ -5,8 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 from planning.anytime.planner import AnytimePlanner
 from planning.config import JSON_NAMES, PenaltyOptions, PlannerConfig, true_energy_config
 from planning.globalsearch.planner import GlobalSearchPlanner
@@ -18,7 +17,7 @@ from planning.types import SegmentPlanner
 
 @pytest.fixture(scope="module")
 def baseline():
-    return PinocchioModel(load_pinocchio("lynxmotion"))
+    return Arm.of("lynxmotion").nominal
 
 
 @pytest.mark.parametrize("name, kind", [("penalty", PenaltyLoop), ("fatrop", PenaltyLoop),

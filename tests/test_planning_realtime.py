@@ -10,8 +10,7 @@ import numpy as np
 import pytest
 
 from harness.experiments.speed import measure
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 from planning.config import PenaltyOptions, PlannerConfig, Scenario
 from planning.formulation import compiled
 from planning.formulation.clearance import link_clearances
@@ -32,7 +31,7 @@ from tests.helpers import random_crossing, segments
 
 @pytest.fixture(scope="module")
 def baseline():
-    return PinocchioModel(load_pinocchio("lynxmotion"))
+    return Arm.of("lynxmotion").nominal
 
 
 # IPOPT quiet, and the toy's call: the constraint x0^2 + x1^2 <= 0.5 is active at its optimum

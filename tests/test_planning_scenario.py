@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 from planning.config import PenaltyOptions, PlannerConfig, Scenario
 from planning.errors import PlanningError
 from planning.formulation.energy import absolute_energy
@@ -22,7 +21,7 @@ from tests.helpers import perturbed_model, segments
 
 @pytest.fixture(scope="module")
 def baseline():
-    return PinocchioModel(load_pinocchio("lynxmotion"))
+    return Arm.of("lynxmotion").nominal
 
 
 @pytest.fixture(scope="module")

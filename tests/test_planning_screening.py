@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 from planning.config import PlannerConfig, Scenario
 from planning.formulation.clearance import link_clearances
 from planning.formulation.screening import Screen, near_samples, screen, uncovered
@@ -35,7 +34,7 @@ def test_covered_needs_every_dip_unless_thinned():
 
 def test_screen_thins_to_the_slots_and_reports_the_gap():
     scenario = Scenario()
-    baseline = PinocchioModel(load_pinocchio("lynxmotion"))
+    baseline = Arm.of("lynxmotion").nominal
     planner = Planner(baseline)
     free = planner.solve(scenario.start, scenario.start_velocity, scenario.duration,
                          scenario.goal)
@@ -59,7 +58,7 @@ def test_samples_above_the_threshold_leave_the_optimum_unchanged():
     """Screen.covered's premise: a solve that also sees samples where its result stays above
     the threshold returns the same result (their penalty terms and gradients are zero)."""
     scenario = Scenario()
-    baseline = PinocchioModel(load_pinocchio("lynxmotion"))
+    baseline = Arm.of("lynxmotion").nominal
     planner = Planner(baseline, PlannerConfig(obstacle_slots=40))
     args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
     free = planner.solve(*args)

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from harness.replay.reference import plan_reference
-from harness.robots.registry import get_robot
+from harness.robots.arm import Arm
 from harness.sections import identification
 from harness.sections.base import Context
 from harness.sections.planning import section
@@ -18,7 +18,7 @@ from harness.sections.planning import section
 
 @pytest.mark.slow
 def test_section_quick(tmp_path):
-    ctx = Context(get_robot("lynxmotion"), tmp_path, quick=True, video=False)
+    ctx = Context(Arm.of("lynxmotion"), tmp_path, quick=True, video=False)
     ctx.earlier["identification"] = identification.run(ctx)
     out = section.run(ctx)
     json.dumps(out.results)  # serializable as is

@@ -13,9 +13,7 @@ from harness.commands.plan_messages import torque_diagnosis
 from harness.replay.checks import checks
 from harness.replay.reference import plan_reference
 from harness.replay.simulate import replay
-from harness.robots.arm import motor_torque_limit
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_mujoco, load_pinocchio
+from harness.robots.arm import Arm
 from planning.config import PlannerConfig, Scenario
 from planning.penalty.solver import Planner
 from planning.replanning import execute
@@ -26,7 +24,7 @@ from tests.helpers import segments
 
 @pytest.fixture(scope="module")
 def baseline():
-    return PinocchioModel(load_pinocchio("lynxmotion"))
+    return Arm.of("lynxmotion").nominal
 
 
 def _plan(model, scenario, config=None, avoid=True):
@@ -45,7 +43,7 @@ def _dense_peak(model, result) -> np.ndarray:
 
 
 def test_default_limit_is_the_mjcf_motor_range():
-    assert motor_torque_limit("lynxmotion") == (10.0, 10.0, 10.0)
+    assert Arm.of("lynxmotion").motor_torque_limit == (10.0, 10.0, 10.0)
     assert PlannerConfig().torque_limit == (10.0, 10.0, 10.0)
 
 
@@ -144,7 +142,7 @@ def test_swaying_replay_meets_acceptance(swaying, baseline):
     assert result.feasible, result.problems
     plan = json.loads(json.dumps(to_json(result, scenario, config, "pinocchio"),
                                  default=lambda x: x.tolist() if hasattr(x, "tolist") else x))
-    replayed, _ = replay(load_mujoco("lynxmotion", scene=True), plan_reference(plan), baseline)
+    replayed, _ = replay(Arm.of("lynxmotion").scene, plan_reference(plan), baseline)
     verdict = checks(replayed)
     assert all(verdict.values()), (verdict, replayed)
     assert max(replayed.max_torque) < 10.0

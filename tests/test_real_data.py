@@ -11,8 +11,8 @@ import pytest
 
 from harness.data.ingest import ingest
 from harness.experiments.peers import joint_friction_columns
+from harness.robots.arm import Arm
 from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
 from harness.sections.real_data.section import HOLDOUT, LOG, RATE, ROBOT, log_result
 
 pytestmark = pytest.mark.slow  # the section on the whole log: half a minute
@@ -25,7 +25,7 @@ def section(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def data():
-    a = ingest(LOG / "panda_gaz2019.csv.gz", 7, ROBOT, RATE, None).arrays
+    a = ingest(LOG / "panda_gaz2019.csv.gz", Arm.of(ROBOT), RATE, None).arrays
     return a["q"], a["qd"], a["qdd"], a["tau"]
 
 
@@ -43,7 +43,7 @@ def independent(data):
 
     q, qd, qdd, tau = data
     split = int(round(len(q) * (1 - HOLDOUT)))
-    model = load_pinocchio(ROBOT)
+    model = Arm.of(ROBOT).pinocchio
     X = np.concatenate([PinocchioModel(model).regressor(q, qd, qdd), joint_friction_columns(qd)],
                        axis=2)
     coef, *_ = np.linalg.lstsq(X[:split].reshape(-1, X.shape[2]), tau[:split].ravel(), rcond=None)

@@ -7,8 +7,8 @@ import pytest
 
 from harness.replay.reference import plan_reference
 from harness.replay.simulate import TrackingGains, replay
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import MODELS, load_mujoco, load_pinocchio
+from harness.robots.arm import Arm
+from harness.robots.registry import MODELS
 from planning.formulation.clearance import segment_distance
 
 Q0 = np.array([np.pi / 2, np.pi / 5, -np.pi / 4])
@@ -38,12 +38,12 @@ def quintic_plan(samples: int = 200, duration: float = 2.0) -> dict:
 
 @pytest.fixture(scope="module")
 def feedforward():
-    return PinocchioModel(load_pinocchio("lynxmotion"))
+    return Arm.of("lynxmotion").nominal
 
 
 @pytest.fixture(scope="module")
 def scene_replay(feedforward):
-    model = load_mujoco("lynxmotion", scene=True)
+    model = Arm.of("lynxmotion").scene
     return replay(model, plan_reference(quintic_plan()), feedforward)
 
 
@@ -78,7 +78,7 @@ def test_replay_tracks_and_measures_the_reference_energy(scene_replay, feedforwa
 
 def test_surface_clearance_is_centre_distance_minus_radii(scene_replay):
     result, trace = scene_replay
-    model = load_mujoco("lynxmotion", scene=True)
+    model = Arm.of("lynxmotion").scene
     capsule = model.geom("link2").size[0]
     sphere = model.geom("obstacle").size[0]
     np.testing.assert_allclose(trace.surface, trace.clearance - capsule - sphere, atol=1e-9)
@@ -101,7 +101,7 @@ def test_damped_plant_without_obstacle_body_still_replays(tmp_path, feedforward)
                       'damping="0.05" armature="0" frictionloss="0.02"')
     plant = tmp_path / "damped.xml"
     plant.write_text(xml)
-    model = load_mujoco(plant)
+    model = Arm.of(plant).mujoco
     result, _ = replay(model, plan_reference(quintic_plan()), feedforward, TrackingGains())
     assert result.tracking_rms < 1e-3
     assert result.surface_clearance is None

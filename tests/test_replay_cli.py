@@ -136,3 +136,32 @@ def test_pinocchio_planned_paper_scenario_meets_replay_acceptance(tmp_path):
     assert result["tracking_rms"] <= 1e-3
     assert abs(result["energy"] / result["energy_planned"] - 1) <= 0.02
     assert result["min_clearance"] >= result["threshold"] - 0.005
+
+
+def test_a_plant_of_the_robot_replays_and_one_of_another_robot_is_one_line_exit_2(tmp_path,
+                                                                                   capsys):
+    """`--plant` is its own robot file, checked against the plan's arm: the Lynxmotion's own
+    scene (motors, obstacle: simulated as it is) replays the plan; the double pendulum's URDF
+    (another robot's kinematics) and a scene whose elbow moved are refused in one line."""
+    from harness.robots.registry import erd_robots_dir
+    from models import MODELS
+
+    plan = _write(tmp_path / "plan.json", quintic_plan())
+    out = tmp_path / "r.json"
+    scene = MODELS / "lynxmotion" / "scene.xml"
+    assert main(["replay", "--plan", str(plan), "--plant", str(scene), "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["plant"] == str(scene)
+    out.unlink()
+    pendulum = erd_robots_dir() / "double_pendulum_description/urdf/double_pendulum.urdf"
+    arm = (MODELS / "lynxmotion" / "lynxmotion.xml").read_text()
+    moved = tmp_path / "lynxmotion.xml"  # the scene's include, beside it
+    moved.write_text(arm.replace('<body name="link3" pos="0.146 0 0">',
+                                 '<body name="link3" pos="0.156 0 0">'))
+    assert moved.read_text() != arm
+    (tmp_path / "scene.xml").write_text(scene.read_text())
+    for plant in (pendulum, tmp_path / "scene.xml"):
+        capsys.readouterr()
+        assert main(["replay", "--plan", str(plan), "--plant", str(plant), "--out", str(out)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and "is not robot lynxmotion" in err, err
+        assert not out.exists()

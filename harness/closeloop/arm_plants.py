@@ -1,6 +1,6 @@
 """Plants of any registered arm with effects its declared model lacks.
 
-The arm's MuJoCo model (registry.load_mujoco: the URDF's arm joints, no meshes) is
+The arm's MuJoCo model (Arm.mujoco: the URDF's arm joints, no meshes, or its MJCF) is
 edited as a MuJoCo spec (mujoco.MjSpec): joint damping, frictionloss, armature and
 stiffness added on chosen joints, a spring on a fixed tendon q2 + q3 (an effect outside
 the close-the-loop dictionary, as the Lynxmotion's coupled plant), and a point payload
@@ -20,21 +20,22 @@ import mujoco
 from harness.closeloop.plants import Variant
 from harness.errors import UserError
 from harness.io import write_text
-from harness.robots.registry import flange_frame, load_pinocchio
+from harness.robots.arm import Arm
+from harness.robots.registry import flange_frame
 from harness.robots.scene import robot_spec
 
 VECTOR_ATTRIBUTES = ("damping", "stiffness")  # polynomial coefficients in MuJoCo >= 3.3
 
 
-def arm_variant_xml(robot: str, variant: Variant) -> str:
+def arm_variant_xml(arm: Arm, variant: Variant) -> str:
     """MJCF text of the arm plus the variant's joint effects and flange payload."""
     from harness.closeloop.plants import JOINT_ATTRIBUTES
 
-    spec = robot_spec(robot)
+    spec = robot_spec(arm)
     hinges = [j for j in spec.joints if j.type == mujoco.mjtJoint.mjJNT_HINGE]
     for effect, joint, value in variant.joint_effects:
         if not 1 <= joint <= len(hinges):
-            raise UserError(f"{robot} has joints 1..{len(hinges)}, not {joint}")
+            raise UserError(f"{arm.label} has joints 1..{len(hinges)}, not {joint}")
         attr = JOINT_ATTRIBUTES[effect]
         target = hinges[joint - 1]
         if attr in VECTOR_ATTRIBUTES:
@@ -44,13 +45,14 @@ def arm_variant_xml(robot: str, variant: Variant) -> str:
             setattr(target, attr, getattr(target, attr) + value)
     if variant.coupling > 0:  # a fixed tendon q2 + q3 with a spring: outside the dictionary
         if len(hinges) < 3:
-            raise UserError(f"a tendon coupling joins joints 2 and 3; {robot} has {len(hinges)}")
+            raise UserError(f"a tendon coupling joins joints 2 and 3; {arm.label} has "
+                            f"{len(hinges)}")
         tendon = spec.add_tendon(name="coupling", stiffness=[variant.coupling, 0.0, 0.0],
                                  springlength=[0.0, 0.0])
         for joint in hinges[1:3]:
             tendon.wrap_joint(joint.name, 1.0)
     if variant.payload > 0:
-        frame = flange_frame(load_pinocchio(robot))
+        frame = flange_frame(arm.pinocchio)
         body, pos = (spec.body(frame) if frame else None), [0.0, 0.0, 0.0]
         site = spec.site(frame) if frame and body is None else None
         if site is not None:  # an MJCF's flange is a site on the last body
@@ -75,9 +77,10 @@ def arm_variant_xml(robot: str, variant: Variant) -> str:
     return text
 
 
-def write_arm_variant(robot: str, variant: Variant, directory: Path) -> Path:
+def write_arm_variant(arm: Arm, variant: Variant, directory: Path) -> Path:
     """Write the variant MJCF to directory/<robot>_<name>.xml; returns its path."""
     directory.mkdir(parents=True, exist_ok=True)
-    path = directory / f"{Path(robot).stem}_{variant.name}.xml"  # a robot path: its file's stem
-    write_text(path, arm_variant_xml(robot, variant))
+    # a robot file: its file's stem
+    path = directory / f"{Path(arm.reference).stem}_{variant.name}.xml"
+    write_text(path, arm_variant_xml(arm, variant))
     return path

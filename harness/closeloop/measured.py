@@ -1,5 +1,5 @@
 """Closing the loop on a given dataset (`closeloop --data FILE.npz --robot R`): a measured
-log (`ingest`) or any dataset of the contract, on a robot's rigid-body base atoms.
+log (`ingest`) or any dataset of the contract, on an arm's rigid-body base atoms.
 
 The loop is identification.closeloop.measured's; here the robot's rigid-body library is
 built from its kinematics and the outcome written as closeloop.json. Errors are against the
@@ -14,7 +14,7 @@ from pathlib import Path
 
 from harness.data.dataset import load_arrays
 from harness.errors import UserError
-from harness.robots.registry import data_robot, load_chain
+from harness.robots.arm import Arm
 from identification.closeloop.measured import (
     EXPLAINED,
     MIN_GAIN,
@@ -29,9 +29,9 @@ from identification.metrics import rel_error
 
 
 @cache
-def rigid_library(robot: str) -> KinematicLibrary:
-    """The robot's rigid-body base atoms (no armature, viscous or Coulomb atom)."""
-    return KinematicLibrary.generate(load_chain(robot), joint_atoms=False)
+def rigid_library(arm: Arm) -> KinematicLibrary:
+    """The arm's rigid-body base atoms (no armature, viscous or Coulomb atom)."""
+    return KinematicLibrary.generate(arm.chain, joint_atoms=False)
 
 
 @dataclass(frozen=True)
@@ -89,17 +89,17 @@ class MeasuredRun:
         return out
 
 
-def run_measured(data: str | Path, robot: str | None = None, holdout: float = 0.25) -> MeasuredRun:
-    """Close the loop on the dataset at data for robot (default: the one it records)."""
+def run_measured(data: str | Path, arm: Arm, holdout: float = 0.25) -> MeasuredRun:
+    """Close the loop on the dataset at data of arm (resolved by the caller from the data's
+    meta: harness.robots.arm.resolve_arm)."""
     arrays, meta = load_arrays(data, ("q", "qd", "qdd", "tau"), optional=("tau_clean",))
-    robot = data_robot(meta, robot)
-    library = rigid_library(robot)
+    library = rigid_library(arm)
     dof = arrays["q"].shape[1]
     if dof != library.dof:
-        raise UserError(f"data have {dof} joints, robot {robot} has {library.dof}")
+        raise UserError(f"data have {dof} joints, robot {arm.label} has {library.dof}")
     try:
         loop = close_loop_measured(library, arrays["q"], arrays["qd"], arrays["qdd"],
                                    arrays["tau"], holdout)
     except IdentificationError as exc:
         raise UserError(f"{data}: {exc}") from None
-    return MeasuredRun(robot, str(data), arrays, meta, holdout, loop)
+    return MeasuredRun(arm.reference, str(data), arrays, meta, holdout, loop)

@@ -6,7 +6,7 @@ rigid-body correction (a MODEL.json on the robot's base atoms) or null, "offsets
 constant torque per joint the model adds (N m; 0 as written by the loop), "effects": [{"joint",
 "effect", "coefficient", "unit", shape...}], "sensor_offsets": {"training", "heldout": per
 run, per joint (N m)}}: read by `predict` and `plan` through
-harness.robots.torque_models.load_torque_model. A sensor offset is a property of a run, not of
+harness.robots.torque_models.torque_model. A sensor offset is a property of a run, not of
 the robot: reported under "sensor_offsets", never added to the torque a planner uses.
 """
 
@@ -14,8 +14,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import identified_robot, load_chain, load_pinocchio
+from harness.robots.arm import Arm
+from harness.robots.resolve import resolve_arm
 from identification.closeloop.effects import UNITS, EffectTerm
 from identification.closeloop.runs import closed_model
 from identification.errors import IdentificationError
@@ -26,29 +26,27 @@ KIND = "closeloop"
 SHAPE = ("lead", "eps", "steepness", "shift")
 
 
-def model_payload(robot: str, declared: dict | str, inertial: KinematicModel | None,
+def model_payload(arm: Arm, declared: dict | str, inertial: KinematicModel | None,
                   terms: tuple[EffectTerm, ...], training_offsets,
                   heldout_offsets=()) -> dict:
     """The content of model.json (declared: 'pinocchio' or a MODEL.json's content); the
     runs' sensor offsets ((runs, dof) N m, training and held out) reported, not added."""
-    chain = load_chain(robot)
-    return {"kind": KIND, "dof": chain.dof, "robot": {"name": chain.name, "hash": chain.digest()},
+    return {"kind": KIND, "dof": arm.dof, "robot": arm.record,
             "declared": declared, "inertial": None if inertial is None else model_to_dict(inertial),
-            "offsets": [0.0] * chain.dof, "effects": [t.to_json() for t in terms],
+            "offsets": [0.0] * arm.dof, "effects": [t.to_json() for t in terms],
             "sensor_offsets": {"training": [[float(o) for o in c] for c in training_offsets],
                                "heldout": [[float(o) for o in c] for c in heldout_offsets]}}
 
 
-def declared_model(spec: dict | str, robot: str, robot_library):
-    """The declared model of a payload: 'pinocchio' or a MODEL.json's content;
-    robot_library(robot): its base atoms (harness.robots.torque_models, which reads us)."""
+def declared_model(spec: dict | str, arm: Arm):
+    """The declared model of a payload on arm: 'pinocchio' or a MODEL.json's content."""
     if spec == "pinocchio":
-        return PinocchioModel(load_pinocchio(robot))
+        return arm.nominal
     if not isinstance(spec, dict):
         raise IdentificationError("'declared' must be 'pinocchio' or a model")
     if spec.get("kind") == KIND:  # a closed loop's model declared for another loop
-        return closeloop_model(spec, robot, Path("declared"), robot_library)
-    return model_from_dict(spec, lambda: robot_library(robot))
+        return closeloop_model(spec, arm, Path("declared"))
+    return model_from_dict(spec, lambda: arm.library)
 
 
 def _term(entry: dict) -> EffectTerm:
@@ -61,20 +59,19 @@ def _term(entry: dict) -> EffectTerm:
         raise IdentificationError(f"malformed effect {str(entry):.60}: {exc}") from None
 
 
-def closeloop_model(payload: dict, robot: str | None, path: Path, robot_library):
-    """The model a closeloop model.json describes, for robot (default: the one it records);
-    robot_library(robot): its base atoms."""
+def closeloop_model(payload: dict, arm: Arm, path: Path):
+    """The model a closeloop model.json describes, on arm (checked against the robot it
+    records)."""
     recorded = payload.get("robot") if isinstance(payload.get("robot"), dict) else {}
-    robot = identified_robot(recorded, robot, path)
-    chain = load_chain(robot)
-    declared = declared_model(payload.get("declared"), robot, robot_library)
+    resolve_arm(arm.reference, model=(str(path), recorded))
+    dof = arm.dof
+    declared = declared_model(payload.get("declared"), arm)
     inertial = payload.get("inertial")
-    inertial = None if inertial is None else model_from_dict(inertial,
-                                                             lambda: robot_library(robot))
+    inertial = None if inertial is None else model_from_dict(inertial, lambda: arm.library)
     terms = tuple(_term(e) for e in payload.get("effects", []))
-    offsets = payload.get("offsets", [0.0] * chain.dof)
-    if len(offsets) != chain.dof or any(t.joint < 1 or t.joint > chain.dof for t in terms):
-        raise IdentificationError(f"offsets and effect joints must fit the robot's {chain.dof}")
+    offsets = payload.get("offsets", [0.0] * dof)
+    if len(offsets) != dof or any(t.joint < 1 or t.joint > dof for t in terms):
+        raise IdentificationError(f"offsets and effect joints must fit the robot's {dof}")
     if inertial is None and any(t.effect == "inertial" for t in terms):
         raise IdentificationError("an 'inertial' effect needs the 'inertial' correction")
     return closed_model(declared, [float(o) for o in offsets], terms, inertial)

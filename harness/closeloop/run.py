@@ -33,7 +33,6 @@ estimation never does):
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -44,15 +43,8 @@ from harness.closeloop.plants import Variant, true_effects
 from harness.data.dataset import Dataset
 from harness.data.generate import generate
 from harness.errors import UserError
-from harness.robots.plant import Plant, load_plant
-from harness.robots.registry import (
-    DEFAULT_ROBOT,
-    flange_frame,
-    load_chain,
-    load_mujoco,
-    load_pinocchio,
-    robot_entry,
-)
+from harness.robots.arm import Arm
+from harness.robots.registry import flange_frame
 from harness.robots.torque_models import load_torque_model
 from identification.closeloop.effects import Effect, EffectTerm
 from identification.closeloop.identified import close_loop_identified
@@ -125,54 +117,42 @@ class CloseLoopRun:
         }
 
 
-def declared_model(spec: str, robot: str = DEFAULT_ROBOT) -> TorqueModel | Library:
-    """'pinocchio' or a MODEL.json path: a fixed torque model; 'identified': the library the
-    loop identifies its declared model with (identification.closeloop.identified; the
-    Lynxmotion's prior-knowledge library)."""
+def declared_model(spec: str, arm: Arm) -> TorqueModel | Library:
+    """'pinocchio' or a MODEL.json path: a fixed torque model of arm; 'identified': the
+    library the loop identifies its declared model with (identification.closeloop.identified;
+    the Lynxmotion's prior-knowledge library)."""
     if spec == "identified":
-        if "prior" not in robot_entry(robot).libraries:
+        if "prior" not in arm.entry.libraries:
             raise UserError(f"--declared identified is built on a prior-knowledge library, which "
-                            f"{robot} does not declare; use 'pinocchio' or a MODEL.json")
+                            f"{arm.label} does not declare; use 'pinocchio' or a MODEL.json")
         return prior_knowledge_library(3)
-    return load_torque_model(spec, robot)
+    return load_torque_model(spec, arm)
 
 
-def check_plant(plant: str | Path, dof: int, robot: str = DEFAULT_ROBOT) -> Plant:
-    """The plant, or a UserError if it cannot be a variant of robot: another number of
-    joints, or joints of another type, axis or place (the declared model's kinematics)."""
-    p = load_plant(plant)
-    if p.dof != dof:
-        raise UserError(f"plant {plant} has {p.dof} joints; the declared {robot} model has "
-                        f"{dof}: not a variant of this robot")
-    ref = declared_mujoco(robot)
-    m = p.model
-    for j in range(dof):
-        same = (m.jnt_type[j] == ref.jnt_type[j]
-                and np.allclose(m.jnt_axis[j], ref.jnt_axis[j], atol=1e-9)
-                and np.allclose(m.jnt_pos[j], ref.jnt_pos[j], atol=1e-9)
-                and np.allclose(m.body_pos[m.jnt_bodyid[j]], ref.body_pos[ref.jnt_bodyid[j]],
-                                atol=1e-9))
-        if not same:
-            raise UserError(f"plant {plant}: joint {j + 1} differs from {robot}'s in type, "
-                            "axis or position: not a variant of this robot")
-    return p
+def check_plant(plant: Arm, arm: Arm) -> None:
+    """UserError, one line, unless plant can be a variant of arm: the same number of joints,
+    each of the same type, axis and place (the kinematics hash, Arm.record)."""
+    dof = plant.mujoco.nv  # MuJoCo's count first: a file Pinocchio cannot read is refused too
+    if dof != arm.dof:
+        raise UserError(f"plant {plant.label} has {dof} joints; the declared {arm.label} "
+                        f"model has {arm.dof}: not a variant of this robot")
+    differ = arm.first_difference(plant)
+    if differ is not None:
+        where = f"joint {differ}" if differ else "its kinematics"
+        raise UserError(f"plant {plant.label}: {where} differs from {arm.label}'s in type, axis "
+                        "or position: not a variant of this robot")
 
 
-def declared_mujoco(robot: str) -> mujoco.MjModel:
-    """The declared model of robot in MuJoCo (what a plant's effects are read against)."""
-    return load_mujoco(robot)
-
-
-def effects_reference(robot: str) -> mujoco.MjModel:
+def effects_reference(arm: Arm) -> mujoco.MjModel:
     """What a plant's true effects are read against: the arm as its plants are written
     (harness.closeloop.arm_plants; MjSpec.to_xml keeps 6 significant digits, so masses rounded
     alike are not read as a payload)."""
-    return mujoco.MjModel.from_xml_string(arm_variant_xml(robot, Variant(name="declared")))
+    return mujoco.MjModel.from_xml_string(arm_variant_xml(arm, Variant(name="declared")))
 
 
 def _loop(spec: str, data: Dataset, split: int, payload: PayloadTorque, truth, outside: bool,
-          holdout: float, robot: str = DEFAULT_ROBOT) -> CloseLoopRun:
-    declared = declared_model(spec, robot)
+          holdout: float, arm: Arm) -> CloseLoopRun:
+    declared = declared_model(spec, arm)
     if declared.dof != data.q.shape[1]:
         raise UserError(f"declared model {spec} has {declared.dof} joints, the plant "
                         f"{data.q.shape[1]}")
@@ -193,23 +173,21 @@ def _loop(spec: str, data: Dataset, split: int, payload: PayloadTorque, truth, o
                         s.noise_floor, s.truth_error, s.truth_error_measured, s.absorbed)
 
 
-def run_closeloop(plant: str | Path, samples: int = 4000, noise: float = 0.05, seed: int = 0,
-                  bias: float = 0.0, holdout: float = 0.25, declared: str = "pinocchio",
-                  compare: bool = False, robot: str = DEFAULT_ROBOT) -> CloseLoopRun:
-    """Generate measured data on plant (a variant of robot), close the loop on the declared
-    model, score it; compare: also close it with the other built-in declared models of the
-    robot (CloseLoopRun.others)."""
-    load_chain(robot)  # a fixed-base open serial chain of revolute joints, or one clear error
-    model = load_pinocchio(robot)
-    p = check_plant(plant, model.nv, robot)
-    data = generate(str(plant), samples, noise, seed, "measured", bias, robot=robot)
+def run_closeloop(plant: Arm, arm: Arm, samples: int = 4000, noise: float = 0.05,
+                  seed: int = 0, bias: float = 0.0, holdout: float = 0.25,
+                  declared: str = "pinocchio", compare: bool = False) -> CloseLoopRun:
+    """Generate measured data on plant (a variant of arm: check_plant), close the loop on
+    arm's declared model, score it; compare: also close it with the arm's other built-in
+    declared models (CloseLoopRun.others)."""
+    check_plant(plant, arm)
+    data = generate(plant, samples, noise, seed, "measured", bias, robot=arm)
     split = int(round(samples * (1.0 - holdout)))
-    payload = PayloadTorque(model, flange_frame(model) or "")
-    truth, outside = true_effects(p.model, effects_reference(robot))
-    run = _loop(declared, data, split, payload, truth, outside, holdout, robot)
+    payload = PayloadTorque(arm.pinocchio, flange_frame(arm.pinocchio) or "")
+    truth, outside = true_effects(plant.mujoco, effects_reference(arm))
+    run = _loop(declared, data, split, payload, truth, outside, holdout, arm)
     if not compare:
         return run
-    specs = DECLARED_MODELS if "prior" in robot_entry(robot).libraries else ("pinocchio",)
-    others = tuple(_loop(spec, data, split, payload, truth, outside, holdout, robot)
+    specs = DECLARED_MODELS if "prior" in arm.entry.libraries else ("pinocchio",)
+    others = tuple(_loop(spec, data, split, payload, truth, outside, holdout, arm)
                    for spec in specs if spec != declared)
     return replace(run, others=others)

@@ -1,5 +1,7 @@
 """`closeloop --data A.npz[,B.npz...] [--validate C.npz[,...]] --robot R [--declared ...]`:
-the loop on runs of one robot against the model the user declared.
+the loop on runs of one robot against the model the user declared. Which robot the runs are
+of is the command's (harness.robots.arm.resolve_arm on every run's meta, the declared model's
+record and --robot): here the runs come with their arm.
 
 The declared model is the robot's nominal model (`pinocchio`: its URDF/MJCF) or a
 MODEL.json; with the nominal model the inertial candidate is the rigid-body correction
@@ -13,19 +15,14 @@ own sensor offset refitted, before and after alike (identification.closeloop.lef
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from harness.closeloop.model_file import model_payload
-from harness.data.dataset import load_arrays
-from harness.data.runs import KEYS, load_runs, split_files
+from harness.data.runs import KEYS, Runs, load_runs, split_files
 from harness.errors import UserError
-from harness.io import read_json
-from harness.robots.baseline import PinocchioModel
-from harness.robots.ellipsoids import robot_ellipsoids
-from harness.robots.registry import data_robot, load_chain, load_pinocchio
-from harness.robots.torque_models import load_torque_model, robot_library
+from harness.robots.arm import Arm
+from harness.robots.torque_models import load_torque_model, read_model
 from identification.closeloop.leftover import LEFT, Leftover, leftover, offset_error, run_offsets
 from identification.closeloop.runs import (
     AGREE,
@@ -42,30 +39,31 @@ from identification.regression.consistent import ConsistentRegressor
 JOINT_ATOMS = ("armature", "viscous", "coulomb")
 
 
-def inertial_correction(robot: str, runs: list[tuple]) -> KinematicModel:
-    """The consistent fit's rigid body pulled toward robot's nominal model, minus the nominal
+def inertial_correction(arm: Arm, runs: list[tuple]) -> KinematicModel:
+    """The consistent fit's rigid body pulled toward arm's nominal model, minus the nominal
     rigid body: the torque to add to the nominal model (its joint atoms left out); each run
     with its own sensor offset, each body inside its link's ellipsoid."""
-    library = robot_library(robot)
-    nominal = PinocchioModel(load_pinocchio(robot)).atom_parameters()
+    library = arm.library
+    nominal = arm.nominal.atom_parameters()
     q, qd, qdd, tau = (np.concatenate([r[i] for r in runs]) for i in range(4))
     labels = np.repeat(np.arange(len(runs)), [len(r[0]) for r in runs])  # an offset per run
-    regressor = ConsistentRegressor(nominal, ellipsoids=robot_ellipsoids(robot))
+    regressor = ConsistentRegressor(nominal, ellipsoids=arm.ellipsoids)
     fit = identify(q, qd, qdd, tau, library, 0.0, regressor=regressor, runs=labels).model
     delta = fit.coefficients - library.fold @ nominal
     delta[[k for k, n in enumerate(library.names) if n.startswith(JOINT_ATOMS)]] = 0.0
     return KinematicModel(library, delta, np.zeros(library.dof), "consistent")
 
 
-def _read(spec: str, option: str) -> tuple[list[tuple], list[dict], list[str]]:
-    files = split_files(spec, option)
-    load_runs(files)  # one robot, one joint count (UserError otherwise)
-    loaded = [load_arrays(f, KEYS) for f in files]
-    return [tuple(a[k] for k in KEYS) for a, _ in loaded], [m for _, m in loaded], files
+def read_runs(data: str, validate: str | None = None) -> tuple[Runs, Runs | None]:
+    """The --data runs and the --validate runs (None without), each of one joint count."""
+    train = load_runs(split_files(data, "--data"))
+    return train, (load_runs(split_files(validate, "--validate")) if validate else None)
 
 
-def _recorded(meta: dict) -> str:
-    return str(meta.get("robot") or meta.get("plant") or "")
+def _split(runs: Runs) -> list[tuple]:
+    """Each run's (q, qd, qdd, tau)."""
+    cuts = np.cumsum(runs.lengths)[:-1]
+    return list(zip(*(np.split(runs.arrays[k], cuts) for k in KEYS), strict=True))
 
 
 @dataclass(frozen=True)
@@ -124,41 +122,39 @@ class RunsRun:
         return out
 
 
-def run_runs(data: str, robot: str | None, declared: str = "pinocchio",
-             validate: str | None = None, holdout: float = 0.25) -> RunsRun:
-    """Close the loop on the runs in data (comma list) of robot (default: the one they
-    record), scored on validate (comma list) or the last holdout of every run."""
-    runs, metas, files = _read(data, "--data")
-    robot = data_robot(metas[0], robot)
-    dof = load_chain(robot).dof
+def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs | None = None,
+             holdout: float = 0.25) -> RunsRun:
+    """Close the loop on the runs data (read_runs) of arm, scored on the validate runs or the
+    last holdout of every run."""
+    runs, dof = _split(data), arm.dof
     if runs[0][0].shape[1] != dof:
-        raise UserError(f"data have {runs[0][0].shape[1]} joints, robot {robot} has {dof}")
-    if validate:
-        held, vmetas, vfiles = _read(validate, "--validate")
-        recorded = {_recorded(m) for m in metas + vmetas} - {""}
-        if len(recorded) > 1 or held[0][0].shape[1] != dof:
-            raise UserError(f"--validate logs are of another robot than the --data logs "
-                            f"({', '.join(sorted(recorded)) or 'joint counts differ'})")
+        raise UserError(f"data have {runs[0][0].shape[1]} joints, robot {arm.label} has {dof}")
+    if validate is not None:
+        held = _split(validate)
+        if held[0][0].shape[1] != dof:
+            raise UserError(f"--validate logs have {held[0][0].shape[1]} joints, robot "
+                            f"{arm.label} has {dof}")
         train = runs
     else:
-        vfiles, cut = [], [int(round(len(r[0]) * (1.0 - holdout))) for r in runs]
+        cut = [int(round(len(r[0]) * (1.0 - holdout))) for r in runs]
         train = [tuple(a[:c] for a in r) for r, c in zip(runs, cut, strict=True)]
         held = [tuple(a[c:] for a in r) for r, c in zip(runs, cut, strict=True)]
     if declared == "pinocchio":
-        spec, model = "pinocchio", PinocchioModel(load_pinocchio(robot))
+        spec, model = "pinocchio", arm.nominal
     else:
-        model = load_torque_model(declared, robot)
-        spec = read_json(Path(declared), "model")
+        model, spec = load_torque_model(declared, arm), read_model(declared).payload
         if model.dof != dof:
-            raise UserError(f"--declared {declared} has {model.dof} joints, robot {robot} {dof}")
+            raise UserError(f"--declared {declared} has {model.dof} joints, robot {arm.label} "
+                            f"{dof}")
     try:
-        inertial = inertial_correction(robot, train) if declared == "pinocchio" else None
+        inertial = inertial_correction(arm, train) if declared == "pinocchio" else None
         loop = close_loop_runs(model, train, inertial)
     except IdentificationError as exc:
-        raise UserError(f"{data}: {exc}") from None
+        raise UserError(f"{','.join(data.files)}: {exc}") from None
     before, after = offset_error(model, held), offset_error(loop.model, held)
     heldout_offsets = run_offsets(loop.model, held)
-    payload = model_payload(robot, spec, inertial, loop.terms, loop.run_offsets, heldout_offsets)
+    payload = model_payload(arm, spec, inertial, loop.terms, loop.run_offsets, heldout_offsets)
     name = "the robot's nominal model (URDF/MJCF)" if declared == "pinocchio" else declared
-    return RunsRun(robot, name, files, vfiles, holdout, loop, before, after,
-                   leftover(loop.model, held), payload, heldout_offsets)
+    return RunsRun(arm.reference, name, list(data.files),
+                   [] if validate is None else list(validate.files), holdout, loop, before,
+                   after, leftover(loop.model, held), payload, heldout_offsets)

@@ -25,7 +25,8 @@ from pathlib import Path
 from harness import interrupt
 from harness.errors import UserError
 from harness.report.writer import SectionOutcome, write_report
-from harness.robots.registry import DEFAULT_ROBOT, robot_entry
+from harness.robots.registry import DEFAULT_ROBOT
+from harness.robots.resolve import resolve_arm
 from harness.sections import SECTIONS, load_section
 from harness.sections.base import Context
 from harness.studies import STUDIES, load_study
@@ -139,7 +140,8 @@ def run_pipeline(ctx: Context, names, progress: Progress, module_of=load_section
 
 def run(args) -> int:
     out_dir = Path(args.out)
-    robot = robot_entry(args.robot)
+    arm = resolve_arm(args.robot)
+    arm.chain  # noqa: B018 - a robot that is no serial arm: one line, before any section
     if out_dir.exists() and not out_dir.is_dir():
         raise UserError(f"--out {out_dir} exists and is not a directory")
     sections = chosen_sections(args.sections)
@@ -147,7 +149,7 @@ def run(args) -> int:
     out_dir.mkdir(parents=True, exist_ok=True)
     progress = Progress()
     progress(f"bench on '{args.robot}' -> {out_dir}{' (quick)' if args.quick else ''}")
-    ctx = Context(robot, out_dir, args.quick, not args.no_video, {})
+    ctx = Context(arm, out_dir, args.quick, not args.no_video, {})
     outcomes = run_pipeline(ctx, sections, progress)
     if args.full:
         outcomes += run_pipeline(ctx, tuple(STUDIES), progress, load_study)

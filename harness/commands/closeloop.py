@@ -7,7 +7,9 @@ from pathlib import Path
 from harness.closeloop.run import run_closeloop
 from harness.errors import UserError
 from harness.io import write_json
-from harness.robots.registry import DEFAULT_ROBOT
+from harness.robots.arm import Arm
+from harness.robots.registry import ROBOTS
+from harness.robots.resolve import resolve_arm, variant_of
 
 
 def register(sub) -> None:
@@ -29,8 +31,9 @@ def register(sub) -> None:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--robot", default=None,
                    help="registered robot (or URDF/MJCF path) the plant is a variant of (its "
-                   f"declared model; default {DEFAULT_ROBOT}), or the data's robot (default: "
-                   "the one the data record)")
+                   "declared model; default: the registered robot of the plant's kinematics, "
+                   "else the plant itself), or the data's robot (default: the one the data "
+                   "record)")
     p.add_argument("--holdout", type=float, default=0.25)
     p.add_argument("--declared", default="pinocchio",
                    help="declared model of the contract keys: 'pinocchio', 'identified' (fitted "
@@ -66,10 +69,44 @@ def _print_measured(run) -> None:
     print(f"    unexplained joints: {list(r.unexplained_joints) or 'none'}")
 
 
-def _run_runs(args) -> int:
-    from harness.closeloop.runs import run_runs
+def _data_arm(args, records: list[tuple[str, dict]]) -> Arm:
+    """The arm of --data: --robot, else the declared MODEL.json's robot, else the data's;
+    every record checked (resolve_arm)."""
+    model = None
+    if args.declared not in ("pinocchio", "identified"):
+        from harness.robots.torque_models import read_model
 
-    r = run_runs(args.data, args.robot, args.declared, args.validate, args.holdout)
+        model = read_model(args.declared).recorded
+    return resolve_arm(args.robot, model=model, data=records)
+
+
+def _plant_arms(args) -> tuple[Arm, Arm]:
+    """The --plant (its own Arm) and the arm it is a variant of: --robot, else the registered
+    robot of its kinematics, else the plant itself."""
+    path = Path(args.plant)
+    if args.plant not in ROBOTS and path.suffix and not path.is_file():  # else: unknown robot
+        raise UserError(f"plant file not found: {args.plant}")
+    plant = Arm.of(args.plant)
+    return plant, (resolve_arm(args.robot) if args.robot else variant_of(plant))
+
+
+def _run_data(args) -> int:
+    """closeloop --data: on the runs, or (--declared identified) on one log."""
+    from harness.closeloop.measured import run_measured
+    from harness.closeloop.runs import read_runs, run_runs
+
+    if args.declared == "identified" and ("," in args.data or args.validate):
+        raise UserError("--declared identified takes one --data log and no --validate")
+    train, held = read_runs(args.data, args.validate)
+    arm = _data_arm(args, train.records + (held.records if held is not None else []))
+    if args.declared == "identified":
+        measured = run_measured(train.files[0], arm, args.holdout)
+        out = Path(args.out) / "closeloop.json"
+        write_json(out, measured.to_json())
+        _print_measured(measured)
+        print(f"wrote {out}")
+        return 0
+    r = run_runs(train, arm, args.declared, held, args.holdout)
     out = Path(args.out)
     write_json(out / "model.json", r.model_json)
     write_json(out / "closeloop.json", r.to_json())
@@ -91,23 +128,12 @@ def run(args) -> int:
         raise UserError("give exactly one of --plant MJCF (simulated measurement) and "
                         "--data FILE.npz (given data)")
     if args.data is not None:
-        from harness.closeloop.measured import run_measured
-
-        if args.declared == "identified":
-            if "," in args.data or args.validate:
-                raise UserError("--declared identified takes one --data log and no --validate")
-            measured = run_measured(args.data, args.robot, args.holdout)
-            out = Path(args.out) / "closeloop.json"
-            write_json(out, measured.to_json())
-            _print_measured(measured)
-            print(f"wrote {out}")
-            return 0
-        return _run_runs(args)
+        return _run_data(args)
     if args.validate:
         raise UserError("--validate applies to --data")
-    loop = run_closeloop(args.plant, args.samples, args.noise, args.seed, args.bias,
-                         args.holdout, args.declared, compare=True,
-                         robot=args.robot or DEFAULT_ROBOT)
+    plant, arm = _plant_arms(args)
+    loop = run_closeloop(plant, arm, args.samples, args.noise, args.seed, args.bias,
+                         args.holdout, args.declared, compare=True)
     out = Path(args.out) / "closeloop.json"
     write_json(out, loop.to_json())
     for run_ in (loop, *loop.others):

@@ -10,6 +10,7 @@ from pathlib import Path
 from harness.data.excitation_file import write_trajectory
 from harness.data.excite import DEFAULT_ACCELERATION, ITERATIONS, design_for, floor_below_home
 from harness.errors import UserError
+from harness.robots.resolve import resolve_arm
 from identification.excitation.criteria import CRITERIA
 
 
@@ -46,12 +47,13 @@ def run(args) -> int:
     _check_writable(Path(args.out))
     if args.iterations < 0:
         raise UserError(f"--iterations must be >= 0, got {args.iterations}")
-    lowest = floor_below_home(args.robot, args.floor)
+    arm = resolve_arm(args.robot)
+    lowest = floor_below_home(arm, args.floor)
     if lowest is not None:
         print(f"note: at q = 0 the arm reaches z = {lowest:.3g} m, below the floor at "
               f"{args.floor:g} m that the excitation will keep every moving link above: give "
               "--floor HEIGHT (or --floor none) if the robot does not stand on it", file=sys.stderr)
-    designed = design_for(args.robot, args.duration, args.rate, args.accel_limit, args.seed,
+    designed = design_for(arm, args.duration, args.rate, args.accel_limit, args.seed,
                           args.iterations, args.harmonics, args.criterion, args.floor)
     write_trajectory(args.out, designed.trajectory)
     n = len(designed.trajectory.t)

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from harness.io import read_json
+from harness.errors import UserError
 from harness.robots.export import FORMATS, export_model
 from harness.robots.registry import DEFAULT_ROBOT
-from harness.robots.torque_models import load_torque_model
+from harness.robots.resolve import resolve_arm
+from harness.robots.torque_models import read_model, torque_model
 
 
 def register(sub) -> None:
@@ -24,11 +25,11 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    payload = read_json(args.model, "model")
-    recorded = payload.get("robot")
-    robot = args.robot or (recorded.get("name") if isinstance(recorded, dict) else None) \
-        or DEFAULT_ROBOT
-    load_torque_model(args.model, robot)  # a well-formed model of this robot's kinematics
-    what = export_model(payload, robot, args.format, args.out)
+    model = read_model(args.model)
+    if model.payload is None:
+        raise UserError("export takes a MODEL.json written by `identify`, not 'pinocchio'")
+    arm = resolve_arm(args.robot, model=model.recorded)
+    torque_model(model, arm)  # a well-formed model of this arm's kinematics
+    what = export_model(model.payload, arm, args.format, args.out)
     print(f"wrote {args.out}: {what}")
     return 0

@@ -7,7 +7,7 @@ import sys
 from harness.data.excitation_file import read_trajectory
 from harness.data.generate import generate
 from harness.io import write_npz
-from harness.robots.plant import load_plant
+from harness.robots.resolve import resolve_arm
 
 SAMPLES = 4000  # without --excitation
 
@@ -30,12 +30,13 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    arm = resolve_arm(args.plant)
     excitation = None
     if args.excitation is not None:
-        excitation = read_trajectory(args.excitation, load_plant(args.plant).dof)
+        excitation = read_trajectory(args.excitation, arm.dof)
     samples = args.samples if args.samples is not None else (
         SAMPLES if excitation is None else len(excitation.t))
-    ds = generate(args.plant, samples, args.noise, args.seed, args.mode, args.bias,
+    ds = generate(arm, samples, args.noise, args.seed, args.mode, args.bias,
                   excitation=excitation)
     write_npz(args.out, **ds.arrays())
     meta = ds.meta

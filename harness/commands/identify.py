@@ -7,9 +7,10 @@ import sys
 import warnings
 
 from harness.data.runs import join, load_runs, split_files
+from harness.identify.fits import arm_identification
 from harness.io import write_json
-from harness.robots.registry import DEFAULT_ROBOT, data_robot
-from harness.robots.torque_models import robot_identification, robot_record
+from harness.robots.registry import DEFAULT_ROBOT
+from harness.robots.resolve import resolve_arm
 from identification.choice import LIBRARIES, METHODS, PRIORS
 from identification.errors import IdentificationError
 from identification.identify import identify
@@ -81,10 +82,10 @@ def run(args) -> int:
         runs = join(runs, validate)
     data, meta = runs.arrays, runs.metas[0]
     dof = data["q"].shape[1]
-    robot = data_robot(meta, args.robot)
-    library, regressor = robot_identification(robot, dof, args.library, args.prior, args.method,
-                                              meta.get("mode") == "measured log", args.plausible,
-                                              args.prior_metric)
+    arm = resolve_arm(args.robot, data=runs.records)  # every --data and --validate run checked
+    library, regressor = arm_identification(arm, dof, args.library, args.prior, args.method,
+                                            meta.get("mode") == "measured log", args.plausible,
+                                            args.prior_metric)
     if args.prior_metric != "ridge" and getattr(regressor, "nominal", None) is None:
         raise IdentificationError(f"--prior-metric {args.prior_metric} measures the pull toward "
                                   "the URDF's bodies: it needs the consistent fit with a prior "
@@ -97,7 +98,7 @@ def run(args) -> int:
     # a numerical library's complaint alike)
     for line in dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught):
         print(f"torquebench identify: warning: {' '.join(line.split())}", file=sys.stderr)
-    write_json(args.out, model_payload(result, robot_record(robot), held,
+    write_json(args.out, model_payload(result, arm.record, held,
                                        "tau_clean" if "tau_clean" in data else "tau"))
     for line in result.model.equations():
         print(line)

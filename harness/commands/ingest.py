@@ -5,7 +5,7 @@ from __future__ import annotations
 from harness.data.dataset import check_arrays
 from harness.data.ingest import ingest
 from harness.io import write_npz
-from harness.robots.registry import load_chain
+from harness.robots.resolve import resolve_arm
 
 
 def register(sub) -> None:
@@ -28,8 +28,9 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    dof = load_chain(args.robot).dof
-    data = ingest(args.csv, dof, args.robot, args.rate, args.window)
+    arm = resolve_arm(args.robot)
+    dof = arm.dof
+    data = ingest(args.csv, arm, args.rate, args.window)
     # what the estimated derivatives reach must pass the dataset loader (a jump in q: a spike)
     check_arrays(f"{args.csv} (estimated derivatives)", data.arrays)
     write_npz(args.out, **data.npz())

@@ -13,7 +13,6 @@ import logging
 import math
 import re
 import sys
-from pathlib import Path
 
 from harness.commands.plan_anytime import add_anytime_options, anytime_options, settle_horizon
 from harness.commands.plan_limits import link_geometry, rate_limits, torque_limit, vector, vector_text
@@ -28,9 +27,9 @@ from harness.commands.plan_messages import (
 )
 from harness.errors import UserError
 from harness.io import write_json
-from harness.robots.arm import planner_config
-from harness.robots.registry import DEFAULT_ROBOT, robot_entry
-from harness.robots.torque_models import load_torque_model
+from harness.plan.arm_config import planner_config
+from harness.robots.resolve import Arm, resolve_arm
+from harness.robots.torque_models import read_model, torque_model
 from harness.trajectory import DEFAULT_RATE, write_trajectory
 from planning.config import ALIASES, REPLANNERS, PlannerConfig, Scenario, true_energy_config
 from planning.control import control_trajectory
@@ -51,9 +50,9 @@ SAMPLES = {"paper": 10, "gauss": PLANNER.energy_samples, "simpson": 21}  # split
 def register(sub) -> None:
     p = sub.add_parser("plan", help="energy-optimal trajectory avoiding a moving obstacle")
     p.add_argument("--model", required=True, help="MODEL.json or 'pinocchio'")
-    p.add_argument("--robot", default=DEFAULT_ROBOT,
-                   help="registered robot or URDF/MJCF path: its links, joint and torque limits "
-                        "and its pinocchio baseline")
+    p.add_argument("--robot", default=None,
+                   help="registered robot or URDF/MJCF path: its links, joint and torque limits and its "
+                        "pinocchio baseline (default: the model's robot, else lynxmotion)")
     p.add_argument("--start", default=None,
                    help="start angles, one per joint (rad); default: the robot's registered "
                         "motion (on the Lynxmotion the paper's, " + vector_text(DEFAULT.start) + ")")
@@ -61,10 +60,12 @@ def register(sub) -> None:
                    help="goal angles, one per joint (rad); default: the robot's registered "
                         "motion (on the Lynxmotion the paper's, " + vector_text(DEFAULT.goal) + ")")
     p.add_argument("--duration", type=float, default=DEFAULT.duration, help="motion time (s)")
-    p.add_argument("--obstacle-from", default=vector_text(DEFAULT.obstacle.start),
-                   help="obstacle centre at t = 0 (m)")
-    p.add_argument("--obstacle-to", default=vector_text(DEFAULT.obstacle.end),
-                   help="obstacle centre at t = duration (m)")
+    p.add_argument("--obstacle-from", default=None,
+                   help="obstacle centre at t = 0 (m); default: the Lynxmotion paper scenario's, "
+                        + vector_text(DEFAULT.obstacle.start))
+    p.add_argument("--obstacle-to", default=None,
+                   help="obstacle centre at t = duration (m); default: the Lynxmotion paper "
+                        "scenario's, " + vector_text(DEFAULT.obstacle.end))
     p.add_argument("--samples", type=int, default=DEFAULT.obstacle.samples,
                    help="obstacle samples K over the motion")
     p.add_argument("--threshold", type=float, default=PlannerConfig.threshold,
@@ -174,19 +175,19 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _angles(args, name: str, dof: int) -> tuple[float, ...]:
-    """--start or --goal, else the robot's registered motion (the Lynxmotion's: the paper's)."""
+def _angles(args, arm: Arm, name: str, dof: int) -> tuple[float, ...]:
+    """--start or --goal, else the arm's registered motion (the Lynxmotion's: the paper's)."""
     text = getattr(args, name)
     if text is None:
-        motion = robot_entry(args.robot).motion
+        motion = arm.entry.motion
         if motion is None:
-            raise UserError(f"--{name} is needed on robot {args.robot}: {dof} comma-separated "
+            raise UserError(f"--{name} is needed on robot {arm.label}: {dof} comma-separated "
                             "joint angles (rad)")
         return tuple(motion[0 if name == "start" else 1])
     return vector(text, name, dof)
 
 
-def _setup(args) -> tuple[PlannerConfig, Scenario]:
+def _setup(args, arm: Arm) -> tuple[PlannerConfig, Scenario]:
     if args.energy_samples is None:
         args.energy_samples = SAMPLES[args.energy_quadrature] \
             if args.energy_quadrature != "split" else 3 * (max(args.power_breaks, 0) + 1)
@@ -214,7 +215,7 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
     if not (math.isfinite(args.power_smoothing) and args.power_smoothing >= 0
             and math.isfinite(args.sway_periods)):
         raise UserError("--power-smoothing must be >= 0 and --sway-periods finite")
-    config = dataclasses.replace(planner_config(args.robot), threshold=args.threshold,
+    config = dataclasses.replace(planner_config(arm), threshold=args.threshold,
                                  penalty_weight=args.penalty, rest_at_goal=not args.free_end,
                                  energy_samples=args.energy_samples,
                                  energy_quadrature=args.energy_quadrature, degree=args.degree,
@@ -222,9 +223,9 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  power_breaks=args.power_breaks,
                                  torque_limit=None)
     dof = config.geometry.dof
-    config = dataclasses.replace(config, geometry=link_geometry(args, config.geometry))
-    config = dataclasses.replace(config, torque_limit=torque_limit(args, dof),
-                                 **rate_limits(args, dof))
+    config = dataclasses.replace(config, geometry=link_geometry(args, arm, config.geometry))
+    config = dataclasses.replace(config, torque_limit=torque_limit(args, arm, dof),
+                                 **rate_limits(args, arm, dof))
     if args.rate is not None and not (math.isfinite(args.rate) and args.rate > 0):
         raise UserError(f"--rate must be a finite number > 0 Hz, got {args.rate}")
     if args.rate is not None and args.trajectory is None:
@@ -241,38 +242,40 @@ def _setup(args) -> tuple[PlannerConfig, Scenario]:
                                  settle_horizon=settle_horizon(args),
                                  replanner=args.replanner or ("penalty" if args.free_end
                                                               else PLANNER.replanner))
-    path = (vector(args.obstacle_from, "obstacle-from"),
-            vector(args.obstacle_to, "obstacle-to"), args.duration, args.samples)
+    default = DEFAULT.obstacle  # neither option given: the Lynxmotion paper scenario's path
+    path = (default.start if args.obstacle_from is None else vector(args.obstacle_from, "obstacle-from"),
+            default.end if args.obstacle_to is None else vector(args.obstacle_to, "obstacle-to"),
+            args.duration, args.samples)
     sway = vector(args.obstacle_sway, "obstacle-sway")
     obstacle = (SwayingObstacle(*path, sway=sway, periods=args.sway_periods) if any(sway)
                 else LinearObstacle(*path))
-    scenario = Scenario(_angles(args, "start", dof), _angles(args, "goal", dof),
+    scenario = Scenario(_angles(args, arm, "start", dof), _angles(args, arm, "goal", dof),
                         args.duration, obstacle, (0.0,) * dof)
     scenario.validate(config)
     return config, scenario
 
 
 def run(args) -> int:
+    model_file = read_model(args.model)
+    arm = resolve_arm(args.robot, model=model_file.recorded)  # once: --robot, else the model's
     logger = logging.getLogger(compiled.__name__)
-    notice = BuildNotice(Path(str(args.robot)).name)
+    notice = BuildNotice(arm.label)
     logger.addHandler(notice)
     logger.setLevel(logging.INFO)
     try:
-        return _run(args, notice)
+        return _run(args, arm, model_file, notice)
     finally:
         logger.removeHandler(notice)
 
 
-def _run(args, notice: BuildNotice) -> int:
-    config, scenario = _setup(args)
+def _run(args, arm: Arm, model_file, notice: BuildNotice) -> int:
+    config, scenario = _setup(args, arm)
     notice.joints = config.geometry.dof
-    model = load_torque_model(args.model, args.robot)
-    if model.dof != config.geometry.dof:
-        raise UserError(f"model has {model.dof} joints, robot {args.robot} has "
-                        f"{config.geometry.dof}")
+    model = torque_model(model_file, arm)  # checks its joints against the arm's
     planner = Planner(model, config)
-    unreachable = (default_obstacle_diagnosis(config, scenario, args.robot)  # before a search
-                   or velocity_diagnosis(config, scenario))  # that must fail
+    defaulted = args.obstacle_from is None and args.obstacle_to is None
+    unreachable = (default_obstacle_diagnosis(config, scenario, arm, defaulted)  # before a
+                   or velocity_diagnosis(config, scenario))  # search that must fail
     if unreachable:
         raise PlanningError(unreachable)
     either = not args.realtime and (args.replanner is None or args.no_replan)  # both methods
@@ -291,7 +294,7 @@ def _run(args, notice: BuildNotice) -> int:
           f"{result.sample_clearance.min():.4f} m (closest: "
           f"{closest_link(result, config)['closest_link']}), "
           f"{len(result.execution.segments) - 1} re-plans")
-    notice = default_obstacle_notice(scenario, args.robot)
+    notice = default_obstacle_notice(arm, defaulted)
     if notice:
         print(notice, file=sys.stderr)
     return 0

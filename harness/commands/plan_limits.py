@@ -6,7 +6,7 @@ import dataclasses
 import math
 
 from harness.errors import UserError
-from harness.robots import arm
+from harness.robots.arm import Arm
 from planning.formulation.kinematics import ArmGeometry
 
 
@@ -25,10 +25,10 @@ def vector_text(values) -> str:
     return ",".join(repr(float(v)) for v in values)
 
 
-def torque_limit(args, dof: int) -> tuple[float, ...] | None:
-    """--torque-limit (N m), else the robot's."""
+def torque_limit(args, arm: Arm, dof: int) -> tuple[float, ...] | None:
+    """--torque-limit (N m), else the arm's."""
     if args.torque_limit is None:
-        return arm.torque_limit(args.robot)
+        return arm.torque_limit
     if args.torque_limit.strip().lower() == "none":
         return None
     limit = vector(args.torque_limit, "torque-limit", dof)
@@ -37,12 +37,12 @@ def torque_limit(args, dof: int) -> tuple[float, ...] | None:
     return limit
 
 
-def link_geometry(args, geometry: ArmGeometry) -> ArmGeometry:
+def link_geometry(args, arm: Arm, geometry: ArmGeometry) -> ArmGeometry:
     """geometry with the link capsules of --link-radius: 'collision', those fitted to the
-    robot's meshes (harness.robots.capsules; the centre lines without any), else one radius
+    arm's meshes (harness.robots.capsules; the centre lines without any), else one radius
     (m) around every joint-origin segment (0: the centre lines)."""
     if args.link_radius.strip().lower() == "collision":
-        fitted = arm.collision_capsules(args.robot)
+        fitted = arm.capsules()
         return dataclasses.replace(geometry, covered=fitted.covered, ends=fitted.ends,
                                    radii=fitted.radii)
     radius = vector(args.link_radius, "link-radius", 1)[0]
@@ -51,9 +51,10 @@ def link_geometry(args, geometry: ArmGeometry) -> ArmGeometry:
     return dataclasses.replace(geometry, radii=(radius,) * len(geometry.links) if radius else ())
 
 
-def rate_limits(args, dof: int) -> dict:
-    """velocity_limit and acceleration_limit of the configuration (rad/s, rad/s^2)."""
-    limits = {"velocity_limit": arm.velocity_limit(args.robot), "acceleration_limit": None}
+def rate_limits(args, arm: Arm, dof: int) -> dict:
+    """velocity_limit and acceleration_limit of the configuration (rad/s, rad/s^2): the
+    options', else the arm's velocity limits and none on the acceleration."""
+    limits = {"velocity_limit": arm.velocity_limit, "acceleration_limit": None}
     for name, key in (("velocity-limit", "velocity_limit"), ("accel-limit", "acceleration_limit")):
         text = getattr(args, key if name == "velocity-limit" else "accel_limit")
         if text is None:

@@ -12,6 +12,7 @@ from functools import cache
 import numpy as np
 from scipy.optimize import linprog
 
+from harness.robots.arm import Arm
 from harness.robots.registry import DEFAULT_ROBOT
 from planning.config import JSON_NAMES, PlannerConfig, Scenario
 from planning.formulation.clearance import link_clearances
@@ -85,28 +86,29 @@ def velocity_diagnosis(config: PlannerConfig, scenario: Scenario) -> str | None:
             + _longer_duration(config, scenario))
 
 
-def uses_the_default_obstacle(scenario: Scenario, robot: str) -> bool:
+def uses_the_default_obstacle(arm: Arm, defaulted: bool) -> bool:
     """Whether another robot than the Lynxmotion plans past the default obstacle path (the
-    Lynxmotion paper scenario's, given no --obstacle-from/--obstacle-to)."""
-    obstacle, default = scenario.obstacle, Scenario().obstacle
-    return str(robot) != DEFAULT_ROBOT and obstacle is not None and (
-        tuple(obstacle.start), tuple(obstacle.end)) == (default.start, default.end)
+    Lynxmotion paper scenario's); defaulted: the user gave neither --obstacle-from nor
+    --obstacle-to."""
+    return defaulted and arm.reference != DEFAULT_ROBOT
 
 
-def default_obstacle_notice(scenario: Scenario, robot: str) -> str | None:
-    """The line `plan` adds after a plan of another robot past the default obstacle path:
-    an obstacle placed for the Lynxmotion, which the plan's clearance is measured to."""
-    if not uses_the_default_obstacle(scenario, robot):
+def default_obstacle_notice(arm: Arm, defaulted: bool) -> str | None:
+    """The line `plan` adds after a plan of another robot past the default obstacle path
+    (defaulted: neither --obstacle-from nor --obstacle-to given): an obstacle placed for the
+    Lynxmotion, which the plan's clearance is measured to."""
+    if not uses_the_default_obstacle(arm, defaulted):
         return None
     return ("note: the obstacle is the Lynxmotion paper scenario's default path, not one of "
-            f"robot {robot}'s: give --obstacle-from and --obstacle-to to plan past yours")
+            f"robot {arm.label}'s: give --obstacle-from and --obstacle-to to plan past yours")
 
 
-def default_obstacle_diagnosis(config: PlannerConfig, scenario: Scenario, robot: str) -> str | None:
+def default_obstacle_diagnosis(config: PlannerConfig, scenario: Scenario, arm: Arm,
+                               defaulted: bool) -> str | None:
     """A one-line reason when the default obstacle path (the Lynxmotion paper scenario's,
-    given no --obstacle-from/--obstacle-to) starts or ends within the threshold of another
-    robot's links: that path means nothing for it."""
-    if not uses_the_default_obstacle(scenario, robot):
+    defaulted: given no --obstacle-from/--obstacle-to) starts or ends within the threshold
+    of another robot's links: that path means nothing for it."""
+    if not uses_the_default_obstacle(arm, defaulted) or scenario.obstacle is None:
         return None
     obstacle = scenario.obstacle
     ends = np.asarray([scenario.start, scenario.goal])
@@ -116,7 +118,7 @@ def default_obstacle_diagnosis(config: PlannerConfig, scenario: Scenario, robot:
         return None
     which = "start" if clearance[0] < config.threshold else "goal"
     return (f"the default obstacle path (the Lynxmotion paper scenario's) lies within the "
-            f"threshold of robot {robot}'s links at the {which} (clearance {min(clearance):.4f} m "
+            f"threshold of robot {arm.label}'s links at the {which} (clearance {min(clearance):.4f} m "
             f"< {config.threshold:g} m): give --obstacle-from and --obstacle-to for this robot")
 
 

@@ -7,8 +7,9 @@ import numpy as np
 from harness.data.dataset import STATE_KEYS, load_arrays
 from harness.errors import UserError
 from harness.io import write_npz
-from harness.robots.registry import DEFAULT_ROBOT, recorded_robot
-from harness.robots.torque_models import load_torque_model
+from harness.robots.registry import DEFAULT_ROBOT
+from harness.robots.resolve import resolve_arm
+from harness.robots.torque_models import read_model, torque_model
 from identification.metrics import rel_error
 from identification.model import sensor_offsets
 
@@ -18,9 +19,9 @@ def register(sub) -> None:
     p.add_argument("--model", required=True, help="MODEL.json or 'pinocchio'")
     p.add_argument("--data", required=True, help="dataset .npz with q, qd, qdd")
     p.add_argument("--robot", default=None,
-                   help="robot name or URDF/MJCF path (default: the robot the data record, else a "
-                   f"MODEL.json's own, else {DEFAULT_ROBOT}); a MODEL.json identified for "
-                   "another robot is an error")
+                   help="robot name or URDF/MJCF path (default: a MODEL.json's own, else the "
+                   f"robot the data record, else {DEFAULT_ROBOT}); a MODEL.json identified "
+                   "for another robot, or data of another, is an error")
     p.add_argument("--out", required=True,
                    help="output .npz: tau, the model's torque at the data's states; on a "
                    "measured log (no tau_clean: ingested or sensed), the torque its sensor would "
@@ -32,7 +33,9 @@ def register(sub) -> None:
 
 def run(args) -> int:
     states, meta = load_arrays(args.data, STATE_KEYS, optional=("tau", "tau_clean"))
-    model = load_torque_model(args.model, args.robot or recorded_robot(meta))
+    read = read_model(args.model)
+    arm = resolve_arm(args.robot, model=read.recorded, data=[(args.data, meta)])
+    model = torque_model(read, arm)
     if states["q"].shape[1] != model.dof:
         raise UserError(f"data has {states['q'].shape[1]} joints, model has {model.dof}")
     tau = model.torque(states["q"], states["qd"], states["qdd"])

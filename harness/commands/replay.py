@@ -9,7 +9,6 @@ from pathlib import Path
 
 from harness.errors import UserError
 from harness.io import read_json, write_json
-from harness.robots.registry import data_robot
 
 FEEDFORWARD = "pinocchio"  # closed-form model of the robot
 
@@ -57,20 +56,20 @@ def run(args) -> int:
     from harness.replay.plants import replay_plant
     from harness.replay.reference import plan_reference
     from harness.replay.simulate import replay
-    from harness.robots.arm import arm_geometry
+    from harness.robots.resolve import resolve_arm
 
     plan = read_plan(args.plan)
     reference = plan_reference(plan)
-    robot = data_robot(plan if isinstance(plan, dict) else {}, args.robot)
-    geometry = arm_geometry(robot)
+    arm = resolve_arm(args.robot, data=[(args.plan, plan)])
+    geometry = arm.geometry
     radii = plan.get("link_radii")
     if isinstance(radii, list) and len(radii) == len(geometry.links) and any(radii):
         geometry = dataclasses.replace(geometry, radii=tuple(float(r) for r in radii))
     geometry = plan_capsules(plan.get("link_capsules"), geometry)
-    plant = replay_plant(args.plant, robot, geometry.radii, geometry)
+    plant = replay_plant(args.plant, arm, geometry.radii, geometry)
     model = plant.model
     if geometry.dof != reference.dof:
-        raise UserError(f"the plan has {reference.dof} joints, robot {robot} has {geometry.dof}")
+        raise UserError(f"the plan has {reference.dof} joints, robot {arm.label} has {geometry.dof}")
     if args.video:  # a video asked for and impossible: said before anything is written
         from harness.replay.video import rendering_problem
 
@@ -79,7 +78,7 @@ def run(args) -> int:
             raise UserError(f"cannot render the video {args.video}: {problem}")
     result, trace = replay(model, reference, plant.feedforward, geometry=geometry)
     write_json(args.out, {**result_json(result, plant.label, plant.feedforward_label),
-                          "robot": robot, "links": geometry.link_names,
+                          "robot": arm.reference, "links": geometry.link_names,
                           "link_min_clearance": trace.clearance.min(axis=0),
                           # m, mj_geomDistance of each link capsule to the obstacle sphere
                           "link_min_surface_clearance": None if trace.surface is None

@@ -13,7 +13,8 @@ from pathlib import Path
 from harness.commands.bench import Progress, command_line, machine, run_pipeline, verdict
 from harness.errors import UserError
 from harness.report.writer import write_report
-from harness.robots.registry import DEFAULT_ROBOT, robot_entry
+from harness.robots.registry import DEFAULT_ROBOT
+from harness.robots.resolve import resolve_arm
 from harness.sections.base import Context
 from harness.studies import STUDIES, load_study
 
@@ -41,10 +42,11 @@ def run(args) -> int:
     if not args.out:
         raise UserError("--out DIR is required")
     out_dir = Path(args.out)
-    robot = robot_entry(args.robot)
+    arm = resolve_arm(args.robot)
+    arm.chain  # noqa: B018 - a robot that is no serial arm: one line, before any section
     out_dir.mkdir(parents=True, exist_ok=True)
     progress = Progress()
-    ctx = Context(robot, out_dir, args.quick, not args.no_video, {})
+    ctx = Context(arm, out_dir, args.quick, not args.no_video, {})
     outcomes = run_pipeline(ctx, (args.name,), progress, load_study)
     args.sections, args.full = None, False
     meta = {"robot": args.robot, "quick": bool(args.quick), "study": args.name,

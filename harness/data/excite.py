@@ -19,10 +19,8 @@ import numpy as np
 from harness.data.excitation_file import Trajectory
 from harness.data.generate import SAMPLE_RATE, default_excitation
 from harness.errors import UserError
-from harness.robots.arm import arm_geometry
-from harness.robots.plant import Plant, load_plant
+from harness.robots.arm import Arm
 from harness.robots.scene import LINK_RADIUS
-from harness.robots.torque_models import robot_library
 from identification.excitation.criteria import log_condition
 from identification.excitation.design import ExcitationDesign, ExcitationLimits, optimize_excitation
 from identification.excitation.regressor import AtomRegressor
@@ -49,18 +47,18 @@ class DesignedExcitation:
     limits: ExcitationLimits
 
 
-def capsule_radius(robot: str) -> float:
+def capsule_radius(arm: Arm) -> float:
     """The radius (m) of the capsules the design keeps apart (see the module docstring)."""
-    return max(LINK_RADIUS, CAPSULE_FRACTION * float(sum(arm_geometry(robot).link_lengths)))
+    return max(LINK_RADIUS, CAPSULE_FRACTION * float(sum(arm.geometry.link_lengths)))
 
 
-def capsule_clearance(robot: str, floor: float | None = 0.0):
-    """clearance(q (n, dof)) -> (n,): the smallest distance (m) between the robot's capsules
+def capsule_clearance(arm: Arm, floor: float | None = 0.0):
+    """clearance(q (n, dof)) -> (n,): the smallest distance (m) between the arm's capsules
     and between them and the floor at height floor (m; None: no floor; see the module
     docstring); <= 0: touching."""
-    geometry = arm_geometry(robot)
+    geometry = arm.geometry
     links = np.array(geometry.links)
-    radius = capsule_radius(robot)
+    radius = capsule_radius(arm)
     home = geometry.points(np.zeros(geometry.dof))
     pairs = [(a, b) for a in range(len(links)) for b in range(a + 1, len(links))
              if not set(links[a]) & set(links[b])
@@ -97,16 +95,16 @@ def default_harmonics(duration: float) -> int:
     return int(np.clip(round(duration * TOP_FREQUENCY), *HARMONICS))
 
 
-def excitation_limits(plant: Plant, acceleration: float) -> ExcitationLimits:
-    lo, hi = plant.limits()
-    return ExcitationLimits(lo, hi, plant.velocity_limits(), np.full(plant.dof, acceleration))
+def excitation_limits(arm: Arm, acceleration: float) -> ExcitationLimits:
+    lo, hi = arm.position_limits
+    return ExcitationLimits(lo, hi, arm.speed_bounds, np.full(arm.dof, acceleration))
 
 
-def design_for(robot: str, duration: float, rate: float, acceleration: float = DEFAULT_ACCELERATION,
+def design_for(arm: Arm, duration: float, rate: float, acceleration: float = DEFAULT_ACCELERATION,
                seed: int = 0, iterations: int = ITERATIONS,
                harmonics: int | None = None, criterion: str = "information",
                floor: float | None = 0.0) -> DesignedExcitation:
-    """The robot's designed excitation sampled at rate (Hz) over [0, duration] s, ends
+    """The arm's designed excitation sampled at rate (Hz) over [0, duration] s, ends
     included (both at rest), with `harmonics` (default default_harmonics(duration)), optimal
     for `criterion` (identification.excitation.criteria.CRITERIA), every moving link above
     the floor at height floor (m; None: no floor); UserError on bad input or if it cannot be
@@ -121,10 +119,9 @@ def design_for(robot: str, duration: float, rate: float, acceleration: float = D
     harmonics = default_harmonics(duration) if harmonics is None else harmonics
     if not 1 <= harmonics <= MAX_HARMONICS:
         raise UserError(f"--harmonics must be between 1 and {MAX_HARMONICS}, got {harmonics}")
-    plant = load_plant(robot)
-    limits = excitation_limits(plant, acceleration)
-    regressor = AtomRegressor(robot_library(robot))
-    clearance = capsule_clearance(robot, floor)
+    limits = excitation_limits(arm, acceleration)
+    regressor = AtomRegressor(arm.library)
+    clearance = capsule_clearance(arm, floor)
     try:
         design = optimize_excitation(limits, duration, regressor, clearance, seed,
                                      harmonics=harmonics, iterations=iterations,
@@ -133,29 +130,29 @@ def design_for(robot: str, duration: float, rate: float, acceleration: float = D
                                      # limits may pass 1000 points and miss between them)
                                      check_points=max(1000, int(round(duration * rate))))
     except ValueError as exc:
-        raise UserError(f"robot {robot}: {exc}") from None
+        raise UserError(f"robot {arm.label}: {exc}") from None
     t = np.arange(int(round(duration * rate)) + 1) / rate
     trajectory = Trajectory(t, *design.excitation.evaluate(t))
     states = (trajectory.q, trajectory.qd, trajectory.qdd)
     if np.any(clearance(trajectory.q) <= 0) or limits.violation(*states) > 1e-9:
-        raise UserError(f"robot {robot}: the designed excitation touches a link or a limit at "
+        raise UserError(f"robot {arm.label}: the designed excitation touches a link or a limit at "
                         "the written samples; try another --seed or a longer --duration")
     grid = np.linspace(0.0, duration, CONDITION_POINTS, endpoint=False)
-    default, _ = default_excitation(plant, robot, max(int(round(duration * SAMPLE_RATE)), 10), seed)
+    default, _ = default_excitation(arm, max(int(round(duration * SAMPLE_RATE)), 10), seed)
     return DesignedExcitation(design, trajectory,
                               float(np.exp(log_condition(regressor, *design.excitation.evaluate(grid)))),
                               float(np.exp(log_condition(regressor, *default.evaluate(grid)))), limits)
 
 
-def floor_below_home(robot: str, floor: float | None) -> float | None:
+def floor_below_home(arm: Arm, floor: float | None) -> float | None:
     """The height (m) of the lowest moving link end at q = 0 when it lies below the floor by
     more than the capsule radius (the arm at home is not standing on that floor: a humanoid's
     arm, one hung from a ceiling), else None."""
     if floor is None:
         return None
-    geometry = arm_geometry(robot)
+    geometry = arm.geometry
     lowest = float(np.min(geometry.points(np.zeros((1, geometry.dof)))[0, _moving(geometry), 2]))
-    return lowest if lowest < floor - capsule_radius(robot) else None
+    return lowest if lowest < floor - capsule_radius(arm) else None
 
 
 def _moving(geometry) -> list[int]:

@@ -17,10 +17,8 @@ from harness.data.excitation_file import Trajectory
 from harness.data.sensors import SensorConfig, torque_noise
 from harness.data.tracking import simulate_measured
 from harness.errors import UserError
-from harness.robots.baseline import PinocchioModel
+from harness.robots.arm import Arm
 from harness.robots.extras import published_library
-from harness.robots.plant import Plant, load_plant
-from harness.robots.registry import robot_entry, robot_reference
 from identification.excitation.fourier import FourierExcitation, design_excitation, normalized_condition
 from identification.regression.oracle import base_columns
 
@@ -29,14 +27,14 @@ SAMPLE_RATE = 200.0  # Hz, rate of the data handed to identification
 
 
 
-def _condition_fn(plant: Plant, robot: str, rate: float, samples: int):
-    """Excitation quality: the worse of the normalized conditions of the plant's
-    base regressor (Pinocchio) and of the library robot's registry entry declares for its
-    data (Robot.excitation_library), if any."""
-    pmodel = plant.pinocchio()
+def _condition_fn(arm: Arm, robot: Arm, rate: float, samples: int):
+    """Excitation quality: the worse of the normalized conditions of arm's base regressor
+    (Pinocchio) and of the library robot's registry entry declares for its data
+    (Robot.excitation_library), if any."""
+    pmodel = arm.pinocchio
     declared = declared_library(robot)
     t = np.linspace(0.0, samples / rate, min(samples, 400), endpoint=False)
-    baseline = PinocchioModel(pmodel)
+    baseline = arm.nominal
     base: list[np.ndarray] = []  # base-parameter columns: structural, found on the first candidate
 
     def condition(exc: FourierExcitation) -> float:
@@ -51,13 +49,14 @@ def _condition_fn(plant: Plant, robot: str, rate: float, samples: int):
     return condition
 
 
-def default_excitation(p: Plant, robot: str, samples: int, seed: int
+def default_excitation(arm: Arm, samples: int, seed: int, robot: Arm | None = None
                        ) -> tuple[FourierExcitation, float]:
-    """generate's own excitation for `samples` points at SAMPLE_RATE: the best-conditioned
-    of seeded random Fourier series in the joint limits and the URDF's speed limits."""
-    lo, hi = p.limits()
-    return design_excitation(lo, hi, seed, _condition_fn(p, robot, SAMPLE_RATE, samples),
-                             velocity=p.velocity_limits())
+    """generate's own excitation of arm for `samples` points at SAMPLE_RATE: the
+    best-conditioned of seeded random Fourier series in the joint limits and the URDF's speed
+    limits (robot: whose declared library also judges it, default arm)."""
+    lo, hi = arm.position_limits
+    return design_excitation(lo, hi, seed, _condition_fn(arm, robot or arm, SAMPLE_RATE, samples),
+                             velocity=arm.speed_bounds)
 
 
 def _along(excitation: Trajectory, dof: int, samples: int, mode: str) -> tuple[np.ndarray, float]:
@@ -98,7 +97,7 @@ def inverse_torques(model: mujoco.MjModel, q, qd, qdd) -> np.ndarray:
 
 
 def generate(
-    plant: str,
+    arm: Arm,
     samples: int = 4000,
     noise: float = 0.05,
     seed: int = 0,
@@ -106,50 +105,51 @@ def generate(
     bias: float = 0.2,
     sensors: SensorConfig | None = None,
     excitation: Trajectory | None = None,
-    robot: str | None = None,
+    robot: Arm | None = None,
 ) -> Dataset:
-    """One dataset of `samples` points at SAMPLE_RATE Hz; noise is a fraction of torque std.
-    With an excitation: along its first `samples` states, at its rate (measured: tracked from
-    its state at t = 0, its samples linearly interpolated between).
-    robot: the registered robot plant is a variant of, whose entry's declared library the
-    excitation and the report use (default: plant's own entry)."""
+    """One dataset of arm (the plant) of `samples` points at SAMPLE_RATE Hz; noise is a
+    fraction of torque std. With an excitation: along its first `samples` states, at its rate
+    (measured: tracked from its state at t = 0, its samples linearly interpolated between).
+    robot: the registered robot arm is a variant of, whose entry's declared library the
+    excitation and the report use (default: arm's own entry)."""
     _validate(samples, noise, bias)
-    p = load_plant(plant)
+    robot = robot or arm
     rate = SAMPLE_RATE
     if excitation is None:
-        exc, cond = default_excitation(p, robot or plant, samples, seed)
+        exc, cond = default_excitation(arm, samples, seed, robot)
         t = np.arange(samples) / SAMPLE_RATE
     else:
         exc = excitation
-        t, rate = _along(excitation, p.dof, samples, mode)
-        cond = _condition_fn(p, robot or plant, rate, samples)(exc)
+        t, rate = _along(excitation, arm.dof, samples, mode)
+        cond = _condition_fn(arm, robot, rate, samples)(exc)
     rng = np.random.default_rng(seed + 1)
-    meta = dict(plant=robot_reference(plant), mode=mode, noise=noise, bias=bias, seed=seed, dof=p.dof,
-                samples=samples, rate=rate, excitation_condition=cond)
+    meta = dict(plant=arm.reference, robot_hash=arm.record["hash"], mode=mode, noise=noise,
+                bias=bias, seed=seed, dof=arm.dof, samples=samples, rate=rate,
+                excitation_condition=cond)
     if mode == "inverse":
         q, qd, qdd = exc.evaluate(t)
-        tau_clean = inverse_torques(p.model, q, qd, qdd)
+        tau_clean = inverse_torques(arm.mujoco, q, qd, qdd)
         truth: dict = {}
     elif mode == "measured":
-        q, qd, qdd, tau_clean, truth, stats = simulate_measured(p, exc, t, rate,
+        q, qd, qdd, tau_clean, truth, stats = simulate_measured(arm, exc, t, rate,
                                                                 sensors or SensorConfig(), rng)
         meta.update(stats)
     else:
         raise UserError(f"--mode must be 'inverse' or 'measured', got '{mode}'")
-    meta.update(library_report(robot or plant, q, qd, qdd, p.pinocchio()))
+    meta.update(library_report(robot, q, qd, qdd, arm.pinocchio))
     tau = tau_clean + torque_noise(tau_clean, noise, bias, rng)
     return Dataset(t, q, qd, qdd, tau, tau_clean, meta, truth)
 
 
-def declared_library(robot: str):
-    """The library robot's registry entry declares for its data (Robot.excitation_library:
+def declared_library(arm: Arm):
+    """The library arm's registry entry declares for its data (Robot.excitation_library:
     the Lynxmotion's is the paper's published 75 features), or None."""
-    name = robot_entry(robot).excitation_library
+    name = arm.entry.excitation_library
     return published_library(name) if name else None
 
 
-def report_library(robot: str, dof: int, pmodel=None):
-    """The library whose conditioning is reported for robot's data: the one its registry
+def report_library(arm: Arm, dof: int, pmodel=None):
+    """The library whose conditioning is reported for arm's data: the one its registry
     entry declares (declared_library); otherwise the base atoms generated from the plant's
     kinematics (identification.library.kinematic), or, with no Pinocchio model of the plant,
     the generic polynomial x trig library.
@@ -158,7 +158,7 @@ def report_library(robot: str, dof: int, pmodel=None):
     from identification.library.generic import generic_library
     from identification.library.kinematic import KinematicLibrary
 
-    declared = declared_library(robot)
+    declared = declared_library(arm)
     if declared is not None:
         return declared
     if pmodel is not None and pmodel.nv == dof:
@@ -177,9 +177,10 @@ def library_condition(library, q, qd, qdd):
     return conditioning(columns.reshape(-1, columns.shape[-1]), library.names)
 
 
-def library_report(robot: str, q, qd, qdd, pmodel=None) -> dict:
-    """Rank and normalized condition of robot's report library on this data."""
-    library = report_library(robot, q.shape[1], pmodel)
+def library_report(arm: Arm, q, qd, qdd, pmodel=None) -> dict:
+    """Rank and normalized condition of arm's report library on this data (pmodel: the
+    Pinocchio model of the plant that made it)."""
+    library = report_library(arm, q.shape[1], pmodel)
     cond = library_condition(library, q, qd, qdd)
     return {"library": library.name, "library_rank": cond.rank, "library_size": cond.size,
             "library_condition": cond.condition}

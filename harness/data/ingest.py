@@ -25,7 +25,7 @@ import numpy as np
 from harness.data.csvlog import Log, read_log
 from harness.data.derivatives import choose_window, savgol_window_derivatives
 from harness.errors import UserError
-from harness.robots.registry import robot_reference
+from harness.robots.arm import Arm
 
 POLYORDER = 4
 
@@ -78,11 +78,12 @@ def estimate(log: Log, grid: np.ndarray, rate: float,
     return out, {**described, "source": source, "estimated": missing}
 
 
-def ingest(path: str | Path, dof: int, robot: str, rate: float | None = None,
+def ingest(path: str | Path, arm: Arm, rate: float | None = None,
            window: int | None = None) -> Ingested:
-    """The log at path of a robot with dof joints, as a dataset at rate Hz (default: the
+    """The log at path of arm (its joints), as a dataset at rate Hz (default: the
     resampling rate, the log's median step); window: the Savitzky-Golay window in samples
     of the resampled grid (default: chosen from the data)."""
+    dof = arm.dof
     log = read_log(path, dof)
     grid, grid_rate = uniform_grid(log.t)
     states, derivatives = estimate(log, grid, grid_rate, window)
@@ -95,8 +96,8 @@ def ingest(path: str | Path, dof: int, robot: str, rate: float | None = None,
     keep = slice(None, None, every)
     arrays = {"t": grid[keep], **{k: states[k][keep] for k in ("q", "qd", "qdd", "tau")}}
     steps = np.diff(log.t)
-    meta = {"mode": "measured log", "source": Path(path).name, "plant": robot_reference(robot),
-            "robot": robot_reference(robot),
+    meta = {"mode": "measured log", "source": Path(path).name, "plant": arm.reference,
+            "robot": arm.reference, "robot_hash": arm.record["hash"],
             "dof": dof, "samples": int(len(arrays["q"])), "logged": sorted(log.groups),
             "raw_samples": int(len(log.t)), "duration_s": float(log.t[-1] - log.t[0]),
             "raw_step_s": {"min": float(steps.min()), "median": float(np.median(steps)),

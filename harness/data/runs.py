@@ -5,6 +5,8 @@ runs are concatenated in the order given, which is what a static regression on (
 tau) needs: no time series crosses from one run to the next. Each run keeps its own sensor
 offset too: identify is told which run each sample comes from (Runs.labels). A run without `tau_clean`
 (a measured log) makes the whole set one: the scores are then against the measured torque.
+Which robot the runs are of is the command's to check: Runs.records, each run's file and meta,
+go to harness.robots.arm.resolve_arm, which refuses a run of another robot.
 """
 
 from __future__ import annotations
@@ -34,6 +36,11 @@ class Runs:
         return len(self.arrays["q"])
 
     @property
+    def records(self) -> list[tuple[str, dict]]:
+        """(file, meta) of each run: resolve_arm's data."""
+        return list(zip(self.files, self.metas, strict=True))
+
+    @property
     def labels(self) -> np.ndarray:
         """(samples,) the index of the run each sample comes from (identify's runs)."""
         return np.repeat(np.arange(len(self.lengths)), self.lengths)
@@ -48,16 +55,13 @@ def split_files(spec: str, option: str) -> list[str]:
 
 
 def load_runs(files: list[str]) -> Runs:
-    """The runs at files, concatenated; UserError if their joints differ."""
+    """The runs at files, concatenated; UserError if their joints differ (their robot is
+    checked by the caller's resolve_arm, on Runs.records)."""
     loaded = [load_arrays(f, KEYS, optional=("tau_clean",)) for f in files]
     dofs = {a["q"].shape[1] for a, _ in loaded}
     if len(dofs) > 1:
         raise UserError(f"the logs {', '.join(files)} have different joint counts "
                         f"({', '.join(str(a['q'].shape[1]) for a, _ in loaded)})")
-    robots = {str(m.get("robot") or m.get("plant") or "") for _, m in loaded} - {""}
-    if len(robots) > 1:
-        raise UserError(f"the logs {', '.join(files)} record different robots "
-                        f"({', '.join(sorted(robots))}): runs of one robot only")
     keys = KEYS + (("tau_clean",) if all("tau_clean" in a for a, _ in loaded) else ())
     arrays = {k: np.concatenate([a[k] for a, _ in loaded]) for k in keys}
     return Runs(arrays, tuple(m for _, m in loaded), tuple(str(Path(f)) for f in files),

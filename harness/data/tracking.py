@@ -10,6 +10,7 @@ as the user's data; the simulator's own states are returned separately as truth.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import replace
 
 import mujoco
@@ -17,8 +18,7 @@ import numpy as np
 
 from harness.data.sensors import SensorConfig, encoder, estimate_derivatives
 from harness.errors import UserError
-from harness.robots.baseline import PinocchioModel
-from harness.robots.plant import Plant
+from harness.robots.arm import Arm
 from identification.excitation.fourier import FourierExcitation
 from identification.metrics import rel_error
 
@@ -54,11 +54,11 @@ def _actuation(model: mujoco.MjModel) -> np.ndarray | None:
     return np.linalg.inv(moment.T)
 
 
-def simulate_measured(plant, exc: FourierExcitation, t_out: np.ndarray, rate: float,
+def simulate_measured(arm: Arm, exc: FourierExcitation, t_out: np.ndarray, rate: float,
                       cfg: SensorConfig, rng: np.random.Generator):
-    """Simulate, sense, estimate; returns q, qd, qdd, tau_clean at t_out (sampled at rate
+    """Simulate arm, sense, estimate; returns q, qd, qdd, tau_clean at t_out (sampled at rate
     Hz), truth, stats."""
-    model = plant.model
+    model = copy.copy(arm.mujoco)  # its time step is refined below: the arm's is shared
     period = 1.0 / rate
     if abs(period / model.opt.timestep - round(period / model.opt.timestep)) > 1e-9:
         # e.g. MuJoCo's 2 ms default on URDF robots: refine so sensor samples land on the grid
@@ -102,7 +102,7 @@ def simulate_measured(plant, exc: FourierExcitation, t_out: np.ndarray, rate: fl
     q_est, qd_est, qdd_est = estimate_derivatives(encoder(q_read, cfg, rng), cfg)
     idx = np.round(t_out * cfg.sensing_rate).astype(int)
     truth = {"q": q_true[idx], "qd": qd_true[idx], "qdd": qdd_true[idx]}
-    stats = state_errors(plant, (q_est[idx], qd_est[idx], qdd_est[idx]),
+    stats = state_errors(arm, (q_est[idx], qd_est[idx], qdd_est[idx]),
                          (truth["q"], truth["qd"], truth["qdd"]))
     stats["tracking_rms"] = float(np.sqrt(np.mean((q_true - q_ref) ** 2)))
     stats["sensors"] = dict(encoder_bits=cfg.encoder_bits, angle_noise=cfg.angle_noise,
@@ -116,10 +116,10 @@ def _mass_matrix(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
     return m
 
 
-def state_errors(p: Plant, est: tuple, true: tuple) -> dict:
+def state_errors(arm: Arm, est: tuple, true: tuple) -> dict:
     """Relative RMS errors of estimated qd, qdd and of the torque they imply."""
     out = {"qd_rel_rmse": rel_error(est[1], true[1]).tolist(),
            "qdd_rel_rmse": rel_error(est[2], true[2]).tolist()}
-    baseline = PinocchioModel(p.pinocchio())
+    baseline = arm.nominal
     out["tau_from_states_rel_rmse"] = rel_error(baseline.torque(*est), baseline.torque(*true)).tolist()
     return out

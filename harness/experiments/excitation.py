@@ -19,6 +19,7 @@ from harness.data.excite import design_for
 from harness.data.generate import SAMPLE_RATE, generate
 from harness.errors import UserError
 from harness.experiments.identification import NOISE, SAMPLES, Motion, score_draw
+from harness.robots.arm import Arm
 from harness.sections.base import Target
 
 DESIGN_SEED = 1
@@ -29,13 +30,13 @@ ERROR = ("{name} error on the other excitation's motion, trained along the desig
 QUICK_ITERATIONS = 20  # the design's SLSQP iterations in --quick
 
 
-def along_design(robot: str, designed, fit, name: str, baseline, judge: Motion, draw: dict) -> dict:
+def along_design(arm: Arm, designed, fit, name: str, baseline, judge: Motion, draw: dict) -> dict:
     """One draw generated again along the design: errors per joint, and their median ratio to
     the same draw along the default excitation, with generate's noise and with the same
     sensor's (the default draw's noise on the design's torque: a sensor's noise does not grow
     with the motion, generate's does)."""
-    data = generate(robot, SAMPLES, NOISE, draw["seed"], "inverse", excitation=designed.trajectory)
-    default = generate(robot, SAMPLES, NOISE, draw["seed"], "inverse")
+    data = generate(arm, SAMPLES, NOISE, draw["seed"], "inverse", excitation=designed.trajectory)
+    default = generate(arm, SAMPLES, NOISE, draw["seed"], "inverse")
     same = replace(data, tau=data.tau_clean + (default.tau - default.tau_clean))
     errors, same_errors = (np.array(score_draw(d, {name: fit}, baseline, [judge])[name][judge.name])
                            for d in (data, same))
@@ -47,7 +48,7 @@ def along_design(robot: str, designed, fit, name: str, baseline, judge: Motion, 
             "same_sensor_median_ratio": same_ratio}
 
 
-def excitation_comparison(robot: str, fit, name: str, baseline, judge: Motion, draws: list[dict],
+def excitation_comparison(arm: Arm, fit, name: str, baseline, judge: Motion, draws: list[dict],
                           quick: bool) -> tuple[list[Target], dict]:
     """Targets (designed condition <= default's; designed-draw error <= default-draw error on
     the judge, median over joints, median over draws) and the figures behind them; `draws`
@@ -55,12 +56,12 @@ def excitation_comparison(robot: str, fit, name: str, baseline, judge: Motion, d
     `name` scored on `judge`."""
     error = ERROR.format(name=name, seeds=", ".join(str(d["seed"]) for d in draws))
     try:
-        designed = design_for(robot, SAMPLES / SAMPLE_RATE, SAMPLE_RATE, seed=DESIGN_SEED,
+        designed = design_for(arm, SAMPLES / SAMPLE_RATE, SAMPLE_RATE, seed=DESIGN_SEED,
                               **({"iterations": QUICK_ITERATIONS} if quick else {}))
     except UserError as exc:  # e.g. no collision-free start: the targets are unmeasured
         return [Target(CONDITION, None, 1.0, note=str(exc)),
                 Target(error, None, 1.0, "x")], {"error": str(exc)}
-    along = [along_design(robot, designed, fit, name, baseline, judge, d) for d in draws]
+    along = [along_design(arm, designed, fit, name, baseline, judge, d) for d in draws]
     ratio = float(np.median([a["median_ratio"] for a in along]))
     targets = [Target(CONDITION, designed.condition, designed.default_condition),
                Target(error, ratio, 1.0, "x")]

@@ -17,26 +17,25 @@ from harness.data.excite import design_for
 from harness.data.generate import SAMPLE_RATE, generate
 from harness.experiments.excitation import along_design
 from harness.experiments.identification import NOISE, SAMPLES, fixed_fit, score_draw, sines_motion
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
-from harness.robots.torque_models import robot_identification
+from harness.identify.fits import arm_identification
+from harness.robots.arm import Arm
 from identification.excitation.criteria import CRITERIA
 
 SEEDS, JUDGE = (101, 102, 103), 1005  # the bench's first draws and judge motion
 
 
-def compare(robot: str) -> dict:
+def compare(arm: Arm) -> dict:
     """Per criterion: conditions and the error ratios per draw under both noise models."""
-    baseline, judge = PinocchioModel(load_pinocchio(robot)), sines_motion(robot, SAMPLES, JUDGE)
-    fit = fixed_fit(*robot_identification(robot))
+    baseline, judge = arm.nominal, sines_motion(arm, SAMPLES, JUDGE)
+    fit = fixed_fit(*arm_identification(arm))
     out = {}
     for criterion in CRITERIA:
-        designed = design_for(robot, SAMPLES / SAMPLE_RATE, SAMPLE_RATE, seed=1, criterion=criterion)
+        designed = design_for(arm, SAMPLES / SAMPLE_RATE, SAMPLE_RATE, seed=1, criterion=criterion)
         rows = []
         for seed in SEEDS:
-            draw = score_draw(generate(robot, SAMPLES, NOISE, seed, "inverse"), {"fit": fit},
+            draw = score_draw(generate(arm, SAMPLES, NOISE, seed, "inverse"), {"fit": fit},
                               baseline, [judge])
-            r = along_design(robot, designed, fit, "fit", baseline, judge, draw)
+            r = along_design(arm, designed, fit, "fit", baseline, judge, draw)
             rows.append({"seed": seed, "bench": r["median_ratio"],
                          "same": r["same_sensor_median_ratio"]})
         out[criterion] = {"condition": designed.condition,

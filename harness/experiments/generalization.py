@@ -27,10 +27,8 @@ from harness.experiments.identification import (
     score_draw,
     sines_motion,
 )
-from harness.robots.baseline import PinocchioModel
-from harness.robots.ellipsoids import robot_ellipsoids
-from harness.robots.registry import load_pinocchio
-from harness.robots.torque_models import robot_identification, robot_library
+from harness.identify.fits import arm_identification
+from harness.robots.arm import Arm
 
 OUTSIDE = Spectrum(count=(3, 7), band=(0.2, 2.0), fill=0.5, stream=104729)
 BIAS = 0.2  # sensor offset, x the noise std (generate's default)
@@ -39,26 +37,26 @@ JUDGE_SEED = 1707  # the fresh motions' seed (the bench's is 1005)
 SPARSE, PRIOR, FLAT = "sparse default", "consistent, perturbed URDF prior", "consistent, no prior"
 
 
-def outside_dataset(robot: str, seed: int, samples: int = SAMPLES, noise: float = NOISE) -> Dataset:
+def outside_dataset(arm: Arm, seed: int, samples: int = SAMPLES, noise: float = NOISE) -> Dataset:
     """Noisy torque (noise x each joint's torque std, plus BIAS of that as an offset) along
     a motion of the OUTSIDE spectrum."""
-    m = sines_motion(robot, samples, seed, spectrum=OUTSIDE)
+    m = sines_motion(arm, samples, seed, spectrum=OUTSIDE)
     rng = np.random.default_rng([seed, 31])
     tau = m.tau_clean + torque_noise(m.tau_clean, noise, BIAS, rng)
     return Dataset(np.arange(samples) / SAMPLE_RATE, m.q, m.qd, m.qdd, tau, m.tau_clean,
                    {"seed": seed, "noise": noise, "excitation": "outside sines"})
 
 
-def generalization(robot: str, seeds=SEEDS) -> dict:
+def generalization(arm: Arm, seeds=SEEDS) -> dict:
     """Per fit and judge motion, the ratio summary to the oracle over the draws (seeds), and
     the draws' per-joint errors."""
-    baseline = PinocchioModel(load_pinocchio(robot))
-    fits = {SPARSE: fixed_fit(*robot_identification(robot)),
-            PRIOR: perturbed_prior_fit(robot_library(robot), baseline, robot_ellipsoids(robot)),
-            FLAT: fixed_fit(*robot_identification(robot, prior="flat"))}
-    judges = [generated_motion(robot, SAMPLES, JUDGE_SEED), sines_motion(robot, SAMPLES, JUDGE_SEED)]
-    draws = [score_draw(outside_dataset(robot, seed), fits, baseline, judges) for seed in seeds]
-    return {"robot": robot, "seeds": list(seeds),
+    baseline = arm.nominal
+    fits = {SPARSE: fixed_fit(*arm_identification(arm)),
+            PRIOR: perturbed_prior_fit(arm.library, baseline, arm.ellipsoids),
+            FLAT: fixed_fit(*arm_identification(arm, prior="flat"))}
+    judges = [generated_motion(arm, SAMPLES, JUDGE_SEED), sines_motion(arm, SAMPLES, JUDGE_SEED)]
+    draws = [score_draw(outside_dataset(arm, seed), fits, baseline, judges) for seed in seeds]
+    return {"robot": arm.reference, "seeds": list(seeds),
             "summary": {name: {m.name: ratio_summary(draws, name, m.name) for m in judges}
                         for name in fits},
             "draws": [{k: v for k, v in d.items() if k != "models"} for d in draws]}

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from harness.data.generate import SAMPLE_RATE, generate, inverse_torques
+from harness.robots.arm import Arm
 from harness.robots.baseline import PinocchioModel
-from harness.robots.plant import load_plant
 from identification.identify import identify
 from identification.library.kinematic import KinematicLibrary
 from identification.metrics import rel_error
@@ -66,18 +66,17 @@ class Spectrum:
     stream: int = 7919
 
 
-def sines_motion(robot: str, samples: int, seed: int, rate: float = SAMPLE_RATE,
+def sines_motion(arm: Arm, samples: int, seed: int, rate: float = SAMPLE_RATE,
                  spectrum: Spectrum = Spectrum()) -> Motion:
     """A motion of another family than generate's Fourier series: per joint 3 to 6 sines of
     random frequencies (0.05-1 Hz), amplitudes and phases, scaled into FILL of the joint's
     range (unlimited joints: of [-pi, pi]); torque by mj_inverse on the robot's plant.
     Another spectrum gives another family (harness.experiments.generalization)."""
-    plant = load_plant(robot)
-    lower, upper = plant.limits()
+    lower, upper = arm.position_limits
     rng = np.random.default_rng([seed, spectrum.stream])
     t = np.arange(samples) / rate
-    q, qd, qdd = (np.zeros((samples, plant.dof)) for _ in range(3))
-    for j in range(plant.dof):
+    q, qd, qdd = (np.zeros((samples, arm.dof)) for _ in range(3))
+    for j in range(arm.dof):
         k = int(rng.integers(*spectrum.count))
         w = 2 * np.pi * rng.uniform(*spectrum.band, k)
         a, phi = rng.uniform(0.2, 1.0, k), rng.uniform(0, 2 * np.pi, k)
@@ -89,12 +88,12 @@ def sines_motion(robot: str, samples: int, seed: int, rate: float = SAMPLE_RATE,
         q[:, j] = centre + scale * shape
         qd[:, j] = scale * (np.cos(np.outer(t, w) + phi) @ (a * w))
         qdd[:, j] = -scale * (s @ (a * w**2))
-    return Motion("sines", q, qd, qdd, inverse_torques(plant.model, q, qd, qdd))
+    return Motion("sines", q, qd, qdd, inverse_torques(arm.mujoco, q, qd, qdd))
 
 
-def generated_motion(robot: str, samples: int, seed: int) -> Motion:
+def generated_motion(arm: Arm, samples: int, seed: int) -> Motion:
     """A noise-free run of generate's own excitation family."""
-    data = generate(robot, samples, 0.0, seed, "inverse")
+    data = generate(arm, samples, 0.0, seed, "inverse")
     return Motion("fresh", data.q, data.qd, data.qdd, data.tau_clean)
 
 
@@ -174,10 +173,10 @@ def ratio_summary(draws: list[dict], method: str, judge: str) -> dict:
             "worst_median": float(np.median(r, axis=1).max()), "worst_joint": float(r.max())}
 
 
-def closed_form_gap(robot: str, motion: Motion) -> float:
+def closed_form_gap(arm: Arm, motion: Motion) -> float:
     """Largest |Pinocchio RNEA (+ damping) - MuJoCo inverse dynamics| over the motion,
     relative to the largest torque: two independent implementations of the same model."""
-    model = PinocchioModel(load_plant(robot).pinocchio())
+    model = arm.nominal
     tau = model.torque(motion.q, motion.qd, motion.qdd)
     return float(np.max(np.abs(tau - motion.tau_clean)) / max(np.max(np.abs(motion.tau_clean)),
                                                                1e-300))

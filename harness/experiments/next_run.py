@@ -28,9 +28,7 @@ import numpy as np
 from harness.data.generate import generate
 from harness.experiments.identification import NOISE, SAMPLES, perturbed_nominal, sines_motion
 from harness.experiments.peers import least_squares
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
-from harness.robots.torque_models import robot_library
+from harness.robots.arm import Arm
 from identification.identify import identify
 from identification.metrics import rel_error
 from identification.regression.consistent import ConsistentRegressor
@@ -78,28 +76,28 @@ class Runs:
     nominal: np.ndarray
 
 
-def two_runs(robot: str, seed: int, samples: int = SAMPLES, noise: float = NOISE) -> Runs:
+def two_runs(arm: Arm, seed: int, samples: int = SAMPLES, noise: float = NOISE) -> Runs:
     rng = np.random.default_rng([seed, 6007])
-    first, second = generate(robot, samples, 0.0, seed, "inverse"), sines_motion(robot, samples, seed)
+    first, second = generate(arm, samples, 0.0, seed, "inverse"), sines_motion(arm, samples, seed)
     spread = first.tau_clean.std(axis=0)
     law, friction = _friction(first.qd, rng, spread)
     tau_first = first.tau_clean + friction + noise * spread * rng.normal(size=first.q.shape)
     truth = second.tau_clean + law_torque(law, second.qd)
     tau_second = truth + noise * spread * rng.normal(size=second.q.shape)
-    nominal = perturbed_nominal(PinocchioModel(load_pinocchio(robot)), seed)
+    nominal = perturbed_nominal(arm.nominal, seed)
     return Runs(first, second, tau_first, tau_second, truth, nominal)
 
 
-def next_run(robot: str, seed: int, samples: int = SAMPLES, noise: float = NOISE) -> dict:
+def next_run(arm: Arm, seed: int, samples: int = SAMPLES, noise: float = NOISE) -> dict:
     """Every model's relative RMS error per joint on the second run, the joints' torque RMS,
     and the rule's outcome."""
-    runs, library = two_runs(robot, seed, samples, noise), robot_library(robot)
+    runs, library = two_runs(arm, seed, samples, noise), arm.library
     first, second = runs.first, runs.second
     states = [np.r_[x, y] for x, y in ((first.q, second.q), (first.qd, second.qd),
                                        (first.qdd, second.qdd))]
     tau, n = np.r_[runs.tau_first, runs.tau_second], len(first.q)
     out = {"nominal": library.evaluate_every(second.q, second.qd, second.qdd) @ runs.nominal,
-           "least_squares": least_squares(robot, *states, tau, n)[n:]}
+           "least_squares": least_squares(arm, *states, tau, n)[n:]}
     for name, prior in (("identified", runs.nominal), ("consistent_flat", None)):
         fit = identify(*states, tau, library, len(second.q) / len(tau),
                        regressor=ConsistentRegressor(prior))

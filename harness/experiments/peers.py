@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from harness.closeloop.measured import rigid_library
+from harness.robots.arm import Arm
 from identification.library.kinematic import COULOMB_WIDTH
 
 
@@ -20,10 +21,10 @@ def joint_friction_columns(qd: np.ndarray) -> np.ndarray:
     return np.concatenate([viscous, coulomb, np.broadcast_to(eye, (n, dof, dof))], axis=2)
 
 
-def least_squares(robot: str, q, qd, qdd, tau, split: int) -> np.ndarray:
+def least_squares(arm: Arm, q, qd, qdd, tau, split: int) -> np.ndarray:
     """The reference model's torque (n, dof): rigid-body atoms + viscous, Coulomb and offset
     per joint, least squares on the first split samples."""
-    X = np.concatenate([rigid_library(robot).evaluate(q, qd, qdd), joint_friction_columns(qd)],
+    X = np.concatenate([rigid_library(arm).evaluate(q, qd, qdd), joint_friction_columns(qd)],
                        axis=2)
     coef, *_ = np.linalg.lstsq(X[:split].reshape(-1, X.shape[2]), tau[:split].ravel(),
                                rcond=None)

@@ -21,10 +21,7 @@ from harness.experiments.identification import (
     perturbed_nominal,
     sines_motion,
 )
-from harness.robots.baseline import PinocchioModel
-from harness.robots.ellipsoids import robot_ellipsoids
-from harness.robots.registry import load_pinocchio
-from harness.robots.torque_models import robot_library
+from harness.robots.arm import Arm
 from identification.metrics import rel_error
 from identification.physical import LAMBDAS, TIE, choose_weight, fit_physical
 from identification.regression.consistent import ConsistentRegressor
@@ -36,11 +33,11 @@ CHOOSE = {"seeds": {0.02: (611, 612), 0.05: (601, 602, 603, 604), 0.10: (621, 62
 RESCORE = {"seeds": {0.02: (631, 632), 0.05: (641, 642, 643, 644), 0.10: (651, 652)}, "judge": 1602}
 
 
-def draw_ratios(robot: str, level: float, seed: int, judge, baseline, library,
+def draw_ratios(arm: Arm, level: float, seed: int, judge, baseline, library,
                 ellipsoids=None) -> dict:
     """Per ridge weight, the fit's error / the oracle's on the judge (dof,); the weights'
     validation errors. ellipsoids: the bodies' bounds (identify's plausible default)."""
-    data = generate(robot, SAMPLES, level, seed, "inverse")
+    data = generate(arm, SAMPLES, level, seed, "inverse")
     n = int(round(SAMPLES * (1 - HOLDOUT)))
     oracle, _ = oracle_fit(baseline, data, n)
     floor = rel_error(oracle.predict(oracle_design(baseline, judge.q, judge.qd, judge.qdd)),
@@ -59,11 +56,11 @@ def draw_ratios(robot: str, level: float, seed: int, judge, baseline, library,
     return {"errors": errors, "ratios": ratios}
 
 
-def scan(robot: str, draws: dict = CHOOSE, ties=TIES) -> dict:
+def scan(arm: Arm, draws: dict = CHOOSE, ties=TIES) -> dict:
     """Per margin: the worst draw's median ratio over joints and the worst joint's ratio."""
-    baseline, library = PinocchioModel(load_pinocchio(robot)), robot_library(robot)
-    judge = sines_motion(robot, SAMPLES, draws["judge"])
-    made = [draw_ratios(robot, level, seed, judge, baseline, library, robot_ellipsoids(robot))
+    baseline, library = arm.nominal, arm.library
+    judge = sines_motion(arm, SAMPLES, draws["judge"])
+    made = [draw_ratios(arm, level, seed, judge, baseline, library, arm.ellipsoids)
             for level, seeds in draws["seeds"].items() for seed in seeds]
     out = {}
     for tie in ties:
@@ -83,12 +80,12 @@ def best_ties(scans: list[dict], ties=TIES) -> list[float]:
     return [t for t in ties if score(t) == best]
 
 
-def tie_study(robots, quick: bool = False) -> dict:
-    """The margins best on CHOOSE's draws and judge over robots, every margin re-scored on
+def tie_study(arms, quick: bool = False) -> dict:
+    """The margins best on CHOOSE's draws and judge over arms, every margin re-scored on
     RESCORE's; and whether the code's TIE is among the best."""
     pick = {"seeds": {0.05: (601,)}, "judge": CHOOSE["judge"]} if quick else CHOOSE
     again = {"seeds": {0.05: (641,)}, "judge": RESCORE["judge"]} if quick else RESCORE
-    chosen_on = {robot: scan(robot, pick) for robot in robots}
-    rescored = {robot: scan(robot, again) for robot in robots}
-    return {"robots": list(robots), "ties": list(TIES), "best": best_ties(list(chosen_on.values())),
+    chosen_on = {arm.reference: scan(arm, pick) for arm in arms}
+    rescored = {arm.reference: scan(arm, again) for arm in arms}
+    return {"robots": list(chosen_on), "ties": list(TIES), "best": best_ties(list(chosen_on.values())),
             "code": TIE, "chosen_on": chosen_on, "rescored": rescored}

@@ -8,12 +8,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import mujoco
+import numpy as np
 
 from harness.errors import UserError
 from harness.io import read_json
-from harness.robots.baseline import PinocchioModel
+from harness.robots.arm import Arm
 from harness.robots.inertials import PARAMETERS_KEY, model_standard_parameters, set_standard_parameters
-from harness.robots.registry import load_mujoco, load_pinocchio
 from harness.robots.scene import build_scene, replay_scene
 from harness.robots.torque_models import load_torque_model
 from identification.torque_model import TorqueModel
@@ -30,32 +30,58 @@ class ReplayPlant:
     feedforward_label: str
 
 
-def replay_plant(plant: str | None, robot: str, radii: tuple[float, ...] = (),
+def replay_plant(plant: str | None, arm: Arm, radii: tuple[float, ...] = (),
                  geometry: ArmGeometry | None = None) -> ReplayPlant:
-    """The plant `replay --plant` names (None: the robot's replay scene), where a scene is
+    """The plant `replay --plant` names (None: the arm's replay scene), where a scene is
     built the link capsules of geometry (the plan's), else of these radii (m) on the
-    joint-origin segments; UserError in one line when it cannot be one."""
+    joint-origin segments; UserError in one line when it cannot be one (a URDF or MJCF of
+    another robot's kinematics among them: a URDF or MJCF of the robot is its own Arm,
+    whose kinematics hash is the arm's)."""
     if plant is None:
-        return ReplayPlant(replay_scene(robot, tuple(radii), geometry),
-                           PinocchioModel(load_pinocchio(robot)), robot, "pinocchio")
+        return ReplayPlant(replay_scene(arm, tuple(radii), geometry), arm.nominal,
+                           arm.reference, "pinocchio")
     path = Path(plant)
     if not path.is_file():
         raise UserError(f"plant file not found: {path}")
     if path.suffix.lower() == ".json":
-        return _identified(path, robot, radii, geometry)
-    if path.suffix.lower() == ".urdf":
-        return ReplayPlant(build_scene(str(path), radii, geometry).compile(),
-                           PinocchioModel(load_pinocchio(path)), str(path), f"pinocchio {path}")
-    model = load_mujoco(path, scene=True)
-    if model.nu:  # an MJCF scene with its own motors (and obstacle), simulated as it is
-        return ReplayPlant(model, PinocchioModel(load_pinocchio(robot)), str(path), "pinocchio")
-    return ReplayPlant(build_scene(str(path), radii, geometry).compile(),
-                       PinocchioModel(load_pinocchio(path)), str(path), f"pinocchio {path}")
+        return _identified(path, arm, radii, geometry)
+    other = Arm.of(path)
+    if path.suffix.lower() != ".urdf" and other.mujoco.nu:
+        # an MJCF scene with its own motors (and obstacle), simulated as it is
+        _check_scene(other.mujoco, arm, path)
+        return ReplayPlant(other.mujoco, arm.nominal, str(path), "pinocchio")
+    if other.record["hash"] != arm.record["hash"]:
+        raise UserError(f"plant {path} is not robot {arm.label}: its kinematics "
+                        f"({other.record['hash']}) are not the arm's ({arm.record['hash']})")
+    return ReplayPlant(build_scene(other, radii, geometry).compile(), other.nominal, str(path),
+                       f"pinocchio {path}")
 
 
-def _identified(path: Path, robot: str, radii: tuple[float, ...],
+def _check_scene(model: mujoco.MjModel, arm: Arm, path: Path, tolerance: float = 1e-6) -> None:
+    """UserError unless the MuJoCo scene at path moves arm's joints: its hinges' anchors and
+    axes are the arm's at a few angles within its limits. (A scene is checked in MuJoCo, which
+    alone simulates it: Pinocchio, whose model the kinematics hash reads, does not follow a
+    scene's <include>.)"""
+    hinges = np.flatnonzero(model.jnt_type == mujoco.mjtJoint.mjJNT_HINGE)
+    same = len(hinges) == model.njnt == arm.dof
+    if same:
+        geometry, data = arm.geometry, mujoco.MjData(model)
+        lower, upper = (np.clip(b, -np.pi, np.pi) for b in arm.position_limits)
+        for q in np.random.default_rng(0).uniform(lower, upper, (3, arm.dof)):
+            data.qpos[model.jnt_qposadr[hinges]] = q
+            mujoco.mj_kinematics(model, data)
+            origins, rotations = (x[0] for x in geometry.joint_frames(q))
+            axes = np.einsum("jik,jk->ji", rotations, np.asarray(geometry.axes, float))
+            same &= bool(np.allclose(data.xanchor[hinges], origins, atol=tolerance)
+                         and np.allclose(data.xaxis[hinges], axes, atol=tolerance))
+    if not same:
+        raise UserError(f"plant {path} is not robot {arm.label}: its {model.njnt} joints are "
+                        "not the arm's")
+
+
+def _identified(path: Path, arm: Arm, radii: tuple[float, ...],
                 geometry: ArmGeometry | None) -> ReplayPlant:
-    """The robot's scene with the bodies a MODEL.json identified, its own torque the
+    """The arm's scene with the bodies a MODEL.json identified, its own torque the
     feed-forward."""
     payload = read_json(path, "model")
     parameters = model_standard_parameters(payload)
@@ -64,5 +90,5 @@ def _identified(path: Path, robot: str, radii: tuple[float, ...],
                         f"{PARAMETERS_KEY}' or a consistent fit's metrics.physical): a model in "
                         "the robot's base atoms has no bodies; identify with --prior nominal|flat "
                         "or pass a URDF or MJCF with the identified inertials as --plant")
-    model = set_standard_parameters(build_scene(robot, radii, geometry).compile(), parameters)
-    return ReplayPlant(model, load_torque_model(str(path), robot), str(path), str(path))
+    model = set_standard_parameters(build_scene(arm, radii, geometry).compile(), parameters)
+    return ReplayPlant(model, load_torque_model(str(path), arm), str(path), str(path))

@@ -1,166 +1,253 @@
-"""What the planner needs of a robot, read from its model: the kinematic chain as data
-(planning.formulation.kinematics.ArmGeometry), its joint limits and its motors' torque limits.
+"""An `Arm`: one robot, resolved once per command (harness.robots.resolve) and handed to
+everything that needs it.
 
-Joint placements and axes come from the Pinocchio model (identification.library.chain);
-the flange is the first of registry.FLANGES the model has (else the frame on the last
-body farthest from its joint). Joint limits are MuJoCo's (an unlimited hinge gets
-[-pi, pi]); torque limits are the MJCF motors' ctrlrange x gear when the model has one
-motor per joint, else the URDF's effort limits.
+The Arm carries what every stage asks of a robot, each built on first use and once: its
+MuJoCo and Pinocchio models (harness.robots.files, the only parser), its kinematic chain,
+the planner's geometry and link capsules, joint, velocity and torque limits, the nominal
+(Pinocchio) torque model and parameters, the bodies' bounding ellipsoids and the base atoms
+of its kinematics. `Arm.of(reference)` is cached per process: a command that names the same
+robot twice gets the same Arm, parsed once. Its models are shared: whoever changes one
+(a timestep, a body's inertia) changes a copy (`copy.copy(arm.mujoco)`, `arm.pinocchio.copy()`).
 """
 
 from __future__ import annotations
 
 import dataclasses
-from functools import cache
+from functools import cache, cached_property
 from pathlib import Path
 
+import mujoco
 import numpy as np
 import pinocchio as pin
 
-from harness.robots.plant import load_plant
-from harness.robots.registry import (
-    ROBOTS,
-    flange_frame,
-    get_robot,
-    load_chain,
-    load_mujoco,
-    load_pinocchio,
-    robot_entry,
-)
-from planning.config import PlannerConfig, Scenario, true_energy_config
+from harness.errors import UserError
+from harness.robots.registry import ROBOTS, Robot, flange_frame, robot_entry
+from identification.library.chain import ChainError, KinematicChain
 from planning.formulation.kinematics import ArmGeometry
 
 
-def robot_label(robot: str | Path) -> str:
-    """What PLAN.json records: a registered name as is, a path made absolute."""
-    return str(robot) if str(robot) in ROBOTS else str(Path(robot).resolve())
+class Arm:
+    """One robot's models and data (module docstring); build with Arm.of or resolve_arm."""
+
+    def __init__(self, entry: Robot):
+        self.entry = entry
+        # what data, models and plans record: a registered name, or the file's absolute path
+        self.reference = entry.name
+
+    @staticmethod
+    def of(name_or_path: str | Path) -> Arm:
+        """The Arm of a registered name or a URDF/MJCF path (cached: parsed once per process);
+        UserError for an unknown name or a missing file."""
+        name = str(name_or_path)
+        if name not in ROBOTS and Path(name).is_file():
+            name = str(Path(name).resolve())
+        return _arm(name)
+
+    def __repr__(self) -> str:
+        return f"Arm({self.reference!r})"
+
+    @property
+    def registered(self) -> bool:
+        return self.reference in ROBOTS
+
+    @property
+    def label(self) -> str:
+        """A short name for messages: the registered name, else the file's name."""
+        return self.reference if self.registered else Path(self.reference).name
+
+    # --- the models, parsed once -----------------------------------------------------------
+    @cached_property
+    def mujoco(self) -> mujoco.MjModel:
+        """The arm's MuJoCo model (no scene); UserError unless an open chain of 1-DOF joints."""
+        from harness.robots.files import parse_mujoco
+
+        model = parse_mujoco(self.entry)
+        if model.nq != model.nv or model.nv == 0:
+            raise UserError(f"robot {self.reference}: needs 1-DOF joints only "
+                            f"(nq={model.nq}, nv={model.nv})")
+        if model.neq > 0:
+            raise UserError(f"robot {self.reference}: equality constraints close the chain: "
+                            "only open serial chains are supported")
+        return model
+
+    @cached_property
+    def scene(self) -> mujoco.MjModel | None:
+        """The registered scene MJCF (the Lynxmotion's hand-written one), else None."""
+        from harness.robots.files import parse_mujoco
+
+        return parse_mujoco(self.entry, scene=True) if self.entry.scene is not None else None
+
+    @cached_property
+    def pinocchio(self) -> pin.Model:
+        """The arm's Pinocchio model (non-arm joints held fixed)."""
+        from harness.robots.files import parse_pinocchio
+
+        return parse_pinocchio(self.entry)
+
+    @cached_property
+    def chain(self) -> KinematicChain:
+        """The kinematic chain; UserError unless a fixed-base serial chain of revolute joints
+        (an MJCF is also checked for loops in MuJoCo)."""
+        if self.entry.urdf is None:
+            self.mujoco  # noqa: B018 - an MJCF's equality constraints close a loop
+        name = self.reference if self.registered else Path(self.reference).stem
+        try:
+            chain = KinematicChain.from_pinocchio(self.pinocchio, name)
+        except ChainError as exc:
+            raise UserError(f"robot {self.reference}: {exc}") from None
+        branches = [j for j, p in enumerate(chain.parents) if p != j - 1]
+        if branches:
+            raise UserError(f"robot {self.reference}: joint {branches[0] + 1} does not follow "
+                            f"joint {branches[0]}: not a serial chain")
+        return chain
+
+    @property
+    def dof(self) -> int:
+        return self.chain.dof
+
+    @cached_property
+    def record(self) -> dict:
+        """What a MODEL.json records of its robot: name and kinematics hash."""
+        return {"name": self.chain.name, "hash": self.chain.digest()}
+
+    # --- geometry and limits ---------------------------------------------------------------
+    @cached_property
+    def geometry(self) -> ArmGeometry:
+        """The chain of joint placements, axes and flange (m), for planning; the flange is the
+        first of registry.FLANGES the model has, else the frame on the last body farthest
+        from its joint."""
+        chain, model = self.chain, self.pinocchio
+        last = model.njoints - 1
+        frames = [f for f in model.frames if f.parentJoint == last]
+        named = [f for f in frames if f.name == flange_frame(model)]
+        tips = named or sorted(frames, key=lambda f: np.linalg.norm(f.placement.translation))
+        flange = np.asarray(tips[-1].placement.translation) if tips else np.zeros(3)
+        bodies = []
+        for j in range(1, model.njoints):
+            names = [f.name for f in model.frames
+                     if f.parentJoint == j and f.type == pin.FrameType.BODY]
+            bodies.append(names[0] if names else model.names[j])
+        return ArmGeometry.of(chain.rotations, chain.translations, chain.axes, flange,
+                              self.reference, bodies)
+
+    @cached_property
+    def body_points(self) -> dict[int, tuple[str, np.ndarray]]:
+        """Per arm joint (1-based) whose links carry geometry the harness reads, which kind
+        ("collision", else "visual") and its points (harness.robots.collision)."""
+        from harness.robots.collision import urdf_body_points
+
+        return urdf_body_points(self.entry, self.pinocchio) if self.entry.urdf else {}
+
+    def capsules(self, default: float = 0.0) -> ArmGeometry:
+        """geometry with each link's capsule fitted to its collision (else visual) geometry
+        (harness.robots.capsules); a link without any keeps its joint-origin segment and
+        radius default (m); without any geometry the links stay the segments, radius default
+        (0: lines)."""
+        return self._capsules(float(default))
+
+    @cache  # noqa: B019 - one Arm per robot and process (Arm.of)
+    def _capsules(self, default: float) -> ArmGeometry:
+        from harness.robots.capsules import fitted_geometry
+
+        return fitted_geometry(self.geometry, self.pinocchio, self.body_points, default)
+
+    @cached_property
+    def position_limits(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper joint limits (rad) from MuJoCo; an unlimited hinge gets [-pi, pi]."""
+        model = self.mujoco
+        ids = model.dof_jntid
+        limited = model.jnt_limited[ids].astype(bool)
+        return (np.where(limited, model.jnt_range[ids, 0], -np.pi),
+                np.where(limited, model.jnt_range[ids, 1], np.pi))
+
+    @property
+    def joint_limits(self) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        lower, upper = self.position_limits
+        return tuple(map(float, lower)), tuple(map(float, upper))
+
+    @cached_property
+    def speed_bounds(self) -> np.ndarray:
+        """Joint speed limits (rad/s) from the URDF's <limit velocity>; inf where none is
+        declared (0, non-finite or huge)."""
+        v = np.asarray(self.pinocchio.velocityLimit, float)
+        return np.where(np.isfinite(v) & (v > 0) & (v < 1e10), v, np.inf)
+
+    @cached_property
+    def velocity_limit(self) -> tuple[float, ...] | None:
+        """|qd_i| bound (rad/s) per joint, None unless every joint has a finite positive one."""
+        velocity = np.asarray(self.pinocchio.velocityLimit, float)
+        if not np.all(np.isfinite(velocity) & (velocity > 0)):
+            return None
+        return tuple(float(v) for v in velocity)
+
+    @cached_property
+    def motor_torque_limit(self) -> tuple[float, ...] | None:
+        """|tau_i| bound (N m) from the MJCF motors (ctrlrange x gear), in joint order; None if
+        a motor is unlimited or the motors do not map 1:1 to joints."""
+        model = self.mujoco
+        joints = model.actuator_trnid[:, 0]
+        if model.nu == 0 or model.nu != model.njnt or sorted(joints) != list(range(model.njnt)) \
+                or not all(model.actuator_ctrllimited):
+            return None
+        reach = np.abs(model.actuator_ctrlrange).min(axis=1) * np.abs(model.actuator_gear[:, 0])
+        limit = np.empty(model.njnt)
+        limit[joints] = reach
+        return tuple(float(v) for v in limit)
+
+    @cached_property
+    def torque_limit(self) -> tuple[float, ...] | None:
+        """The motors' limits (MJCF), else the model's effort limits (URDF); None if unknown."""
+        if self.motor_torque_limit is not None or self.mujoco.nu > 0:
+            return self.motor_torque_limit
+        effort = np.asarray(self.pinocchio.effortLimit, float)
+        if not np.all(np.isfinite(effort) & (effort > 0)):
+            return None
+        return tuple(float(v) for v in effort)
+
+    # --- what identification and planning start from ---------------------------------------
+    @cached_property
+    def nominal(self):
+        """The closed-form baseline: Pinocchio's RNEA on the arm's model (a TorqueModel)."""
+        from harness.robots.baseline import PinocchioModel
+
+        return PinocchioModel(self.pinocchio)
+
+    @cached_property
+    def ellipsoids(self) -> tuple:
+        """Per body, its bounding ellipsoid (harness.robots.ellipsoids)."""
+        from harness.robots.ellipsoids import arm_ellipsoids
+
+        return arm_ellipsoids(self.pinocchio, self.body_points)
+
+    @cached_property
+    def library(self):
+        """The base atoms generated from the arm's kinematics (KinematicLibrary)."""
+        from identification.library.kinematic import KinematicLibrary
+
+        return KinematicLibrary.generate(self.chain)
+
+    def first_difference(self, other: Arm, tolerance: float = 1e-5) -> int | None:
+        """The first joint (1-based) where other's kinematics differ from this arm's beyond
+        tolerance (m, and unit vectors; an MJCF written by MjSpec keeps 6 digits), 0 for
+        another joint count, None when they agree."""
+        if other.record["hash"] == self.record["hash"]:
+            return None
+        mine, theirs = self.chain, other.chain
+        if mine.dof != theirs.dof or mine.parents != theirs.parents:
+            return 0
+        return next((j + 1 for j in range(mine.dof) if not all(
+            np.allclose(np.asarray(a)[j], np.asarray(b)[j], atol=tolerance)
+            for a, b in ((mine.rotations, theirs.rotations),
+                         (mine.translations, theirs.translations), (mine.axes, theirs.axes)))),
+            None)
+
+    def check_joints(self, dof: int, what: str) -> None:
+        """UserError unless what (data, a model, an excitation) has the arm's joint count."""
+        if dof != self.dof:
+            raise UserError(f"{what} has {dof} joints, robot {self.label} has {self.dof}")
 
 
 @cache
-def arm_geometry(robot: str) -> ArmGeometry:
-    """The robot's chain of joint placements, axes and flange (m), for planning."""
-    chain = load_chain(robot)
-    model = load_pinocchio(robot)
-    last = model.njoints - 1
-    frames = [f for f in model.frames if f.parentJoint == last]
-    named = [f for f in frames if f.name == flange_frame(model)]
-    # the named flange (a body in a URDF, a site in an MJCF), else the frame of the last
-    # body farthest from its joint (the tip); none: the last joint's origin
-    tips = named or sorted(frames, key=lambda f: np.linalg.norm(f.placement.translation))
-    flange = np.asarray(tips[-1].placement.translation) if tips else np.zeros(3)
-    bodies = []
-    for j in range(1, model.njoints):
-        names = [f.name for f in model.frames
-                 if f.parentJoint == j and f.type == pin.FrameType.BODY]
-        bodies.append(names[0] if names else model.names[j])
-    return ArmGeometry.of(chain.rotations, chain.translations, chain.axes, flange,
-                          robot_label(robot), bodies)
-
-
-@cache
-def collision_capsules(robot: str, default: float = 0.0) -> ArmGeometry:
-    """The robot's arm_geometry with each link's capsule fitted to its URDF collision (else
-    visual) geometry (harness.robots.capsules; a moving meshed body on a zero-length segment
-    becomes a link); a link without any keeps its joint-origin segment and radius default
-    (m); without any geometry (an MJCF, a URDF without meshes) the links stay the segments,
-    with radius default (0: lines)."""
-    from harness.robots.capsules import link_capsules
-    from harness.robots.collision import robot_body_points
-
-    geometry = arm_geometry(robot)
-    lines = dataclasses.replace(geometry, radii=(default,) * len(geometry.links) if default
-                                else ())
-    meshes = {j: points for j, (_, points) in robot_body_points(robot).items()}
-    if not meshes:
-        return lines
-    model = load_pinocchio(robot)
-    # a meshed body on a zero-length segment is a link too (if it moves)
-    extra = tuple(j - 1 for j in sorted(meshes) if (j - 1, j) not in geometry.links)
-    grown = dataclasses.replace(geometry, covered=extra)
-    geometry = dataclasses.replace(geometry, covered=tuple(
-        i for i in extra if (i, i + 1) in grown.links))
-    capsules = link_capsules(meshes, model, geometry)
-    ends = tuple(origin if c is None else (tuple(map(float, c.a)), tuple(map(float, c.b)))
-                 for c, origin in zip(capsules, geometry.origin_ends, strict=True))
-    radii = tuple(default if c is None else c.radius for c in capsules)
-    return dataclasses.replace(geometry, ends=ends, radii=radii)
-
-
-def link_radii(robot: str, default: float = 0.0) -> tuple[float, ...]:
-    """Each planner link's capsule radius (m) from collision_capsules."""
-    return tuple(float(r) for r in collision_capsules(robot, default).link_radii)
-
-
-def joint_limits(robot: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """Lower and upper joint limits (rad) from the robot's MuJoCo model."""
-    lower, upper = load_plant(robot).limits()
-    return tuple(map(float, lower)), tuple(map(float, upper))
-
-
-def motor_torque_limit(robot: str) -> tuple[float, ...] | None:
-    """|tau_i| bound (N m) of each joint from the robot's MJCF motors (ctrlrange x gear), in
-    joint order; None if a motor is unlimited or the motors do not map 1:1 to joints."""
-    model = load_mujoco(robot)
-    joints = model.actuator_trnid[:, 0]
-    if model.nu == 0 or model.nu != model.njnt or sorted(joints) != list(range(model.njnt)) \
-            or not all(model.actuator_ctrllimited):
-        return None
-    reach = np.abs(model.actuator_ctrlrange).min(axis=1) * np.abs(model.actuator_gear[:, 0])
-    limit = np.empty(model.njnt)
-    limit[joints] = reach
-    return tuple(float(v) for v in limit)
-
-
-def torque_limit(robot: str) -> tuple[float, ...] | None:
-    """The motors' limits (MJCF), else the model's effort limits (URDF); None if unknown."""
-    motors = motor_torque_limit(robot)
-    if motors is not None or load_mujoco(robot).nu > 0:
-        return motors
-    effort = np.asarray(load_pinocchio(robot).effortLimit, float)
-    if not np.all(np.isfinite(effort) & (effort > 0)):
-        return None
-    return tuple(float(v) for v in effort)
-
-
-def velocity_limit(robot: str) -> tuple[float, ...] | None:
-    """|qd_i| bound (rad/s) of each joint from the URDF's <limit velocity>; None unless every
-    joint has a finite positive one (an MJCF has none)."""
-    velocity = np.asarray(load_pinocchio(robot).velocityLimit, float)
-    if not np.all(np.isfinite(velocity) & (velocity > 0)):
-        return None
-    return tuple(float(v) for v in velocity)
-
-
-def planner_config(robot: str, **changes) -> PlannerConfig:
-    """The default planner configuration on robot, what `plan` and the bench plan with: the
-    true energy, several starts and the arrival at rest of planning.config.true_energy_config
-    (planning.config's own defaults are the paper's), the robot's links, joint and torque
-    limits, and the solver its registry entry names (IPOPT unless said: on the UR5's
-    crossing, compiled NLP, fatrop's cold solve stopped at its 300-iteration cap and half its
-    warm re-plans at 60, each then rescued by IPOPT; IPOPT alone: 18 + 6 iterations cold, 4-7
-    per re-plan)."""
-    lower, upper = joint_limits(robot)
-    base = dict(geometry=arm_geometry(robot), lower=lower, upper=upper,
-                torque_limit=torque_limit(robot))
-    return true_energy_config(**{**base, **changes}).with_penalty(
-        solver=robot_entry(robot).solver)
-
-
-def bench_motion(robot: str, duration: float = 2.0) -> tuple[Scenario, int]:
-    """The robot's planning motion (registry entry; else from 30 % to 70 % of every joint's
-    range) at rest, without obstacle, and the index (into the geometry's links) of the link
-    an obstacle should cross: the registered body's, else the last link."""
-    geometry = arm_geometry(robot)
-    entry = get_robot(robot) if robot in ROBOTS else None
-    if entry is not None and entry.motion is not None:
-        start, goal, body = entry.motion
-    else:
-        lower, upper = (np.maximum(np.asarray(b), -np.pi) if k == 0 else
-                        np.minimum(np.asarray(b), np.pi) for k, b in enumerate(joint_limits(robot)))
-        start, goal, body = tuple(lower + 0.3 * (upper - lower)), \
-            tuple(lower + 0.7 * (upper - lower)), ""
-    owners = [geometry.bodies[i] for i, _ in geometry.links]
-    link = owners.index(body) if body in owners else len(owners) - 1
-    dof = geometry.dof
-    return Scenario(tuple(map(float, start)), tuple(map(float, goal)), duration, None,
-                    (0.0,) * dof), link
+def _arm(name: str) -> Arm:
+    entry = robot_entry(name)
+    return Arm(dataclasses.replace(entry, name=name) if name not in ROBOTS else entry)

@@ -15,6 +15,7 @@ joint-origin segment has no length (the Panda's link 5, its forearm) becomes a l
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -106,3 +107,24 @@ def link_capsules(meshes: dict[int, np.ndarray], model: pin.Model, geometry: Arm
         world = points @ placement.rotation.T + placement.translation
         capsules.append(fit_capsule((world - origins[i]) @ rotations[i]))
     return tuple(capsules)
+
+
+def fitted_geometry(geometry, model: pin.Model, body_points: dict, default: float = 0.0):
+    """geometry (an ArmGeometry) with each link's capsule fitted to its bodies' points
+    (Arm.body_points); a link without any keeps its joint-origin segment and radius default
+    (m); without any points the links stay the segments, radius default (0: lines). A meshed
+    body on a zero-length segment is a link too (if it moves)."""
+    lines = dataclasses.replace(geometry, radii=(default,) * len(geometry.links)
+                                if default else ())
+    meshes = {j: points for j, (_, points) in body_points.items()}
+    if not meshes:
+        return lines
+    extra = tuple(j - 1 for j in sorted(meshes) if (j - 1, j) not in geometry.links)
+    grown = dataclasses.replace(geometry, covered=extra)
+    geometry = dataclasses.replace(geometry, covered=tuple(
+        i for i in extra if (i, i + 1) in grown.links))
+    capsules = link_capsules(meshes, model, geometry)
+    ends = tuple(origin if c is None else (tuple(map(float, c.a)), tuple(map(float, c.b)))
+                 for c, origin in zip(capsules, geometry.origin_ends, strict=True))
+    radii = tuple(default if c is None else c.radius for c in capsules)
+    return dataclasses.replace(geometry, ends=ends, radii=radii)

@@ -107,15 +107,11 @@ def body_points(urdf: Path, model: pin.Model, packages: tuple[Path, ...] = (),
     return {j: np.vstack(p) for j, p in out.items()}
 
 
-def robot_body_points(robot: str) -> dict[int, tuple[str, np.ndarray]]:
-    """Per joint of the robot's arm (1-based) whose links carry any, which geometry
-    ("collision", else "visual") and its points (body_points); {} for an MJCF."""
-    from harness.robots.registry import erd_robots_dir, load_pinocchio, robot_entry
+def urdf_body_points(entry, model: pin.Model) -> dict[int, tuple[str, np.ndarray]]:
+    """Per joint of the arm's Pinocchio model (1-based) whose links in the registry entry's
+    URDF carry any, which geometry ("collision", else "visual") and its points (body_points)."""
+    from harness.robots.registry import erd_robots_dir
 
-    entry = robot_entry(robot)
-    if entry.urdf is None:
-        return {}
-    model = load_pinocchio(robot)
     packages = (erd_robots_dir().parent.parent,) if entry.source == "example-robot-data" else ()
     found: dict[int, tuple[str, np.ndarray]] = {}
     for kind in ("visual", "collision"):  # collision where a body has both

@@ -17,8 +17,6 @@ from dataclasses import replace
 import numpy as np
 import pinocchio as pin
 
-from harness.robots.collision import robot_body_points
-from harness.robots.registry import load_pinocchio
 from identification.ellipsoids import Ellipsoid, enclosing, holding
 from identification.physical import pseudo_inertia
 
@@ -47,9 +45,9 @@ def segment_ellipsoid(model: pin.Model, joint: int) -> Ellipsoid:
                      "about the segment to the child joint")
 
 
-def robot_ellipsoids(robot: str) -> tuple[Ellipsoid, ...]:
-    """Per body of the robot's arm, its bounding ellipsoid (its source says where from)."""
-    model, found = load_pinocchio(robot), robot_body_points(robot)
+def arm_ellipsoids(model: pin.Model, found: dict) -> tuple[Ellipsoid, ...]:
+    """Per body of the arm's Pinocchio model, its bounding ellipsoid (its source says where
+    from); found: the bodies' geometry points (Arm.body_points)."""
     ellipsoids = []
     for joint in range(1, model.njoints):
         bound = segment_ellipsoid(model, joint) if joint not in found else replace(

@@ -21,9 +21,8 @@ import pinocchio as pin
 
 from harness.errors import UserError
 from harness.io import atomic_write
-from harness.robots.baseline import PinocchioModel
+from harness.robots.arm import Arm
 from harness.robots.inertials import centroidal_inertia, model_standard_parameters, set_standard_parameters
-from harness.robots.registry import load_mujoco, load_pinocchio, robot_entry
 from identification.library.kinematic import atom_unit
 from identification.model import joint_entries
 
@@ -34,10 +33,10 @@ BODY_UNITS = (("mass", "kg"), ("mc_x", "kg m"), ("mc_y", "kg m"), ("mc_z", "kg m
 JOINT_UNITS = (("armature", "kg m^2"), ("viscous", "N m s/rad"), ("coulomb", "N m"))
 
 
-def body_table(params: np.ndarray, robot: str) -> list[tuple]:
+def body_table(params: np.ndarray, arm: Arm) -> list[tuple]:
     """(body or joint, parameter, value, unit, nominal) rows of 13 dof standard parameters."""
-    model = _pinocchio(robot, params)
-    nominal = PinocchioModel(model).atom_parameters()
+    model = _pinocchio(arm, params)
+    nominal = arm.nominal.atom_parameters()
     dof = model.nv
     names = list(model.names)[1:]
     rows = []
@@ -53,11 +52,11 @@ def body_table(params: np.ndarray, robot: str) -> list[tuple]:
     return rows
 
 
-def _pinocchio(robot: str, params: np.ndarray) -> pin.Model:
-    """The robot's Pinocchio model, UserError when it has not the parameters' joint count."""
-    model = load_pinocchio(robot)
+def _pinocchio(arm: Arm, params: np.ndarray) -> pin.Model:
+    """The arm's Pinocchio model, UserError when it has not the parameters' joint count."""
+    model = arm.pinocchio
     if params.size != 13 * model.nv:
-        raise UserError(f"the model has {params.size} standard parameters, robot {robot} needs "
+        raise UserError(f"the model has {params.size} standard parameters, robot {arm.label} needs "
                         f"{13 * model.nv} (13 per joint)")
     return model
 
@@ -85,13 +84,13 @@ def _csv(rows: list[tuple], header: str) -> str:
                                              for x in row) + "\n" for row in rows)
 
 
-def export_urdf(params: np.ndarray, robot: str) -> str:
-    """The robot's URDF text with these standard parameters (module docstring)."""
-    urdf = robot_entry(robot).urdf
+def export_urdf(params: np.ndarray, arm: Arm) -> str:
+    """The arm's URDF text with these standard parameters (module docstring)."""
+    urdf = arm.entry.urdf
     if urdf is None:
-        raise UserError(f"robot {robot} has no URDF to rewrite (try --format mjcf)")
+        raise UserError(f"robot {arm.label} has no URDF to rewrite (try --format mjcf)")
     root = ET.parse(urdf).getroot()
-    model = _pinocchio(robot, params)
+    model = _pinocchio(arm, params)
     dof = model.nv
     _absolute_meshes(root, Path(urdf).parent)
     joints = {j.get("name"): j for j in root.findall("joint")}  # not a <transmission>'s
@@ -146,8 +145,8 @@ def _set_inertial(link, mass: float, c, inertia) -> None:
     ET.SubElement(inertial, "inertia", {k: f"{inertia[i]:.12g}" for k, i in names.items()})
 
 
-def export_model(payload: dict, robot: str, fmt: str, out: str | Path) -> str:
-    """Write MODEL.json's payload for robot in fmt to out, whole or not at all; what it wrote,
+def export_model(payload: dict, arm: Arm, fmt: str, out: str | Path) -> str:
+    """Write MODEL.json's payload for arm in fmt to out, whole or not at all; what it wrote,
     in words."""
     if fmt not in FORMATS:
         raise UserError(f"--format must be one of {', '.join(FORMATS)}, got {fmt}")
@@ -159,18 +158,22 @@ def export_model(payload: dict, robot: str, fmt: str, out: str | Path) -> str:
                             f"nominal|flat for a {fmt}")
         text = _csv(term_table(payload), "joint,term,coefficient,unit")
     elif fmt == "csv":
-        text = _csv(body_table(params, robot), "item,parameter,value,unit,nominal")
+        text = _csv(body_table(params, arm), "item,parameter,value,unit,nominal")
     elif fmt == "urdf":
-        text = export_urdf(params, robot)
+        text = export_urdf(params, arm)
     else:
-        model = set_standard_parameters(load_mujoco(robot), params)
+        # MuJoCo saves a model through the XML it parsed last: the arm's file parsed again
+        # (arm.mujoco, parsed earlier and shared in the process, is neither changed nor saved)
+        from harness.robots.files import parse_mujoco
+
+        model = set_standard_parameters(parse_mujoco(arm.entry), params)
 
         def write(tmp: str) -> None:
             mujoco.mj_saveLastXML(tmp, model)
         atomic_write(out, write, suffix=".xml")
-        return f"robot {robot}'s MuJoCo model with the identified bodies"
+        return f"robot {arm.label}'s MuJoCo model with the identified bodies"
     atomic_write(out, lambda tmp: Path(tmp).write_text(text), suffix="." + fmt)
     if params is None:
         return "the model's terms (it has no bodies)"
-    return f"robot {robot}'s " + ("URDF with the identified bodies" if fmt == "urdf"
+    return f"robot {arm.label}'s " + ("URDF with the identified bodies" if fmt == "urdf"
                                   else "identified bodies and joints beside the URDF's")

@@ -22,9 +22,9 @@ import mujoco
 import numpy as np
 
 from harness.errors import UserError
-from harness.robots.arm import arm_geometry, torque_limit
-from harness.robots.registry import ROBOTS, get_robot, load_mujoco, read_text
-from harness.robots.urdf import arm_urdf, strip_geometry
+from harness.robots.arm import Arm
+from harness.robots.files import arm_urdf_text, read_text
+from harness.robots.urdf import strip_geometry
 from planning.formulation.kinematics import ArmGeometry
 
 TIMESTEP = 0.0005  # s
@@ -34,18 +34,12 @@ ZERO_LENGTH = 1e-6  # m: a link axis shorter than this is drawn as a sphere
 FLANGE_SITE = "end_effector"
 
 
-def robot_spec(robot: str) -> mujoco.MjSpec:
-    """The arm's MuJoCo spec, compiled exactly as registry.load_mujoco compiles it."""
-    if robot in ROBOTS:
-        entry = get_robot(robot)
-        if entry.mjcf is not None:
-            return mujoco.MjSpec.from_file(str(entry.mjcf))
-        return mujoco.MjSpec.from_string(strip_geometry(arm_urdf(entry.urdf.read_text(), robot)))
-    load_mujoco(robot)  # one clear error for a missing or invalid file
-    path = Path(robot)
-    if path.suffix.lower() == ".urdf":
-        return mujoco.MjSpec.from_string(strip_geometry(arm_urdf(path.read_text(), robot)))
-    return mjcf_spec(path)
+def robot_spec(arm: Arm) -> mujoco.MjSpec:
+    """The arm's MuJoCo spec, compiled exactly as Arm.mujoco compiles it."""
+    arm.mujoco  # noqa: B018 - one clear error for an invalid file
+    if arm.entry.mjcf is not None:
+        return mjcf_spec(arm.entry.mjcf)
+    return mujoco.MjSpec.from_string(strip_geometry(arm_urdf_text(arm.entry)))
 
 
 def mjcf_spec(path: Path) -> mujoco.MjSpec:
@@ -67,42 +61,41 @@ def mjcf_spec(path: Path) -> mujoco.MjSpec:
 
 
 @cache
-def replay_scene(robot: str, radii: tuple[float, ...] = (),
+def replay_scene(arm: Arm, radii: tuple[float, ...] = (),
                  geometry: ArmGeometry | None = None) -> mujoco.MjModel:
-    """The robot's replay scene: its own scene MJCF when registered with one (the
-    Lynxmotion's), else one built around it (build_scene) with the plan's link capsules."""
-    if robot in ROBOTS and get_robot(robot).scene is not None:
-        return load_mujoco(robot, scene=True)
-    return build_scene(robot, radii, geometry).compile()
+    """The arm's replay scene: its registered scene MJCF when it has one (the Lynxmotion's,
+    arm.scene), else one built around it (build_scene) with the plan's link capsules."""
+    if arm.scene is not None:
+        return arm.scene
+    return build_scene(arm, radii, geometry).compile()
 
 
-def build_scene(robot: str, radii: tuple[float, ...] = (),
+def build_scene(arm: Arm, radii: tuple[float, ...] = (),
                 geometry: ArmGeometry | None = None) -> mujoco.MjSpec:
-    """The robot's spec with floor, light, camera, mocap obstacle, motors, flange site and
+    """The arm's spec with floor, light, camera, mocap obstacle, motors, flange site and
     link capsules added (see the module docstring): those of geometry (the planner's: its
-    links, capsule axes and radii), else the robot's joint-origin segments with these radii
+    links, capsule axes and radii), else the arm's joint-origin segments with these radii
     (m); no radius or 0: LINK_RADIUS, drawn."""
-    spec = robot_spec(robot)
-    geometry = geometry or dataclasses.replace(arm_geometry(robot), radii=tuple(radii))
+    spec = robot_spec(arm)
+    geometry = geometry or dataclasses.replace(arm.geometry, radii=tuple(radii))
     hinges = [j for j in spec.joints if j.type == mujoco.mjtJoint.mjJNT_HINGE]
     if len(hinges) != geometry.dof or len(spec.joints) != geometry.dof:
-        raise UserError(f"robot {robot}: {len(spec.joints)} MuJoCo joints, the arm has "
+        raise UserError(f"robot {arm.label}: {len(spec.joints)} MuJoCo joints, the arm has "
                         f"{geometry.dof} revolute joints")
     spec.compiler.discardvisual = False  # the scene's geoms have no contacts: keep them
     spec.option.timestep = TIMESTEP
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.visual.global_.offwidth, spec.visual.global_.offheight = 640, 480
-    _add_motors(spec, hinges, robot)
+    _add_motors(spec, hinges, arm.torque_limit)
     _add_links(spec, hinges, geometry)
     _add_surroundings(spec, geometry)
     return spec
 
 
-def _add_motors(spec: mujoco.MjSpec, hinges, robot: str) -> None:
+def _add_motors(spec: mujoco.MjSpec, hinges, limit: tuple[float, ...] | None) -> None:
     """One motor per joint, ctrlrange = +- the torque limit (unlimited if none is known)."""
     if len(spec.actuators):
         return  # an MJCF with its own motors keeps them
-    limit = torque_limit(robot)
     for k, joint in enumerate(hinges):
         motor = spec.add_actuator(name=joint.name, target=joint.name,
                                   trntype=mujoco.mjtTrn.mjTRN_JOINT)

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from harness.robots.registry import Robot
+from harness.robots.arm import Arm
 
 
 @dataclass(frozen=True)
@@ -101,10 +101,10 @@ class SectionResult:
 
 @dataclass(frozen=True)
 class Context:
-    """A run of the bench or of a study: the robot, where to write, how much to do, and the
-    results of the sections that ran before (by name)."""
+    """A run of the bench or of a study: the arm (resolved once), where to write, how much to
+    do, and the results of the sections that ran before (by name)."""
 
-    robot: Robot
+    arm: Arm
     out_dir: Path
     quick: bool = False
     video: bool = True

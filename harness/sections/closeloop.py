@@ -28,8 +28,7 @@ from harness.closeloop.arm_plants import flange_frame, write_arm_variant
 from harness.closeloop.payload import PayloadTorque
 from harness.closeloop.plants import Variant
 from harness.closeloop.run import run_closeloop
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 from harness.sections.base import Context, Row, SectionResult, Target, check
 from identification.closeloop.effects import effect_torque
 
@@ -42,9 +41,9 @@ EFFECTS = (("viscous", 2, 0.8), ("coulomb", 3, 1.5), ("armature", 1, 0.1), ("spr
 PAYLOAD, COUPLING = 1.0, 3.0  # kg at the flange; N m/rad on the tendon q2 + q3
 
 
-def plants(robot: str) -> tuple[Variant, ...]:
-    """The effects, coupled and control plants of robot, sized by its mass."""
-    model = load_pinocchio(robot)
+def plants(arm: Arm) -> tuple[Variant, ...]:
+    """The effects, coupled and control plants of arm, sized by its mass."""
+    model = arm.pinocchio
     dof = model.nv
     scale = sum(model.inertias[j].mass for j in range(1, model.njoints)) / REFERENCE_MASS
     effects = tuple((e, min(j, dof), v * scale) for e, j, v in EFFECTS)
@@ -54,20 +53,20 @@ def plants(robot: str) -> tuple[Variant, ...]:
     return (*out, Variant(name="control"))
 
 
-def coefficient_spread(run, robot: str) -> list[dict]:
+def coefficient_spread(run, arm: Arm) -> list[dict]:
     """Per true effect: the true effect set (true Coulomb shape) refitted by weighted least
     squares on the training residual of the declared model, once on the measured torque
     (coefficient and standard error: what the noise allows) and once on the clean torque
     (what the estimated states alone allow: a bias shows here)."""
     if not run.truth:
         return []
-    model = load_pinocchio(robot)
+    model = arm.pinocchio
     payload = PayloadTorque(model, flange_frame(model) or "")
     d, k = run.data, run.result.split
     q, qd, qdd = d.q[:k], d.qd[:k], d.qdd[:k]
     units = [(t,) for t in (replace(t, coefficient=1.0) for t in run.truth)]
     cols = np.stack([effect_torque(u, q, qd, qdd, payload) for u in units], axis=2)
-    declared = PinocchioModel(model).torque(q, qd, qdd)
+    declared = arm.nominal.torque(q, qd, qdd)
     out = []
     for tau in (d.tau[:k], d.tau_clean[:k]):
         sigma = np.maximum((tau - declared - cols @ np.linalg.lstsq(
@@ -109,14 +108,15 @@ def _score(run) -> dict:
 
 
 def run(ctx: Context) -> SectionResult:
-    robot = ctx.robot.name
+    arm = ctx.arm
+    robot = arm.label
     plant_dir = Path(ctx.out_dir) / "plants"
-    results: dict = {"robot": robot, "plants": {}}
-    for variant in plants(robot):
-        path = write_arm_variant(robot, variant, plant_dir)
-        loop = run_closeloop(path, SAMPLES, NOISE, robot=robot)
+    results: dict = {"robot": arm.reference, "plants": {}}
+    for variant in plants(arm):
+        path = write_arm_variant(arm, variant, plant_dir)
+        loop = run_closeloop(Arm.of(path), arm, SAMPLES, NOISE)
         results["plants"][variant.name] = _score(loop)
-        spread = {(c["effect"], c["joint"]): c for c in coefficient_spread(loop, robot)}
+        spread = {(c["effect"], c["joint"]): c for c in coefficient_spread(loop, arm)}
         for e in results["plants"][variant.name]["effects"]:
             c = spread[e["effect"], e["joint"]]
             e.update(stderr=c["stderr"], refit_clean=c["refit_clean"],

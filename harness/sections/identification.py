@@ -36,11 +36,8 @@ from harness.experiments.identification import (
 )
 from harness.experiments.next_run import markdown as next_run_markdown
 from harness.experiments.next_run import next_run, rule_targets
-from harness.robots.baseline import PinocchioModel
-from harness.robots.ellipsoids import robot_ellipsoids
+from harness.identify.fits import arm_identification
 from harness.robots.extras import extra as load_extra
-from harness.robots.registry import load_pinocchio
-from harness.robots.torque_models import robot_identification, robot_library
 from harness.sections.base import Context, Row, SectionResult, Target, check
 from identification.identify import identify
 
@@ -61,25 +58,25 @@ PRIOR, FLAT = "consistent, perturbed URDF prior", "consistent, no prior"
 
 
 def run(ctx: Context) -> SectionResult:
-    robot = ctx.robot.name
-    fits = {name: fixed_fit(*robot_identification(robot, library=name))
-            for name in ctx.robot.libraries}
-    default = ctx.robot.libraries[0]
-    baseline = PinocchioModel(load_pinocchio(robot))
-    fits[PRIOR] = perturbed_prior_fit(robot_library(robot), baseline, robot_ellipsoids(robot))
-    fits[FLAT] = fixed_fit(*robot_identification(robot, prior="flat"))
-    judges = [generated_motion(robot, SAMPLES, FRESH_SEED), sines_motion(robot, SAMPLES, FRESH_SEED)]
-    clean = generate(robot, SAMPLES, 0.0, 1, "inverse")
+    arm = ctx.arm
+    fits = {name: fixed_fit(*arm_identification(arm, library=name))
+            for name in arm.entry.libraries}
+    default = arm.entry.libraries[0]
+    baseline = arm.nominal
+    fits[PRIOR] = perturbed_prior_fit(arm.library, baseline, arm.ellipsoids)
+    fits[FLAT] = fixed_fit(*arm_identification(arm, prior="flat"))
+    judges = [generated_motion(arm, SAMPLES, FRESH_SEED), sines_motion(arm, SAMPLES, FRESH_SEED)]
+    clean = generate(arm, SAMPLES, 0.0, 1, "inverse")
     exact = identify(clean.q, clean.qd, clean.qdd, clean.tau, fits[default].library, HOLDOUT,
                      clean.tau_clean, fits[default].regressor(1))
     exact_oracle = score_draw(clean, {}, baseline, judges[:1])["oracle"]["fresh"]
     levels = QUICK_LEVELS if ctx.quick else LEVELS
-    by_level = {level: [score_draw(generate(robot, SAMPLES, level, seed, "inverse"), fits,
+    by_level = {level: [score_draw(generate(arm, SAMPLES, level, seed, "inverse"), fits,
                                    baseline, judges) for seed in seeds]
                 for level, seeds in levels.items()}
     draws = by_level[NOISE]
     model = draws[0]["models"][default]
-    gap = closed_form_gap(robot, judges[1])
+    gap = closed_form_gap(arm, judges[1])
     checks = [
         check("pinocchio_agrees_with_mujoco", gap <= AGREEMENT,
               f"max |RNEA - mj_inverse| / max |tau| = {gap:.1e} (bar {AGREEMENT:g})"),
@@ -113,10 +110,10 @@ def run(ctx: Context) -> SectionResult:
         Target(f"{PRIOR} identification CPU time (LMI included), median over draws",
                float(np.median([d[PRIOR]["timing"]["cpu_s"] for d in draws])), 30.0, "s",
                timing=True)]
-    runs = [next_run(robot, seed) for seed in (QUICK_NEXT_RUNS if ctx.quick else NEXT_RUNS)]
+    runs = [next_run(arm, seed) for seed in (QUICK_NEXT_RUNS if ctx.quick else NEXT_RUNS)]
     targets += rule_targets(runs)
     excitation_targets, excitation = excitation_comparison(
-        robot, fits[default], default, baseline, judges[1], draws, ctx.quick)
+        arm, fits[default], default, baseline, judges[1], draws, ctx.quick)
     targets += excitation_targets
     errors = np.median([d[default]["sines"] for d in draws], axis=0)
     oracle = np.median([d["oracle"]["sines"] for d in draws], axis=0)
@@ -126,7 +123,7 @@ def run(ctx: Context) -> SectionResult:
                     "knowledge can beat it, and that is not an error)",
                     ", ".join(f"{100 * e:.2f} %" for e in errors) + " (oracle "
                     + ", ".join(f"{100 * o:.2f} %" for o in oracle) + ")")]
-    results = {"robot": robot, "libraries": list(fits), "default_library": default,
+    results = {"robot": arm.reference, "libraries": list(fits), "default_library": default,
                "samples": SAMPLES, "noise": NOISE, "closed_form_gap": gap,
                "noise_free_heldout": exact.heldout_rel_rmse.tolist(),
                "oracle_parameters": draws[0]["oracle_parameters"],
@@ -137,7 +134,7 @@ def run(ctx: Context) -> SectionResult:
                     *excitation_markdown(excitation)])
     out = SectionResult(md, results, checks, targets, headline,
                         outputs={"model": model, "draws": draws})
-    for extra in ctx.robot.extras:
+    for extra in arm.entry.extras:
         out.extend(load_extra(extra).identification(ctx), extra)
     return out
 

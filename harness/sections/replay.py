@@ -21,9 +21,6 @@ from harness.replay.figures import power_figure, tracking_figure
 from harness.replay.reference import plan_reference
 from harness.replay.simulate import ReplayResult, ReplayTrace, replay
 from harness.report.figures import plt, save_figure
-from harness.robots.arm import arm_geometry
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
 from harness.robots.scene import replay_scene
 from harness.sections.base import Context, Row, SectionResult, Target, check
 
@@ -49,9 +46,8 @@ def run(ctx: Context) -> SectionResult:
     if not plans:
         return SectionResult("No plans to replay (the planning section did not run).",
                              checks=[check("plans_to_replay", False, "none handed on")])
-    robot = ctx.robot.name
-    model, geometry = replay_scene(robot), arm_geometry(robot)
-    feedforward = PinocchioModel(load_pinocchio(robot))
+    arm = ctx.arm
+    robot, model, geometry, feedforward = arm.reference, replay_scene(arm), arm.geometry, arm.nominal
     results: dict[str, ReplayResult] = {}
     traces: dict[str, ReplayTrace] = {}
     for name, plan in plans.items():

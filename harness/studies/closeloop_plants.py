@@ -27,6 +27,7 @@ from harness.closeloop.figures import error_figure, residual_figure
 from harness.closeloop.plants import DECLARED_MJCF
 from harness.closeloop.run import CloseLoopRun, run_closeloop
 from harness.data.generate import SAMPLE_RATE
+from harness.robots.arm import Arm
 from harness.sections.base import Context, SectionResult, check
 from identification.closeloop.loop import UNEXPLAINED_SIZE
 
@@ -98,8 +99,9 @@ def run(ctx: Context) -> SectionResult:
     figures_dir = out_dir / "figures"
     figures_dir.mkdir(parents=True, exist_ok=True)
     samples = 3000 if quick else 4000
-    runs = {name: run_closeloop(DECLARED_MJCF.parent / f, samples=samples, noise=NOISE,
-                                holdout=HOLDOUT, compare=True)
+    arm = Arm.of("lynxmotion")  # the plants are the paper arm's own files, whatever ctx.arm
+    runs = {name: run_closeloop(Arm.of(DECLARED_MJCF.parent / f), arm, samples=samples,
+                                noise=NOISE, holdout=HOLDOUT, compare=True)
             for name, f in PLANTS.items()}
     figures = [error_figure(runs, figures_dir / "closeloop_errors.png")]
     for name in ("friction", "payload"):

@@ -13,6 +13,7 @@ from harness.experiments.generalization import (
     markdown,
 )
 from harness.experiments.identification import ORACLE
+from harness.robots.arm import Arm
 from harness.robots.registry import erd_robots_dir
 from harness.sections.base import Context, SectionResult, Target
 
@@ -28,7 +29,7 @@ def robots(quick: bool) -> list[str]:
 
 
 def run(ctx: Context) -> SectionResult:
-    results = [generalization(robot, QUICK_SEEDS if ctx.quick else SEEDS)
+    results = [generalization(Arm.of(robot), QUICK_SEEDS if ctx.quick else SEEDS)
                for robot in robots(ctx.quick)]
     targets = []
     for r in results:

@@ -8,6 +8,7 @@ the UR5, one draw each way.
 from __future__ import annotations
 
 from harness.experiments.prior_tie import tie_study
+from harness.robots.arm import Arm
 from harness.robots.registry import erd_robots_dir
 from harness.sections.base import Context, SectionResult, Target, check
 
@@ -15,12 +16,13 @@ ARMS = ("xarm_description/urdf/xarm7.urdf", "so_arm_description/urdf/so101.urdf"
 JOINT_TARGET = 1.6  # x oracle, the bench's identification bar
 
 
-def robots(quick: bool) -> list[str]:
-    return ["ur5"] if quick else ["ur5", *(str(erd_robots_dir() / a) for a in ARMS)]
+def arms(quick: bool) -> list[Arm]:
+    names = ["ur5"] if quick else ["ur5", *(str(erd_robots_dir() / a) for a in ARMS)]
+    return [Arm.of(name) for name in names]
 
 
 def run(ctx: Context) -> SectionResult:
-    r = tie_study(robots(ctx.quick), ctx.quick)
+    r = tie_study(arms(ctx.quick), ctx.quick)
     md = ["Each draw: `generate`'s excitation (seeds 601-652, never scored by a bench section), "
           "a perturbed URDF prior, the fit at every ridge weight; each margin picks its weight "
           "from the same validation errors. Judged on random sines (judge seeds 1601 to "

@@ -1,9 +1,10 @@
 """One cell of a sweep: generate its data, identify by its method, score on a fresh trajectory.
 
-The data are `generate(robot, samples, noise, seed)` (MuJoCo inverse dynamics along the seed's
+A cell names its robot by a string (a Ray worker builds its Arm, `Arm.of`, once per process).
+The data are `generate(arm, samples, noise, seed)` (MuJoCo inverse dynamics along the seed's
 excitation, non-zero-mean torque noise from the seed); every sample trains. The score is the
 relative RMS error per joint of the identified torque on a fresh noise-free trajectory
-(`generate(robot, FRESH_SAMPLES, 0, FRESH_SEED)`, the same for every cell of a robot) against
+(`generate(arm, FRESH_SAMPLES, 0, FRESH_SEED)`, the same for every cell of a robot) against
 its clean torque, as in the bench's arm section.
 
 Methods, each reused from identification/ with the library `torquebench identify` picks by
@@ -32,9 +33,8 @@ from threadpoolctl import threadpool_limits
 from harness.data.generate import generate
 from harness.errors import UserError
 from harness.experiments.identification import oracle_design
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
-from harness.robots.torque_models import robot_identification
+from harness.identify.fits import arm_identification
+from harness.robots.arm import Arm
 from harness.sweep.grid import Cell
 from identification.errors import IdentificationError, LibraryRankWarning
 from identification.identify import identify
@@ -72,42 +72,37 @@ class CellFailure:
 
 
 @cache
-def identification(robot: str):
-    """(library, regressor) `torquebench identify` uses on robot's generated data by default
+def identification(arm: Arm):
+    """(library, regressor) `torquebench identify` uses on arm's generated data by default
     (cached per process)."""
-    return robot_identification(robot)
+    return arm_identification(arm)
 
 
-def library(robot: str):
-    """The library `torquebench identify` uses on robot by default."""
-    return identification(robot)[0]
-
-
-@cache
-def _baseline(robot: str) -> PinocchioModel:
-    return PinocchioModel(load_pinocchio(robot))
+def library(arm: Arm):
+    """The library `torquebench identify` uses on arm by default."""
+    return identification(arm)[0]
 
 
 @cache
-def fresh(robot: str):
-    """The noise-free trajectory every cell of robot is scored on."""
-    return generate(robot, FRESH_SAMPLES, 0.0, FRESH_SEED, "inverse")
+def fresh(arm: Arm):
+    """The noise-free trajectory every cell of arm is scored on."""
+    return generate(arm, FRESH_SAMPLES, 0.0, FRESH_SEED, "inverse")
 
 
-def _coupled(robot: str, d) -> Predictor:
-    lib, regressor = identification(robot)
+def _coupled(arm: Arm, d) -> Predictor:
+    lib, regressor = identification(arm)
     return identify(d.q, d.qd, d.qdd, d.tau, lib, 0.0, regressor=regressor).model.torque
 
 
-def _oracle(robot: str, d) -> Predictor:
-    base = _baseline(robot)
+def _oracle(arm: Arm, d) -> Predictor:
+    base = arm.nominal
     fit = BaseParameterRegression().fit(oracle_design(base, d.q, d.qd, d.qdd), d.tau)
     return lambda q, qd, qdd: fit.predict(oracle_design(base, q, qd, qdd))
 
 
-def _per_joint(make: Callable) -> Callable[[str, object], Predictor]:
-    def fit(robot: str, d) -> Predictor:
-        lib = library(robot)
+def _per_joint(make: Callable) -> Callable[[Arm, object], Predictor]:
+    def fit(arm: Arm, d) -> Predictor:
+        lib = library(arm)
         fits = [make().fit(x, d.tau[:, j]) for j, x in enumerate(lib.joint_designs(d.q, d.qd, d.qdd))]
 
         def predict(q, qd, qdd):
@@ -122,20 +117,22 @@ FITS = {"coupled": _coupled, "oracle": _oracle, "per-joint": _per_joint(SparseRe
         "ssr": _per_joint(lambda: PeerRegression("SSR"))}
 
 
-def run_cell(cell: Cell) -> CellResult | CellFailure:
-    """Run one cell on one BLAS thread; a user-fixable error comes back as a CellFailure."""
+def run_cell(cell: Cell, reference: str | None = None) -> CellResult | CellFailure:
+    """Run one cell on one BLAS thread, on the arm Arm.of(reference) (default: cell.robot; a
+    string: what crosses to a Ray worker); a user-fixable error comes back as a CellFailure."""
     start, cpu = time.perf_counter(), time.process_time()
     try:
+        arm = Arm.of(reference or cell.robot)
         with threadpool_limits(limits=1, user_api="blas"), warnings.catch_warnings():
             # few samples may leave the library rank-deficient, or STLSQ's subsets ill-conditioned:
             # the error measured on the fresh trajectory says what it cost
             warnings.simplefilter("ignore", LibraryRankWarning)
             warnings.simplefilter("ignore", LinAlgWarning)
-            data = generate(cell.robot, cell.samples, cell.noise, cell.seed, "inverse")
+            data = generate(arm, cell.samples, cell.noise, cell.seed, "inverse")
             tic = time.perf_counter()
-            predict = FITS[cell.method](cell.robot, data)
+            predict = FITS[cell.method](arm, data)
             seconds = time.perf_counter() - tic
-            truth = fresh(cell.robot)
+            truth = fresh(arm)
             errors = rel_error(predict(truth.q, truth.qd, truth.qdd), truth.tau_clean)
     except (IdentificationError, UserError) as exc:
         return CellFailure(cell, str(exc))

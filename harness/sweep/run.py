@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.errors import UserError
+from harness.robots.arm import Arm
 from harness.sweep.cell import CellFailure, CellResult, run_cell
 from harness.sweep.grid import Cell, Grid
 from harness.sweep.progress import Progress
@@ -61,18 +62,20 @@ def ray_session(address: str | None = None):
         ray.shutdown()
 
 
-def ray_cells(ray, cells: Iterable[Cell], window: int | None = None) -> Iterator[CellResult | CellFailure]:
+def ray_cells(ray, cells: Iterable[Cell], window: int | None = None,
+              references: dict[str, str] | None = None) -> Iterator[CellResult | CellFailure]:
     """Every cell as one Ray task (one CPU each); results in the order they finish.
 
     At most `window` tasks are in flight (default 4 per CPU of the cluster, at least 16), the
     next cells submitted as results come back: the driver's bookkeeping stays small however
-    large the grid, and the cells run in grid order (seeds outermost)."""
+    large the grid, and the cells run in grid order (seeds outermost). references: each cell
+    robot's Arm.reference, the string a worker builds its Arm from (default: the cell's robot)."""
     task = ray.remote(num_cpus=1)(run_cell)
     window = window or max(16, 4 * int(ray.cluster_resources().get("CPU", 1)))
-    todo, pending = iter(cells), {}
+    todo, pending, references = iter(cells), {}, references or {}
     while True:
         for cell in itertools.islice(todo, window - len(pending)):
-            pending[task.remote(cell)] = cell
+            pending[task.remote(cell, references.get(cell.robot))] = cell
         if not pending:
             return
         ready, _ = ray.wait(list(pending), num_returns=1, timeout=1.0)
@@ -81,12 +84,6 @@ def ray_cells(ray, cells: Iterable[Cell], window: int | None = None) -> Iterator
         for ref in ready:
             del pending[ref]
             yield ray.get(ref)
-
-
-def _joints(grid: Grid) -> int:
-    from harness.robots.registry import load_chain
-
-    return max(load_chain(r).dof for r in grid.robots)
 
 
 def check_samples(grid: Grid) -> None:
@@ -98,7 +95,7 @@ def check_samples(grid: Grid) -> None:
     first = int(np.argmax(mask))
     block = first + int(np.argmin(mask[first:]))  # samples up to the end of the first block
     for robot in grid.robots:
-        need = len(library(robot)) + 1
+        need = len(library(Arm.of(robot))) + 1
         if min(grid.samples) < need:
             raise UserError(f"--samples {min(grid.samples)} is too few for robot {robot}: its "
                             f"library has {need - 1} columns, need at least {need} samples")
@@ -111,8 +108,9 @@ def run_sweep(grid: Grid, out: Path, address: str | None = None, progress_every:
     """Run the cells of grid not yet in out/results.csv; returns (store, cells run here).
 
     Nothing is written before the cells can run (bad input, an unreachable cluster: no file)."""
+    arms = {r: Arm.of(r) for r in grid.robots}  # each robot resolved once, here
     check_samples(grid)
-    joints, path = _joints(grid), out / "results.csv"
+    joints, path = max(a.dof for a in arms.values()), out / "results.csv"
     if path.is_dir():
         raise UserError(f"{path} is a directory")
     finished = read(path)[0]
@@ -122,7 +120,8 @@ def run_sweep(grid: Grid, out: Path, address: str | None = None, progress_every:
         return ResultsStore(path, joints), 0
     with ray_session(address) as ray:
         store = ResultsStore(path, joints)
-        for result in ray_cells(ray, todo):
+        references = {r: a.reference for r, a in arms.items()}  # strings cross to the workers
+        for result in ray_cells(ray, todo, references=references):
             if isinstance(result, CellFailure):
                 raise UserError(f"cell {result.cell.label()}: {result.message}")
             store.append(result)

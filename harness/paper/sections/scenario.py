@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from harness.experiments.planning import plan_checks, reproducible, summary
 from harness.paper.planning.variants import PAPER
-from harness.robots.arm import planner_config
+from harness.plan.arm_config import planner_config
 from harness.robots.baseline import PinocchioModel
 from harness.sections.base import Context, Row, SectionResult, Target
 from planning.planners import segment_planner
@@ -20,8 +20,8 @@ IDENTIFIED_TARGET = 0.02  # identified plan's true energy within 2 % of the clos
 
 def run(ctx: Context, models: dict) -> SectionResult:
     baseline = next(m for m in models.values() if isinstance(m, PinocchioModel))
-    paper = PAPER.config(planner_config(ctx.robot.name, rest_at_goal=False))
-    default = reproducible(planner_config(ctx.robot.name))
+    paper = PAPER.config(planner_config(ctx.arm, rest_at_goal=False))
+    default = reproducible(planner_config(ctx.arm))
     scenario = paper_scenario()
     runs = {f"paper_{name}": (model, paper) for name, model in models.items()}
     runs["default_pinocchio"] = (baseline, default)

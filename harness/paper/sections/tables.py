@@ -33,7 +33,7 @@ def run(ctx: Context) -> SectionResult:
     systems = SYSTEMS + (CONSISTENT_DOUBLE_PENDULUM,)
     fits = [fit_system(s) for s in (systems[1:2] if ctx.quick else systems)]
     library = paper_library()
-    clean = generate(ctx.robot.name, 4000, 0.0, 1, "inverse")
+    clean = generate(ctx.arm, 4000, 0.0, 1, "inverse")
     span = span_residual(library, clean)
     results = {"table4": {f.system: {"max_coef_error": f.max_error, "method": f.method,
                                      "heldout_rel_rmse": list(f.heldout_rel_rmse),

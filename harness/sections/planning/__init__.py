@@ -2,7 +2,7 @@
 moving obstacle with the robot's closed-form model and with the identification section's
 model, and the planner's speed on that robot.
 
-The motion is the robot's registered one (harness.robots.arm.bench_motion), from rest to
+The motion is the robot's registered one (harness.plan.arm_config.bench_motion), from rest to
 rest. Its unobstructed energy optimum (closed form) is planned first; an obstacle then
 crosses the middle of one moving link of that optimum at mid-time, sweeping 0.5 m upward
 (planning.scenarios.crossing_scenario), and the arm plans and re-plans around it

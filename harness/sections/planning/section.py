@@ -9,10 +9,8 @@ import numpy as np
 from harness.experiments.causal import against_causal
 from harness.experiments.planning import REPLAY_ITERATION_MS, plan_checks, reproducible, summary
 from harness.experiments.speed import measure
-from harness.robots.arm import bench_motion, planner_config
-from harness.robots.baseline import PinocchioModel
+from harness.plan.arm_config import bench_motion, planner_config
 from harness.robots.extras import extra as load_extra
-from harness.robots.registry import load_pinocchio
 from harness.sections.base import Context, Row, SectionResult, Target, check
 from harness.sections.planning import figures
 from planning.planners import segment_planner
@@ -28,12 +26,12 @@ CAUSAL_STARTS, CAUSAL_TOLERANCE = 2, 0.005  # the reference's random starts; "wi
 
 
 def run(ctx: Context) -> SectionResult:
-    robot = ctx.robot.name
-    baseline = PinocchioModel(load_pinocchio(robot))
+    arm = ctx.arm
+    robot, baseline = arm.reference, arm.nominal
     # as `plan` plans, the anytime budgets counted in SQP iterations (the same plans on any
     # load); the speed is measured under the real CPU budget, the penalty loop beside
-    config = reproducible(planner_config(robot, compile_code=True))
-    base, link = bench_motion(robot)
+    config = reproducible(planner_config(arm, compile_code=True))
+    base, link = bench_motion(arm)
     planner = segment_planner(baseline, config)
     free = evaluate(execute(planner, base, avoid=False), base, baseline, config)
     scenario = crossing_scenario(free.execution.segments[0].trajectory, config.geometry,
@@ -41,7 +39,7 @@ def run(ctx: Context) -> SectionResult:
     free_crossing = evaluate(execute(planner, scenario, avoid=False), scenario, baseline, config)
     # a registered motion's crossing is designed to be clearable; one derived from the joint
     # limits of a user's robot may leave no path, and its clearance is then a target
-    clearable = ctx.robot.motion is not None
+    clearable = arm.entry.motion is not None
     models = {"pinocchio": baseline}
     identified = ctx.output("identification", "model")
     if identified is not None:
@@ -136,7 +134,7 @@ def run(ctx: Context) -> SectionResult:
                         outputs={"plans": plans})
     out.figures.append(figures.path3d(executed, scenario, config.geometry,
                                       ctx.figures_dir / "planning_path3d.png"))
-    for extra in ctx.robot.extras:
+    for extra in arm.entry.extras:
         out.extend(load_extra(extra).planning(ctx, models), extra)
     return out
 

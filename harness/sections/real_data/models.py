@@ -27,9 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from harness.experiments.peers import least_squares, nominal_friction
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
-from harness.robots.torque_models import robot_library
+from harness.robots.arm import Arm
 from identification.identify import identify
 from identification.metrics import rel_error
 from identification.regression.consistent import ConsistentRegressor
@@ -45,7 +43,7 @@ class Scored:
     seconds: float
 
 
-def score_models(robot: str, q, qd, qdd, tau, holdout: float) -> tuple[dict[str, Scored], object]:
+def score_models(arm: Arm, q, qd, qdd, tau, holdout: float) -> tuple[dict[str, Scored], object]:
     """The peers on the data; also the default identification (its MODEL.json payload)."""
     split = int(round(len(q) * (1 - holdout)))
     held = slice(split, None)
@@ -57,11 +55,11 @@ def score_models(robot: str, q, qd, qdd, tau, holdout: float) -> tuple[dict[str,
         out[name] = Scored(name, torque, rel_error(torque[held], tau[held]),
                            time.process_time() - start)
 
-    nominal = PinocchioModel(load_pinocchio(robot))
+    nominal = arm.nominal
     add("nominal", lambda: nominal.torque(q, qd, qdd))
     add("nominal_friction", lambda: nominal_friction(out["nominal"].torque, qd, tau, split))
-    add("least_squares", lambda: least_squares(robot, q, qd, qdd, tau, split))
-    library, result = robot_library(robot), {}
+    add("least_squares", lambda: least_squares(arm, q, qd, qdd, tau, split))
+    library, result = arm.library, {}
 
     def fitted(name, regressor):
         def fn():

@@ -30,6 +30,7 @@ from data import DATA
 from harness.closeloop.measured import run_measured
 from harness.data.ingest import ingest
 from harness.io import write_npz
+from harness.robots.arm import Arm
 from harness.robots.registry import ROBOTS, get_robot
 from harness.sections.base import Context, Row, SectionResult, Target, check
 from harness.sections.real_data.figures import (
@@ -61,9 +62,9 @@ def readme_reference(name: str) -> list[float]:
 
 def _models(window: int | None) -> tuple:
     """The ingested data (window None: chosen from the data) and its three models."""
-    data = ingest(LOG / "panda_gaz2019.csv.gz", 7, ROBOT, RATE, window)
+    data = ingest(LOG / "panda_gaz2019.csv.gz", Arm.of(ROBOT), RATE, window)
     a = data.arrays
-    models, identification = score_models(ROBOT, a["q"], a["qd"], a["qdd"], a["tau"], HOLDOUT)
+    models, identification = score_models(Arm.of(ROBOT), a["q"], a["qd"], a["qdd"], a["tau"], HOLDOUT)
     whole = rel_error(models["nominal"].torque, a["tau"])
     return data, models, identification, whole
 
@@ -84,7 +85,7 @@ def _reproduction(reference, nominal_ref) -> dict:
 
 def run(ctx: Context) -> SectionResult:
     """Every shipped log of the robot, else every shipped log (with its own robot)."""
-    logs = ctx.robot.logs or tuple(log for name in ROBOTS for log in get_robot(name).logs)
+    logs = ctx.arm.entry.logs or tuple(log for name in ROBOTS for log in get_robot(name).logs)
     out = SectionResult(f"Logs: {', '.join(logs) or 'none shipped'}.")
     for log in logs:
         if log != LOG.name:
@@ -98,7 +99,7 @@ def log_result(out_dir: Path) -> SectionResult:
     data, models, identification, nominal_whole = _models(None)
     npz = out_dir / "real_data" / "panda_gaz2019.npz"
     write_npz(npz, **data.npz())
-    loop = run_measured(npz, ROBOT, HOLDOUT)
+    loop = run_measured(npz, Arm.of(ROBOT), HOLDOUT)
     r, a = loop.loop, data.arrays
     states, tau = (a["q"], a["qd"], a["qdd"]), a["tau"]
     reference, nominal_ref = readme_reference("least squares"), readme_reference("nominal")

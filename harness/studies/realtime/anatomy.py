@@ -30,8 +30,8 @@ import time
 
 import numpy as np
 
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
+from harness.robots.arm import Arm
+from harness.robots.registry import DEFAULT_ROBOT
 from harness.studies.realtime import measure as realtime
 from harness.studies.realtime import options as random_scenarios
 from planning.config import true_energy_config
@@ -67,7 +67,7 @@ class RecordingPlanner(Planner):
 def replans(baseline, config, setup: realtime.Setup) -> dict:
     """Section 1: every warm re-plan of Algorithm 2 on the random scenarios, call by call."""
     planner, per_replan = RecordingPlanner(baseline, config), []
-    plant, executed, infeasible, cold = load_mujoco(DEFAULT_ROBOT, scene=True), 0.0, 0, []
+    plant, executed, infeasible, cold = Arm.of(DEFAULT_ROBOT).scene, 0.0, 0, []
     for case in realtime.scenarios(baseline, config, setup):
         planner.groups.clear()
         run = execute(PenaltyLoop(planner), case)
@@ -170,7 +170,7 @@ def main() -> None:
     variant.add_argument("--split", action="store_true")
     variant.add_argument("--polish", action="store_true")
     args = options.parse_args()
-    baseline = PinocchioModel(load_pinocchio(DEFAULT_ROBOT))
+    baseline = Arm.of(DEFAULT_ROBOT).nominal
     config = true_energy_config(compile_code=True, **(random_scenarios.SPLIT if args.split
                                                       else {}))
     if args.polish:

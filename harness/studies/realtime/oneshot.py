@@ -20,8 +20,8 @@ import dataclasses
 
 import numpy as np
 
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
+from harness.robots.arm import Arm
+from harness.robots.registry import DEFAULT_ROBOT
 from harness.studies.realtime import measure as realtime
 from harness.studies.realtime import options as random_scenarios
 from planning.config import true_energy_config
@@ -42,8 +42,8 @@ def _execution(plan) -> Execution:
 
 def main() -> None:
     args = random_scenarios.parser(__doc__).parse_args()
-    baseline = PinocchioModel(load_pinocchio(DEFAULT_ROBOT))
-    plant = load_mujoco(DEFAULT_ROBOT, scene=True)
+    baseline = Arm.of(DEFAULT_ROBOT).nominal
+    plant = Arm.of(DEFAULT_ROBOT).scene
     config = true_energy_config(compile_code=True)
     cases = realtime.scenarios(baseline, config, random_scenarios.setup(args))
     default, numbers = segment_planner(baseline, config), Planner(baseline, config)

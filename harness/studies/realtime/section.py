@@ -6,8 +6,6 @@ result of the study is reported as timing-dependent."""
 
 from __future__ import annotations
 
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
 from harness.robots.scene import replay_scene
 from harness.sections.base import Context, SectionResult, Target
 from harness.studies.realtime import measure
@@ -19,8 +17,7 @@ OVERHEAD_MS = 0.3
 
 
 def run(ctx: Context) -> SectionResult:
-    robot = ctx.robot.name
-    study = measure.run(PinocchioModel(load_pinocchio(robot)), replay_scene(robot), ctx.quick)
+    study = measure.run(ctx.arm.nominal, replay_scene(ctx.arm), ctx.quick)
     default = study["default"]
     warm, cold = default["replan_cpu_ms"], default["cold_cpu_ms"]
     per, causal = study["references"]["per_replan"], study["references"]["causal"]

@@ -14,8 +14,8 @@ import json
 import os
 
 from harness.io import write_json
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import DEFAULT_ROBOT, load_mujoco, load_pinocchio
+from harness.robots.arm import Arm
+from harness.robots.registry import DEFAULT_ROBOT
 from harness.studies.realtime import measure as realtime
 from harness.studies.realtime import options as random_scenarios
 
@@ -28,12 +28,12 @@ def main() -> None:
                         help="plan with the paper's free end velocity (default: at rest)")
     args = parser.parse_args()
     changes = {"rest_at_goal": False} if args.free_end else {}
-    baseline = PinocchioModel(load_pinocchio(DEFAULT_ROBOT))
+    baseline = Arm.of(DEFAULT_ROBOT).nominal
     setup = random_scenarios.setup(args)
     ways = None
     if args.ways == "fast":
         ways = realtime.fast_ways(realtime.study_config(True, **changes))
-    study = realtime.run(baseline, load_mujoco(DEFAULT_ROBOT, scene=True), False, setup, ways,
+    study = realtime.run(baseline, Arm.of(DEFAULT_ROBOT).scene, False, setup, ways,
                          **changes)
     print("\n".join(realtime.markdown_lines(study)))
     print(json.dumps(realtime.acceptance(study)))

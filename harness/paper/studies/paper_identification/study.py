@@ -11,8 +11,7 @@ from threadpoolctl import threadpool_limits
 
 from harness.data.generate import generate
 from harness.data.sensors import torque_noise
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
+from harness.robots.arm import Arm
 from identification.identify import identify
 from identification.library.prior_knowledge import prior_knowledge_library
 from identification.metrics import rel_error
@@ -156,14 +155,15 @@ def context() -> dict:
 
 
 def _context() -> dict:
-    clean = generate("lynxmotion", 4000, 0.0, seed=0)
-    fresh = generate("lynxmotion", 4000, 0.0, seed=5)
+    arm = Arm.of("lynxmotion")  # the paper's arm
+    clean = generate(arm, 4000, 0.0, seed=0)
+    fresh = generate(arm, 4000, 0.0, seed=5)
     libs = {"symmetric": prior_knowledge_library(3), "general": prior_knowledge_library(3, False)}
     bases = {k: AtomBasis.from_atoms(v.atoms, 3) for k, v in libs.items()}
     lib = libs["symmetric"]
     return {"clean": clean, "fresh": fresh, "library": lib, "libraries": libs, "basis": bases["symmetric"],
             "bases": bases,
-            "regressor": PinocchioModel(load_pinocchio("lynxmotion")).regressor(clean.q, clean.qd, clean.qdd),
+            "regressor": arm.nominal.regressor(clean.q, clean.qd, clean.qdd),
             "theta": lib.evaluate(clean.q, clean.qd, clean.qdd),
             "truth": {k: true_terms(v, clean) for k, v in libs.items()},
             "atoms": {k: true_atoms(b, clean) for k, b in bases.items()}}

@@ -17,8 +17,6 @@ from harness.paper.studies.paper_planning.studies import (
     speed_study,
     swaying_study,
 )
-from harness.robots.baseline import PinocchioModel
-from harness.robots.registry import load_pinocchio
 from harness.sections.base import Context, SectionResult, Target, check
 from planning.config import nominal_iteration_ms, true_energy_config
 from planning.formulation.energy import absolute_energy
@@ -55,7 +53,7 @@ def run(ctx: Context) -> SectionResult:
     planned beside the closed form when the bench ran it first: `bench --full`)."""
     out_dir, quick = Path(ctx.out_dir), ctx.quick
     identified_model = ctx.output("identification", "model")
-    baseline = PinocchioModel(load_pinocchio(ctx.robot.name))
+    baseline = ctx.arm.nominal
     # the paper reproduction plans with the paper's quadrature (eq. 18, N = 10); the
     # default planner (true energy) runs beside it as "default"
     config, scenario = PAPER.config(), paper_scenario()
