@@ -84,8 +84,8 @@ def test_identification_section_scores_the_generated_library_against_the_oracle(
     """The bench's identification section on the UR5 (quick: 2 draws): noise-free data
     identified exactly, and per draw the generated library's error against the oracle's on
     both judge motions, the summary computed from those numbers."""
-    from harness.sections import identification as section
-    from harness.sections.base import Context
+    from harness.bench import identification as section
+    from harness.report.results import Context
 
     out = section.run(Context(Arm.of("ur5"), tmp_path, quick=True))
     r = out.results
@@ -110,8 +110,8 @@ def test_closing_the_loop_on_the_ur5_names_every_effect_within_10_percent(tmp_pa
     Pinocchio model lacks: each is named on its joint with its coefficient within 10 %, nothing
     else is named, and no joint is worse after; the control plant names nothing; a tendon
     spring (outside the dictionary) is said unexplained."""
-    from harness.sections import closeloop as section
-    from harness.sections.base import Context
+    from harness.bench import closeloop as section
+    from harness.report.results import Context
 
     result = section.run(Context(Arm.of("ur5"), tmp_path))
     out = {"results": result.results}

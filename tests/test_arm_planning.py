@@ -11,11 +11,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from harness.bench import replay
 from harness.cli import main
 from harness.plan.arm_config import bench_motion, planner_config
+from harness.report.results import Context, SectionResult
 from harness.robots.arm import Arm
-from harness.sections import replay
-from harness.sections.base import Context, SectionResult
 from planning.formulation.clearance import link_clearances
 from planning.penalty.solver import Planner
 from planning.replanning import execute

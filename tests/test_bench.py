@@ -22,11 +22,11 @@ from pathlib import Path
 
 import pytest
 
+from harness.bench import SECTIONS
 from harness.cli import main
 from harness.commands.bench import Progress, run_one
+from harness.report.results import Context, SectionResult
 from harness.robots.arm import Arm
-from harness.sections import SECTIONS
-from harness.sections.base import Context, SectionResult
 from tests.result_files import incomplete_files, interrupt
 
 REDUCED = "identification"
@@ -77,7 +77,7 @@ def test_reduced_bench_writes_complete_report(reduced):
 def test_failed_check_exits_3_naming_it(tmp_path, monkeypatch, capsys):
     """The real section under a bar it cannot meet: the report is written, the exit status
     is 3 and stderr names the failed check."""
-    import harness.sections.identification as section
+    import harness.bench.identification as section
 
     monkeypatch.setattr(section, "EXACT", 0.0)  # noise-free error must be exactly zero
     out = tmp_path / "out"
@@ -92,7 +92,7 @@ def test_failed_check_exits_3_naming_it(tmp_path, monkeypatch, capsys):
 
 @pytest.mark.slow
 def test_a_missed_target_does_not_change_the_exit_status(tmp_path, monkeypatch):
-    import harness.sections.identification as section
+    import harness.bench.identification as section
 
     monkeypatch.setattr(section, "MEDIAN_TARGET", 0.0)  # no model beats a zero ratio
     out = tmp_path / "out"
@@ -106,7 +106,7 @@ def test_a_section_that_raises_is_recorded_as_failed(tmp_path, capsys):
     """The real replay section on a plan without time stamps: failed, with its error line."""
     ctx = Context(Arm.of("lynxmotion"), tmp_path, True, False, {
         "planning": SectionResult("", outputs={"plans": {"broken": {"q": [[0.0, 0.0, 0.0]]}}})})
-    from harness.sections import load_section
+    from harness.bench import load_section
 
     outcome, result = run_one("replay", load_section, ctx, Progress())
     assert outcome.status == "failed" and result is None
@@ -119,7 +119,7 @@ def test_a_warning_raised_in_a_section_reaches_stderr_and_the_report(tmp_path, m
                                                                      capsys):
     import warnings
 
-    import harness.sections.identification as section
+    import harness.bench.identification as section
 
     real = section.score_draw
 
@@ -266,7 +266,7 @@ def test_clearance_is_a_target_where_no_path_was_designed():
     """plan_checks: on a registered motion (designed to be clearable) a plan that dips is a
     failed check; on a user's robot it is a target with its gap, and the plan's saying so is
     not a failure."""
-    from harness.experiments.planning import plan_checks
+    from harness.plan.scoring import plan_checks
 
     s = {"problems": ["clearance 0.0459 m < threshold 0.08 m - 0.002 m"], "end_error_rad": 0.0,
          "min_clearance_m": 0.0459, "end_speed_rad_s": 0.0, "true_energy_J": 1.0,

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.experiments.identification import closed_form_gap, sines_motion
+from harness.identify.scoring import closed_form_gap, sines_motion
 from harness.robots.arm import Arm
 
 URDF = str(Path(__file__).resolve().parent / "data" / "gen3_like.urdf")

@@ -167,7 +167,7 @@ def test_replay_simulates_an_exported_mjcf_named_mjcf(fitted):
 def test_an_mjcf_of_any_suffix_keeps_its_includes(tmp_path, monkeypatch):
     """The Lynxmotion's scene (it includes its arm's file) read as `.mjcf` from another folder
     compiles to what MuJoCo's loader makes of it."""
-    from harness.robots.scene import mjcf_spec
+    from harness.robots.files import mjcf_spec
     from models import MODELS
 
     for name, target in (("lynxmotion.xml", "lynxmotion.xml"), ("scene.xml", "scene.mjcf")):
@@ -177,6 +177,7 @@ def test_an_mjcf_of_any_suffix_keeps_its_includes(tmp_path, monkeypatch):
     own = mujoco.MjModel.from_xml_path(str(tmp_path / "scene.mjcf"))
     assert (spec.nbody, spec.ngeom, spec.nu) == (own.nbody, own.ngeom, own.nu) and own.nu
     assert np.allclose(spec.body_mass, own.body_mass, rtol=1e-12)
+
 
 def test_a_model_of_other_kinematics_is_refused(fitted, capsys):
     out = fitted / "other.csv"

@@ -4,7 +4,7 @@ oracle; a Coulomb coefficient fitted to noise on a joint without friction made i
 
 from __future__ import annotations
 
-from harness.experiments.generalization import FLAT, PRIOR, generalization
+from harness.identify.generalization import FLAT, PRIOR, generalization
 from harness.robots.arm import Arm
 from harness.studies.generalization import JOINT_TARGET, MEDIAN_TARGET
 

@@ -193,7 +193,7 @@ def test_a_missing_file_and_an_unknown_robot_are_one_line(tmp_path, capsys):
 
 
 def test_the_reference_figures_are_read_from_the_shipped_readme():
-    from harness.sections.real_data.section import readme_reference
+    from harness.bench.real_data.section import readme_reference
 
     ls, nominal = readme_reference("least squares"), readme_reference("nominal")
     assert len(ls) == len(nominal) == 7 and ls[0] == 0.22 and nominal[6] == 0.99

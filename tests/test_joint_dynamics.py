@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.experiments.identification import closed_form_gap, sines_motion
+from harness.identify.scoring import closed_form_gap, sines_motion
 from harness.robots.arm import Arm
 from harness.robots.registry import erd_robots_dir
 

@@ -1,4 +1,4 @@
-"""The next-run experiment (harness.experiments.next_run): its nominal model is the perturbed
+"""The next-run experiment (harness.identify.next_run): its nominal model is the perturbed
 URDF's RNEA (recomputed by Pinocchio on a model with those inertias), its rule outcome is
 what its errors say, and the identified model beats the perturbed nominal by far."""
 
@@ -8,8 +8,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from harness.experiments.next_run import RULE_RMS, law_torque, next_run, rule_targets, two_runs
-from harness.experiments.peers import joint_friction_columns
+from harness.identify.next_run import RULE_RMS, law_torque, next_run, rule_targets, two_runs
+from harness.identify.peers import joint_friction_columns
 from harness.robots.arm import Arm
 from harness.robots.baseline import PinocchioModel
 from identification.metrics import rel_error

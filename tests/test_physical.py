@@ -13,7 +13,7 @@ import pinocchio as pin
 import pytest
 
 from harness.data.generate import generate
-from harness.experiments.identification import perturbed_nominal, sines_motion
+from harness.identify.scoring import perturbed_nominal, sines_motion
 from harness.robots.arm import Arm
 from identification.ellipsoids import Ellipsoid, enclosing, holding, inside
 from identification.friction import FrictionLaw, choose_law

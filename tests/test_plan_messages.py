@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.commands.plan_messages import (
+from harness.plan.messages import (
     infeasible,
     peak_factor,
     polynomial_duration,

@@ -16,9 +16,9 @@ import pinocchio as pin
 import pytest
 
 from harness.cli import main
+from harness.plan.trajectory_csv import read_trajectory
 from harness.robots.arm import Arm
 from harness.robots.inertials import set_standard_parameters
-from harness.trajectory import read_trajectory
 from models import MODELS
 from planning.config import PlannerConfig, Scenario
 from planning.formulation.clearance import link_clearances

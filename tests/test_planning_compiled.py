@@ -117,7 +117,7 @@ def test_the_plan_is_the_same_with_the_quick_and_the_optimized_build(tmp_path, m
 def test_the_plan_command_says_each_compile_stage_on_a_terminal(monkeypatch, capsys):
     """One line as each stage of 100 kB or more starts, with the time so far, and the total;
     nothing when stderr is not a terminal."""
-    from harness.commands.plan_messages import BuildNotice
+    from harness.plan.messages import BuildNotice
 
     notice = BuildNotice("panda", 7)
     monkeypatch.setattr("sys.stderr.isatty", lambda: True)

@@ -9,7 +9,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from harness.experiments.speed import measure
+from harness.plan.speed import measure
 from harness.robots.arm import Arm
 from planning.config import PenaltyOptions, PlannerConfig, Scenario
 from planning.formulation import compiled

@@ -9,11 +9,11 @@ from pathlib import Path
 
 import pytest
 
+from harness.bench import identification
+from harness.bench.planning import section
 from harness.replay.reference import plan_reference
+from harness.report.results import Context
 from harness.robots.arm import Arm
-from harness.sections import identification
-from harness.sections.base import Context
-from harness.sections.planning import section
 
 
 @pytest.mark.slow
@@ -45,7 +45,7 @@ def test_section_quick(tmp_path):
 def test_no_executed_replan_is_measured_as_nothing_not_as_zero():
     """With no re-plan executed, the executed re-plans' CPU max is None, so its target is
     neither met nor missed (0.0 ms read as met)."""
-    from harness.sections.base import Target
+    from harness.report.results import Target
 
     assert section.largest([]) is None
     assert Target("x", section.largest([]), 10.0, "ms").met is None

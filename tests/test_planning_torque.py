@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.commands.plan_messages import torque_diagnosis
+from harness.plan.messages import torque_diagnosis
 from harness.replay.checks import checks
 from harness.replay.reference import plan_reference
 from harness.replay.simulate import replay

@@ -9,11 +9,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from harness.bench.real_data.section import HOLDOUT, LOG, RATE, ROBOT, log_result
 from harness.data.ingest import ingest
-from harness.experiments.peers import joint_friction_columns
+from harness.identify.peers import joint_friction_columns
 from harness.robots.arm import Arm
 from harness.robots.baseline import PinocchioModel
-from harness.sections.real_data.section import HOLDOUT, LOG, RATE, ROBOT, log_result
 
 pytestmark = pytest.mark.slow  # the section on the whole log: half a minute
 

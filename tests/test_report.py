@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from harness.report.results import Check, SectionResult, Target, check
 from harness.report.writer import SectionOutcome, failed_checks, report_json
-from harness.sections.base import Check, SectionResult, Target, check
 
 
 def test_numpy_booleans_are_checks_and_count():

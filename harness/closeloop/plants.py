@@ -17,6 +17,8 @@ import mujoco
 import numpy as np
 
 from harness.io import write_text
+from harness.robots.arm import Arm
+from harness.robots.registry import DEFAULT_ROBOT
 from identification.closeloop.effects import EffectTerm
 from models import MODELS
 
@@ -80,7 +82,7 @@ def true_effects(plant: mujoco.MjModel, declared: mujoco.MjModel | None = None,
     """Effects the plant carries beyond the declared MJCF (Coulomb terms with MuJoCo's own
     friction shape), and whether any lies outside the dictionary (tendon springs/dampers,
     gravity compensation)."""
-    declared = declared or mujoco.MjModel.from_xml_path(str(DECLARED_MJCF))
+    declared = declared or Arm.of(DEFAULT_ROBOT).mujoco
     terms = []
     pairs = (("viscous", plant.dof_damping, declared.dof_damping),
              ("coulomb", plant.dof_frictionloss, declared.dof_frictionloss),

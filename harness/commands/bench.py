@@ -1,7 +1,7 @@
 """`torquebench bench --out DIR`: every stage on one robot, one report.
 
 Sections run in data-flow order (identification -> planning -> replay -> closeloop -> real
-data), each given what the earlier ones handed on (harness.sections.base.Context), the same
+data), each given what the earlier ones handed on (harness.report.results.Context), the same
 sections for every robot. A section that raises is reported as failed with its message.
 The report is always written (harness.report.writer); the command then exits 1 if a section
 failed, 3 if a check failed (each named on stderr), else 0. Targets never change the exit
@@ -23,12 +23,12 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from harness import interrupt
+from harness.bench import SECTIONS, load_section
 from harness.errors import UserError
+from harness.report.results import Context
 from harness.report.writer import SectionOutcome, write_report
 from harness.robots.registry import DEFAULT_ROBOT
 from harness.robots.resolve import resolve_arm
-from harness.sections import SECTIONS, load_section
-from harness.sections.base import Context
 from harness.studies import STUDIES, load_study
 
 HEARTBEAT = 30.0  # s between "still running" lines of a long section

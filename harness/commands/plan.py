@@ -14,9 +14,12 @@ import math
 import re
 import sys
 
-from harness.commands.plan_anytime import add_anytime_options, anytime_options, settle_horizon
-from harness.commands.plan_limits import link_geometry, rate_limits, torque_limit, vector, vector_text
-from harness.commands.plan_messages import (
+from harness.errors import UserError
+from harness.io import write_json
+from harness.plan.anytime_options import add_anytime_options, anytime_options, settle_horizon
+from harness.plan.arm_config import planner_config
+from harness.plan.limits import link_geometry, rate_limits, torque_limit, vector, vector_text
+from harness.plan.messages import (
     BuildNotice,
     default_obstacle_diagnosis,
     default_obstacle_notice,
@@ -25,12 +28,9 @@ from harness.commands.plan_messages import (
     torque_diagnosis,
     velocity_diagnosis,
 )
-from harness.errors import UserError
-from harness.io import write_json
-from harness.plan.arm_config import planner_config
+from harness.plan.trajectory_csv import DEFAULT_RATE, write_trajectory
 from harness.robots.resolve import Arm, resolve_arm
 from harness.robots.torque_models import read_model, torque_model
-from harness.trajectory import DEFAULT_RATE, write_trajectory
 from planning.config import ALIASES, REPLANNERS, PlannerConfig, Scenario, true_energy_config
 from planning.control import control_trajectory
 from planning.errors import PlanningError

@@ -12,10 +12,10 @@ from pathlib import Path
 
 from harness.commands.bench import Progress, command_line, machine, run_pipeline, verdict
 from harness.errors import UserError
+from harness.report.results import Context
 from harness.report.writer import write_report
 from harness.robots.registry import DEFAULT_ROBOT
 from harness.robots.resolve import resolve_arm
-from harness.sections.base import Context
 from harness.studies import STUDIES, load_study
 
 

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.io import write_json, write_text
-from harness.sections.base import Check, Row, SectionResult, Target
+from harness.report.results import Check, Row, SectionResult, Target
 
 TITLES = {
     "identification": "Identification",

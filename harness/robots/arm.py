@@ -57,11 +57,18 @@ class Arm:
 
     # --- the models, parsed once -----------------------------------------------------------
     @cached_property
+    def spec(self) -> mujoco.MjSpec:
+        """The arm's MuJoCo spec as parsed (no scene): copy it to build on it."""
+        from harness.robots.files import parse_spec
+
+        return parse_spec(self.entry)
+
+    @cached_property
     def mujoco(self) -> mujoco.MjModel:
         """The arm's MuJoCo model (no scene); UserError unless an open chain of 1-DOF joints."""
-        from harness.robots.files import parse_mujoco
+        from harness.robots.files import compile_spec
 
-        model = parse_mujoco(self.entry)
+        model = compile_spec(self.spec, self.entry)
         if model.nq != model.nv or model.nv == 0:
             raise UserError(f"robot {self.reference}: needs 1-DOF joints only "
                             f"(nq={model.nq}, nv={model.nv})")
@@ -73,9 +80,10 @@ class Arm:
     @cached_property
     def scene(self) -> mujoco.MjModel | None:
         """The registered scene MJCF (the Lynxmotion's hand-written one), else None."""
-        from harness.robots.files import parse_mujoco
+        from harness.robots.files import compile_spec, parse_spec
 
-        return parse_mujoco(self.entry, scene=True) if self.entry.scene is not None else None
+        return (compile_spec(parse_spec(self.entry, scene=True), self.entry)
+                if self.entry.scene is not None else None)
 
     @cached_property
     def pinocchio(self) -> pin.Model:

@@ -162,11 +162,9 @@ def export_model(payload: dict, arm: Arm, fmt: str, out: str | Path) -> str:
     elif fmt == "urdf":
         text = export_urdf(params, arm)
     else:
-        # MuJoCo saves a model through the XML it parsed last: the arm's file parsed again
-        # (arm.mujoco, parsed earlier and shared in the process, is neither changed nor saved)
-        from harness.robots.files import parse_mujoco
+        from harness.robots.files import model_to_save
 
-        model = set_standard_parameters(parse_mujoco(arm.entry), params)
+        model = set_standard_parameters(model_to_save(arm.entry), params)
 
         def write(tmp: str) -> None:
             mujoco.mj_saveLastXML(tmp, model)

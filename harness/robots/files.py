@@ -10,6 +10,7 @@ loses its meshes so `package://` paths need not resolve (inertias come from <ine
 from __future__ import annotations
 
 import os
+import re
 import sys
 import tempfile
 from contextlib import contextmanager
@@ -85,12 +86,47 @@ def arm_urdf_text(entry: Robot) -> str:
     return arm_urdf(read_text(entry.urdf), entry.name)
 
 
-def parse_mujoco(entry: Robot, scene: bool = False) -> mujoco.MjModel:
-    """The entry's MuJoCo model: its MJCF (scene: its scene MJCF, if it has one), else its URDF's
-    arm without meshes."""
+def parse_spec(entry: Robot, scene: bool = False) -> mujoco.MjSpec:
+    """The entry's MuJoCo spec, the one MuJoCo parse of its file: its MJCF (scene: its scene
+    MJCF, if it has one), else its URDF's arm without meshes."""
     if entry.mjcf is not None:
         path = entry.scene if scene and entry.scene is not None else entry.mjcf
-        return _parse(lambda: mujoco.MjModel.from_xml_path(str(path)), path, f"invalid MJCF {path}")
+        return _parse(lambda: mjcf_spec(path), path, f"invalid MJCF {path}")
+    text = strip_geometry(arm_urdf_text(entry))
+    return _parse(lambda: mujoco.MjSpec.from_string(text), entry.urdf, f"invalid URDF {entry.urdf}")
+
+
+def compile_spec(spec: mujoco.MjSpec, entry: Robot) -> mujoco.MjModel:
+    """A copy of spec compiled (the spec stays as parsed); UserError naming the file."""
+    path = entry.mjcf or entry.urdf
+    return _parse(lambda: spec.copy().compile(), path, f"invalid robot file {path}")
+
+
+def mjcf_spec(path: Path) -> mujoco.MjSpec:
+    """The spec of the MJCF at path whatever its suffix, its includes and assets found beside
+    it, as MjModel.from_xml_path reads it (MjSpec.from_file picks a decoder by the suffix:
+    an exported `.mjcf` had none)."""
+    if path.suffix.lower() == ".xml":
+        return mujoco.MjSpec.from_file(str(path))
+    includes: dict[str, bytes] = {}
+    pending = [read_text(path)]
+    while pending:
+        for name in re.findall(r'<include\b[^>]*\bfile="([^"]+)"', pending.pop()):
+            if name not in includes:
+                includes[name] = (path.parent / name).read_bytes()
+                pending.append(includes[name].decode(errors="replace"))
+    spec = mujoco.MjSpec.from_string(read_text(path), include=includes)
+    spec.modelfiledir = str(path.parent.resolve()) + "/"
+    return spec
+
+
+def model_to_save(entry: Robot) -> mujoco.MjModel:
+    """The entry's MuJoCo model parsed again, for `export --format mjcf` alone: MuJoCo saves a
+    model through the XML it parsed last (mj_saveLastXML, full precision; MjSpec.to_xml keeps
+    6 digits), so the model to change and save must be the last one parsed from XML."""
+    if entry.mjcf is not None:
+        return _parse(lambda: mujoco.MjModel.from_xml_path(str(entry.mjcf)), entry.mjcf,
+                      f"invalid MJCF {entry.mjcf}")
     text = strip_geometry(arm_urdf_text(entry))
     return _parse(lambda: mujoco.MjModel.from_xml_string(text), entry.urdf,
                   f"invalid URDF {entry.urdf}")

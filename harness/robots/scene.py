@@ -14,17 +14,13 @@ tracked at the same rate.
 from __future__ import annotations
 
 import dataclasses
-import re
 from functools import cache
-from pathlib import Path
 
 import mujoco
 import numpy as np
 
 from harness.errors import UserError
 from harness.robots.arm import Arm
-from harness.robots.files import arm_urdf_text, read_text
-from harness.robots.urdf import strip_geometry
 from planning.formulation.kinematics import ArmGeometry
 
 TIMESTEP = 0.0005  # s
@@ -35,29 +31,8 @@ FLANGE_SITE = "end_effector"
 
 
 def robot_spec(arm: Arm) -> mujoco.MjSpec:
-    """The arm's MuJoCo spec, compiled exactly as Arm.mujoco compiles it."""
-    arm.mujoco  # noqa: B018 - one clear error for an invalid file
-    if arm.entry.mjcf is not None:
-        return mjcf_spec(arm.entry.mjcf)
-    return mujoco.MjSpec.from_string(strip_geometry(arm_urdf_text(arm.entry)))
-
-
-def mjcf_spec(path: Path) -> mujoco.MjSpec:
-    """The spec of the MJCF at path whatever its suffix, its includes and assets found beside
-    it, as MjModel.from_xml_path reads it (MjSpec.from_file picks a decoder by the suffix:
-    an exported `.mjcf` had none)."""
-    if path.suffix.lower() == ".xml":
-        return mujoco.MjSpec.from_file(str(path))
-    includes: dict[str, bytes] = {}
-    pending = [read_text(path)]
-    while pending:
-        for name in re.findall(r'<include\b[^>]*\bfile="([^"]+)"', pending.pop()):
-            if name not in includes:
-                includes[name] = (path.parent / name).read_bytes()
-                pending.append(includes[name].decode(errors="replace"))
-    spec = mujoco.MjSpec.from_string(read_text(path), include=includes)
-    spec.modelfiledir = str(path.parent.resolve()) + "/"
-    return spec
+    """A copy of the arm's MuJoCo spec (Arm.spec: the file parsed once), to build on."""
+    return arm.spec.copy()
 
 
 @cache

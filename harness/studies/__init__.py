@@ -9,7 +9,7 @@ tests/test_studies.py on its quick form.
 
 from __future__ import annotations
 
-from harness.sections import entry_module
+from harness.bench import entry_module
 
 STUDIES = {
     "paper_identification": "the paper's identification study on its arm: noise levels, "

@@ -27,8 +27,8 @@ from harness.closeloop.figures import error_figure, residual_figure
 from harness.closeloop.plants import DECLARED_MJCF
 from harness.closeloop.run import CloseLoopRun, run_closeloop
 from harness.data.generate import SAMPLE_RATE
+from harness.report.results import Context, SectionResult, check
 from harness.robots.arm import Arm
-from harness.sections.base import Context, SectionResult, check
 from identification.closeloop.loop import UNEXPLAINED_SIZE
 
 NOISE = 0.05  # torque noise std / torque std of the measured data

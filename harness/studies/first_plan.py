@@ -26,7 +26,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from harness.sections.base import Context, SectionResult, Target, check
+from harness.report.results import Context, SectionResult, Target, check
 from planning.result import TIMING_KEYS
 
 ROOT = Path(__file__).resolve().parents[2]  # the runs plan with this tree's code

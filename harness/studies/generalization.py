@@ -1,21 +1,21 @@
 """Study `generalization`: identification on data made along another excitation than the
-project's (harness.experiments.generalization), judged on a fresh motion of the project's
+project's (harness.identify.generalization), judged on a fresh motion of the project's
 own family, against the oracle; the UR5 and the Panda (registered) and the xArm7 and the
 Unitree Z1 (example-robot-data's URDFs). Quick: the UR5 on one draw.
 """
 
 from __future__ import annotations
 
-from harness.experiments.generalization import (
+from harness.identify.generalization import (
     QUICK_SEEDS,
     SEEDS,
     generalization,
     markdown,
 )
-from harness.experiments.identification import ORACLE
+from harness.identify.scoring import ORACLE
+from harness.report.results import Context, SectionResult, Target
 from harness.robots.arm import Arm
 from harness.robots.registry import erd_robots_dir
-from harness.sections.base import Context, SectionResult, Target
 
 MEDIAN_TARGET, JOINT_TARGET = 1.1, 1.6  # x oracle, as the bench's identification section
 EXAMPLE_ARMS = ("xarm_description/urdf/xarm7.urdf", "z1_description/urdf/z1.urdf")

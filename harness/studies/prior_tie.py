@@ -1,16 +1,16 @@
 """Study `prior_tie`: the consistent fit's TIE margin (identification.physical.choose_weight)
 chosen on draws and a judge motion no bench section scores, every margin re-scored on fresh
-draws and a fresh judge (harness.experiments.prior_tie). Robots: the UR5 and the two light
+draws and a fresh judge (harness.identify.prior_tie). Robots: the UR5 and the two light
 wristed arms the margin was raised for (xArm7, SO-101, example-robot-data's URDFs). Quick:
 the UR5, one draw each way.
 """
 
 from __future__ import annotations
 
-from harness.experiments.prior_tie import tie_study
+from harness.identify.prior_tie import tie_study
+from harness.report.results import Context, SectionResult, Target, check
 from harness.robots.arm import Arm
 from harness.robots.registry import erd_robots_dir
-from harness.sections.base import Context, SectionResult, Target, check
 
 ARMS = ("xarm_description/urdf/xarm7.urdf", "so_arm_description/urdf/so101.urdf")
 JOINT_TARGET = 1.6  # x oracle, the bench's identification bar

@@ -15,7 +15,7 @@ the kinematics on any other arm):
 - stlsq, ssr: pysindy's STLSQ and SSR per joint on the same columns, tuned on the same
   validation blocks (identification.regression.peers);
 - oracle: two-step WLS on Pinocchio's base regressor plus per-joint viscous and armature
-  columns (harness.experiments.identification.oracle_design).
+  columns (harness.identify.scoring.oracle_design).
 """
 
 from __future__ import annotations
@@ -32,8 +32,8 @@ from threadpoolctl import threadpool_limits
 
 from harness.data.generate import generate
 from harness.errors import UserError
-from harness.experiments.identification import oracle_design
 from harness.identify.fits import arm_identification
+from harness.identify.scoring import oracle_design
 from harness.robots.arm import Arm
 from harness.sweep.grid import Cell
 from identification.errors import IdentificationError, LibraryRankWarning

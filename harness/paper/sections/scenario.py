@@ -5,11 +5,11 @@ the default planner (true energy, rest to rest) on the same scenario."""
 
 from __future__ import annotations
 
-from harness.experiments.planning import plan_checks, reproducible, summary
 from harness.paper.planning.variants import PAPER
 from harness.plan.arm_config import planner_config
+from harness.plan.scoring import plan_checks, reproducible, summary
+from harness.report.results import Context, Row, SectionResult, Target
 from harness.robots.baseline import PinocchioModel
-from harness.sections.base import Context, Row, SectionResult, Target
 from planning.planners import segment_planner
 from planning.replanning import execute
 from planning.result import evaluate, to_json

@@ -11,7 +11,7 @@ import numpy as np
 from harness.data.generate import generate
 from harness.paper.identification.published_library import paper_library
 from harness.paper.identification.table4 import CONSISTENT_DOUBLE_PENDULUM, SYSTEMS, fit_system
-from harness.sections.base import Context, Row, SectionResult, Target, check
+from harness.report.results import Context, Row, SectionResult, Target, check
 
 COEFFICIENT_TARGET = 0.02  # relative error of every Table IV coefficient
 SPANS = 1e-9  # noise-free least-squares residual of a joint the library spans

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from harness.errors import UserError
-from harness.experiments.causal import causal_multistart
+from harness.plan.causal import causal_multistart
 from harness.replay.reference import plan_reference
 from harness.replay.simulate import replay
 from harness.studies.realtime import references

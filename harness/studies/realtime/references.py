@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.experiments.causal import multistart
+from harness.plan.causal import multistart
 from planning.anytime.planner import AnytimePlanner
 from planning.config import PlannerConfig, Scenario
 from planning.formulation.energy import dense_energy

@@ -6,8 +6,8 @@ result of the study is reported as timing-dependent."""
 
 from __future__ import annotations
 
+from harness.report.results import Context, SectionResult, Target
 from harness.robots.scene import replay_scene
-from harness.sections.base import Context, SectionResult, Target
 from harness.studies.realtime import measure
 
 REPLAN_MEDIAN_MS, REPLAN_MAX_MS, COLD_MAX_MS = 2.0, 10.0, 25.0

@@ -34,7 +34,7 @@ from harness.paper.studies.paper_identification.study import (
     compare,
     context,
 )
-from harness.sections.base import Context, SectionResult, Target
+from harness.report.results import Context, SectionResult, Target
 
 RATIO_TARGET = 1.25  # x the oracle's held-out error, every joint at 5 %
 

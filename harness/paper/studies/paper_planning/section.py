@@ -6,7 +6,6 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-from harness.experiments.speed import measure
 from harness.paper.planning.variants import PAPER
 from harness.paper.studies.paper_planning import figures
 from harness.paper.studies.paper_planning.studies import (
@@ -17,7 +16,8 @@ from harness.paper.studies.paper_planning.studies import (
     speed_study,
     swaying_study,
 )
-from harness.sections.base import Context, SectionResult, Target, check
+from harness.plan.speed import measure
+from harness.report.results import Context, SectionResult, Target, check
 from planning.config import nominal_iteration_ms, true_energy_config
 from planning.formulation.energy import absolute_energy
 from planning.planners import segment_planner

@@ -7,9 +7,9 @@ import dataclasses
 
 import numpy as np
 
-from harness.experiments.speed import measure
 from harness.paper.planning.baselines import MinimumJerk, solve_trust_constr
 from harness.paper.planning.variants import PARAMETRIZATIONS, Parametrization
+from harness.plan.speed import measure
 from planning.config import PlannerConfig
 from planning.formulation.energy import absolute_energy, net_work
 from planning.formulation.screening import screen

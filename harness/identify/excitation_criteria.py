@@ -1,6 +1,6 @@
 """The designed excitation's criteria side by side, at the same sensor noise.
 
-`python -m harness.experiments.excitation_criteria ROBOT`: per criterion of `excite`
+`python -m harness.identify.excitation_criteria ROBOT`: per criterion of `excite`
 (identification.excitation.criteria.CRITERIA), the design over the bench's duration (seed 1),
 its condition number against the default excitation's, and for draws 101-103 the robot's
 default fit's error on the bench's sines motion, trained along the design / along the
@@ -15,9 +15,9 @@ import sys
 
 from harness.data.excite import design_for
 from harness.data.generate import SAMPLE_RATE, generate
-from harness.experiments.excitation import along_design
-from harness.experiments.identification import NOISE, SAMPLES, fixed_fit, score_draw, sines_motion
+from harness.identify.excitation import along_design
 from harness.identify.fits import arm_identification
+from harness.identify.scoring import NOISE, SAMPLES, fixed_fit, score_draw, sines_motion
 from harness.robots.arm import Arm
 from identification.excitation.criteria import CRITERIA
 

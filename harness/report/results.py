@@ -1,6 +1,6 @@
 """What every bench section and study is given and returns.
 
-A section (harness/sections/<name>) and a study (harness/studies/<name>) are modules with
+A section (harness/bench/<name>) and a study (harness/studies/<name>) are modules with
 `run(context: Context) -> SectionResult`. They separate two kinds of figures:
 
 - a `Check` must hold whenever the software is correct (a cross-check against an

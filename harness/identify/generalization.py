@@ -16,7 +16,8 @@ import numpy as np
 from harness.data.dataset import Dataset
 from harness.data.generate import SAMPLE_RATE
 from harness.data.sensors import torque_noise
-from harness.experiments.identification import (
+from harness.identify.fits import arm_identification
+from harness.identify.scoring import (
     NOISE,
     SAMPLES,
     Spectrum,
@@ -27,7 +28,6 @@ from harness.experiments.identification import (
     score_draw,
     sines_motion,
 )
-from harness.identify.fits import arm_identification
 from harness.robots.arm import Arm
 
 OUTSIDE = Spectrum(count=(3, 7), band=(0.2, 2.0), fill=0.5, stream=104729)

@@ -28,8 +28,8 @@ from harness.closeloop.arm_plants import flange_frame, write_arm_variant
 from harness.closeloop.payload import PayloadTorque
 from harness.closeloop.plants import Variant
 from harness.closeloop.run import run_closeloop
+from harness.report.results import Context, Row, SectionResult, Target, check
 from harness.robots.arm import Arm
-from harness.sections.base import Context, Row, SectionResult, Target, check
 from identification.closeloop.effects import effect_torque
 
 SAMPLES = 4000  # measured samples per plant

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from harness.report.results import Check, Target, check
 from harness.robots.baseline import PinocchioModel
-from harness.sections.base import Check, Target, check
 from planning.result import CLEARANCE_TOLERANCE, END_TOLERANCE, closest_link, executed_energy
 
 # the bench's executed plans count each iteration of the anytime SQP as this many ms of its

@@ -5,7 +5,7 @@ through the user's path: `ingest` (resampled to its median step, qdd from qd by
 Savitzky-Golay with the window chosen from the data, handed over at RATE Hz), then
 
 - three models side by side, scored on the last HOLDOUT of the time against the measured
-  torque (harness.sections.real_data.models): the nominal URDF model, the least-squares
+  torque (harness.bench.real_data.models): the nominal URDF model, the least-squares
   reference of the source README recomputed on the same data, and `identify --robot
   panda`; the identified model is judged against the README's reference figures (parsed
   from data/panda_gaz2019/README.md): median over joints of its error ratio <= 1 and no
@@ -27,19 +27,19 @@ from pathlib import Path
 import numpy as np
 
 from data import DATA
-from harness.closeloop.measured import run_measured
-from harness.data.ingest import ingest
-from harness.io import write_npz
-from harness.robots.arm import Arm
-from harness.robots.registry import ROBOTS, get_robot
-from harness.sections.base import Context, Row, SectionResult, Target, check
-from harness.sections.real_data.figures import (
+from harness.bench.real_data.figures import (
     error_figure,
     residual_time_figure,
     residual_velocity_figure,
 )
-from harness.sections.real_data.models import score_models
-from harness.sections.real_data.report import markdown
+from harness.bench.real_data.models import score_models
+from harness.bench.real_data.report import markdown
+from harness.closeloop.measured import run_measured
+from harness.data.ingest import ingest
+from harness.io import write_npz
+from harness.report.results import Context, Row, SectionResult, Target, check
+from harness.robots.arm import Arm
+from harness.robots.registry import ROBOTS, get_robot
 from identification.metrics import rel_error
 
 LOG = DATA / "panda_gaz2019"

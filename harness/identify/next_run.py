@@ -26,8 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from harness.data.generate import generate
-from harness.experiments.identification import NOISE, SAMPLES, perturbed_nominal, sines_motion
-from harness.experiments.peers import least_squares
+from harness.identify.peers import least_squares
+from harness.identify.scoring import NOISE, SAMPLES, perturbed_nominal, sines_motion
 from harness.robots.arm import Arm
 from identification.identify import identify
 from identification.metrics import rel_error
@@ -117,7 +117,7 @@ def rule_targets(runs: list[dict]) -> list:
     """The rule's targets over runs: the joints carrying real torque where the identified
     model is at or below both peers (of how many), and the worst run's median ratio to least
     squares."""
-    from harness.sections.base import Target
+    from harness.report.results import Target
 
     carried = sum(len(r["rule_joints"]) for r in runs)
     held = sum(len(r["rule_holds_on"]) for r in runs)
@@ -131,7 +131,7 @@ def rule_targets(runs: list[dict]) -> list:
 
 def markdown(runs: list[dict]) -> list[str]:
     names = list(runs[0]["errors"])
-    out = ["Next run (harness.experiments.next_run): fitted on one run of the project's "
+    out = ["Next run (harness.identify.next_run): fitted on one run of the project's "
            "excitation with friction, a sensor offset and noise added, the URDF perturbed; "
            "scored on a run of another family (random sines) against its torque without the "
            "noise. Relative RMS error per joint:", "",

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from harness.data.generate import generate
-from harness.experiments.identification import (
+from harness.identify.scoring import (
     HOLDOUT,
     SAMPLES,
     oracle_design,

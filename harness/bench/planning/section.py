@@ -6,13 +6,13 @@ import dataclasses
 
 import numpy as np
 
-from harness.experiments.causal import against_causal
-from harness.experiments.planning import REPLAY_ITERATION_MS, plan_checks, reproducible, summary
-from harness.experiments.speed import measure
+from harness.bench.planning import figures
 from harness.plan.arm_config import bench_motion, planner_config
+from harness.plan.causal import against_causal
+from harness.plan.scoring import REPLAY_ITERATION_MS, plan_checks, reproducible, summary
+from harness.plan.speed import measure
+from harness.report.results import Context, Row, SectionResult, Target, check
 from harness.robots.extras import extra as load_extra
-from harness.sections.base import Context, Row, SectionResult, Target, check
-from harness.sections.planning import figures
 from planning.planners import segment_planner
 from planning.replanning import execute
 from planning.result import evaluate, to_json
@@ -85,7 +85,7 @@ def run(ctx: Context) -> SectionResult:
             plan_targets.append(Target(f"{name.replace('_', ' ')}: re-plans", replans, least,
                                      lower_is_better=False))
     # the executed energy against the causal reference (an IPOPT multi-start at every
-    # re-plan, harness.experiments.causal): a target, nothing here depends on timing; the
+    # re-plan, harness.plan.causal): a target, nothing here depends on timing; the
     # quick bench skips the swaying crossing (a re-plan, a search, at every sample)
     cases = (("pinocchio", scenario),) + ((("swaying", sway),) if not ctx.quick else ())
     causal = {name: against_causal(baseline, config, case, results[name]["true_energy_J"],

@@ -6,7 +6,7 @@ anytime SQP."""
 
 from __future__ import annotations
 
-from harness.experiments.planning import summary
+from harness.plan.scoring import summary
 from planning.config import PlannerConfig, Scenario
 from planning.globalsearch.multistart import MultiStart
 from planning.replanning import Execution, execute

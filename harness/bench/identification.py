@@ -4,7 +4,7 @@ For any robot: independent draws at 5 % noise (`generate(robot, 4000, 0.05, seed
 own excitation and noise; the first 75 % trains), identified with every library the robot's
 registry entry offers (the kinematic base atoms for any arm; the Lynxmotion also its
 prior-knowledge and published libraries) and by the oracle on the same samples
-(harness.experiments.identification). All are judged on two motions never fitted: a fresh
+(harness.identify.scoring). All are judged on two motions never fitted: a fresh
 run of the project's excitation and a motion of another family (random sines).
 
 Checks (must hold): Pinocchio's RNEA and MuJoCo's inverse dynamics agree on the judge motion
@@ -19,9 +19,12 @@ from __future__ import annotations
 import numpy as np
 
 from harness.data.generate import generate
-from harness.experiments.excitation import excitation_comparison
-from harness.experiments.excitation import markdown as excitation_markdown
-from harness.experiments.identification import (
+from harness.identify.excitation import excitation_comparison
+from harness.identify.excitation import markdown as excitation_markdown
+from harness.identify.fits import arm_identification
+from harness.identify.next_run import markdown as next_run_markdown
+from harness.identify.next_run import next_run, rule_targets
+from harness.identify.scoring import (
     HOLDOUT,
     NOISE,
     ORACLE,
@@ -34,11 +37,8 @@ from harness.experiments.identification import (
     score_draw,
     sines_motion,
 )
-from harness.experiments.next_run import markdown as next_run_markdown
-from harness.experiments.next_run import next_run, rule_targets
-from harness.identify.fits import arm_identification
+from harness.report.results import Context, Row, SectionResult, Target, check
 from harness.robots.extras import extra as load_extra
-from harness.sections.base import Context, Row, SectionResult, Target, check
 from identification.identify import identify
 
 # draws (seeds) per torque noise level; the paper's level, 5 %, gets the most. Seeds from

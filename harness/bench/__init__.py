@@ -1,7 +1,7 @@
 """The bench's sections, one per stage in data-flow order; each serves every robot.
 
-A section is the module harness.sections.<name> (for a package, its `section` module) with
-`run(context) -> SectionResult` (harness.sections.base). Work only some robots need is
+A section is the module harness.bench.<name> (for a package, its `section` module) with
+`run(context) -> SectionResult` (harness.report.results). Work only some robots need is
 declared in the robot's registry entry (Robot.extras, harness.robots.extras), not branched
 on here.
 """
@@ -26,4 +26,4 @@ def entry_module(kind: str, name: str, known, module: str):
 
 def load_section(name: str):
     """The entry module of section name."""
-    return entry_module("sections", name, SECTIONS, f"harness.sections.{name}")
+    return entry_module("sections", name, SECTIONS, f"harness.bench.{name}")

@@ -60,7 +60,7 @@ def markdown(r: dict) -> list[str]:
            "must spend. The unobstructed optimum ignores the obstacle placed on it; `swaying`: "
            "the same crossing with the obstacle swaying 4 cm sideways (closed form).", "",
            "Against the causal reference (Algorithm 2 re-planning by a multi-start of IPOPT to "
-           "convergence at every re-plan, harness.experiments.causal; true energy): " + "; ".join(
+           "convergence at every re-plan, harness.plan.causal; true energy): " + "; ".join(
                f"{name} {c['executed_J']:.4f} J against {c['reference_J']:.4f} J "
                f"({c['excess_pct']:+.2f} %)" for name, c in r.get("against_causal", {}).items())
            + ".", "",

@@ -21,8 +21,8 @@ from harness.replay.figures import power_figure, tracking_figure
 from harness.replay.reference import plan_reference
 from harness.replay.simulate import ReplayResult, ReplayTrace, replay
 from harness.report.figures import plt, save_figure
+from harness.report.results import Context, Row, SectionResult, Target, check
 from harness.robots.scene import replay_scene
-from harness.sections.base import Context, Row, SectionResult, Target, check
 
 IDENTIFIED_TOLERANCE = 0.01  # replayed energy, identified plan vs closed-form plan
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.experiments.peers import least_squares, nominal_friction
+from harness.identify.peers import least_squares, nominal_friction
 from harness.robots.arm import Arm
 from identification.identify import identify
 from identification.metrics import rel_error

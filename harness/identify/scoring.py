@@ -71,7 +71,7 @@ def sines_motion(arm: Arm, samples: int, seed: int, rate: float = SAMPLE_RATE,
     """A motion of another family than generate's Fourier series: per joint 3 to 6 sines of
     random frequencies (0.05-1 Hz), amplitudes and phases, scaled into FILL of the joint's
     range (unlimited joints: of [-pi, pi]); torque by mj_inverse on the robot's plant.
-    Another spectrum gives another family (harness.experiments.generalization)."""
+    Another spectrum gives another family (harness.identify.generalization)."""
     lower, upper = arm.position_limits
     rng = np.random.default_rng([seed, spectrum.stream])
     t = np.arange(samples) / rate

@@ -18,9 +18,9 @@ import numpy as np
 from harness.data.excite import design_for
 from harness.data.generate import SAMPLE_RATE, generate
 from harness.errors import UserError
-from harness.experiments.identification import NOISE, SAMPLES, Motion, score_draw
+from harness.identify.scoring import NOISE, SAMPLES, Motion, score_draw
+from harness.report.results import Target
 from harness.robots.arm import Arm
-from harness.sections.base import Target
 
 DESIGN_SEED = 1
 CONDITION = ("designed excitation's condition number (atoms + offsets, columns normalized), "
