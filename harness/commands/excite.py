@@ -29,11 +29,9 @@ def register(sub) -> None:
                    help=f"optimizer (SLSQP) iterations at most (default {ITERATIONS})")
     p.add_argument("--criterion", choices=sorted(CRITERIA), default="information",
                    help="information (the default): the largest log det of the regressor's Gram "
-                   "(D-optimal: large motions count; on generated Lynxmotion, UR5, Panda "
-                   "and xArm7 data 0.2-0.7x the default excitation's error at the same "
-                   "sensor noise); condition: the smallest condition number of the "
-                   "column-normalized regressor (blind to scale: its designs move little and "
-                   "generalize 1.2-6x worse; docs/identification.md, "
+                   "(D-optimal: large motions count); condition: the smallest condition number "
+                   "of the column-normalized regressor (blind to scale: its designs move "
+                   "little; how the two compare: docs/identification.md, "
                    "'identification.excitation.criteria')")
     p.add_argument("--floor", type=_height, default=0.0,
                    help="height (m, in the robot's base frame) of the floor every moving link "
