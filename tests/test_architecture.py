@@ -49,7 +49,8 @@ GRAPH = {name: _imports(path) for name, path in MODULES.items()}
 def test_the_layout_exists():
     for pkg in ("harness.robots", "harness.data", "harness.identify", "harness.plan",
                 "harness.replay", "harness.closeloop", "harness.report", "harness.bench",
-                "harness.studies", "harness.paper", "harness.robots.arm", "identification.library", "identification.regression",
+                "harness.studies", "harness.paper", "harness.robots.arm",
+                "identification.library", "identification.regression",
                 "identification.closeloop", "identification.torque_model"):
         assert pkg in MODULES, pkg
 
