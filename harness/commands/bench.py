@@ -74,7 +74,7 @@ def register(subparsers) -> None:
     )
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--quick", action="store_true", help="fewer draws and timings")
-    p.add_argument("--robot", default=DEFAULT_ROBOT,
+    p.add_argument("--robot", default=None,
                    help=f"registered robot or URDF/MJCF path (default {DEFAULT_ROBOT}); every "
                    "robot gets the same sections, plus the extras its registry entry declares")
     p.add_argument("--no-video", action="store_true", help="do not render replay videos")
@@ -148,12 +148,12 @@ def run(args) -> int:
     started = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     out_dir.mkdir(parents=True, exist_ok=True)
     progress = Progress()
-    progress(f"bench on '{args.robot}' -> {out_dir}{' (quick)' if args.quick else ''}")
+    progress(f"bench on '{arm.label}' -> {out_dir}{' (quick)' if args.quick else ''}")
     ctx = Context(arm, out_dir, args.quick, not args.no_video, {})
     outcomes = run_pipeline(ctx, sections, progress)
     if args.full:
         outcomes += run_pipeline(ctx, tuple(STUDIES), progress, load_study)
-    meta = {"robot": args.robot, "quick": bool(args.quick), "sections": list(sections),
+    meta = {"robot": args.robot or arm.reference, "quick": bool(args.quick), "sections": list(sections),
             "command": command_line(args), "machine": machine(),
             "timing": {"elapsed_s": progress.elapsed, "started_utc": started,
                        "load_average_at_start": os.getloadavg()[0]
@@ -185,7 +185,7 @@ def verdict(outcomes, progress: Progress, out_dir: Path, what: str = "bench") ->
 def command_line(args) -> str:
     """The bench command that reproduces this run (output folder aside)."""
     return " ".join(filter(None, ["torquebench bench", "--quick" if args.quick else "",
-                                  f"--robot {args.robot}" if args.robot != DEFAULT_ROBOT else "",
+                                  f"--robot {args.robot}" if args.robot else "",
                                   f"--sections {args.sections}" if args.sections else "",
                                   "--full" if args.full else "",
                                   "--no-video" if args.no_video else ""]))

@@ -27,7 +27,7 @@ def register(subparsers) -> None:
     p.add_argument("--out", help="output directory")
     p.add_argument("--list", action="store_true", help="name every study and exit")
     p.add_argument("--quick", action="store_true", help="the study's smoke-test size")
-    p.add_argument("--robot", default=DEFAULT_ROBOT, help=f"robot (default {DEFAULT_ROBOT})")
+    p.add_argument("--robot", default=None, help=f"robot (default {DEFAULT_ROBOT})")
     p.add_argument("--no-video", action="store_true", help="do not render videos")
     p.set_defaults(func=run)
 
@@ -49,7 +49,7 @@ def run(args) -> int:
     ctx = Context(arm, out_dir, args.quick, not args.no_video, {})
     outcomes = run_pipeline(ctx, (args.name,), progress, load_study)
     args.sections, args.full = None, False
-    meta = {"robot": args.robot, "quick": bool(args.quick), "study": args.name,
+    meta = {"robot": args.robot or arm.reference, "quick": bool(args.quick), "study": args.name,
             "command": command_line(args).replace("torquebench bench",
                                                   f"torquebench study {args.name}"),
             "machine": machine(), "timing": {"elapsed_s": progress.elapsed}}
