@@ -80,7 +80,15 @@ def _nullable(x: np.ndarray) -> list:
 
 
 def check_data(q, qd, qdd, tau, n_features: int) -> tuple[np.ndarray, ...]:
-    """Arrays as float (n, dof); IdentificationError with one clear line otherwise."""
+    """Arrays as float (n, dof), enough of them and excited; IdentificationError with one
+    clear line otherwise."""
+    arrays = as_arrays(q, qd, qdd, tau)
+    check_excited(arrays, n_features)
+    return arrays
+
+
+def as_arrays(q, qd, qdd, tau) -> tuple[np.ndarray, ...]:
+    """Arrays as float (n, dof) of one shape, finite; IdentificationError otherwise."""
     arrays = []
     for name, x in (("q", q), ("qd", qd), ("qdd", qdd), ("tau", tau)):
         x = np.asarray(x, dtype=float)
@@ -94,6 +102,12 @@ def check_data(q, qd, qdd, tau, n_features: int) -> tuple[np.ndarray, ...]:
     if len({a.shape for a in arrays}) != 1:
         shapes = ", ".join(f"{n}{a.shape}" for n, a in zip(("q", "qd", "qdd", "tau"), arrays, strict=True))
         raise IdentificationError(f"shape mismatch: {shapes}")
+    return tuple(arrays)
+
+
+def check_excited(arrays: tuple[np.ndarray, ...], n_features: int) -> None:
+    """IdentificationError unless (q, qd, qdd, tau) have more samples than features, every
+    joint moves and every torque varies."""
     n, dof = arrays[0].shape
     if n <= n_features:
         raise IdentificationError(f"{n} training samples for {n_features} library features: "
@@ -103,7 +117,6 @@ def check_data(q, qd, qdd, tau, n_features: int) -> tuple[np.ndarray, ...]:
             raise IdentificationError(f"torque of joint {j + 1} is constant: nothing to identify")
         if np.ptp(arrays[0][:, j]) == 0:
             raise IdentificationError(f"joint {j + 1} does not move (q{j + 1} constant): not excited")
-    return tuple(arrays)
 
 
 def _score(model, q, qd, qdd, truth, offsets=0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -152,13 +165,13 @@ def split_training(q, qd, qdd, tau, dof: int, name: str, holdout: float, n_featu
     """Validated arrays and the number of training samples (the first 1 - holdout)."""
     if not 0.0 <= holdout < 1.0:
         raise IdentificationError(f"holdout must be in [0, 1), got {holdout}")
-    q, qd, qdd, tau = check_data(q, qd, qdd, tau, 0)
+    q, qd, qdd, tau = as_arrays(q, qd, qdd, tau)
     if q.shape[1] != dof:
         raise IdentificationError(f"data has {q.shape[1]} joints, library {name} has {dof}")
     n_train = int(round(len(q) * (1 - holdout)))
     if holdout > 0 and n_train >= len(q):
         raise IdentificationError(f"holdout {holdout} of {len(q)} samples leaves no held-out sample")
-    check_data(q[:n_train], qd[:n_train], qdd[:n_train], tau[:n_train], n_features)
+    check_excited((q[:n_train], qd[:n_train], qdd[:n_train], tau[:n_train]), n_features)
     if not validation_mask(n_train).any():  # the selection scores alpha on validation blocks
         raise IdentificationError(f"{n_train} training samples are too few: the selection "
                                   "validates on every 5th block of 50 samples (needs more than 200)")
@@ -169,7 +182,7 @@ def heldout_errors(model, q, qd, qdd, tau, tau_clean, n_train: int):
     """Held-out errors against the clean torque, or, without one (a measured log), against
     the measured torque, which carries the sensor offsets: the model's torque plus its
     fitted offsets is then what predicts the measurement."""
-    truth = tau if tau_clean is None else check_data(q, qd, qdd, tau_clean, 0)[3]
+    truth = tau if tau_clean is None else as_arrays(q, qd, qdd, tau_clean)[3]
     offsets = sensor_offsets(model) if tau_clean is None else 0.0
     if n_train < len(q):
         return _score(model, q[n_train:], qd[n_train:], qdd[n_train:], truth[n_train:], offsets)
