@@ -13,6 +13,7 @@ payload point is the one harness.closeloop.payload puts its unit mass at
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
 from pathlib import Path
 
 import mujoco
@@ -25,6 +26,15 @@ from harness.robots.registry import flange_frame
 from harness.robots.scene import robot_spec
 
 VECTOR_ATTRIBUTES = ("damping", "stiffness")  # polynomial coefficients in MuJoCo >= 3.3
+
+
+@dataclass(frozen=True)
+class LoadedVariant(Variant):
+    """A variant whose payload's centre of mass is offset from the flange (m, in the frame of
+    the flange's body) and has a rotational inertia (principal moments about it, kg m^2)."""
+
+    payload_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    payload_inertia: tuple[float, float, float] = (1e-9, 1e-9, 1e-9)
 
 
 def arm_variant_xml(arm: Arm, variant: Variant) -> str:
@@ -57,7 +67,9 @@ def arm_variant_xml(arm: Arm, variant: Variant) -> str:
         site = spec.site(frame) if frame and body is None else None
         if site is not None:  # an MJCF's flange is a site on the last body
             body, pos = site.parent, list(site.pos)
-        (body or hinges[-1].parent).add_body(name="payload", pos=pos)
+        offset = getattr(variant, "payload_offset", (0.0, 0.0, 0.0))
+        (body or hinges[-1].parent).add_body(
+            name="payload", pos=[p + o for p, o in zip(pos, offset, strict=True)])
     # a massless frame body (a flange, a tool frame) gets an explicit zero inertial, which
     # Pinocchio's MJCF reader needs on every body; MjSpec.to_xml drops an inertial it did not
     # read (the payload's too): both are written into the text here
@@ -67,8 +79,9 @@ def arm_variant_xml(arm: Arm, variant: Variant) -> str:
     text = spec.to_xml()
     inertials = {name: '<inertial pos="0 0 0" mass="0" diaginertia="0 0 0"/>' for name in frames}
     if variant.payload > 0:
+        diag = " ".join(f"{i:.10g}" for i in getattr(variant, "payload_inertia", (1e-9,) * 3))
         inertials["payload"] = (f'<inertial pos="0 0 0" mass="{variant.payload:.10g}" '
-                                'diaginertia="1e-9 1e-9 1e-9"/>')
+                                f'diaginertia="{diag}"/>')
     for name, inertial in inertials.items():
         text, n = re.subn(rf'<body name="{re.escape(name)}"([^>]*?)\s*/>',
                           rf'<body name="{name}"\1>{inertial}</body>', text)

@@ -14,9 +14,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from harness.closeloop.payload import last_body
 from harness.robots.arm import Arm
 from harness.robots.resolve import resolve_arm
 from identification.closeloop.effects import UNITS, EffectTerm
+from identification.closeloop.payload import standard
 from identification.closeloop.runs import closed_model
 from identification.errors import IdentificationError
 from identification.kinematic_model import KinematicModel
@@ -53,8 +55,13 @@ def _term(entry: dict) -> EffectTerm:
     if not isinstance(entry, dict) or entry.get("effect") not in UNITS:
         raise IdentificationError(f"malformed effect {str(entry):.60}")
     try:
+        body = {}
+        if entry["effect"] == "payload" and "com" in entry:  # a payload on the last body
+            params = standard(float(entry["mass"]), [float(c) for c in entry["com"]],
+                              [float(i) for i in entry["inertia"]])
+            body = {"params": tuple(map(float, params)), "body": str(entry.get("body", ""))}
         return EffectTerm(str(entry["effect"]), int(entry["joint"]), float(entry["coefficient"]),
-                          **{k: float(entry[k]) for k in SHAPE if k in entry})
+                          **{k: float(entry[k]) for k in SHAPE if k in entry}, **body)
     except (KeyError, TypeError, ValueError) as exc:
         raise IdentificationError(f"malformed effect {str(entry):.60}: {exc}") from None
 
@@ -74,4 +81,4 @@ def closeloop_model(payload: dict, arm: Arm, path: Path):
         raise IdentificationError(f"offsets and effect joints must fit the robot's {dof}")
     if inertial is None and any(t.effect == "inertial" for t in terms):
         raise IdentificationError("an 'inertial' effect needs the 'inertial' correction")
-    return closed_model(declared, [float(o) for o in offsets], terms, inertial)
+    return closed_model(declared, [float(o) for o in offsets], terms, inertial, last_body(arm))

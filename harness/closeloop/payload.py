@@ -57,3 +57,15 @@ class PayloadTorque:
         from harness.robots.casadi_rnea import symbolic_rnea
 
         return symbolic_rnea(self.model, q, qd, qdd)
+
+
+def last_body(arm):
+    """The arm's last body (identification.closeloop.payload.LastBody): its chain and the name
+    of the link its last joint moves (the first body frame of that joint)."""
+    from identification.closeloop.payload import LastBody
+
+    model = arm.pinocchio
+    joint = model.njoints - 1
+    names = [f.name for f in model.frames
+             if f.type == pin.FrameType.BODY and f.parentJoint == joint]
+    return LastBody(arm.chain, names[0] if names else model.names[joint])

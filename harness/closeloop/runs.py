@@ -19,11 +19,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from harness.closeloop.model_file import model_payload
+from harness.closeloop.payload import last_body
 from harness.data.runs import KEYS, Runs, load_runs, split_files
 from harness.errors import UserError
 from harness.robots.arm import Arm
 from harness.robots.torque_models import load_torque_model, read_model
 from identification.closeloop.leftover import LEFT, Leftover, leftover, offset_error, run_offsets
+from identification.closeloop.payload import REACH
 from identification.closeloop.runs import (
     AGREE,
     MIN_GAIN,
@@ -123,9 +125,10 @@ class RunsRun:
 
 
 def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs | None = None,
-             holdout: float = 0.25) -> RunsRun:
+             holdout: float = 0.25, reach: float = REACH) -> RunsRun:
     """Close the loop on the runs data (read_runs) of arm, scored on the validate runs or the
-    last holdout of every run."""
+    last holdout of every run; a payload on the last body is a candidate, its centre of mass
+    within reach m of the last joint."""
     runs, dof = _split(data), arm.dof
     if runs[0][0].shape[1] != dof:
         raise UserError(f"data have {runs[0][0].shape[1]} joints, robot {arm.label} has {dof}")
@@ -148,7 +151,7 @@ def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs |
                             f"{dof}")
     try:
         inertial = inertial_correction(arm, train) if declared == "pinocchio" else None
-        loop = close_loop_runs(model, train, inertial)
+        loop = close_loop_runs(model, train, inertial, body=last_body(arm), reach=reach)
     except IdentificationError as exc:
         raise UserError(f"{','.join(data.files)}: {exc}") from None
     before, after = offset_error(model, held), offset_error(loop.model, held)

@@ -41,6 +41,9 @@ def register(sub) -> None:
                    "'declared_models' in closeloop.json reports both built-in ones; with "
                    "--data: 'pinocchio' (the robot's nominal URDF/MJCF model), MODEL.json, or "
                    "'identified' (one log: the rigid-body identification on its first part)")
+    p.add_argument("--payload-reach", type=float, default=0.4, metavar="M",
+                   help="with --data: a payload's centre of mass lies within M m of the last "
+                   "joint (default 0.4)")
     p.set_defaults(func=run)
 
 
@@ -67,6 +70,23 @@ def _print_measured(run) -> None:
     print(f"    held-out error vs measured torque: before [{fmt(f'{e:.3f}' for e in r.error_before)}]"
           f" after [{fmt(f'{e:.3f}' for e in r.error_after)}]")
     print(f"    unexplained joints: {list(r.unexplained_joints) or 'none'}")
+
+
+def _named(named) -> str:
+    """One named effect with its units; a payload with its mass and centre of mass (per run
+    too where the runs' disagree)."""
+    t, entry = named.term, named.to_json()
+    if t.effect != "payload" or "com" not in entry:
+        return f"joint {t.joint} {t.effect} {t.coefficient:.4g} {entry['unit']}"
+    xyz = ", ".join(f"{c:.3f}" for c in entry["com"])
+    text = f"payload {entry['mass']:.3g} kg, centre of mass ({xyz}) m in the last link's frame"
+    if "per_run_mass" in entry:
+        text += " (mass per run " + " / ".join(f"{m:.3g}" for m in entry["per_run_mass"]) + " kg"
+        if not entry["com_agrees"]:
+            text += "; the runs' centres of mass disagree: " + " / ".join(
+                "(" + ", ".join(f"{c:.3f}" for c in com) + ")" for com in entry["per_run_com"])
+        text += ")"
+    return text
 
 
 def _data_arm(args, records: list[tuple[str, dict]]) -> Arm:
@@ -106,13 +126,14 @@ def _run_data(args) -> int:
         _print_measured(measured)
         print(f"wrote {out}")
         return 0
-    r = run_runs(train, arm, args.declared, held, args.holdout)
+    if not args.payload_reach > 0:
+        raise UserError(f"--payload-reach must be positive, got {args.payload_reach}")
+    r = run_runs(train, arm, args.declared, held, args.holdout, args.payload_reach)
     out = Path(args.out)
     write_json(out / "model.json", r.model_json)
     write_json(out / "closeloop.json", r.to_json())
     fmt = ", ".join
-    named = fmt(f"joint {n.term.joint} {n.term.effect} {n.term.coefficient:.4g} "
-                f"{n.term.to_json()['unit']}" for n in r.loop.named) or "none"
+    named = fmt(_named(n) for n in r.loop.named) or "none"
     print(f"  robot {r.robot}, declared {r.declared}; named [{named}]")
     print(f"    error (relative) before [{fmt(f'{e:.3f}' for e in r.error_before)}] "
           f"after [{fmt(f'{e:.3f}' for e in r.error_after)}]")

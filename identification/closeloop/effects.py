@@ -93,10 +93,21 @@ class EffectTerm:
     eps: float = COULOMB_EPS  # rad/s, coulomb shape only
     steepness: float = SIGMOID_STEEPNESS  # s/rad, sigmoid shape only (phi2)
     shift: float = 0.0  # rad/s, sigmoid shape only (phi3)
+    params: tuple[float, ...] = ()  # payload on a measured log: the last body's 10 standard
+    # parameters (identification.closeloop.payload), coefficient = mass (kg)
+    body: str = ""  # the body a payload is on
 
     def to_json(self) -> dict:
         out = {"joint": self.joint, "effect": self.effect, "coefficient": self.coefficient,
                "unit": UNITS[self.effect]}
+        if self.effect == "payload" and self.params:
+            from identification.closeloop.payload import describe
+
+            mass, com, inertia = describe(self.params)
+            out.update(body=self.body, mass=mass, com=com.tolist(), inertia=inertia.tolist(),
+                       inertia_definition="Ixx, Ixy, Iyy, Ixz, Iyz, Izz (kg m^2) about the "
+                                          "centre of mass, axes of the last link's frame",
+                       frame="the last link's (its joint's) frame, m")
         if self.effect == "coulomb":
             out.update(lead=self.lead, eps=self.eps)
         if self.effect == "sigmoid":

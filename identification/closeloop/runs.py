@@ -37,6 +37,13 @@ from identification.closeloop.crossval import BlockValidation, weighted_fit
 from identification.closeloop.effects import EffectTerm, effect_torque
 from identification.closeloop.extended import ExtendedModel
 from identification.closeloop.measured import VALIDATION_BLOCKS, _Projector, candidates
+from identification.closeloop.payload import (
+    REACH,
+    BodyTorque,
+    LastBody,
+    named_payload,
+    payload_column,
+)
 from identification.errors import IdentificationError
 from identification.torque_model import TorqueModel, as_states
 
@@ -47,6 +54,8 @@ RUN_BLOCKS = 4  # blocks of a run whose coefficients' spread gives the run's unc
 ARMATURE_PLAUSIBLE = 1.0  # kg m^2: a reflected rotor inertia above it has no physical reading
 RUNS_EFFECTS = ("viscous", "coulomb", "armature", "spring")  # the contract's joint effects (the
 # offset is refitted as the base): one dry-friction name, so runs cannot split it between shapes
+FEWER = 0.05  # the rigid-body correction (10 parameters a body) is taken before the payload
+# (10 in all) only if it predicts the validation runs 5 % better: a load is the likelier
 MIN_RUN = 40  # samples: a run shorter than that cannot be validated on
 
 
@@ -78,15 +87,24 @@ class Scaled:
 
 
 def closed_model(declared: TorqueModel, offsets, terms: tuple[EffectTerm, ...],
-                 inertial: TorqueModel | None = None) -> ExtendedModel:
-    """The declared model with the named terms (an `inertial` term scales inertial) and the
-    offsets: what model.json holds."""
+                 inertial: TorqueModel | None = None, body: LastBody | None = None,
+                 ) -> ExtendedModel:
+    """The declared model with the named terms (an `inertial` term scales inertial; a
+    payload with parameters sits on body) and the offsets: what model.json holds."""
     parts = [declared]
     for t in terms:
         if t.effect == "inertial":
             parts.append(Scaled(inertial, t.coefficient))
+        if _body_level(t):
+            if body is None:
+                raise IdentificationError("a payload with parameters needs the last body")
+            parts.append(BodyTorque(body, t.params))
     return ExtendedModel(Summed(tuple(parts), offsets),
-                         tuple(t for t in terms if t.effect != "inertial"))
+                         tuple(t for t in terms if t.effect != "inertial" and not _body_level(t)))
+
+
+def _body_level(term: EffectTerm) -> bool:
+    return term.effect == "payload" and bool(term.params)
 
 
 @dataclass(frozen=True)
@@ -98,12 +116,13 @@ class Named:
     per_run_std: tuple[float, ...]  # standard error of each run's coefficient
     gain: float  # fraction of its joint's validation error power it removes
     physical: bool  # has a physical reading (see module docstring)
+    detail: tuple = ()  # a payload's per-run figures (identification.closeloop.payload)
 
     def to_json(self) -> dict:
         return {**self.term.to_json(), "per_run": list(self.per_run),
                 "per_run_std": list(self.per_run_std), "validation_gain": self.gain,
-                "physical_reading": self.physical,
-                **({"joints": "all"} if self.term.effect == "inertial" else {})}
+                "physical_reading": self.physical, **dict(self.detail),
+                **({"joints": "all"} if self.term.effect in ("inertial", "payload") else {})}
 
 
 @dataclass(frozen=True)
@@ -133,7 +152,7 @@ def physical_reading(term: EffectTerm) -> bool:
 
 
 def _rows(term: EffectTerm, dof: int) -> list[int]:
-    return list(range(dof)) if term.effect == "inertial" else [term.joint - 1]
+    return list(range(dof)) if term.effect in ("inertial", "payload") else [term.joint - 1]
 
 
 def _per_run(base, target, cols, w, runs: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -172,10 +191,12 @@ def _verdict(term, gain, fold_gains, coef, per_run, per_run_std, several) -> str
 
 def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
                     inertial: TorqueModel | None = None,
-                    effects=RUNS_EFFECTS) -> RunsLoop:
+                    effects=RUNS_EFFECTS, body: LastBody | None = None,
+                    reach: float = REACH) -> RunsLoop:
     """Name the effects the declared model lacks on training runs [(q, qd, qdd, tau)] of one
     robot ((n_r, dof) each, rad, rad/s, rad/s^2, N m); inertial: the rigid-body correction
-    candidate (a TorqueModel of the torque to add to declared), or None."""
+    candidate (a TorqueModel of the torque to add to declared), or None; body: the last body,
+    whose payload (centre of mass within reach m of its joint) is a candidate, or None."""
     dof = declared.dof
     if not runs or any(len(r[0]) < MIN_RUN for r in runs):
         raise IdentificationError(f"every run needs at least {MIN_RUN} samples")
@@ -196,6 +217,11 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
     if inertial is not None:
         terms.append(EffectTerm("inertial", dof, 1.0))
         cols.append(inertial.torque(*states))
+    regressor = None if body is None else body(*states)
+    payload = None if body is None else payload_column(base, target, regressor, w, reach)
+    if payload is not None:
+        terms.append(EffectTerm("payload", dof, 1.0, params=tuple(payload[1]), body=body.name))
+        cols.append(payload[0])
     cols = np.stack(cols, axis=2)
     several = len(runs) > 1
     cv = BlockValidation.build(base, target, cols, w, run_rows if several else VALIDATION_BLOCKS,
@@ -216,7 +242,8 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
                 gain = 1.0 - np.sum(new[:, rows]) / max(np.sum(before), 1e-300)
                 trials.append((float(np.sum(new)), float(gain), i, new, fold_gains))
         step = None
-        for total, gain, i, new, fold_gains in sorted(trials, key=lambda tr: tr[0]):
+        for total, gain, i, new, fold_gains in sorted(trials, key=lambda tr: tr[0] * (
+                1.0 + FEWER * (terms[tr[2]].effect == "inertial" and payload is not None))):
             if gain < MIN_GAIN:
                 continue
             subset = chosen + [i]
@@ -236,11 +263,17 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
         found.append((gain, per_run, per_std))
         path.append((f"{terms[i].effect}@{terms[i].joint}", total))
     coef_base, coef = weighted_fit(base, target, cols[:, :, chosen], w)
+    k, detail = len(terms) - 1, {}
+    if payload is not None and k in chosen:  # its 10 parameters refitted with the rest
+        coef_base, coef, params, detail = named_payload(
+            base, target, cols, regressor, w, chosen, k, run_rows, RUN_BLOCKS, reach)
+        terms[k] = replace(terms[k], params=tuple(map(float, params)))
     named = tuple(
         Named(replace(terms[i], coefficient=float(c)), tuple(map(float, pr)),
-              tuple(map(float, ps)), g, physical_reading(replace(terms[i], coefficient=float(c))))
+              tuple(map(float, ps)), g, physical_reading(replace(terms[i], coefficient=float(c))),
+              tuple(detail.items()) if i == k else ())
         for i, c, (g, pr, ps) in zip(chosen, coef, found, strict=True))
-    model = closed_model(declared, np.zeros(dof), tuple(x.term for x in named), inertial)
+    model = closed_model(declared, np.zeros(dof), tuple(x.term for x in named), inertial, body)
     run_offsets = coef_base.reshape(len(runs), dof)
     mean = np.average(run_offsets, axis=0, weights=np.diff(lengths))
     return RunsLoop(model, named, mean, run_offsets, "runs" if several else "blocks",
