@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from harness.data.dataset import check_arrays
 from harness.data.ingest import ingest
+from harness.errors import UserError
 from harness.io import write_npz
 from harness.robots.resolve import resolve_arm
 
@@ -24,13 +25,23 @@ def register(sub) -> None:
     p.add_argument("--window", type=int, default=None,
                    help="Savitzky-Golay window (odd, samples of the resampled grid) instead of "
                    "the one chosen from the data")
+    p.add_argument("--current-gains", default=None, metavar="K1,...,Kn",
+                   help="the effort columns (tau1..taun, or i1..in) are motor currents (A): "
+                   "torque = gain x current, gains in N m/A per joint (recorded in meta)")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
     arm = resolve_arm(args.robot)
     dof = arm.dof
-    data = ingest(args.csv, arm, args.rate, args.window)
+    gains = None
+    if args.current_gains is not None:
+        try:
+            gains = [float(k) for k in args.current_gains.split(",")]
+        except ValueError:
+            raise UserError(f"--current-gains must be numbers K1,...,Kn (N m/A), got "
+                            f"'{args.current_gains}'") from None
+    data = ingest(args.csv, arm, args.rate, args.window, gains)
     # what the estimated derivatives reach must pass the dataset loader (a jump in q: a spike)
     check_arrays(f"{args.csv} (estimated derivatives)", data.arrays)
     write_npz(args.out, **data.npz())

@@ -1,7 +1,8 @@
 """A measured log in the documented CSV form, read and validated.
 
 Header `t, q1..qn, [qd1..qn], [qdd1..qn], tau1..taun` (any column order; s, rad,
-rad/s, rad/s^2, N m), one row per sample, comma-separated; a `.gz` file is read
+rad/s, rad/s^2, N m), or `i1..in` (motor currents, A) for the effort columns, one row per
+sample, comma-separated; a `.gz` file is read
 compressed. Every problem is a UserError naming it: an unknown or missing column, a
 group of another size than the robot's joints, a value that is not a number, NaN or
 inf, time stamps that do not strictly increase or leave a gap, too few samples.
@@ -20,11 +21,11 @@ import numpy as np
 from harness.data.dataset import MAGNITUDE
 from harness.errors import UserError
 
-GROUPS = ("q", "qd", "qdd", "tau")  # joint columns <group><joint>, joints 1..n
-REQUIRED = ("q", "tau")
+GROUPS = ("q", "qd", "qdd", "tau", "i")  # joint columns <group><joint>, joints 1..n
+REQUIRED = ("q", "tau")  # the effort: tau1..taun, or i1..in (currents)
 MIN_SAMPLES = 200
 MAX_GAP = 25.0  # a step longer than this many median steps is a gap in the log
-_COLUMN = re.compile(r"^(q|qd|qdd|tau)([1-9][0-9]*)$")
+_COLUMN = re.compile(r"^(q|qd|qdd|tau|i)([1-9][0-9]*)$")
 
 
 @dataclass(frozen=True)
@@ -73,15 +74,17 @@ def _layout(path: Path, names: list[str], dof: int) -> dict[str, list[int]]:
             continue
         if not match:
             raise UserError(f"{path}: unknown column '{name}' (expected t, q1..qn, qd1..qn, "
-                            "qdd1..qn, tau1..taun)")
+                            "qdd1..qn, tau1..taun or i1..in)")
         groups[match.group(1)][int(match.group(2))] = i
     if "t" not in seen:
         raise UserError(f"{path}: no time column 't'")
+    if groups["tau"] and groups["i"]:
+        raise UserError(f"{path}: both tau and i (current) columns: give one effort group")
     layout = {"t": [seen["t"]]}
     for g in GROUPS:
         joints = groups[g]
         if not joints:
-            if g in REQUIRED:
+            if g in REQUIRED and not (g == "tau" and groups["i"]):
                 raise UserError(f"{path}: missing columns {g}1..{g}{dof}")
             continue
         if max(joints) > dof:
@@ -158,7 +161,7 @@ def read_log(path: str | Path, dof: int) -> Log:
         row, col = (int(x[0]) for x in np.nonzero(~finite))
         raise UserError(f"{path}: column '{names[col]}' is NaN or infinite at line {row + 2}")
     for group, cols in layout.items():  # the dataset contract's bounds (harness.data.dataset)
-        bound, unit = MAGNITUDE[group]
+        bound, unit = MAGNITUDE.get(group, (1e6, "A"))
         worst = np.abs(values[:, cols]).max()
         if worst > bound:
             row, col = np.unravel_index(np.argmax(np.abs(values[:, cols])), values[:, cols].shape)

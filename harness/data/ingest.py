@@ -9,6 +9,8 @@
    chosen from the data (harness.data.derivatives.choose_window). Logged columns are kept
    as logged (resampled).
 4. Optionally decimated to `rate` Hz (every k-th grid sample, after differentiation).
+5. Motor currents: with current gains (N m/A per joint) the effort columns (`tau1..taun`, or
+   `i1..in`) are currents and the torque is gain x current; meta records the gains.
 
 `meta` records the source, the resampling, the derivative method with its window and the
 time-stamp statistics. There is no `tau_clean`: scores are against the measured torque.
@@ -78,13 +80,33 @@ def estimate(log: Log, grid: np.ndarray, rate: float,
     return out, {**described, "source": source, "estimated": missing}
 
 
+def _currents(log: Log, gains) -> tuple[Log, dict]:
+    """The log with its effort as torque (gain x current, N m) and the effort's description."""
+    effort = "i" if "i" in log.groups else "tau"
+    if gains is None:
+        if effort == "i":
+            raise UserError(f"{log.path}: columns i1..in are motor currents: give their drive "
+                            "gains, --current-gains K1,...,Kn (N m/A per joint)")
+        return log, {"logged": "torque (N m)"}
+    gains = np.asarray(gains, float)
+    if gains.shape != (log.dof,) or not np.all(np.isfinite(gains)) or np.any(gains == 0):
+        raise UserError(f"--current-gains needs {log.dof} finite non-zero gains (N m/A), got "
+                        f"{len(gains)}")
+    groups = {k: v for k, v in log.groups.items() if k != effort}
+    groups["tau"] = log.groups[effort] * gains
+    return Log(log.path, log.t, groups), {
+        "logged": f"motor current (A), columns {effort}1..{effort}{log.dof}",
+        "current_gains": gains.tolist(), "torque": "gain x current (N m/A x A)"}
+
+
 def ingest(path: str | Path, arm: Arm, rate: float | None = None,
-           window: int | None = None) -> Ingested:
+           window: int | None = None, current_gains=None) -> Ingested:
     """The log at path of arm (its joints), as a dataset at rate Hz (default: the
     resampling rate, the log's median step); window: the Savitzky-Golay window in samples
-    of the resampled grid (default: chosen from the data)."""
+    of the resampled grid (default: chosen from the data); current_gains (N m/A per joint):
+    the effort columns are motor currents, the torque gain x current."""
     dof = arm.dof
-    log = read_log(path, dof)
+    log, effort = _currents(read_log(path, dof), current_gains)
     grid, grid_rate = uniform_grid(log.t)
     states, derivatives = estimate(log, grid, grid_rate, window)
     every = 1
@@ -105,5 +127,5 @@ def ingest(path: str | Path, arm: Arm, rate: float | None = None,
             "resampling": {"method": "linear interpolation onto a uniform grid at the median "
                            "step", "rate_hz": grid_rate, "decimation": every,
                            "rate_out_hz": grid_rate / every},
-            "derivatives": derivatives, "noise": None, "seed": None}
+            "derivatives": derivatives, "effort": effort, "noise": None, "seed": None}
     return Ingested(arrays, meta)
