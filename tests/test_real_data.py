@@ -84,3 +84,23 @@ def test_checks_follow_the_results(section):
     assert checks["identified_bodies_physically_consistent"] == bool(
         min(physical["min_pseudo_eigenvalues"]) >= -1e-8)
     assert physical["prior"] == "nominal" and len(physical["friction"]) == 7
+
+
+def test_the_identified_model_is_what_identify_fits(tmp_path):
+    """The section's "identified" model is `identify --robot panda` on the ingested log (issue
+    #56: it was fitted without the bodies' ellipsoids the command applies)."""
+    import json
+
+    from harness.bench.real_data.models import score_models
+    from harness.cli import main
+    from harness.io import write_npz
+
+    ingested = ingest(LOG / "panda_gaz2019.csv.gz", Arm.of(ROBOT), RATE, None)
+    npz, model = tmp_path / "log.npz", tmp_path / "m.json"
+    write_npz(npz, **ingested.npz())
+    assert main(["identify", "--data", str(npz), "--robot", ROBOT, "--holdout", str(HOLDOUT),
+                 "--out", str(model)]) == 0
+    a = ingested.arrays
+    models, _ = score_models(Arm.of(ROBOT), a["q"], a["qd"], a["qdd"], a["tau"], HOLDOUT)
+    ours = json.loads(model.read_text())["metrics"]["heldout_rel_rmse"]
+    np.testing.assert_allclose(models["identified"].heldout, ours, rtol=1e-6)

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from harness.identify.fits import arm_identification
 from harness.identify.peers import least_squares, nominal_friction
 from harness.robots.arm import Arm
 from identification.identify import identify
@@ -68,6 +69,9 @@ def score_models(arm: Arm, q, qd, qdd, tau, holdout: float) -> tuple[dict[str, S
         return fn
 
     add("least_squares_lmi", fitted("least_squares_lmi", ConsistentRegressor()))
-    add("identified", fitted("identified", ConsistentRegressor(nominal.atom_parameters())))
+    # what `identify --robot panda` fits on a measured log: the nominal prior, every body
+    # inside its link's ellipsoid (arm_identification, the command's own choice)
+    _, regressor = arm_identification(arm, q.shape[1], prior="nominal", measured=True)
+    add("identified", fitted("identified", regressor))
     add("sparse", fitted("sparse", None))
     return out, result["identified"]
