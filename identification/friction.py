@@ -123,19 +123,32 @@ def law_design(law: FrictionLaw, qd: np.ndarray, coulomb: np.ndarray) -> np.ndar
 
 
 def choose_law(residual: np.ndarray, qd: np.ndarray, coulomb: np.ndarray, folds: int = 5,
-               margin: float = 0.05) -> tuple[FrictionLaw, list[tuple[FrictionLaw, float]]]:
+               margin: float = 0.05, runs=None) -> tuple[FrictionLaw, list[tuple[FrictionLaw, float]]]:
     """The law whose fit of one joint's friction residual (the torque minus the rigid body's,
     n samples) predicts it best in blocked cross-validation (`folds` contiguous blocks, each
     predicted from the others), the simpler preferred: viscous-coulomb must beat viscous,
     and a law with a column of its own the one of those chosen, by `margin` (relative mean
-    square). Also every candidate's validation error."""
+    square). Also every candidate's validation error. runs: (n,) labels of several runs:
+    each run is a fold instead (leave one run out), the residual and the design centred
+    within each run (every run its own offset: the run left out is scored after its mean
+    residual is removed)."""
     from scipy.optimize import nnls
 
-    blocks = np.array_split(np.arange(len(residual)), folds)
+    from identification.regression.base import within_runs
+
+    if runs is None:
+        blocks = np.array_split(np.arange(len(residual)), folds)
+    else:
+        labels = np.asarray(runs)
+        blocks = [np.flatnonzero(labels == r) for r in np.unique(labels)]
+        residual = within_runs(residual, labels)
     scored = []
     for law in candidate_laws():
         x = law_design(law, qd, coulomb)
-        x = np.column_stack([x, -x[:, -1]])  # the offset free: +1 and -1, both >= 0
+        if runs is None:
+            x = np.column_stack([x, -x[:, -1]])  # the offset free: +1 and -1, both >= 0
+        else:
+            x = within_runs(x[:, :-1], labels)  # an offset per run: centred away
         error = 0.0
         for block in blocks:
             train = np.ones(len(residual), bool)

@@ -20,8 +20,10 @@ a body's (m, h, I) is physically consistent iff J_b is positive semidefinite). l
 least squares under the LMI; lam > 0 pulls what the data leave open toward the nominal
 model (metric "entropic": by the LogDet divergence of each body's pseudo-inertia from the
 nominal's instead of the ridge, PRIOR_METRICS). lam and each joint's friction law are
-chosen by validation inside the training data (the last contiguous block of each run),
-never on a scored part; several runs have an offset each. Solved by Clarabel (SCS if it fails).
+chosen by validation inside the training data, never on a scored part: with one run on its
+last contiguous block; with several runs by leaving each run out in turn (a block of the
+same run shares its errors in the derivatives, offsets and temperature, a new run does
+not; issue #57). Several runs have an offset each. Solved by Clarabel (SCS if it fails).
 """
 
 from __future__ import annotations
@@ -44,6 +46,9 @@ LAMBDAS = (1e-6, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)  # ridge weights tried toward the 
 PRIOR_METRICS = ("ridge", "entropic")
 TIE = 0.02  # a larger weight must predict the validation block this much better (relative
 # mean square), or a prior wins it by chance (docs/identification.md, 'identification.physical')
+SCORES = {False: "mean square of the error in units of each joint's torque std, on the block",
+          True: "mean over the runs left out of the mean over joints of the squared relative "
+                "error, each run's mean residual (its sensor offset) removed"}
 CONSISTENT_TOL = 1e-8  # smallest pseudo-inertia eigenvalue still consistent (solver accuracy)
 
 
@@ -200,6 +205,14 @@ def choose_weight(lambdas, errors, tie: float = TIE) -> float:
     return float(min(w for w, e in zip(lambdas, errors, strict=True) if e <= (1 + tie) * min(errors)))
 
 
+def _relative(pred: np.ndarray, tau: np.ndarray) -> float:
+    """A run left out, its data centred: the mean over joints of the squared relative error
+    once the run's mean residual (its own sensor offset) is removed."""
+    error = pred - tau
+    error = error - error.mean(axis=0)
+    return float(np.mean(np.mean(error**2, axis=0) / np.maximum(np.mean(tau**2, axis=0), 1e-300)))
+
+
 def _rows(runs, n: int, validation: float) -> np.ndarray:
     """True on the samples the validation predicts: the last `validation` fraction of each
     run (of the whole set without runs), so that every run is both fitted and judged."""
@@ -216,41 +229,55 @@ def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np
                  runs=None, bounds=None, metric: str = "ridge") -> PhysicalFit:
     """The consistent fit of tau (n, dof) on every atom's torque (n, dof, 13 dof), offsets and
     friction, pulled toward the nominal coefficients (13 dof) with the lam of `lambdas` that
-    predicts the last `validation` fraction of each run best when fitted on the rest; each
-    joint's friction law chosen on the same split (choose_friction); refitted on all.
-    runs: (n,) run labels of several runs, each with its own sensor offset (the fit's
-    offsets are their mean over the samples); None: one run. bounds: per body an ellipsoid
-    matrix Q (identification.ellipsoids) or None: the body's mass held inside (plausible).
+    predicts best what it was not fitted on: with one run, its last `validation` fraction
+    fitted on the rest; with several runs, each run left out in turn, fitted on the others
+    (SCORES); each joint's friction law chosen on the same split (choose_friction, with
+    several runs on the rigid body fitted on them all); refitted on all. validation records
+    what was chosen on ("chosen_on"). runs: (n,) run labels of several runs, each with its
+    own sensor offset (the fit's offsets are their mean over the samples); None: one run.
+    bounds: per body an ellipsoid matrix Q (identification.ellipsoids) or None: the body's
+    mass held inside (plausible).
     metric: the prior's distance from the nominal (PRIOR_METRICS)."""
     A, qd, tau, nominal = (np.asarray(x, float) for x in (atoms, qd, tau, nominal))
     n, dof, _ = A.shape
     several, centred = run_centring(runs)
     raw_A, raw_tau, A, tau = A, tau, centred(A), centred(tau)
     scale = np.maximum(tau.std(axis=0), 1e-9)
-    held, used = _rows(runs if several else None, n, validation), []
-    fit = ~held
-    laws = (FrictionLaw(),) * dof
+    used, laws = [], (FrictionLaw(),) * dof
     cols = centred(law_columns(laws, qd))
-    errors = []
-    for lam in lambdas:
-        fitted = _solve(A[fit], tau[fit], cols[fit], laws, scale, nominal, lam, used, bounds, metric)
-        pred = _predict(A[held], cols[held], fitted)
-        errors.append(float(np.mean(((pred - tau[held]) / scale) ** 2)))
+
+    def solve(rows, lam, cols):  # viscous-Coulomb on every joint
+        return _solve(A[rows], tau[rows], cols[rows], laws, scale, nominal, lam, used, bounds, metric)
+
+    if several:  # leave one run out: fitted on the others, scored on it
+        labels = np.asarray(runs)
+        folds = [labels == r for r in np.unique(labels)]
+        errors = [float(np.mean([_relative(_predict(A[out], cols[out], solve(~out, lam, cols)),
+                                           tau[out]) for out in folds])) for lam in lambdas]
+        fit, on = np.ones(n, bool), f"leave one run out over {len(folds)} runs"
+    else:  # the last `validation` of the run predicted from the rest
+        held = _rows(None, n, validation)
+        fit, on = ~held, f"blocks of one run (the last {validation:.0%} predicted from the rest)"
+        errors = [float(np.mean(((_predict(A[held], cols[held], solve(fit, lam, cols))
+                                  - tau[held]) / scale) ** 2)) for lam in lambdas]
     lam = choose_weight(lambdas, errors)
     chosen = {}
     if choose_friction:
-        x = _solve(A[fit], tau[fit], cols[fit], laws, scale, nominal, lam, used, bounds, metric)[0]
+        x = solve(fit, lam, cols)[0]
         rigid = A[:, :, :11 * dof] @ x[:11 * dof]  # the rigid body and the armature
         coulomb = A[:, :, 12 * dof:].diagonal(axis1=1, axis2=2)
-        picks = [choose_law(tau[:, j] - rigid[:, j], qd[:, j], coulomb[:, j])
-                 for j in range(dof)]
+        picks = [choose_law(tau[:, j] - rigid[:, j], qd[:, j], coulomb[:, j],
+                            runs=labels if several else None) for j in range(dof)]
         laws = tuple(p[0] for p in picks)
-        chosen = {"friction_errors": [{law.name: min(e for other, e in p[1] if other.name == law.name)
+        rigid_on = " (the rigid body fitted on every run)" if several else ""
+        chosen = {"friction_chosen_on": on + rigid_on,
+                  "friction_errors": [{law.name: min(e for other, e in p[1] if other.name == law.name)
                                        for law, _ in p[1]} for p in picks]}
         cols = centred(law_columns(laws, qd))
     x, off, g = _solve(A, tau, cols, laws, scale, nominal, lam, used, bounds, metric)
     if several:  # one offset for the model: the runs' mean
         off = np.mean(raw_tau - raw_A @ x - law_columns(laws, qd) * g, axis=0)
     return PhysicalFit(x, off, laws, g, lam, min_pseudo_eigenvalues(x[:10 * dof]),
-                       {"lambdas": list(lambdas), "lambda_errors": errors, **chosen,
+                       {"chosen_on": on, "score": SCORES[several], "lambdas": list(lambdas),
+                        "lambda_errors": errors, **chosen,
                         "solver": "SCS" if "SCS" in used else "CLARABEL"})

@@ -34,6 +34,7 @@ from identification.metrics import rel_error
 from identification.regression.consistent import ConsistentRegressor
 
 RULE_RMS = 2.0  # N m: joints that carry real torque
+SAMPLE_RUN = 2000  # samples per run of several_runs
 LOAD_SHARE = 0.25  # ... or, on a small arm, this share of its most loaded joint's RMS
 
 
@@ -86,6 +87,32 @@ def two_runs(arm: Arm, seed: int, samples: int = SAMPLES, noise: float = NOISE) 
     tau_second = truth + noise * spread * rng.normal(size=second.q.shape)
     nominal = perturbed_nominal(arm.nominal, seed)
     return Runs(first, second, tau_first, tau_second, truth, nominal)
+
+
+@dataclass(frozen=True)
+class Run:
+    """One run of a series: its motion, its measured torque, its torque without the noise."""
+
+    motion: object
+    tau: np.ndarray
+    truth: np.ndarray
+
+
+def several_runs(arm: Arm, seed: int, count: int = 3, samples: int = SAMPLE_RUN,
+                 noise: float = NOISE) -> tuple[list[Run], np.ndarray]:
+    """`count` runs of one arm (one friction law and sensor offset, as two_runs draws them)
+    on different excitations: the project's excitation at seeds seed, seed + 1, ... for all
+    but the last, random sines (another family) for the last; and the perturbed nominal."""
+    rng = np.random.default_rng([seed, 6011])
+    motions = [generate(arm, samples, 0.0, seed + k, "inverse") for k in range(count - 1)]
+    motions.append(sines_motion(arm, samples, seed))
+    spread = motions[0].tau_clean.std(axis=0)
+    law, _ = _friction(motions[0].qd, rng, spread)
+    runs = []
+    for m in motions:
+        truth = m.tau_clean + law_torque(law, m.qd)
+        runs.append(Run(m, truth + noise * spread * rng.normal(size=m.q.shape), truth))
+    return runs, perturbed_nominal(arm.nominal, seed)
 
 
 def next_run(arm: Arm, seed: int, samples: int = SAMPLES, noise: float = NOISE) -> dict:
