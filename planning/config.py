@@ -1,15 +1,16 @@
-"""Configuration of the planner and of a planning scenario (defaults: the paper's)."""
+"""Configuration of the planner and of a planning scenario. The arm (its links and limits)
+and the motion have no defaults here: they are a robot's (the paper's Lynxmotion and its
+scenario: harness.paper.planning.scenario)."""
 
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from math import pi
 
 import numpy as np
 
 from planning.errors import PlanningError
-from planning.formulation.kinematics import ArmGeometry, paper_arm
+from planning.formulation.kinematics import ArmGeometry
 from planning.formulation.obstacle import LinearObstacle
 
 REPLANNERS = ("penalty", "anytime")
@@ -107,7 +108,7 @@ def nominal_iteration_ms(dof: int) -> float:
     return round(0.5 * (dof / 3) ** 1.5, 3)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class PlannerConfig:
     """How trajectories are scored and constrained (the formulation), which segment planner
     plans them (replanner) and each planner's options.
@@ -120,9 +121,9 @@ class PlannerConfig:
     limits in rad, enforced at limit_samples interior points of every segment;
     velocity_limit, acceleration_limit: per joint (rad/s, rad/s^2), None: unconstrained;
     torque_limit: |tau_i| <= torque_limit[i] (N m, planning model's torque) at s = 0, the
-    energy samples and the obstacle samples of every segment (None: unconstrained). The
-    default is the Lynxmotion MJCF motors' ctrlrange (gear 1); callers that know the
-    plant pass its own (planning does not read models).
+    energy samples and the obstacle samples of every segment (None: unconstrained; callers
+    that know the plant pass its own: planning does not read models).
+    geometry (the links clearance is kept for), lower and upper are the arm's: required.
     replanner: "penalty" (the paper's exterior penalty loop, planning.penalty; alias
     "fatrop") or "anytime" (the anytime SQP, planning.anytime; alias "sqp").
     """
@@ -141,17 +142,17 @@ class PlannerConfig:
     # its optimum may arrive moving, which no real arm can execute and whose energy leaves out
     # the braking: `plan`, the bench and true_energy_config() arrive at rest
     rest_at_goal: bool = False
-    lower: tuple[float, ...] = (-pi / 2, 0.0, -pi)
-    upper: tuple[float, ...] = (pi / 2, pi, 0.0)
+    lower: tuple[float, ...]
+    upper: tuple[float, ...]
     limit_samples: int = 8
-    torque_limit: tuple[float, ...] | None = (10.0, 10.0, 10.0)
+    torque_limit: tuple[float, ...] | None = None
     # |qd_i| <= velocity_limit[i] (rad/s) and |qdd_i| <= acceleration_limit[i] (rad/s^2) at
     # rate_samples interior points of every segment, each within RATE_MARGIN of its bound so
     # the motion between the points keeps it (None: unconstrained)
     velocity_limit: tuple[float, ...] | None = None
     acceleration_limit: tuple[float, ...] | None = None
     rate_samples: int = 24
-    geometry: ArmGeometry = field(default_factory=paper_arm)  # links for clearance
+    geometry: ArmGeometry  # links for clearance
     power_smoothing: float = 0.0  # W; 0: exact epigraph of |P|, > 0: sqrt(P^2 + eps^2) - eps
     compile_code: bool = False  # NLP functions as C compiled once (planning.formulation.compiled)
     # built at -O0 when not cached optimized: quick to build, slower to run, the same
@@ -193,28 +194,36 @@ class PlannerConfig:
                                                                            **changes))
 
 
-def true_energy_config(**changes) -> PlannerConfig:
+# what true_energy_config changes of PlannerConfig's defaults
+TRUE_ENERGY = dict(energy_quadrature="gauss", energy_samples=20, starts=4, rest_at_goal=True,
+                   replanner="anytime", global_search=GlobalSearchOptions(enabled=True))
+
+
+def true_energy_config(geometry: ArmGeometry, lower, upper, **changes) -> PlannerConfig:
     """What `torquebench plan` and the bench plan with by default: the true energy (Gauss-
     Legendre, N = 20; eq. 18 with N = 10 lets the optimizer hide negative power between its
     samples), the best of 4 cold starts (the landscape has local optima), at rest at the
     goal, planned and re-planned by the anytime SQP under a CPU budget with its global search
     beside (docs/realtime.md, 'planning.globalsearch'; the paper's penalty loop: replanner
-    "penalty")."""
-    return dataclasses.replace(PlannerConfig(energy_quadrature="gauss", energy_samples=20,
-                                             starts=4, rest_at_goal=True, replanner="anytime",
-                                             global_search=GlobalSearchOptions(enabled=True)),
-                               **changes)
+    "penalty"), on the arm of this geometry and joint limits (rad)."""
+    return PlannerConfig(**{"geometry": geometry, "lower": tuple(lower), "upper": tuple(upper),
+                            **TRUE_ENERGY, **changes})
 
 
 @dataclass(frozen=True)
 class Scenario:
-    """Where the arm goes and what crosses its way (rad, rad/s, s, m)."""
+    """Where the arm goes and what crosses its way (rad, rad/s, s, m): a robot's motion
+    (the paper's: harness.paper.planning.scenario.paper_scenario)."""
 
-    start: tuple[float, ...] = (pi / 2, pi / 5, -pi / 4)
-    goal: tuple[float, ...] = (-pi / 2, 2 * pi / 5, -pi / 3)
-    duration: float = 2.0
-    obstacle: LinearObstacle | None = LinearObstacle((0.15, 0.40, 0.22), (0.18, -0.35, 0.28), 2.0)
-    start_velocity: tuple[float, ...] = (0.0, 0.0, 0.0)  # one per joint
+    start: tuple[float, ...]
+    goal: tuple[float, ...]
+    duration: float
+    obstacle: LinearObstacle | None = None
+    start_velocity: tuple[float, ...] | None = None  # one per joint; None: at rest
+
+    def __post_init__(self):
+        if self.start_velocity is None:
+            object.__setattr__(self, "start_velocity", (0.0,) * len(self.start))
 
     def validate(self, config: PlannerConfig) -> None:
         """Raise PlanningError on input no plan can satisfy."""

@@ -27,13 +27,12 @@ def uses_anytime(config: PlannerConfig) -> bool:
         config.penalty.replan_iterations is None
 
 
-def segment_planner(model: TorqueModel, config: PlannerConfig | None = None,
+def segment_planner(model: TorqueModel, config: PlannerConfig,
                     solver: Planner | None = None) -> SegmentPlanner:
     """The anytime SQP (uses_anytime) or the paper's penalty loop for this model and
     configuration; the anytime SQP's cold plans polished by the penalty loop with
     config.penalty.polish (the penalty loop polishes its own). solver: the penalty loop's NLP
     solver of this model and configuration if one is built already (its builds reused)."""
-    config = config or PlannerConfig()
     solver = Planner(model, config) if solver is None else solver
     if not uses_anytime(config):
         return PenaltyLoop(solver)
@@ -54,11 +53,10 @@ def other_method(config: PlannerConfig) -> PlannerConfig | None:
     return dataclasses.replace(config, replanner="anytime").with_penalty(replan_iterations=None)
 
 
-def offline_planner(model: TorqueModel, config: PlannerConfig | None = None,
+def offline_planner(model: TorqueModel, config: PlannerConfig,
                     solver: Planner | None = None) -> Offline:
     """segment_planner's planner whose cold plans run to convergence and fall back to the
     other method's (other_method; planning.offline): for a plan that need not be real time."""
-    config = config or PlannerConfig()
     solver = Planner(model, config) if solver is None else solver
     other = other_method(config)
     return Offline(segment_planner(model, config, solver),

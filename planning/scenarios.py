@@ -1,5 +1,6 @@
-"""Named scenarios: the paper's, one whose obstacle crosses the optimal path, and one whose
-obstacle also sways (constant-velocity prediction is never exact: repeated re-planning)."""
+"""Scenarios built on a robot's motion: one whose obstacle crosses the optimal path, one whose
+obstacle also sways (constant-velocity prediction is never exact: repeated re-planning), and
+random ones (the paper's scenario: harness.paper.planning.scenario)."""
 
 from __future__ import annotations
 
@@ -12,11 +13,6 @@ from planning.formulation.obstacle import LinearObstacle, SwayingObstacle
 from planning.formulation.trajectory import PolynomialTrajectory
 
 
-def paper_scenario() -> Scenario:
-    """q0 = (pi/2, pi/5, -pi/4) to (-pi/2, 2pi/5, -pi/3) in 2 s; obstacle as in the paper."""
-    return Scenario()
-
-
 def _link_ends(free: PolynomialTrajectory, geometry: ArmGeometry, t: float, link: int):
     """Both ends (3,) of link `link`'s capsule axis (index into geometry.links) of `free` at
     time t (s)."""
@@ -24,14 +20,13 @@ def _link_ends(free: PolynomialTrajectory, geometry: ArmGeometry, t: float, link
     return a[0, link], b[0, link]
 
 
-def crossing_scenario(free: PolynomialTrajectory, geometry: ArmGeometry, t_cross: float = 1.0,
-                      sweep: tuple[float, float, float] = (0.0, 0.0, 0.5),
-                      base: Scenario | None = None, link: int = -1) -> Scenario:
-    """base's motion (default: the paper's) with an obstacle that passes exactly through the
+def crossing_scenario(free: PolynomialTrajectory, geometry: ArmGeometry, base: Scenario,
+                      t_cross: float = 1.0, sweep: tuple[float, float, float] = (0.0, 0.0, 0.5),
+                      link: int = -1) -> Scenario:
+    """base's motion with an obstacle that passes exactly through the
     middle of one moving link (default the last: the Lynxmotion's forearm) of the
     unobstructed optimum `free` at t_cross (s), moving at constant velocity `sweep` (m per
     motion duration) centred on t_cross."""
-    base = base or Scenario()
     crossing = 0.5 * np.add(*_link_ends(free, geometry, t_cross, link))
     frac = t_cross / base.duration
     start = crossing - frac * np.asarray(sweep)
@@ -40,9 +35,8 @@ def crossing_scenario(free: PolynomialTrajectory, geometry: ArmGeometry, t_cross
     return Scenario(base.start, base.goal, base.duration, obstacle, base.start_velocity)
 
 
-def swaying_scenario(free: PolynomialTrajectory, geometry: ArmGeometry, amplitude: float = 0.04,
-                     periods: float = 1.0, base: Scenario | None = None,
-                     link: int = -1) -> Scenario:
+def swaying_scenario(free: PolynomialTrajectory, geometry: ArmGeometry, base: Scenario,
+                     amplitude: float = 0.04, periods: float = 1.0, link: int = -1) -> Scenario:
     """The crossing scenario's obstacle swaying sideways (horizontal, perpendicular to the
     crossed link of `free` at the crossing) by `amplitude` (m), `periods` times over the
     motion; with whole periods it still passes through the link's middle at t = 1 s."""

@@ -1,12 +1,32 @@
 """Small helpers shared by several test modules."""
 
+import dataclasses
+
 import numpy as np
 import pinocchio as pin
 
+from harness.paper.planning.scenario import paper_config, paper_default_config, paper_scenario
 from harness.robots.arm import Arm
 from harness.robots.baseline import PinocchioModel
 from identification.signals import multisine
 from identification.torque_model import Motion
+
+
+def lynx_config(**changes):
+    """The paper's formulation on the Lynxmotion (harness.paper.planning.scenario.paper_config:
+    its closed-form links, joint and torque limits) with these fields changed."""
+    return paper_config(**changes)
+
+
+def lynx_default_config(**changes):
+    """What `plan` plans with by default (planning.config.true_energy_config) on the
+    Lynxmotion of lynx_config, with these fields changed."""
+    return paper_default_config(**changes)
+
+
+def lynx_scenario(**changes):
+    """The paper's scenario on the Lynxmotion with these fields changed."""
+    return dataclasses.replace(paper_scenario(), **changes)
 
 
 def central_difference(fun, x, h=1e-6):

@@ -18,11 +18,11 @@ from harness.cli import main
 from harness.robots.arm import Arm
 from planning.anytime.budget import Clock
 from planning.anytime.planner import AnytimePlanner
-from planning.config import nominal_iteration_ms, true_energy_config
+from planning.config import nominal_iteration_ms
 from planning.penalty.solver import Planner
 from planning.result import TIMING_KEYS
 from planning.types import DEADLINE, Segment
-from tests.helpers import random_crossing
+from tests.helpers import lynx_default_config, random_crossing
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +33,7 @@ def baseline():
 @pytest.fixture(scope="module")
 def nominal(baseline):
     """An anytime planner counting 1 ms per SQP iteration, and the penalty loop's Planner."""
-    config = true_energy_config(compile_code=False, torque_limit=None, starts=3).with_anytime(
+    config = lynx_default_config(compile_code=False, torque_limit=None, starts=3).with_anytime(
         iteration_ms=1.0)
     return AnytimePlanner(baseline, config), Planner(baseline, config)
 
@@ -103,7 +103,7 @@ def test_a_first_plans_starts_share_nominal_time_under_any_load(nominal):
 def test_a_late_re_plan_is_dropped_under_real_time_clocks(baseline):
     """--realtime: a re-plan past its 0.01 ms deadline of CPU is dropped (DEADLINE), the
     same re-plan without deadline succeeds."""
-    config = true_energy_config(compile_code=False, torque_limit=None)
+    config = lynx_default_config(compile_code=False, torque_limit=None)
     planner, numbers = AnytimePlanner(baseline, config), Planner(baseline, config)
     case, forecast = random_crossing(numbers, seed=7)
     first = planner.plan_cold(Segment(case.start, case.start_velocity, 0.0, case.duration,

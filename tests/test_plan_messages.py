@@ -19,30 +19,30 @@ from harness.plan.messages import (
     velocity_duration,
 )
 from harness.robots.registry import erd_robots_dir
-from planning.config import PlannerConfig, Scenario
+from tests.helpers import lynx_config, lynx_scenario
 
-LIMITED = PlannerConfig(velocity_limit=(0.5, 0.5, 0.5))
+LIMITED = lynx_config(velocity_limit=(0.5, 0.5, 0.5))
 
 
 def test_the_shortest_duration_is_the_straight_line_at_the_limit():
-    s = Scenario()
+    s = lynx_scenario()
     shortest, joint = velocity_duration(LIMITED, s)
     assert joint == 0 and shortest == pytest.approx(np.pi / 0.5)
     assert velocity_duration(dataclasses.replace(LIMITED, velocity_limit=None), s) is None
 
 
 def test_a_too_short_duration_is_diagnosed_with_the_duration_needed():
-    message = velocity_diagnosis(LIMITED, Scenario())
+    message = velocity_diagnosis(LIMITED, lynx_scenario())
     assert "--duration" in message and f"{np.pi / 0.5:.3g} s" in message
     assert "replan-budget" not in message
-    assert velocity_diagnosis(LIMITED, dataclasses.replace(Scenario(), duration=9.5)) is None
+    assert velocity_diagnosis(LIMITED, dataclasses.replace(lynx_scenario(), duration=9.5)) is None
 
 
 def test_velocity_problems_suggest_a_longer_duration():
     problems = ["joint 1 velocity 0.8 rad/s exceeds the limit 0.5 rad/s"]
-    message = infeasible(problems, LIMITED, dataclasses.replace(Scenario(), duration=7.0))
+    message = infeasible(problems, LIMITED, dataclasses.replace(lynx_scenario(), duration=7.0))
     assert "a longer --duration" in message and "replan-budget" not in message
-    assert "--duration" not in infeasible(["solver failed: x"], LIMITED, Scenario())
+    assert "--duration" not in infeasible(["solver failed: x"], LIMITED, lynx_scenario())
 
 
 def test_cli_velocity_limited_plan_says_duration(tmp_path, capsys):
@@ -79,8 +79,8 @@ def test_the_peak_factor_is_the_cubics_at_degree_4_and_no_polynomial_beats_it():
 def test_a_duration_the_straight_line_allows_but_no_plan_can_is_diagnosed():
     """Within the straight line's bound (2 s > pi / 2) but below the degree-4 polynomial's
     (1.5 x pi / 2 = 2.36 s): diagnosed before any search, with both durations."""
-    limited = PlannerConfig(velocity_limit=(2.0, 2.0, 2.0), rest_at_goal=True)  # plan's default
-    case = dataclasses.replace(Scenario(), duration=2.0)
+    limited = lynx_config(velocity_limit=(2.0, 2.0, 2.0), rest_at_goal=True)  # plan's default
+    case = dataclasses.replace(lynx_scenario(), duration=2.0)
     assert velocity_duration(limited, case)[0] < 2.0
     shortest, joint = polynomial_duration(limited, case)
     assert joint == 0 and shortest == pytest.approx(1.5 * np.pi / 2.0, rel=1e-6)
@@ -118,7 +118,7 @@ def test_a_failure_both_re_planners_had_does_not_suggest_the_other():
     """When plain `plan` has run the penalty loop's execution after the anytime SQP's
     (planning.planners.executed, either) and both missed, the error line says so instead of
     suggesting --replanner fatrop; with the re-planner named it still suggests it."""
-    config = dataclasses.replace(PlannerConfig(), replanner="anytime")
+    config = dataclasses.replace(lynx_config(), replanner="anytime")
     problems = ("clearance 0.0730 m < threshold 0.08 m - 0.002 m",)
     both, named = infeasible(problems, config, both=True), infeasible(problems, config)
     assert "did not keep the threshold either" in both and "may find one;" in both

@@ -20,9 +20,9 @@ from harness.plan.trajectory_csv import read_trajectory
 from harness.robots.arm import Arm
 from harness.robots.inertials import set_standard_parameters
 from models import MODELS
-from planning.config import PlannerConfig, Scenario
 from planning.formulation.clearance import link_clearances
 from planning.penalty.solver import Planner
+from tests.helpers import lynx_config, lynx_scenario
 
 RATE = 200.0
 
@@ -69,14 +69,14 @@ def test_feedforward_is_pinocchio_rnea_at_the_rows(planned):
 
 
 def test_velocity_limit_holds_between_the_nlp_samples():
-    scenario = Scenario(obstacle=None)
+    scenario = lynx_scenario(obstacle=None)
     model = Arm.of("lynxmotion").nominal
-    free = Planner(model, PlannerConfig(rest_at_goal=True)).solve(
+    free = Planner(model, lynx_config(rest_at_goal=True)).solve(
         scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
     t = np.linspace(0, scenario.duration, 2001)
     peak = np.abs(free.trajectory.state(t)[1]).max()
     limit = 0.9 * peak
-    limited = Planner(model, PlannerConfig(rest_at_goal=True, velocity_limit=(limit,) * 3)).solve(
+    limited = Planner(model, lynx_config(rest_at_goal=True, velocity_limit=(limit,) * 3)).solve(
         scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
     assert limited.success
     assert np.abs(limited.trajectory.state(t)[1]).max() <= limit

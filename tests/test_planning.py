@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 from harness.robots.arm import Arm
-from planning.config import PlannerConfig
 from planning.formulation.clearance import link_clearances, segment_distance
 from planning.formulation.kinematics import paper_arm
 from planning.formulation.nlp import PlanningNLP
@@ -16,6 +15,7 @@ from planning.formulation.trajectory import QuarticTrajectory
 from planning.penalty.solver import Planner
 from planning.types import ObstacleForecast
 from tests.helpers import central_difference as _central_difference
+from tests.helpers import lynx_config
 
 RNG = np.random.default_rng(7)
 
@@ -79,7 +79,7 @@ def test_linear_prediction_is_exact_for_a_linear_obstacle():
 @pytest.fixture(scope="module")
 def nlp_functions():
     model = Arm.of("lynxmotion").nominal
-    config = PlannerConfig(obstacle_slots=8)
+    config = lynx_config(obstacle_slots=8)
     planner = Planner(model, config)
     q0, goal = np.array([1.2, 0.6, -0.8]), np.array([-1.0, 1.2, -1.0])
     arm = QuarticTrajectory.from_free(0.0, 2.0, q0, np.zeros(3),

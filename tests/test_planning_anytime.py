@@ -15,7 +15,6 @@ from planning.anytime import elastic_qp, local_model, sqp
 from planning.anytime.planner import AnytimePlanner
 from planning.anytime.safety import SafetyCheck
 from planning.anytime.solver import MIN_VIOLATION, Anytime
-from planning.config import Scenario, true_energy_config
 from planning.formulation.clearance import link_clearances, predicted_clearance
 from planning.formulation.energy import dense_energy
 from planning.formulation.limits import limit_excess
@@ -27,7 +26,7 @@ from planning.replanning import TRIGGER_TOLERANCE, execute, forecast_at
 from planning.result import TORQUE_TOLERANCE, evaluate
 from planning.starts import start_points
 from planning.types import ITERATE, ObstacleForecast, Segment
-from tests.helpers import random_crossing, segments
+from tests.helpers import lynx_default_config, lynx_scenario, random_crossing, segments
 
 IPOPT = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "ipopt.tol": 1e-10,
          "ipopt.constr_viol_tol": 1e-10}
@@ -40,7 +39,7 @@ def baseline():
 
 @pytest.fixture(scope="module")
 def planner(baseline):
-    return Planner(baseline, true_energy_config(replanner="anytime", compile_code=False,
+    return Planner(baseline, lynx_default_config(replanner="anytime", compile_code=False,
                                                 torque_limit=None))
 
 
@@ -267,7 +266,7 @@ def test_compiled_safety_checks_match_the_numpy_ones(baseline):
     """Clearance at each sample (planning.formulation.clearance), the limit excess with its turning
     points (planning.formulation.limits), the torque excess (Planner.torque_excess) and the dense energy
     (planning.formulation.energy, same trapezoid points) on random motions."""
-    config = true_energy_config()
+    config = lynx_default_config()
     check, planner = SafetyCheck(baseline, config, compile_code=False), Planner(baseline, config)
     rng = np.random.default_rng(4)
     for _ in range(3):
@@ -288,10 +287,10 @@ def test_a_forecast_no_motion_can_clear_gets_the_minimum_violation_plan(planner)
     """An obstacle standing on the goal's forearm: every motion ends within the threshold.
     The plan is returned (followed), reported as the minimum violation in mm, and misses the
     threshold by no more than its start point did."""
-    goal = Scenario().goal
+    goal = lynx_scenario().goal
     end = planner.config.geometry.points(np.asarray([goal]))[0]
     centre = tuple(0.5 * (end[-1] + end[-2]))
-    case = dataclasses.replace(Scenario(), obstacle=LinearObstacle(centre, centre, 2.0))
+    case = dataclasses.replace(lynx_scenario(), obstacle=LinearObstacle(centre, centre, 2.0))
     times = case.obstacle.sample_times
     forecast = ObstacleForecast(times, case.obstacle.position(times))
     anytime = Anytime(planner.model, planner.config)
@@ -318,7 +317,7 @@ def test_iterates_whose_own_rows_miss_the_threshold_are_passed_over_soundly(plan
     from planning.anytime import candidates
     from planning.anytime import solver as module
 
-    goal = Scenario().goal
+    goal = lynx_scenario().goal
     end = planner.config.geometry.points(np.asarray([goal]))[0]
     centre = tuple(0.5 * (end[-1] + end[-2]))
     times = np.linspace(0.05, 2.0, 40)
@@ -345,7 +344,7 @@ def test_iterates_whose_own_rows_miss_the_threshold_are_passed_over_soundly(plan
     anytime = Anytime(planner.model, planner.config)
     anytime.prepare(goal)
     calls.clear()
-    plan, _, _ = anytime.solve(Scenario().start, Scenario().start_velocity, 0.0, 2.0, goal,
+    plan, _, _ = anytime.solve(lynx_scenario().start, lynx_scenario().start_velocity, 0.0, 2.0, goal,
                               forecast, budget_ms=1e5)
     assert MIN_VIOLATION in plan.status and calls and any(passed)
     for chosen, full in calls:
@@ -454,7 +453,7 @@ def test_a_budget_counted_in_iterations_gives_the_same_plan_under_any_load(basel
     keeps the process busy."""
     import threading
 
-    config = true_energy_config(compile_code=False, torque_limit=None).with_anytime(
+    config = lynx_default_config(compile_code=False, torque_limit=None).with_anytime(
         iteration_ms=1.0)
     planner = Planner(baseline, config)
     case, forecast = random_crossing(planner, seed=7)
@@ -503,7 +502,7 @@ def test_algorithm_2_with_the_anytime_sqp_keeps_the_threshold(baseline):
     """A random crossing planned and re-planned by the anytime SQP: the executed motion is
     feasible (threshold, limits, goal at rest) and spends no more than 2 % above the penalty
     loop's (fatrop) execution of the same scenario."""
-    config = true_energy_config(compile_code=False)
+    config = lynx_default_config(compile_code=False)
     planners = {name: Planner(baseline, dataclasses.replace(config, replanner=name))
                 for name in ("anytime", "penalty")}
     case, _ = random_crossing(planners["penalty"], seed=3)
@@ -523,7 +522,7 @@ def test_a_quick_build_makes_the_torque_limited_nlp_when_a_plan_first_needs_it(b
     goal, duration = (-1.57, 1.2566, -1.047), 0.13
     plans = {}
     for quick in (True, False):
-        config = true_energy_config(replanner="anytime", compile_code=False, quick_build=quick,
+        config = lynx_default_config(replanner="anytime", compile_code=False, quick_build=quick,
                                     anytime=AnytimeOptions(iteration_ms=nominal_iteration_ms(3)))
         anytime = Anytime(baseline, config)
         anytime.prepare(goal)
@@ -546,8 +545,8 @@ def test_no_unconverged_replan_is_gone_on_from_in_the_settle_horizon(baseline):
     and the execution is otherwise the same: the same energy to 0.1 % and the same problems
     (at this budget the plans dip below the threshold earlier, at 1.18 s, with or without
     the horizon)."""
-    case = Scenario()
-    base = true_energy_config(compile_code=False, torque_limit=None).with_anytime(
+    case = lynx_scenario()
+    base = lynx_default_config(compile_code=False, torque_limit=None).with_anytime(
         iteration_ms=0.5, replan_budget_ms=1.0).with_global_search(enabled=False)
     runs = {}
     for horizon in (0.0, 0.2):

@@ -11,16 +11,15 @@ from scipy.integrate import quad
 from scipy.optimize import brentq
 
 from harness.robots.arm import Arm
-from planning.config import PenaltyOptions, PlannerConfig
+from planning.config import PenaltyOptions
 from planning.formulation.breaks import power_breaks, settled, sign_changes
 from planning.formulation.energy import dense_energy, power
 from planning.formulation.quadrature import energy_nodes, split_nodes
 from planning.formulation.trajectory import PolynomialTrajectory
 from planning.penalty.loop import plan_multistart, plan_segment
 from planning.penalty.solver import Planner
-from planning.scenarios import paper_scenario
 from planning.starts import rank
-from tests.helpers import random_crossing
+from tests.helpers import lynx_config, lynx_scenario, random_crossing
 
 
 @pytest.fixture(scope="module")
@@ -75,10 +74,10 @@ def test_breaks_are_the_power_sign_changes_then_even_fills(baseline):
 def test_split_plan_prices_its_own_energy_and_beats_gauss_on_the_paper_scenario(baseline):
     """The planned energy of a split-quadrature plan is its true energy (a dense integral of
     Pinocchio's power); a Gauss N = 24 plan, same nodes, underprices its own."""
-    scenario = paper_scenario()
+    scenario = lynx_scenario()
     results = {}
     for rule in ("split", "gauss"):
-        config = PlannerConfig(energy_quadrature=rule, energy_samples=24, power_breaks=7)
+        config = lynx_config(energy_quadrature=rule, energy_samples=24, power_breaks=7)
         planner = Planner(baseline, config)
         plan, _, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0,
                                   scenario.duration, scenario.goal, None)
@@ -135,7 +134,7 @@ def test_polished_cold_plan_spends_less_and_replans_warm_from_it(baseline):
     it spends less than the best unpolished plan (dense integral, 0.4 % measured) and
     prices its own energy; a re-plan of the Gauss planner starts warm from it (from its
     motion: the multipliers are another NLP's)."""
-    config = PlannerConfig(energy_quadrature="gauss", energy_samples=20, starts=2,
+    config = lynx_config(energy_quadrature="gauss", energy_samples=20, starts=2,
                            penalty=PenaltyOptions(polish=1))
     planner = Planner(baseline, config)
     case, forecast = random_crossing(planner, 2)

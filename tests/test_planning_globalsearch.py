@@ -14,7 +14,6 @@ import pytest
 
 from harness.robots.arm import Arm
 from planning.anytime.planner import AnytimePlanner
-from planning.config import Scenario, true_energy_config
 from planning.globalsearch import background
 from planning.globalsearch.ipopt import IpoptElastic
 from planning.globalsearch.multistart import MultiStart, objective
@@ -22,7 +21,7 @@ from planning.globalsearch.planner import ADOPTED, GlobalSearchPlanner, report
 from planning.penalty.solver import Planner
 from planning.planners import executed
 from planning.types import Segment
-from tests.helpers import random_crossing
+from tests.helpers import lynx_default_config, lynx_scenario, random_crossing
 
 
 @pytest.fixture(scope="module")
@@ -32,7 +31,7 @@ def baseline():
 
 @pytest.fixture(scope="module")
 def config():
-    return true_energy_config(compile_code=False, torque_limit=None).with_anytime(
+    return lynx_default_config(compile_code=False, torque_limit=None).with_anytime(
         iteration_ms=0.5)
 
 
@@ -66,7 +65,7 @@ def test_the_same_scenario_twice_gives_the_same_plan(baseline, config):
     """Algorithm 2 with the global search on the nominal clock, twice in one process (the
     searches' planners and estimates warm the second time): identical segments, and a
     search's plan adopted."""
-    runs = [executed(baseline, config, Scenario())[1] for _ in range(2)]
+    runs = [executed(baseline, config, lynx_scenario())[1] for _ in range(2)]
     first, second = (run.execution.segments for run in runs)
     assert len(first) == len(second)
     for a, b in zip(first, second, strict=True):
@@ -99,7 +98,7 @@ def test_with_one_core_the_real_time_loop_runs_alone(baseline, config, monkeypat
     live = config.with_anytime(iteration_ms=None)
     planner = GlobalSearchPlanner(AnytimePlanner(baseline, live), baseline, live)
     assert planner.mode == "one core"
-    case = Scenario()
+    case = lynx_scenario()
     first = planner.plan(Segment(case.start, case.start_velocity, 0.0, case.duration,
                                  case.goal, None, budget_ms=math.inf))
     assert not planner.offers(0.5)
@@ -156,7 +155,7 @@ def test_each_better_plan_enters_when_the_search_work_up_to_it_is_done(baseline,
             assert problem.t_begin + samples * period >= end - 1e-9
 
     monkeypatch.setattr(GlobalSearchPlanner, "_launch", launched)
-    executed(baseline, config, Scenario())
+    executed(baseline, config, lynx_scenario())
     assert checked and max(checked) > 2
     assert any(early)
 

@@ -8,8 +8,8 @@ import numpy as np
 
 import planning.formulation.nlp as nlp_module
 from harness.robots.arm import Arm
-from planning.config import true_energy_config
 from planning.formulation.nlp import PlanningNLP
+from tests.helpers import lynx_config, lynx_default_config
 
 
 def _derivatives(nlp: PlanningNLP) -> ca.Function:
@@ -22,7 +22,7 @@ def _derivatives(nlp: PlanningNLP) -> ca.Function:
 
 def test_called_torque_model_is_the_inlined_one(monkeypatch):
     model = Arm.of("lynxmotion").nominal
-    config = true_energy_config(obstacle_slots=6, energy_samples=8)
+    config = lynx_default_config(obstacle_slots=6, energy_samples=8)
     inlined = PlanningNLP(model, config)
     monkeypatch.setattr(nlp_module, "INLINE_INSTRUCTIONS", 0)
     called = PlanningNLP(model, config)
@@ -43,11 +43,11 @@ def test_called_torque_model_is_the_inlined_one(monkeypatch):
 def test_goal_limit_rows_are_built_only_where_the_goal_is_on_a_limit():
     """A goal inside the limits is solved without the (free) goal-limit rows: the same
     optimum as the NLP with every row; a goal on a limit gets that joint's rows."""
-    from planning.config import PenaltyOptions, PlannerConfig
+    from planning.config import PenaltyOptions
     from planning.penalty.solver import Planner
 
     model = Arm.of("lynxmotion").nominal
-    planner = Planner(model, PlannerConfig(penalty=PenaltyOptions(solver="ipopt")))
+    planner = Planner(model, lynx_config(penalty=PenaltyOptions(solver="ipopt")))
     start, goal = (1.0, 0.6, -0.8), (-0.5, 1.2, -1.4)
     plan = planner.solve(start, (0.0, 0.0, 0.0), 2.0, goal)
     pruned = planner._relaxed_for(goal).nlp

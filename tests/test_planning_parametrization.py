@@ -13,7 +13,6 @@ from scipy.integrate import quad
 from harness.paper.planning.baselines import MinimumJerk
 from harness.robots.arm import Arm
 from harness.robots.baseline import PinocchioModel
-from planning.config import PlannerConfig
 from planning.formulation.energy import absolute_energy, net_work, power
 from planning.formulation.obstacle import SwayingObstacle, predict_linear
 from planning.formulation.quadrature import energy_nodes
@@ -27,6 +26,7 @@ from planning.penalty.solver import Planner
 from planning.result import executed_energy, sample_execution
 from planning.types import ObstacleForecast
 from tests.helpers import central_difference as _central_difference
+from tests.helpers import lynx_config
 
 RNG = np.random.default_rng(7)
 Q0, GOAL = np.array([1.2, 0.6, -0.8]), np.array([-1.0, 1.2, -1.0])
@@ -44,7 +44,7 @@ def baseline(pin_model):
 
 @pytest.mark.parametrize("smoothing", [0.0, 1e-3])
 def test_degree_seven_gradients_match_finite_differences(baseline, smoothing):
-    config = PlannerConfig(degree=7, energy_quadrature="gauss", energy_samples=12,
+    config = lynx_config(degree=7, energy_quadrature="gauss", energy_samples=12,
                            obstacle_slots=6, power_smoothing=smoothing)
     planner = Planner(baseline, config)
     arm = PolynomialTrajectory.from_free(0.0, 2.0, Q0, np.zeros(3),
@@ -67,7 +67,7 @@ def test_degree_seven_gradients_match_finite_differences(baseline, smoothing):
 
 @pytest.mark.parametrize("degree", range(4, 10))
 def test_boundary_conditions_hold_for_every_degree(baseline, degree):
-    config = PlannerConfig(degree=degree, energy_quadrature="gauss", energy_samples=8,
+    config = lynx_config(degree=degree, energy_quadrature="gauss", energy_samples=8,
                            rest_at_goal=True)
     qd0 = np.array([0.2, -0.1, 0.3])
     plan = Planner(baseline, config).solve(Q0, qd0, 1.5, GOAL, t_begin=0.5)
@@ -115,7 +115,7 @@ def test_degree_five_rest_to_rest_is_minimum_jerk():
     assert all(np.allclose(a, b, atol=1e-12) for a, b in zip(quintic.state(t), jerk.state(t),
                                                              strict=True))
     # the planner's degree-5 NLP with rest at the goal: minimum jerk satisfies its equalities
-    config = PlannerConfig(degree=5, energy_quadrature="gauss", energy_samples=6,
+    config = lynx_config(degree=5, energy_quadrature="gauss", energy_samples=6,
                            rest_at_goal=True, power_smoothing=1e-3)
     planner = Planner(Arm.of("lynxmotion").nominal, config)
     _, constraints, _ = planner.nlp.functions()
@@ -152,7 +152,7 @@ def test_dense_energy_matches_scipy_quad_of_pinocchio_power(baseline):
     exact, _ = quad(absolute_power, 0.0, 2.0, limit=400, epsabs=1e-12, epsrel=1e-10)
     grid = np.linspace(0.0, 2.0, 4001)
     assert np.isclose(absolute_energy(baseline, grid, *trajectory.state(grid)), exact, rtol=1e-5)
-    config = PlannerConfig(degree=7, energy_quadrature="gauss", energy_samples=60,
+    config = lynx_config(degree=7, energy_quadrature="gauss", energy_samples=60,
                            power_smoothing=1e-6)
     planner = Planner(baseline, config)
     x = trajectory.coefficients[:, 2:].ravel()

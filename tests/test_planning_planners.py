@@ -7,12 +7,13 @@ import pytest
 
 from harness.robots.arm import Arm
 from planning.anytime.planner import AnytimePlanner
-from planning.config import JSON_NAMES, PenaltyOptions, PlannerConfig, true_energy_config
+from planning.config import JSON_NAMES, PenaltyOptions
 from planning.globalsearch.planner import GlobalSearchPlanner
 from planning.penalty.planner import PenaltyLoop
 from planning.penalty.polish import Polished
 from planning.planners import segment_planner
 from planning.types import SegmentPlanner
+from tests.helpers import lynx_config, lynx_default_config
 
 
 @pytest.fixture(scope="module")
@@ -23,7 +24,7 @@ def baseline():
 @pytest.mark.parametrize("name, kind", [("penalty", PenaltyLoop), ("fatrop", PenaltyLoop),
                                         ("anytime", AnytimePlanner), ("sqp", AnytimePlanner)])
 def test_the_factory_picks_the_replanner_the_config_names(baseline, name, kind):
-    config = true_energy_config(replanner=name, compile_code=False).with_global_search(
+    config = lynx_default_config(replanner=name, compile_code=False).with_global_search(
         enabled=False)
     planner = segment_planner(baseline, config)
     assert isinstance(planner, kind) and isinstance(planner, SegmentPlanner)
@@ -32,14 +33,14 @@ def test_the_factory_picks_the_replanner_the_config_names(baseline, name, kind):
 
 
 def test_the_split_rule_and_real_time_iterations_keep_the_penalty_loop(baseline):
-    split = true_energy_config(energy_quadrature="split", energy_samples=24, compile_code=False)
-    iterating = true_energy_config(compile_code=False).with_penalty(replan_iterations=1)
+    split = lynx_default_config(energy_quadrature="split", energy_samples=24, compile_code=False)
+    iterating = lynx_default_config(compile_code=False).with_penalty(replan_iterations=1)
     assert isinstance(segment_planner(baseline, split), PenaltyLoop)
     assert isinstance(segment_planner(baseline, iterating), PenaltyLoop)
 
 
 def test_the_anytime_sqps_cold_plans_are_polished_by_the_penalty_loop(baseline):
-    config = true_energy_config(compile_code=False).with_penalty(polish=1).with_global_search(
+    config = lynx_default_config(compile_code=False).with_penalty(polish=1).with_global_search(
         enabled=False)
     planner = segment_planner(baseline, config)
     assert isinstance(planner, Polished) and isinstance(planner.inner, AnytimePlanner)
@@ -48,7 +49,7 @@ def test_the_anytime_sqps_cold_plans_are_polished_by_the_penalty_loop(baseline):
 def test_the_global_search_goes_around_the_anytime_sqp_only(baseline):
     """On by default (true_energy_config): the anytime SQP, polished or not, inside it; the
     penalty loop never gets one."""
-    config = true_energy_config(compile_code=False).with_anytime(iteration_ms=0.5)
+    config = lynx_default_config(compile_code=False).with_anytime(iteration_ms=0.5)
     planner = segment_planner(baseline, config.with_penalty(polish=1))
     assert isinstance(planner, GlobalSearchPlanner) and isinstance(planner, SegmentPlanner)
     assert isinstance(planner.inner, Polished)
@@ -58,9 +59,9 @@ def test_the_global_search_goes_around_the_anytime_sqp_only(baseline):
 
 
 def test_options_are_grouped_by_the_planner_they_belong_to():
-    config = PlannerConfig(penalty=PenaltyOptions(solver="ipopt")).with_anytime(
+    config = lynx_config(penalty=PenaltyOptions(solver="ipopt")).with_anytime(
         replan_budget_ms=20.0)
     assert config.penalty.solver == "ipopt" and config.anytime.replan_budget_ms == 20.0
     assert config.replanner == "penalty"
     with pytest.raises(ValueError, match="replanner"):
-        PlannerConfig(replanner="newton")
+        lynx_config(replanner="newton")

@@ -11,7 +11,7 @@ import pytest
 
 from harness.plan.speed import measure
 from harness.robots.arm import Arm
-from planning.config import PenaltyOptions, PlannerConfig, Scenario
+from planning.config import PenaltyOptions
 from planning.formulation import compiled
 from planning.formulation.clearance import link_clearances
 from planning.formulation.limits import LIMIT_TOLERANCE, limit_excess
@@ -26,7 +26,7 @@ from planning.result import evaluate
 from planning.scenarios import random_scenarios, swaying_scenario
 from planning.starts import start_points
 from planning.types import DEADLINE, ITERATE, LATE
-from tests.helpers import random_crossing, segments
+from tests.helpers import lynx_config, lynx_scenario, random_crossing, segments
 
 
 @pytest.fixture(scope="module")
@@ -92,9 +92,9 @@ def test_sqpmethod_status_comes_from_the_kkt_conditions_of_its_point(capfd):
 
 
 def test_fatrop_and_ipopt_find_the_same_optimum(baseline):
-    scenario = Scenario()
+    scenario = lynx_scenario()
     args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
-    plans = {name: Planner(baseline, PlannerConfig(penalty=PenaltyOptions(solver=name))).solve(*args)
+    plans = {name: Planner(baseline, lynx_config(penalty=PenaltyOptions(solver=name))).solve(*args)
              for name in ("fatrop", "ipopt")}
     assert all(plan.success for plan in plans.values())
     fatrop, ipopt = plans["fatrop"], plans["ipopt"]
@@ -104,7 +104,7 @@ def test_fatrop_and_ipopt_find_the_same_optimum(baseline):
 
 
 def test_start_points_keep_the_boundary_conditions(baseline):
-    planner = Planner(baseline)
+    planner = Planner(baseline, lynx_config())
     q0, qd0, goal, duration = np.array([0.3, 1.0, -1.2]), np.array([0.1, -0.2, 0.3]), \
         np.array([-0.5, 1.5, -0.8]), 1.7
     points = start_points(planner, q0, qd0, duration, goal, 5)
@@ -119,8 +119,8 @@ def test_start_points_keep_the_boundary_conditions(baseline):
 
 
 def test_a_replan_past_its_deadline_is_dropped_and_counted(baseline):
-    planner = Planner(baseline, PlannerConfig(replan_deadline_ms=1e-6))
-    scenario = Scenario()
+    planner = Planner(baseline, lynx_config(replan_deadline_ms=1e-6))
+    scenario = lynx_scenario()
     first, _, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0,
                                scenario.duration, scenario.goal,
                                forecast_at(scenario.obstacle, 0.0))
@@ -139,7 +139,7 @@ def test_a_replan_past_its_deadline_is_dropped_and_counted(baseline):
 def test_a_late_but_converged_replan_is_the_next_warm_start(baseline, monkeypatch):
     """The arm keeps following its last plan, but the next re-plan starts from the newest
     converged solution (Algorithm 2 in real time: late work is not thrown away)."""
-    planner = Planner(baseline, PlannerConfig(replan_deadline_ms=1e-6))
+    planner = Planner(baseline, lynx_config(replan_deadline_ms=1e-6))
     loop = PenaltyLoop(planner)
     calls, real = [], loop.plan
 
@@ -148,8 +148,8 @@ def test_a_late_but_converged_replan_is_the_next_warm_start(baseline, monkeypatc
         calls.append((warm, result))
         return result
 
-    free = planner.solve(Scenario().start, (0.0,) * 3, 2.0, Scenario().goal).trajectory
-    scenario = swaying_scenario(free, planner.config.geometry)  # every forecast is new
+    free = planner.solve(lynx_scenario().start, (0.0,) * 3, 2.0, lynx_scenario().goal).trajectory
+    scenario = swaying_scenario(free, planner.config.geometry, lynx_scenario())  # every forecast is new
     monkeypatch.setattr(loop, "plan", recording)
     run = execute(loop, scenario)
     replans = [(warm, result) for warm, result in calls if warm is not None]
@@ -163,7 +163,7 @@ def test_a_late_but_converged_replan_is_the_next_warm_start(baseline, monkeypatc
 
 
 def test_random_scenarios_are_seeded_and_put_the_obstacle_in_the_way(baseline):
-    config = PlannerConfig()
+    config = lynx_config()
     planner = Planner(baseline, config)
     paths = {}
 
@@ -192,9 +192,9 @@ def test_random_scenarios_are_seeded_and_put_the_obstacle_in_the_way(baseline):
 def test_a_warm_solve_the_fast_solver_cannot_finish_is_rescued_by_ipopt(baseline):
     """fatrop capped at one iteration cannot converge a re-plan; IPOPT, warm-started from the
     same point, finishes it (the same optimum as an uncapped fatrop solve)."""
-    scenario = Scenario()
-    capped = Planner(baseline, PlannerConfig(penalty=PenaltyOptions(warm_max_iterations=1)))
-    full = Planner(baseline, PlannerConfig())
+    scenario = lynx_scenario()
+    capped = Planner(baseline, lynx_config(penalty=PenaltyOptions(warm_max_iterations=1)))
+    full = Planner(baseline, lynx_config())
     first, _, _ = plan_segment(full, scenario.start, scenario.start_velocity, 0.0,
                                scenario.duration, scenario.goal, forecast_at(scenario.obstacle, 0.0))
     t = 0.5
@@ -211,7 +211,7 @@ def test_a_warm_solve_the_fast_solver_cannot_finish_is_rescued_by_ipopt(baseline
         <= 1e-5 * (reference.energy + reference.penalty)
     # ... but not a re-plan under a deadline (rescue=False), warm or from a cold start: its
     # answer would come too late; fatrop's unfinished solve is returned unsuccessful
-    late = Planner(baseline, PlannerConfig(penalty=PenaltyOptions(warm_max_iterations=1, max_iterations=1)))
+    late = Planner(baseline, lynx_config(penalty=PenaltyOptions(warm_max_iterations=1, max_iterations=1)))
     for warm in (first, None):
         dropped = late.solve(*args, warm=warm, reference=reference_path, rescue=False)
         assert not dropped.success and dropped.status != "Solve_Succeeded"
@@ -223,7 +223,7 @@ def test_each_start_point_reaches_a_plan_of_its_own(baseline):
     obstacle's path known) the first start finds a detour 3x cheaper than the one the
     unobstructed optimum leads to (solving that first brought every start point to it), and
     every plan keeps the clearance."""
-    config = PlannerConfig()
+    config = lynx_config()
     planner = Planner(baseline, config)
     case, forecast = random_crossing(planner, 2)
     t = case.obstacle.sample_times
@@ -242,7 +242,8 @@ def test_each_start_point_reaches_a_plan_of_its_own(baseline):
 
 def test_replan_timing_breaks_down_into_the_solver_and_the_rest(baseline):
     """Re-plan times are end to end; the solver calls (Planner.solver_ms) are part of them."""
-    timings, _ = measure(segments(Planner(baseline)), Scenario(), cold_repeats=1, stride=40)
+    timings, _ = measure(segments(Planner(baseline, lynx_config())), lynx_scenario(),
+                         cold_repeats=1, stride=40)
     replans, solver = np.asarray(timings.replan_ms), np.asarray(timings.replan_solver_ms)
     assert len(replans) == len(solver) > 0
     assert np.all(solver > 0) and np.all(solver <= replans)
@@ -253,7 +254,7 @@ def test_a_warm_plan_its_rounds_leave_beyond_a_joint_limit_is_not_successful(bas
     leaves the plan 2.9e-5 rad beyond a joint limit (its turning points not yet the
     constrained ones): it is returned unsuccessful, so Algorithm 2 would keep its last plan.
     With the default rounds the limits settle. A cold plan is returned as it is."""
-    planner = Planner(baseline, PlannerConfig(energy_quadrature="gauss", energy_samples=20))
+    planner = Planner(baseline, lynx_config(energy_quadrature="gauss", energy_samples=20))
     case, forecast = random_crossing(planner, 5)
     args = (case.start, case.start_velocity, 0.0, case.duration, case.goal, forecast)
     limits = planner.config.lower, planner.config.upper
@@ -301,8 +302,8 @@ def test_a_real_time_iteration_is_followed_only_where_it_is_feasible_and_cheaper
     step from the first plan and returns its iterate (status ITERATE): it reaches the goal,
     keeps the limits, and its objective lies between the start's and the converged re-plan's.
     The same re-plan without `iterate` is solved out."""
-    scenario = Scenario()
-    planner = Planner(baseline, PlannerConfig(penalty=PenaltyOptions(replan_iterations=1)))
+    scenario = lynx_scenario()
+    planner = Planner(baseline, lynx_config(penalty=PenaltyOptions(replan_iterations=1)))
     first, _, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0,
                                scenario.duration, scenario.goal,
                                forecast_at(scenario.obstacle, 0.0))
@@ -337,7 +338,7 @@ def test_algorithm_2_with_real_time_iterations_follows_iterates_and_stays_feasib
     segments iterates)."""
     runs = {}
     for iterations in (None, 1):
-        planner = Planner(baseline, PlannerConfig(penalty=PenaltyOptions(replan_iterations=iterations)))
+        planner = Planner(baseline, lynx_config(penalty=PenaltyOptions(replan_iterations=iterations)))
         case, _ = random_crossing(planner, 4)
         run = execute(segments(planner), case)
         runs[iterations] = (run, evaluate(run, case, baseline, planner.config))
@@ -357,8 +358,8 @@ def test_cold_plans_settling_and_polishing_never_stop_at_an_iterate(baseline):
     """Real-time iterations are for Algorithm 2's re-plans only: the cold plan's warm solves
     (rounds, penalty growth, polishing with the split rule) are solved out, and the
     polisher and the IPOPT rescuer build no feasible SQP."""
-    scenario = Scenario()
-    planner = Planner(baseline, PlannerConfig(penalty=PenaltyOptions(
+    scenario = lynx_scenario()
+    planner = Planner(baseline, lynx_config(penalty=PenaltyOptions(
         replan_iterations=1, polish=1, polish_samples=16)))
     plan, _, _, plans = plan_multistart(planner, scenario.start, scenario.start_velocity, 0.0,
                                         scenario.duration, scenario.goal,
@@ -373,6 +374,6 @@ def test_cold_plans_settling_and_polishing_never_stop_at_an_iterate(baseline):
                                forecast_at(scenario.obstacle, 0.0), warm=plan)
     assert again.status != ITERATE  # a warm plan_segment call outside Algorithm 2
     with pytest.raises(ValueError, match="replan_iterations"):
-        Planner(baseline, PlannerConfig(penalty=PenaltyOptions(replan_iterations=0)))
+        Planner(baseline, lynx_config(penalty=PenaltyOptions(replan_iterations=0)))
     with pytest.raises(ValueError, match="solver must be one of"):
-        Planner(baseline, PlannerConfig(penalty=PenaltyOptions(solver="feasiblesqp")))
+        Planner(baseline, lynx_config(penalty=PenaltyOptions(solver="feasiblesqp")))

@@ -10,13 +10,13 @@ import pytest
 
 from harness.cli import main
 from harness.robots.arm import Arm
-from planning.config import PenaltyOptions, PlannerConfig, Scenario
+from planning.config import PenaltyOptions
 from planning.errors import PlanningError
 from planning.formulation.energy import absolute_energy
 from planning.penalty.solver import Planner
 from planning.replanning import execute
 from planning.result import evaluate
-from tests.helpers import perturbed_model, segments
+from tests.helpers import lynx_config, lynx_scenario, perturbed_model, segments
 
 
 @pytest.fixture(scope="module")
@@ -26,8 +26,8 @@ def baseline():
 
 @pytest.fixture(scope="module")
 def paper(baseline):
-    planner = Planner(baseline)
-    scenario = Scenario()
+    planner = Planner(baseline, lynx_config())
+    scenario = lynx_scenario()
     free = evaluate(execute(segments(planner), scenario, avoid=False), scenario, baseline, planner.config)
     avoided = evaluate(execute(segments(planner), scenario), scenario, baseline, planner.config)
     return planner, scenario, free, avoided
@@ -61,7 +61,8 @@ def test_stand_in_model_energy_close_to_baseline(paper, baseline):
     keeps the clearance."""
     planner, scenario, _, reference = paper
     model = perturbed_model()
-    result = evaluate(execute(segments(Planner(model)), scenario), scenario, model, planner.config)
+    result = evaluate(execute(segments(Planner(model, lynx_config())), scenario), scenario, model,
+                      planner.config)
     assert result.feasible, result.problems
     assert np.max(np.abs(result.q - reference.q)) > 1e-3  # another plan, not the same one
     energy = absolute_energy(baseline, result.t, result.q, result.qd, result.qdd)
@@ -75,9 +76,9 @@ def test_stand_in_model_energy_close_to_baseline(paper, baseline):
     ({"start": (np.nan, 0.5, -0.5)}, "finite"),
 ])
 def test_bad_input_is_an_error(baseline, change, message):
-    scenario = dataclasses.replace(Scenario(obstacle=None), **change)
+    scenario = dataclasses.replace(lynx_scenario(obstacle=None), **change)
     with pytest.raises(PlanningError, match=message):
-        execute(segments(Planner(baseline)), scenario)
+        execute(segments(Planner(baseline, lynx_config())), scenario)
 
 
 def test_start_inside_threshold_is_an_error(paper):
@@ -89,9 +90,9 @@ def test_start_inside_threshold_is_an_error(paper):
 
 def test_solver_failure_is_flagged(baseline):
     # no solve may finish: cold and warm capped, no IPOPT rescue (it has its own warm cap)
-    config = PlannerConfig(penalty=PenaltyOptions(max_iterations=2, warm_max_iterations=2,
+    config = lynx_config(penalty=PenaltyOptions(max_iterations=2, warm_max_iterations=2,
                                                    solver="ipopt"))
-    scenario = Scenario()
+    scenario = lynx_scenario()
     result = evaluate(execute(segments(Planner(baseline, config)), scenario), scenario, baseline, config)
     assert not result.feasible
     assert any("solver failed" in p for p in result.problems)
@@ -190,8 +191,8 @@ def test_warm_replan_finds_the_cold_optimum(paper, baseline):
 
 def test_rest_at_goal_on_a_joint_limit(baseline):
     """The paper's goal has q1 on its lower limit; arriving at rest there stays inside."""
-    config = PlannerConfig(rest_at_goal=True)
-    scenario = Scenario()
+    config = lynx_config(rest_at_goal=True)
+    scenario = lynx_scenario()
     result = evaluate(execute(segments(Planner(baseline, config)), scenario), scenario, baseline, config)
     assert result.feasible, result.problems
     assert np.allclose(result.qd[-1], 0.0, atol=1e-8)
@@ -204,7 +205,8 @@ def test_crossing_obstacle_is_avoided_at_every_sample(paper, baseline):
     from planning.scenarios import crossing_scenario
 
     planner, _, free, _ = paper
-    crossing = crossing_scenario(free.execution.segments[0].trajectory, planner.config.geometry)
+    crossing = crossing_scenario(free.execution.segments[0].trajectory, planner.config.geometry,
+                                 lynx_scenario())
     blind = evaluate(execute(segments(planner), crossing, avoid=False), crossing, baseline, planner.config)
     result = evaluate(execute(segments(planner), crossing), crossing, baseline, planner.config)
     needed = blind.sample_clearance < planner.config.threshold
@@ -219,10 +221,11 @@ def test_penalty_weight_rises_until_the_threshold_holds(paper, baseline):
     from planning.scenarios import crossing_scenario
 
     planner, _, free, _ = paper
-    crossing = crossing_scenario(free.execution.segments[0].trajectory, planner.config.geometry)
+    crossing = crossing_scenario(free.execution.segments[0].trajectory, planner.config.geometry,
+                                 lynx_scenario())
     results = {}
     for ceiling in (2.0, 2e5):
-        config = PlannerConfig(penalty_weight=2.0, penalty=PenaltyOptions(max_weight=ceiling))
+        config = lynx_config(penalty_weight=2.0, penalty=PenaltyOptions(max_weight=ceiling))
         results[ceiling] = evaluate(execute(segments(Planner(baseline, config)), crossing), crossing,
                                     baseline, config)
     assert not results[2.0].feasible

@@ -6,11 +6,12 @@ import numpy as np
 import pytest
 
 from harness.robots.arm import Arm
-from planning.config import PlannerConfig, Scenario
+from planning.config import Scenario
 from planning.formulation.clearance import link_clearances
 from planning.formulation.screening import Screen, near_samples, screen, uncovered
 from planning.penalty.solver import Planner
 from planning.types import ObstacleForecast
+from tests.helpers import lynx_config, lynx_scenario
 
 
 def _screen(dips, gap):
@@ -33,9 +34,9 @@ def test_covered_needs_every_dip_unless_thinned():
 
 
 def test_screen_thins_to_the_slots_and_reports_the_gap():
-    scenario = Scenario()
+    scenario = lynx_scenario()
     baseline = Arm.of("lynxmotion").nominal
-    planner = Planner(baseline)
+    planner = Planner(baseline, lynx_config())
     free = planner.solve(scenario.start, scenario.start_velocity, scenario.duration,
                          scenario.goal)
     forecast = _known_path(scenario)
@@ -57,9 +58,9 @@ def test_screen_thins_to_the_slots_and_reports_the_gap():
 def test_samples_above_the_threshold_leave_the_optimum_unchanged():
     """Screen.covered's premise: a solve that also sees samples where its result stays above
     the threshold returns the same result (their penalty terms and gradients are zero)."""
-    scenario = Scenario()
+    scenario = lynx_scenario()
     baseline = Arm.of("lynxmotion").nominal
-    planner = Planner(baseline, PlannerConfig(obstacle_slots=40))
+    planner = Planner(baseline, lynx_config(obstacle_slots=40))
     args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
     free = planner.solve(*args)
     forecast = _known_path(scenario)

@@ -14,12 +14,11 @@ from harness.replay.checks import checks
 from harness.replay.reference import plan_reference
 from harness.replay.simulate import replay
 from harness.robots.arm import Arm
-from planning.config import PlannerConfig, Scenario
 from planning.penalty.solver import Planner
 from planning.replanning import execute
 from planning.result import TORQUE_TOLERANCE, evaluate, to_json
 from planning.scenarios import swaying_scenario
-from tests.helpers import segments
+from tests.helpers import lynx_config, lynx_scenario, segments
 
 
 @pytest.fixture(scope="module")
@@ -28,7 +27,7 @@ def baseline():
 
 
 def _plan(model, scenario, config=None, avoid=True):
-    planner = Planner(model, config)
+    planner = Planner(model, config or lynx_config())
     return evaluate(execute(segments(planner), scenario, avoid=avoid), scenario, model, planner.config)
 
 
@@ -44,7 +43,7 @@ def _dense_peak(model, result) -> np.ndarray:
 
 def test_default_limit_is_the_mjcf_motor_range():
     assert Arm.of("lynxmotion").motor_torque_limit == (10.0, 10.0, 10.0)
-    assert PlannerConfig().torque_limit == (10.0, 10.0, 10.0)
+    assert lynx_config().torque_limit == (10.0, 10.0, 10.0)
 
 
 def test_overdriving_plan_is_refused_without_file(tmp_path, capsys):
@@ -66,18 +65,18 @@ def test_torque_diagnosis_counts_the_limits_as_a_plan_does(baseline, monkeypatch
     """The torque limits are blamed for an unreachable goal only when the torque-limited
     motion passes them beyond the tolerance a plan's result allows (planning.result); a
     motion within it reaches the goal, and the failure lies elsewhere (the clearance)."""
-    scenario = dataclasses.replace(Scenario(), duration=0.12, obstacle=None)
+    scenario = dataclasses.replace(lynx_scenario(), duration=0.12, obstacle=None)
     args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
-    motion = Planner(baseline, PlannerConfig(torque_limit=None)).solve(*args)
+    motion = Planner(baseline, lynx_config(torque_limit=None)).solve(*args)
     t = np.linspace(0.0, scenario.duration, 4001)
     peak = np.abs(baseline.torque(*motion.trajectory.state(t))).max(axis=0)
-    planner = Planner(baseline, PlannerConfig(torque_limit=tuple(peak / (1 + over))))
+    planner = Planner(baseline, lynx_config(torque_limit=tuple(peak / (1 + over))))
     monkeypatch.setattr(planner, "solve", lambda *a, **k: motion)  # the limited problem's
     message = torque_diagnosis(planner, scenario)
     assert motion.success and (message is not None) == blamed, message
 
 def test_default_plan_torque_within_limits(baseline):
-    result = _plan(baseline, Scenario())
+    result = _plan(baseline, lynx_scenario())
     assert result.feasible, result.problems
     assert np.all(result.peak_torque <= 10.0)
     assert np.all(_dense_peak(baseline, result) <= 10.0)
@@ -86,8 +85,8 @@ def test_default_plan_torque_within_limits(baseline):
 def test_fast_motion_is_held_at_the_limit(baseline):
     """0.12 s: the unconstrained optimum needs ~18 N m at joint 2; with the limit the plan
     stays feasible at <= 10 N m (+ the sampling tolerance between the NLP's samples)."""
-    scenario = dataclasses.replace(Scenario(), duration=0.12, obstacle=None)
-    free = _plan(baseline, scenario, PlannerConfig(torque_limit=None))
+    scenario = dataclasses.replace(lynx_scenario(), duration=0.12, obstacle=None)
+    free = _plan(baseline, scenario, lynx_config(torque_limit=None))
     assert free.peak_torque.max() > 12.0
     limited = _plan(baseline, scenario)
     assert limited.feasible, limited.problems
@@ -97,19 +96,20 @@ def test_fast_motion_is_held_at_the_limit(baseline):
 def test_torque_violation_is_flagged(baseline):
     """A plan exceeding a (here artificially low) limit by more than the tolerance is
     infeasible and says which joint."""
-    result = _plan(baseline, Scenario(obstacle=None), avoid=False)
+    result = _plan(baseline, lynx_scenario(obstacle=None), avoid=False)
     peak = result.peak_torque
-    low = PlannerConfig(torque_limit=tuple(0.5 * peak))
-    checked = evaluate(result.execution, Scenario(obstacle=None), baseline, low)
+    low = lynx_config(torque_limit=tuple(0.5 * peak))
+    checked = evaluate(result.execution, lynx_scenario(obstacle=None), baseline, low)
     assert not checked.feasible
     assert any("torque" in p and "exceeds the limit" in p for p in checked.problems)
 
 
 @pytest.fixture(scope="module")
 def swaying(baseline):
-    planner = Planner(baseline)
-    free = _plan(baseline, Scenario(), avoid=False)
-    scenario = swaying_scenario(free.execution.segments[0].trajectory, planner.config.geometry)
+    planner = Planner(baseline, lynx_config())
+    free = _plan(baseline, lynx_scenario(), avoid=False)
+    scenario = swaying_scenario(free.execution.segments[0].trajectory, planner.config.geometry,
+                                lynx_scenario())
     result = evaluate(execute(segments(planner), scenario), scenario, baseline, planner.config)
     return scenario, result, planner.config
 

@@ -1,6 +1,8 @@
 """`torquebench plan`: an energy-optimal, obstacle-avoiding trajectory (paper III.G).
 
-Defaults are the paper's scenario. The plan is written only if it is feasible
+The configuration is the robot's (harness.plan.arm_config) with the options given
+(harness.plan.options); the motion, the robot's registered one past the Lynxmotion paper
+scenario's obstacle path unless given. The plan is written only if it is feasible
 (solver converged, goal reached, limits kept, clearance held); otherwise the
 command names the problem and exits 2 without writing.
 """
@@ -8,17 +10,14 @@ command names the problem and exits 2 without writing.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import logging
-import math
 import re
 import sys
 
-from harness.errors import UserError
 from harness.io import write_json
-from harness.plan.anytime_options import add_anytime_options, anytime_options, settle_horizon
-from harness.plan.arm_config import planner_config
-from harness.plan.limits import link_geometry, rate_limits, torque_limit, vector, vector_text
+from harness.plan.anytime_options import add_anytime_options
+from harness.plan.arm_config import DURATION, default_obstacle
+from harness.plan.limits import vector_text
 from harness.plan.messages import (
     BuildNotice,
     default_obstacle_diagnosis,
@@ -28,23 +27,22 @@ from harness.plan.messages import (
     torque_diagnosis,
     velocity_diagnosis,
 )
+from harness.plan.options import config_from_options, scenario_from_options
 from harness.plan.trajectory_csv import DEFAULT_RATE, write_trajectory
 from harness.robots.resolve import Arm, resolve_arm
 from harness.robots.torque_models import read_model, torque_model
-from planning.config import ALIASES, REPLANNERS, PlannerConfig, Scenario, true_energy_config
+from planning.config import ALIASES, REPLANNERS, TRUE_ENERGY, PenaltyOptions, PlannerConfig
 from planning.control import control_trajectory
 from planning.errors import PlanningError
 from planning.formulation import compiled
-from planning.formulation.obstacle import LinearObstacle, SwayingObstacle
-from planning.formulation.quadrature import RULES, splits_evenly
+from planning.formulation.quadrature import RULES
 from planning.penalty.backends import SOLVERS
 from planning.penalty.solver import Planner
 from planning.planners import executed
 from planning.result import closest_link, to_json
 
-DEFAULT = Scenario()
-PLANNER = true_energy_config()
-SAMPLES = {"paper": 10, "gauss": PLANNER.energy_samples, "simpson": 21}  # split: 3 per interval
+OBSTACLE = default_obstacle()  # the default path (the Lynxmotion paper scenario's)
+# every option's default is None, left out: the arm's planner_config's, or as its help says
 
 
 def register(sub) -> None:
@@ -55,41 +53,46 @@ def register(sub) -> None:
                         "pinocchio baseline (default: the model's robot, else lynxmotion)")
     p.add_argument("--start", default=None,
                    help="start angles, one per joint (rad); default: the robot's registered "
-                        "motion (on the Lynxmotion the paper's, " + vector_text(DEFAULT.start) + ")")
+                        "motion (on the Lynxmotion the paper's)")
     p.add_argument("--goal", default=None,
                    help="goal angles, one per joint (rad); default: the robot's registered "
-                        "motion (on the Lynxmotion the paper's, " + vector_text(DEFAULT.goal) + ")")
-    p.add_argument("--duration", type=float, default=DEFAULT.duration, help="motion time (s)")
+                        "motion (on the Lynxmotion the paper's)")
+    p.add_argument("--duration", type=float, default=None,
+                   help=f"motion time (s, default {DURATION:g})")
     p.add_argument("--obstacle-from", default=None,
                    help="obstacle centre at t = 0 (m); default: the Lynxmotion paper scenario's, "
-                        + vector_text(DEFAULT.obstacle.start))
+                        + vector_text(OBSTACLE.start))
     p.add_argument("--obstacle-to", default=None,
                    help="obstacle centre at t = duration (m); default: the Lynxmotion paper "
-                        "scenario's, " + vector_text(DEFAULT.obstacle.end))
-    p.add_argument("--samples", type=int, default=DEFAULT.obstacle.samples,
-                   help="obstacle samples K over the motion")
-    p.add_argument("--threshold", type=float, default=PlannerConfig.threshold,
-                   help="clearance threshold lambda (m)")
-    p.add_argument("--penalty", type=float, default=PlannerConfig.penalty_weight,
-                   help="penalty weight alpha (J/m^2 per obstacle sample)")
+                        "scenario's, " + vector_text(OBSTACLE.end))
+    p.add_argument("--samples", type=int, default=None,
+                   help=f"obstacle samples K over the motion (default {OBSTACLE.samples})")
+    p.add_argument("--threshold", type=float, default=None,
+                   help=f"clearance threshold lambda (m, default {PlannerConfig.threshold:g})")
+    p.add_argument("--penalty", type=float, default=None,
+                   help="penalty weight alpha (J/m^2 per obstacle sample, default "
+                        f"{PlannerConfig.penalty_weight:g})")
     p.add_argument("--energy-samples", type=int, default=None,
                    help="power samples N of the energy objective (default: 20 for gauss, the "
                         "paper's 10 for paper, 21 for simpson, 3 per interval for split)")
-    p.add_argument("--energy-quadrature", choices=RULES, default=PLANNER.energy_quadrature,
+    p.add_argument("--energy-quadrature", choices=RULES, default=None,
                    help="where the power is sampled: gauss (Gauss-Legendre, the default: plans "
                         "with the true energy at N = 20), paper (eq. 18, s_i = i/N), simpson, "
                         "split (Gauss between the power's sign changes)")
-    p.add_argument("--power-breaks", type=int, default=PlannerConfig.power_breaks,
+    p.add_argument("--power-breaks", type=int, default=None,
                    help="split: breaks between the quadrature's intervals, put where the "
-                        "power changes sign; --energy-samples must be a multiple of this + 1")
-    p.add_argument("--degree", type=int, default=PlannerConfig.degree,
-                   help="degree of the joint polynomials (paper: 4; 4..9)")
-    p.add_argument("--power-smoothing", type=float, default=PlannerConfig.power_smoothing,
-                   help="W; 0: exact |P| (epigraph), > 0: sqrt(P^2 + eps^2) - eps")
-    p.add_argument("--obstacle-sway", default="0,0,0",
+                        "power changes sign; --energy-samples must be a multiple of this + 1 "
+                        f"(default {PlannerConfig.power_breaks})")
+    p.add_argument("--degree", type=int, default=None,
+                   help=f"degree of the joint polynomials (4..9, default {PlannerConfig.degree}: "
+                        "the paper's)")
+    p.add_argument("--power-smoothing", type=float, default=None,
+                   help="W; 0 (the default): exact |P| (epigraph), > 0: sqrt(P^2 + eps^2) - eps")
+    p.add_argument("--obstacle-sway", default=None,
                    help="sway amplitude vector (m) added to the linear obstacle path as "
-                        "sway sin(2 pi periods t / duration)")
-    p.add_argument("--sway-periods", type=float, default=1.0, help="sway periods over the motion")
+                        "sway sin(2 pi periods t / duration) (default: none)")
+    p.add_argument("--sway-periods", type=float, default=None,
+                   help="sway periods over the motion (default 1)")
     p.add_argument("--torque-limit", default=None,
                    help="per-joint torque limits (N m, one per joint), or 'none'; default: the "
                         "robot MJCF's motor ctrlrange times gear, else the URDF effort limits")
@@ -99,7 +102,7 @@ def register(sub) -> None:
     p.add_argument("--accel-limit", default=None,
                    help="acceleration limit (rad/s^2): one for every joint or one per joint "
                         "(default: none)")
-    p.add_argument("--link-radius", default="collision",
+    p.add_argument("--link-radius", default=None,
                    help="capsule radius around every joint-origin segment (m; clearance is to "
                         "its surface; 0: the centre lines, the paper's), or 'collision' (the "
                         "default): capsules fitted to the URDF's collision (else visual) "
@@ -115,15 +118,17 @@ def register(sub) -> None:
     p.add_argument("--solver", choices=SOLVERS, default=None,
                    help="NLP solver (CasADi plugin); ipopt is the paper's (default: fatrop on "
                         "the Lynxmotion, ipopt on other arms)")
-    p.add_argument("--starts", type=int, default=PLANNER.starts,
-                   help="start points of the cold plan (the best is kept)")
-    p.add_argument("--polish", type=int, default=PLANNER.penalty.polish,
+    p.add_argument("--starts", type=int, default=None,
+                   help="start points of the cold plan (the best is kept; default "
+                        f"{TRUE_ENERGY['starts']})")
+    p.add_argument("--polish", type=int, default=None,
                    help="the best N distinct cold plans are solved again with the split "
                         "quadrature (breaks at the power's sign changes) and the one that "
-                        "spends least kept (0: none)")
-    p.add_argument("--polish-samples", type=int, default=PLANNER.penalty.polish_samples,
-                   help="nodes of the polishing quadrature: a multiple of --power-breaks + 1")
-    p.add_argument("--deadline-ms", type=float, default=0.0,
+                        "spends least kept (0, the default: none)")
+    p.add_argument("--polish-samples", type=int, default=None,
+                   help="nodes of the polishing quadrature: a multiple of --power-breaks + 1 "
+                        f"(default {PenaltyOptions.polish_samples})")
+    p.add_argument("--deadline-ms", type=float, default=None,
                    help="ms a re-plan may take (nominal; CPU with --realtime); a later one is "
                         "dropped and the last plan kept, as on a real-time controller (0, the "
                         "default: no deadline; "
@@ -134,9 +139,10 @@ def register(sub) -> None:
                         "re-plan that cannot clear the forecast returns the plan that misses "
                         "the threshold least) or penalty (alias fatrop: the paper's penalty "
                         f"loop, alpha raised until the plan keeps the threshold); default "
-                        f"{PLANNER.replanner}, penalty with --free-end (it keeps the threshold "
+                        f"{TRUE_ENERGY['replanner']}, penalty with --free-end (it keeps the "
+                        "threshold "
                         "more often there: docs/realtime.md, 'harness.commands.plan')")
-    add_anytime_options(p, PLANNER)
+    add_anytime_options(p)
     p.add_argument("--realtime", action="store_true",
                    help="real CPU clocks, as on a robot: budgets and --deadline-ms count the "
                         "planning thread's CPU, a re-plan past its deadline is dropped (the arm "
@@ -144,15 +150,15 @@ def register(sub) -> None:
                         "plan shares the cold budget; default: nominal clocks, and the first "
                         "plan solved to convergence, by the other method if need be")
     p.add_argument("--global-search", action=argparse.BooleanOptionalAction,
-                   default=PLANNER.global_search.enabled,
+                   default=None,
                    help="anytime: a global search beside the re-plans, solving the forecast "
                         "from many starts (the obstacle passed each side, above, below; random "
                         "starts) to convergence; a re-plan adopts its plan when, re-solved warm "
                         "within its budget, it spends less and keeps the clearance (nominal "
                         "clocks: offered a fixed number of obstacle samples later; --realtime: "
                         "in another process, when ready). PLAN.json's global_search counts "
-                        f"the adoptions (default: {'on' if PLANNER.global_search.enabled else 'off'})")
-    p.add_argument("--replan-iterations", type=int, default=0,
+                        "the adoptions (default: on)")
+    p.add_argument("--replan-iterations", type=int, default=None,
                    help="real-time iterations: each re-plan first takes this many iterations "
                         "of CasADi's feasible SQP from the last plan and the arm follows the "
                         "iterate if it keeps the threshold and the limits, going on from it "
@@ -175,86 +181,6 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _angles(args, arm: Arm, name: str, dof: int) -> tuple[float, ...]:
-    """--start or --goal, else the arm's registered motion (the Lynxmotion's: the paper's)."""
-    text = getattr(args, name)
-    if text is None:
-        motion = arm.entry.motion
-        if motion is None:
-            raise UserError(f"--{name} is needed on robot {arm.label}: {dof} comma-separated "
-                            "joint angles (rad)")
-        return tuple(motion[0 if name == "start" else 1])
-    return vector(text, name, dof)
-
-
-def _setup(args, arm: Arm) -> tuple[PlannerConfig, Scenario]:
-    if args.energy_samples is None:
-        args.energy_samples = SAMPLES[args.energy_quadrature] \
-            if args.energy_quadrature != "split" else 3 * (max(args.power_breaks, 0) + 1)
-    if not args.duration > 0 or not math.isfinite(args.duration):
-        raise PlanningError(f"--duration must be > 0 s, got {args.duration}")
-    if not (args.threshold > 0 and args.penalty >= 0) or args.samples < 2 \
-            or args.energy_samples < 1:
-        raise UserError("--threshold must be > 0, --penalty >= 0, --samples >= 2, "
-                        "--energy-samples >= 1")
-    if args.starts < 1 or not (math.isfinite(args.deadline_ms) and args.deadline_ms >= 0):
-        raise UserError("--starts must be >= 1 and --deadline-ms a finite number >= 0")
-    if args.replan_iterations < 0:
-        raise UserError(f"--replan-iterations must be >= 0, got {args.replan_iterations}")
-    if args.polish < 0 or (args.polish and not splits_evenly(args.polish_samples, args.power_breaks)):
-        raise UserError("--polish must be >= 0; with it, --power-breaks >= 1 and "
-                        "--polish-samples a positive multiple of --power-breaks + 1")
-    if not 4 <= args.degree <= 9:
-        raise UserError(f"--degree must be in 4..9, got {args.degree}")
-    if args.energy_quadrature == "simpson" and (args.energy_samples < 3
-                                                 or args.energy_samples % 2 == 0):
-        raise UserError("--energy-quadrature simpson needs an odd --energy-samples >= 3")
-    if args.energy_quadrature == "split" and not splits_evenly(args.energy_samples, args.power_breaks):
-        raise UserError("--energy-quadrature split needs --power-breaks >= 1 and "
-                        "--energy-samples a multiple of --power-breaks + 1")
-    if not (math.isfinite(args.power_smoothing) and args.power_smoothing >= 0
-            and math.isfinite(args.sway_periods)):
-        raise UserError("--power-smoothing must be >= 0 and --sway-periods finite")
-    config = dataclasses.replace(planner_config(arm), threshold=args.threshold,
-                                 penalty_weight=args.penalty, rest_at_goal=not args.free_end,
-                                 energy_samples=args.energy_samples,
-                                 energy_quadrature=args.energy_quadrature, degree=args.degree,
-                                 power_smoothing=args.power_smoothing,
-                                 power_breaks=args.power_breaks,
-                                 torque_limit=None)
-    dof = config.geometry.dof
-    config = dataclasses.replace(config, geometry=link_geometry(args, arm, config.geometry))
-    config = dataclasses.replace(config, torque_limit=torque_limit(args, arm, dof),
-                                 **rate_limits(args, arm, dof))
-    if args.rate is not None and not (math.isfinite(args.rate) and args.rate > 0):
-        raise UserError(f"--rate must be a finite number > 0 Hz, got {args.rate}")
-    if args.rate is not None and args.trajectory is None:
-        raise UserError("--rate needs --trajectory (the CSV it samples)")
-    config = config.with_penalty(solver=args.solver or config.penalty.solver,
-                                 polish=args.polish, polish_samples=args.polish_samples,
-                                 replan_iterations=args.replan_iterations or None)
-    config = config.with_global_search(enabled=args.global_search)
-    config = dataclasses.replace(config.with_anytime(**anytime_options(args)),
-                                 starts=args.starts, compile_code=not args.no_compile,
-                                 # -O0 first where no CPU time decides the plan
-                                 quick_build=not (args.realtime or args.deadline_ms),
-                                 replan_deadline_ms=args.deadline_ms or None,
-                                 settle_horizon=settle_horizon(args),
-                                 replanner=args.replanner or ("penalty" if args.free_end
-                                                              else PLANNER.replanner))
-    default = DEFAULT.obstacle  # neither option given: the Lynxmotion paper scenario's path
-    path = (default.start if args.obstacle_from is None else vector(args.obstacle_from, "obstacle-from"),
-            default.end if args.obstacle_to is None else vector(args.obstacle_to, "obstacle-to"),
-            args.duration, args.samples)
-    sway = vector(args.obstacle_sway, "obstacle-sway")
-    obstacle = (SwayingObstacle(*path, sway=sway, periods=args.sway_periods) if any(sway)
-                else LinearObstacle(*path))
-    scenario = Scenario(_angles(args, arm, "start", dof), _angles(args, arm, "goal", dof),
-                        args.duration, obstacle, (0.0,) * dof)
-    scenario.validate(config)
-    return config, scenario
-
-
 def run(args) -> int:
     model_file = read_model(args.model)
     arm = resolve_arm(args.robot, model=model_file.recorded)  # once: --robot, else the model's
@@ -269,7 +195,8 @@ def run(args) -> int:
 
 
 def _run(args, arm: Arm, model_file, notice: BuildNotice) -> int:
-    config, scenario = _setup(args, arm)
+    config = config_from_options(args, arm)
+    scenario = scenario_from_options(args, arm, config)
     notice.joints = config.geometry.dof
     model = torque_model(model_file, arm)  # checks its joints against the arm's
     planner = Planner(model, config)

@@ -1,12 +1,27 @@
-"""The planner's configuration and the bench's motion on an Arm: geometry and limits come
-from the arm, nothing from another robot's defaults."""
+"""The planner's configuration and the motions planned on an Arm: geometry and limits come
+from the arm, nothing from another robot's defaults; `plan`'s default obstacle path."""
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 
 from harness.robots.arm import Arm
 from planning.config import PlannerConfig, Scenario, true_energy_config
+from planning.formulation.obstacle import LinearObstacle
+
+DURATION = 2.0  # s: the motion's time in `plan` and the bench
+# `plan`'s obstacle path when none is given (its centre at t = 0 and at the end, m): the
+# Lynxmotion paper scenario's (on another robot, with a notice: harness.plan.messages)
+OBSTACLE_PATH = ((0.15, 0.40, 0.22), (0.18, -0.35, 0.28))
+
+
+def default_obstacle(duration: float = DURATION, samples: int | None = None) -> LinearObstacle:
+    """The default obstacle path over `duration` (s), in `samples` samples (default
+    LinearObstacle's)."""
+    return LinearObstacle(*OBSTACLE_PATH, duration, **({} if samples is None
+                                                      else {"samples": samples}))
 
 
 def planner_config(arm: Arm, **changes) -> PlannerConfig:
@@ -19,7 +34,13 @@ def planner_config(arm: Arm, **changes) -> PlannerConfig:
     return true_energy_config(**{**base, **changes}).with_penalty(solver=arm.entry.solver)
 
 
-def bench_motion(arm: Arm, duration: float = 2.0) -> tuple[Scenario, int]:
+def motion_scenario(arm: Arm, duration: float = DURATION) -> Scenario:
+    """The arm's registered motion (bench_motion) past the default obstacle path: on the
+    Lynxmotion, the paper's scenario."""
+    return dataclasses.replace(bench_motion(arm, duration)[0], obstacle=default_obstacle(duration))
+
+
+def bench_motion(arm: Arm, duration: float = DURATION) -> tuple[Scenario, int]:
     """The arm's planning motion (its registry entry's; else from 30 % to 70 % of every
     joint's range) at rest, without obstacle, and the index (into the geometry's links) of the
     link an obstacle should cross: the registered body's, else the last link."""

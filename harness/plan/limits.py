@@ -40,8 +40,8 @@ def torque_limit(args, arm: Arm, dof: int) -> tuple[float, ...] | None:
 def link_geometry(args, arm: Arm, geometry: ArmGeometry) -> ArmGeometry:
     """geometry with the link capsules of --link-radius: 'collision', those fitted to the
     arm's meshes (harness.robots.capsules; the centre lines without any), else one radius
-    (m) around every joint-origin segment (0: the centre lines)."""
-    if args.link_radius.strip().lower() == "collision":
+    (m) around every joint-origin segment (0: the centre lines); left out: 'collision'."""
+    if args.link_radius is None or args.link_radius.strip().lower() == "collision":
         fitted = arm.capsules()
         return dataclasses.replace(geometry, covered=fitted.covered, ends=fitted.ends,
                                    radii=fitted.radii)

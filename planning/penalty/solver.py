@@ -63,8 +63,8 @@ class Planner(ProblemNumbers):
     nothing (the torque rows are costly: (docs/realtime.md, 'planning.penalty.solver')).
     """
 
-    def __init__(self, model: TorqueModel, config: PlannerConfig | None = None):
-        self.config = config or PlannerConfig()
+    def __init__(self, model: TorqueModel, config: PlannerConfig):
+        self.config = config
         if self.config.penalty.solver not in backends.SOLVERS:  # feasiblesqp cannot solve cold
             raise ValueError(f"solver must be one of {backends.SOLVERS}, got "
                              f"'{self.config.penalty.solver}'")

@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+from harness.paper.planning.scenario import paper_config
 from planning.config import PlannerConfig
 
 
@@ -27,7 +28,7 @@ class Parametrization:
 
     def config(self, base: PlannerConfig | None = None) -> PlannerConfig:
         """`base` (default: the paper's configuration) with this parametrization."""
-        return dataclasses.replace(base or PlannerConfig(), degree=self.degree,
+        return dataclasses.replace(base or paper_config(), degree=self.degree,
                                    energy_quadrature=self.quadrature,
                                    energy_samples=self.samples, power_smoothing=self.smoothing,
                                    rest_at_goal=self.rest_at_goal,

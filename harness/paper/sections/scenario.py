@@ -5,6 +5,7 @@ the default planner (true energy, rest to rest) on the same scenario."""
 
 from __future__ import annotations
 
+from harness.paper.planning.scenario import paper_scenario
 from harness.paper.planning.variants import PAPER
 from harness.plan.arm_config import planner_config
 from harness.plan.scoring import plan_checks, reproducible, summary
@@ -13,7 +14,6 @@ from harness.robots.baseline import PinocchioModel
 from planning.planners import segment_planner
 from planning.replanning import execute
 from planning.result import evaluate, to_json
-from planning.scenarios import paper_scenario
 
 IDENTIFIED_TARGET = 0.02  # identified plan's true energy within 2 % of the closed form's
 

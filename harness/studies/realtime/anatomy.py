@@ -30,18 +30,17 @@ import time
 
 import numpy as np
 
+from harness.plan.arm_config import motion_scenario, planner_config
 from harness.robots.arm import Arm
 from harness.robots.registry import DEFAULT_ROBOT
 from harness.studies.realtime import measure as realtime
 from harness.studies.realtime import options as random_scenarios
-from planning.config import true_energy_config
 from planning.formulation.screening import screen
 from planning.penalty import backends
 from planning.penalty.loop import plan_segment
 from planning.penalty.planner import PenaltyLoop
 from planning.penalty.solver import Planner
 from planning.replanning import execute, forecast_at
-from planning.scenarios import paper_scenario
 
 
 class RecordingPlanner(Planner):
@@ -110,7 +109,7 @@ def call_costs(baseline, config) -> dict:
     """Section 2: CPU of one warm solve capped at 0, 1, 5 iterations and at the warm cap, per
     solver, and of the same NLP solved again from the point that returned."""
     planner = Planner(baseline, config)
-    scenario, t = paper_scenario(), 0.71
+    scenario, t = motion_scenario(Arm.of(DEFAULT_ROBOT)), 0.71
     forecast0 = forecast_at(scenario.obstacle, 0.0)
     plan, _, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0,
                               scenario.duration, scenario.goal, forecast0)
@@ -171,8 +170,8 @@ def main() -> None:
     variant.add_argument("--polish", action="store_true")
     args = options.parse_args()
     baseline = Arm.of(DEFAULT_ROBOT).nominal
-    config = true_energy_config(compile_code=True, **(random_scenarios.SPLIT if args.split
-                                                      else {}))
+    config = planner_config(Arm.of(DEFAULT_ROBOT), compile_code=True,
+                            **(random_scenarios.SPLIT if args.split else {}))
     if args.polish:
         config = random_scenarios.polished(config)
     setup = random_scenarios.setup(args)

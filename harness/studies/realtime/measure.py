@@ -4,13 +4,10 @@ drawn from a seed; the obstacle crosses the unobstructed optimum, so avoidance i
 - timing: Algorithm 2 on every scenario; the first (cold, multi-start) plan and every warm
   re-plan timed in wall and CPU time of the planning thread, as distributions; re-plans
   dropped at the deadline (the arm keeps its last plan) and failed ones counted.
-- backends: the same scenarios with each way in (the re-planner: the penalty loop or the
-  anytime elastic SQP; solver, compiled code, warm start, Hessian, penalty samples, real-time
-  iterations), side by side in one run, with what each way's executed motions spend,
-  replayed, and how safe they are (clearance, limits, torques).
-- references: the anytime SQP against optimality references a causal planner can meet
-  (harness.studies.realtime.references: the same problem solved by multi-start per re-plan,
-  a causal multi-start planner, the one-shot plan with the path known).
+- backends: the same scenarios each way (the re-planner, solver, compiled code, warm start,
+  Hessian, penalty samples, real-time iterations), side by side, with what each way's
+  executed motions spend, replayed, and how safe they are (clearance, limits, torques).
+- references: the anytime SQP against causal optimality references (.references).
 """
 
 from __future__ import annotations
@@ -21,11 +18,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from harness.errors import UserError
+from harness.plan.arm_config import planner_config
 from harness.plan.causal import causal_multistart
 from harness.replay.reference import plan_reference
 from harness.replay.simulate import replay
+from harness.robots.arm import Arm
+from harness.robots.registry import DEFAULT_ROBOT
 from harness.studies.realtime import references
-from planning.config import PlannerConfig, Scenario, true_energy_config
+from planning.config import PlannerConfig, Scenario
 from planning.penalty.solver import Planner
 from planning.planners import segment_planner
 from planning.replanning import Execution, execute
@@ -56,10 +56,10 @@ def distribution(values) -> dict:
 
 
 def study_config(compile_code: bool, **changes) -> PlannerConfig:
-    """The default planner as the study runs it: its executions run faster than real time, so
-    the global search's plans enter a fixed number of samples later (GlobalSearchOptions)."""
-    return true_energy_config(compile_code=compile_code, **changes).with_global_search(
-        background=False)
+    """The default planner on the Lynxmotion, its global search's plans entering a fixed
+    number of samples later (the study's executions run faster than real time)."""
+    return planner_config(Arm.of(DEFAULT_ROBOT), compile_code=compile_code,
+                          **changes).with_global_search(background=False)
 
 
 def scenarios(baseline, config: PlannerConfig, setup: Setup) -> list[Scenario]:

@@ -20,11 +20,11 @@ import dataclasses
 
 import numpy as np
 
+from harness.plan.arm_config import planner_config
 from harness.robots.arm import Arm
 from harness.robots.registry import DEFAULT_ROBOT
 from harness.studies.realtime import measure as realtime
 from harness.studies.realtime import options as random_scenarios
-from planning.config import true_energy_config
 from planning.penalty.solver import Planner
 from planning.planners import segment_planner
 from planning.replanning import Execution
@@ -44,7 +44,7 @@ def main() -> None:
     args = random_scenarios.parser(__doc__).parse_args()
     baseline = Arm.of(DEFAULT_ROBOT).nominal
     plant = Arm.of(DEFAULT_ROBOT).scene
-    config = true_energy_config(compile_code=True)
+    config = planner_config(Arm.of(DEFAULT_ROBOT), compile_code=True)
     cases = realtime.scenarios(baseline, config, random_scenarios.setup(args))
     default, numbers = segment_planner(baseline, config), Planner(baseline, config)
     fine = segment_planner(baseline, dataclasses.replace(config, energy_samples=FINE_SAMPLES,

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.paper.planning.scenario import paper_scenario
 from harness.report.figures import plt, save_figure
-from planning.config import Scenario
 from planning.formulation.energy import power as mechanical_power
 from planning.formulation.kinematics import paper_arm
 
@@ -141,7 +141,7 @@ def markdown(results: dict, config) -> str:
         f"{same['ipopt_iterations']} it, objective {same['ipopt_objective_J']:.5f} J |",
         f"| same cold NLP: scipy trust-constr, finite differences | {_scipy(same)} |",
         "", "Wall times depend on the machine's load (CPU time does not); the re-plan period "
-        f"of the obstacle's {_rate(Scenario()):g} Hz sampling is {1e3 / _rate(Scenario()):g} ms. "
+        f"of the obstacle's {_rate(paper_scenario()):g} Hz sampling is {1e3 / _rate(paper_scenario()):g} ms. "
         "Actual re-plans include re-screening rounds and penalty escalation; the first plan "
         "sees one observation (a standing obstacle), the first re-plan a moving one.",
         "", *_parametrization_lines(results["parametrizations"]),

@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
+from harness.paper.planning.scenario import paper_default_config, paper_scenario
 from harness.paper.planning.variants import PAPER
 from harness.paper.studies.paper_planning import figures
 from harness.paper.studies.paper_planning.studies import (
@@ -18,11 +19,11 @@ from harness.paper.studies.paper_planning.studies import (
 )
 from harness.plan.speed import measure
 from harness.report.results import Context, SectionResult, Target, check
-from planning.config import nominal_iteration_ms, true_energy_config
+from planning.config import nominal_iteration_ms
 from planning.formulation.energy import absolute_energy
 from planning.planners import segment_planner
 from planning.result import PlanResult, to_json
-from planning.scenarios import crossing_scenario, paper_scenario
+from planning.scenarios import crossing_scenario
 
 CLEARANCE_SLACK = 2e-3  # m: acceptance allows lambda - 2 mm where avoidance is needed
 
@@ -67,12 +68,13 @@ def run(ctx: Context) -> SectionResult:
         summaries[name] = _summary(paper[name], free, baseline, config.threshold)
         plans[f"paper_{name}"] = to_json(paper[name], scenario, config, name)
     # on the nominal clock, as `plan` by default: its checks must not depend on the machine
-    default = true_energy_config().with_anytime(
+    default = paper_default_config().with_anytime(
         iteration_ms=nominal_iteration_ms(config.geometry.dof))
     paper["default"] = plan_scenario(baseline, scenario, default)
     summaries["default"] = _summary(paper["default"], free, baseline, config.threshold)
     plans["paper_default"] = to_json(paper["default"], scenario, default, "pinocchio")
-    crossing = crossing_scenario(free.execution.segments[0].trajectory, config.geometry)
+    crossing = crossing_scenario(free.execution.segments[0].trajectory, config.geometry,
+                                 scenario)
     crossing_free = plan_scenario(baseline, crossing, config, avoid=False)
     crossing_avoid = plan_scenario(baseline, crossing, config)
     plans["crossing_obstacle"] = to_json(crossing_avoid, crossing, config, "pinocchio")

@@ -8,6 +8,7 @@ import dataclasses
 import numpy as np
 
 from harness.paper.planning.baselines import MinimumJerk, solve_trust_constr
+from harness.paper.planning.scenario import paper_scenario
 from harness.paper.planning.variants import PARAMETRIZATIONS, Parametrization
 from harness.plan.speed import measure
 from planning.config import PlannerConfig
@@ -21,7 +22,7 @@ from planning.scenarios import swaying_scenario
 from planning.types import ObstacleForecast
 
 
-def plan_scenario(model, scenario, config=None, avoid=True) -> PlanResult:
+def plan_scenario(model, scenario, config: PlannerConfig, avoid=True) -> PlanResult:
     planner = segment_planner(model, config)
     return evaluate(execute(planner, scenario, avoid=avoid), scenario, model, planner.config)
 
@@ -91,11 +92,11 @@ def parametrization_study(baseline, scenario, quick: bool) -> dict:
 
 
 def swaying_study(baseline, free_trajectory, quick: bool,
-                  config: PlannerConfig | None = None) -> tuple[dict, PlanResult, object]:
+                  config: PlannerConfig) -> tuple[dict, PlanResult, object]:
     """The crossing obstacle swaying sideways: the constant-velocity prediction from the last
     two samples is never exact, so Algorithm 2 re-plans wherever the forecast threatens."""
     planner = segment_planner(baseline, config)
-    scenario = swaying_scenario(free_trajectory, planner.config.geometry)
+    scenario = swaying_scenario(free_trajectory, planner.config.geometry, paper_scenario())
     result = evaluate(execute(planner, scenario), scenario, baseline, planner.config)
     replan_ms = np.asarray(result.execution.solve_ms[1:])
     obstacle = scenario.obstacle
@@ -128,7 +129,7 @@ def scenario_replans(solve_ms) -> dict:
             "replan_max_ms": float(np.max(replans)) if len(replans) else None}
 
 
-def speed_study(baseline, scenario, quick: bool, config: PlannerConfig | None = None) -> dict:
+def speed_study(baseline, scenario, quick: bool, config: PlannerConfig) -> dict:
     """Cold and warm timings, and scipy trust-constr on the same cold problem."""
     planner = Planner(baseline, config)
     # one obstacle sample apart, over the whole motion, also in quick mode (about 2 s)
