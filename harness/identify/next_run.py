@@ -115,6 +115,33 @@ def several_runs(arm: Arm, seed: int, count: int = 3, samples: int = SAMPLE_RUN,
     return runs, perturbed_nominal(arm.nominal, seed)
 
 
+def fit_runs(arm: Arm, runs: list[Run], nominal: np.ndarray, which):
+    """`identify --prior nominal` (holdout 0, the arm's ellipsoids) on the runs `which`,
+    each labelled (an offset each; with several, the weight chosen by leaving one out)."""
+    states = [np.concatenate([getattr(runs[k].motion, a) for k in which]) for a in ("q", "qd", "qdd")]
+    labels = np.concatenate([np.full(len(runs[k].tau), k) for k in which])
+    return identify(*states, np.concatenate([runs[k].tau for k in which]), arm.library, 0.0,
+                    regressor=ConsistentRegressor(nominal, ellipsoids=arm.ellipsoids), runs=labels)
+
+
+def error_on(fit, run: Run) -> np.ndarray:
+    """A fit's relative RMS error per joint on a run, against its torque without the noise."""
+    m, model = run.motion, fit.model
+    return rel_error(model.torque(m.q, m.qd, m.qdd) + model.offsets, run.truth)
+
+
+def runs_against_single(arm: Arm, seed: int) -> dict:
+    """Three runs (several_runs): runs 1 + 2 fitted together and each alone, all scored on
+    run 3; per joint the ratio of the pair's error to the best single run's (issue #57)."""
+    runs, nominal = several_runs(arm, seed)
+    single = [fit_runs(arm, runs, nominal, [k]) for k in (0, 1)]
+    both = fit_runs(arm, runs, nominal, [0, 1])
+    best = np.minimum(*(error_on(f, runs[2]) for f in single))
+    return {"seed": seed, "ratio": (error_on(both, runs[2]) / best).tolist(),
+            "lambda": both.physical["lambda"], "single_lambdas": [f.physical["lambda"] for f in single],
+            "chosen_on": both.physical["validation"]["chosen_on"]}
+
+
 def next_run(arm: Arm, seed: int, samples: int = SAMPLES, noise: float = NOISE) -> dict:
     """Every model's relative RMS error per joint on the second run, the joints' torque RMS,
     and the rule's outcome."""
