@@ -140,7 +140,12 @@ def test_other_robot_needs_its_own_angles(tmp_path, capsys):
     assert main(["plan", "--robot", "double_pendulum", "--model", "pinocchio", "--out",
                  str(out)]) == 2  # no registered motion
     assert not out.exists()
-    assert "--start is needed on robot double_pendulum: 2" in capsys.readouterr().err
+    err = capsys.readouterr().err.strip()  # both missing options named in one line
+    assert "--start and --goal are needed on robot double_pendulum" in err and ": 2 " in err
+    assert len(err.splitlines()) == 1
+    assert main(["plan", "--robot", "double_pendulum", "--model", "pinocchio", "--goal", "0,0",
+                 "--out", str(out)]) == 2
+    assert "--start is needed on robot double_pendulum" in capsys.readouterr().err
 
 
 def test_another_robot_past_the_default_obstacle_is_told_so(tmp_path, capsys):
@@ -153,6 +158,7 @@ def test_another_robot_past_the_default_obstacle_is_told_so(tmp_path, capsys):
                  *angles, "--out", str(out)]) == 0
     err = [line for line in capsys.readouterr().err.splitlines() if line.startswith("note:")]
     assert out.exists() and len(err) == 1 and "--obstacle-from" in err[0]
+    assert "from (0.15, 0.4, 0.22) to (0.18, -0.35, 0.28) m" in err[0]  # where it is
     assert main(["plan", "--no-compile", "--robot", "double_pendulum", "--model", "pinocchio",
                  *angles, "--obstacle-from", "0.3,0.3,0.5", "--obstacle-to", "0.3,0.3,0.9",
                  "--out", str(tmp_path / "own.json")]) == 0

@@ -205,6 +205,9 @@ def _run(args, arm: Arm, model_file, notice: BuildNotice) -> int:
                    or velocity_diagnosis(config, scenario))  # search that must fail
     if unreachable:
         raise PlanningError(unreachable)
+    note = default_obstacle_notice(arm, defaulted)  # before the search: a failure has it too
+    if note:
+        print(note, file=sys.stderr)
     either = not args.realtime and (args.replanner is None or args.no_replan)  # both methods
     config, result = executed(model, config, scenario, planner, replan=not args.no_replan,
                               realtime=args.realtime, either=either)
@@ -221,7 +224,4 @@ def _run(args, arm: Arm, model_file, notice: BuildNotice) -> int:
           f"{result.sample_clearance.min():.4f} m (closest: "
           f"{closest_link(result, config)['closest_link']}), "
           f"{len(result.execution.segments) - 1} re-plans")
-    notice = default_obstacle_notice(arm, defaulted)
-    if notice:
-        print(notice, file=sys.stderr)
     return 0

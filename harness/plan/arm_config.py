@@ -12,16 +12,17 @@ from planning.config import PlannerConfig, Scenario, true_energy_config
 from planning.formulation.obstacle import LinearObstacle
 
 DURATION = 2.0  # s: the motion's time in `plan` and the bench
-# `plan`'s obstacle path when none is given (its centre at t = 0 and at the end, m): the
-# Lynxmotion paper scenario's (on another robot, with a notice: harness.plan.messages)
+# `plan`'s obstacle path on a robot that registers none (its centre at t = 0 and at the end,
+# m): the paper scenario's, the Lynxmotion's registered path (with a notice: harness.plan.messages)
 OBSTACLE_PATH = ((0.15, 0.40, 0.22), (0.18, -0.35, 0.28))
 
 
-def default_obstacle(duration: float = DURATION, samples: int | None = None) -> LinearObstacle:
-    """The default obstacle path over `duration` (s), in `samples` samples (default
-    LinearObstacle's)."""
-    return LinearObstacle(*OBSTACLE_PATH, duration, **({} if samples is None
-                                                      else {"samples": samples}))
+def default_obstacle(duration: float = DURATION, samples: int | None = None,
+                     arm: Arm | None = None) -> LinearObstacle:
+    """The arm's registered obstacle path (else OBSTACLE_PATH) over `duration` (s), in
+    `samples` samples (default LinearObstacle's)."""
+    path = (arm.entry.obstacle if arm is not None else None) or OBSTACLE_PATH
+    return LinearObstacle(*path, duration, **({} if samples is None else {"samples": samples}))
 
 
 def planner_config(arm: Arm, **changes) -> PlannerConfig:
@@ -37,7 +38,8 @@ def planner_config(arm: Arm, **changes) -> PlannerConfig:
 def motion_scenario(arm: Arm, duration: float = DURATION) -> Scenario:
     """The arm's registered motion (bench_motion) past the default obstacle path: on the
     Lynxmotion, the paper's scenario."""
-    return dataclasses.replace(bench_motion(arm, duration)[0], obstacle=default_obstacle(duration))
+    return dataclasses.replace(bench_motion(arm, duration)[0],
+                               obstacle=default_obstacle(duration, arm=arm))
 
 
 def bench_motion(arm: Arm, duration: float = DURATION) -> tuple[Scenario, int]:

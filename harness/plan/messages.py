@@ -12,8 +12,8 @@ from functools import cache
 import numpy as np
 from scipy.optimize import linprog
 
+from harness.plan.arm_config import OBSTACLE_PATH
 from harness.robots.arm import Arm
-from harness.robots.registry import DEFAULT_ROBOT
 from planning.config import JSON_NAMES, PlannerConfig, Scenario
 from planning.formulation.clearance import link_clearances
 from planning.formulation.limits import LIMIT_TOLERANCE
@@ -87,10 +87,9 @@ def velocity_diagnosis(config: PlannerConfig, scenario: Scenario) -> str | None:
 
 
 def uses_the_default_obstacle(arm: Arm, defaulted: bool) -> bool:
-    """Whether another robot than the Lynxmotion plans past the default obstacle path (the
-    Lynxmotion paper scenario's); defaulted: the user gave neither --obstacle-from nor
-    --obstacle-to."""
-    return defaulted and arm.reference != DEFAULT_ROBOT
+    """Whether a robot that registers no obstacle path plans past the paper scenario's
+    (defaulted: the user gave neither --obstacle-from nor --obstacle-to)."""
+    return defaulted and arm.entry.obstacle is None
 
 
 def default_obstacle_notice(arm: Arm, defaulted: bool) -> str | None:
@@ -99,8 +98,11 @@ def default_obstacle_notice(arm: Arm, defaulted: bool) -> str | None:
     Lynxmotion, which the plan's clearance is measured to."""
     if not uses_the_default_obstacle(arm, defaulted):
         return None
-    return ("note: the obstacle is the Lynxmotion paper scenario's default path, not one of "
-            f"robot {arm.label}'s: give --obstacle-from and --obstacle-to to plan past yours")
+    start, end = OBSTACLE_PATH
+    return ("note: the obstacle is the Lynxmotion paper scenario's default path, from "
+            f"({', '.join(f'{v:g}' for v in start)}) to ({', '.join(f'{v:g}' for v in end)}) m, "
+            f"not one placed for robot {arm.label}: give --obstacle-from and --obstacle-to to "
+            "plan past yours")
 
 
 def default_obstacle_diagnosis(config: PlannerConfig, scenario: Scenario, arm: Arm,

@@ -123,7 +123,7 @@ def scenario_from_options(args, arm: Arm, config: PlannerConfig) -> Scenario:
     against the configuration's limits."""
     duration = DURATION if args.duration is None else args.duration
     dof = config.geometry.dof
-    default = default_obstacle(duration, args.samples)
+    default = default_obstacle(duration, args.samples, arm)
     path = (default.start if args.obstacle_from is None else vector(args.obstacle_from, "obstacle-from"),
             default.end if args.obstacle_to is None else vector(args.obstacle_to, "obstacle-to"),
             duration, default.samples)
@@ -131,6 +131,11 @@ def scenario_from_options(args, arm: Arm, config: PlannerConfig) -> Scenario:
     periods = 1.0 if args.sway_periods is None else args.sway_periods
     obstacle = (SwayingObstacle(*path, sway=sway, periods=periods) if any(sway)
                 else LinearObstacle(*path))
+    missing = [f"--{n}" for n in ("start", "goal") if getattr(args, n) is None]
+    if missing and arm.entry.motion is None:  # every missing option named at once
+        raise UserError(f"{' and '.join(missing)} {'are' if len(missing) > 1 else 'is'} needed "
+                        f"on robot {arm.label} (it registers no motion): {dof} comma-separated "
+                        "joint angles (rad) each")
     scenario = Scenario(_angles(args, arm, "start", dof), _angles(args, arm, "goal", dof),
                         duration, obstacle, (0.0,) * dof)
     scenario.validate(config)

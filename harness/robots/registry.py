@@ -32,6 +32,9 @@ class Robot:
     # the bench's planning motion: start and goal (rad, one per joint) and the body whose
     # link the obstacle crosses; None: derived from the joint limits
     motion: tuple[tuple[float, ...], tuple[float, ...], str] | None = None
+    # `plan`'s obstacle path when none is given: its centre at t = 0 and at the end (m); None:
+    # the paper scenario's, with a notice that it is not placed for this robot
+    obstacle: tuple[tuple[float, ...], tuple[float, ...]] | None = None
     # identification libraries `identify` offers for it, the first its default ("kinematic":
     # the base atoms generated from its kinematics, for any arm)
     libraries: tuple[str, ...] = ("kinematic",)
@@ -71,6 +74,7 @@ ROBOTS = {
         # its compiled NLP (docs/realtime.md, 'Nominal clock')
         # the paper scenario's start and goal; the obstacle crosses the forearm
         motion=((pi / 2, pi / 5, -pi / 4), (-pi / 2, 2 * pi / 5, -pi / 3), "link3"),
+        obstacle=((0.15, 0.40, 0.22), (0.18, -0.35, 0.28)),
         libraries=("prior", "kinematic", "prior-general", "paper"), solver="fatrop",
         excitation_library="paper", extras=("paper",),
     ),
