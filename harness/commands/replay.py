@@ -82,7 +82,9 @@ def run(args) -> int:
                           "link_min_clearance": trace.clearance.min(axis=0),
                           # m, mj_geomDistance of each link capsule to the obstacle sphere
                           "link_min_surface_clearance": None if trace.surface is None
-                          else trace.surface.min(axis=0)})
+                          else trace.surface.min(axis=0),
+                          # the links' geometry the capsules could not be fitted to (stderr too)
+                          "unread_geometry": [u._asdict() for u in arm.unread_geometry]})
     if args.video:
         from harness.replay.video import render_video
 

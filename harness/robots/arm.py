@@ -13,6 +13,7 @@ robot twice gets the same Arm, parsed once. Its models are shared: whoever chang
 from __future__ import annotations
 
 import dataclasses
+import sys
 from functools import cache, cached_property
 from pathlib import Path
 
@@ -139,12 +140,31 @@ class Arm:
                               self.reference, bodies)
 
     @cached_property
+    def _read_geometry(self) -> tuple[dict, tuple]:
+        """harness.robots.collision.urdf_geometry, read once; each link whose geometry cannot
+        be read is named once on stderr (one line: its files and why)."""
+        from harness.robots.collision import urdf_geometry
+
+        if not self.entry.urdf:
+            return {}, ()
+        found, unread = urdf_geometry(self.entry, self.pinocchio)
+        for link in dict.fromkeys(u.link for u in unread):
+            files = "; ".join(f"{u.file} ({u.reason})" for u in unread if u.link == link)
+            print(f"torquebench: warning: robot {self.label}: link {link}: geometry not read: "
+                  f"{files}; its capsule and bounding ellipsoid leave it out", file=sys.stderr)
+        return found, unread
+
+    @property
     def body_points(self) -> dict[int, tuple[str, np.ndarray]]:
         """Per arm joint (1-based) whose links carry geometry the harness reads, which kind
         ("collision", else "visual") and its points (harness.robots.collision)."""
-        from harness.robots.collision import urdf_body_points
+        return self._read_geometry[0]
 
-        return urdf_body_points(self.entry, self.pinocchio) if self.entry.urdf else {}
+    @property
+    def unread_geometry(self) -> tuple:
+        """The links' geometry that could not be read (harness.robots.collision
+        .UnreadGeometry: link, file, reason), where it would have counted."""
+        return self._read_geometry[1]
 
     def capsules(self, default: float = 0.0) -> ArmGeometry:
         """geometry with each link's capsule fitted to its collision (else visual) geometry
