@@ -40,10 +40,11 @@ def test_next_run_scores_what_it_says():
     np.testing.assert_allclose(errors["least_squares"], ls, rtol=1e-6)
     # every joint judged carries load, and the rule judges at least one joint (never vacuous)
     rms = np.sqrt((truth ** 2).sum(axis=0) / len(truth))
-    assert out["rule_joints"] and all(rms[j] > min(RULE_RMS, 0.25 * rms.max())
+    # (joints numbered from 1, as the report's tables number them)
+    assert out["rule_joints"] and all(rms[j - 1] > min(RULE_RMS, 0.25 * rms.max())
                                       for j in out["rule_joints"])
     for j in out["rule_holds_on"]:
-        assert errors["identified"][j] <= min(errors["nominal"][j], ls[j] * (1 + 1e-6))
+        assert errors["identified"][j - 1] <= min(errors["nominal"][j - 1], ls[j - 1] * (1 + 1e-6))
     assert out["median_ratio_to_least_squares"] == pytest.approx(
         np.median(errors["identified"] / ls), rel=1e-6)
     assert np.all(errors["identified"] < 0.2 * errors["nominal"])

@@ -9,8 +9,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness.report.results import Check, SectionResult, Target, check
-from harness.report.writer import SectionOutcome, failed_checks, report_json
+from harness.identify.next_run import markdown as next_run_markdown
+from harness.identify.next_run import rule_targets
+from harness.report.results import Check, SectionResult, Target, check, distinct
+from harness.report.writer import (
+    SectionOutcome,
+    failed_checks,
+    report_json,
+    report_markdown,
+    targets_markdown,
+)
 
 
 def test_numpy_booleans_are_checks_and_count():
@@ -39,3 +47,41 @@ def test_a_missing_command_module_is_an_error(monkeypatch):
     monkeypatch.setattr(cli, "COMMANDS", [*cli.COMMANDS, "nonexistent"])
     with pytest.raises(ModuleNotFoundError):
         cli.build_parser()
+
+
+def _outcome(targets) -> SectionOutcome:
+    return SectionOutcome.of("s", SectionResult("", checks=[check("c", True)], targets=targets), 1.0)
+
+
+def test_the_top_line_names_the_missed_targets():
+    """report.md's top line said 'all N checks hold' over a missed target (issue #58)."""
+    outcome = _outcome([Target("fast", 1.0, 2.0, "s"), Target("exact", 0.00304, 0.00276, "x"),
+                        Target("unmeasured", None, 1.0)])
+    top = report_markdown([outcome], {"robot": "r"}, Path(".")).splitlines()[2]
+    assert "all 1 checks hold" in top and "1 of 3 targets met" in top
+    assert "missed: s: exact" in top and "not measured: s: unmeasured" in top
+    assert "fast" not in top
+    clean = report_markdown([_outcome([Target("fast", 1.0, 2.0, "s")])], {}, Path("."))
+    assert "all 1 checks hold; 1 of 1 targets met." in clean.splitlines()[2]
+
+
+def test_the_gap_is_blank_where_met_and_figures_compared_read_apart():
+    rows = targets_markdown([_outcome([Target("met", 1.0, 2.0, "x"),
+                                       Target("close", 1.0504, 1.05, "x")])])
+    met, close = (row.split(" | ") for row in rows[2:])
+    assert met[4] == "" and met[5] == "yes |"  # no "0 x" on a met row
+    assert close[2] == "1.0504 x" and close[3] == "<= 1.05 x"
+    assert close[4] == "0.0004 x"
+    assert distinct([0.00304, 0.00276, 0.003]) == ["0.00304", "0.00276", "0.003"]
+    assert distinct([0.0030401, 0.0030402]) == ["0.0030401", "0.0030402"]
+    assert distinct([1.0, 1.0]) == ["1", "1"]
+
+
+def test_the_next_run_numbers_joints_from_1_in_json_and_markdown_alike():
+    run = {"seed": 1, "errors": {"identified": [0.00304, 0.1], "least_squares": [0.00276, 0.2]},
+           "rule_joints": [1, 2], "rule_holds_on": [2]}
+    table = next_run_markdown([run, {**run, "seed": 2}])
+    assert table[-1] == "| 2 | 0.00304, 0.1 | 0.00276, 0.2 | [1, 2] | [2] |"
+    target = rule_targets([dict(run, median_ratio_to_least_squares=1.0),
+                           dict(run, seed=2, median_ratio_to_least_squares=1.0)])
+    assert target[0].target == 4 and "counted over 2 seeds (1, 2)" in target[0].name

@@ -124,3 +124,18 @@ class Context:
 
 def check(name: str, passed, detail: str = "") -> Check:
     return Check(name, bool(passed), detail)
+
+
+MAX_DIGITS = 6  # significant digits distinct() goes up to
+
+
+def distinct(values, digits: int = 3) -> list[str]:
+    """values printed with `digits` significant digits, more (up to MAX_DIGITS) where two
+    that differ would read the same: figures a table compares never look equal when not."""
+    values = [float(v) for v in values]
+    for n in range(digits, MAX_DIGITS + 1):
+        texts = [f"{v:.{n}g}" for v in values]
+        if all(texts[i] != texts[k] or values[i] == values[k]
+               for i in range(len(values)) for k in range(i)):
+            break
+    return texts

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.io import write_json, write_text
-from harness.report.results import Check, Row, SectionResult, Target
+from harness.report.results import Check, Row, SectionResult, Target, distinct
 
 TITLES = {
     "identification": "Identification",
@@ -105,25 +105,46 @@ def report_json(outcomes: list[SectionOutcome], meta: dict, out_dir: Path) -> di
     })
 
 
-def _number(x: float | None, unit: str) -> str:
+def _number(x: float | None, unit: str, text: str | None = None) -> str:
     if x is None:
         return "–"
-    return f"{x:.3g} {unit}".strip()
+    return f"{text or f'{x:.3g}'} {unit}".strip()
 
 
 def targets_markdown(outcomes) -> list[str]:
-    """The targets table: what is aimed at, measured against it, with the gap."""
+    """The targets table: what is aimed at, measured against it (with the digits that tell
+    them apart), and the gap of a missed one (blank where met)."""
     rows = [(o.name, t) for o in outcomes for t in o.targets]
     if not rows:
         return ["_No targets._"]
     md = ["| section | target | measured | aim | gap | met |", "|---|---|---|---|---|---|"]
     for name, t in rows:
-        aim = f"{'<=' if t.lower_is_better else '>='} {_number(t.target, t.unit)}"
+        measured, target = (distinct([t.measured, t.target]) if t.met is not None
+                            else (None, None))
+        aim = f"{'<=' if t.lower_is_better else '>='} {_number(t.target, t.unit, target)}"
         met = {True: "yes", False: "**no**", None: "–"}[t.met]
         timing = " (timing)" if t.timing else ""
-        md.append(f"| {name} | {t.name}{timing} | {_number(t.measured, t.unit)} | {aim} | "
-                  f"{_number(t.gap, t.unit)} | {met} |")
+        gap = "" if t.met else _number(t.gap, t.unit)
+        md.append(f"| {name} | {t.name}{timing} | {_number(t.measured, t.unit, measured)} | "
+                  f"{aim} | {gap} | {met} |")
     return md
+
+
+def targets_verdict(outcomes) -> str:
+    """What the top line says of the targets: how many met, and which were missed or not
+    measured, by name."""
+    targets = [(o.name, t) for o in outcomes for t in o.targets]
+    if not targets:
+        return "no targets"
+    missed = [f"{name}: {t.name}" for name, t in targets if t.met is False]
+    unmeasured = [f"{name}: {t.name}" for name, t in targets if t.met is None]
+    met = sum(t.met is True for _, t in targets)
+    text = f"{met} of {len(targets)} targets met"
+    if missed:
+        text = f"**{text}** — missed: {'; '.join(missed)}"
+    if unmeasured:
+        text += f" — not measured: {'; '.join(unmeasured)}"
+    return text
 
 
 def headline_markdown(outcomes) -> list[str]:
@@ -157,7 +178,7 @@ def report_markdown(outcomes: list[SectionOutcome], meta: dict, out_dir: Path) -
     total = sum(len(o.checks) for o in outcomes)
     status = (f"sections failed: {', '.join(failed)}" if failed else
               f"**{len(checks)} of {total} checks failed** ({', '.join(checks)})" if checks else
-              f"all {total} checks hold")
+              f"all {total} checks hold") + f"; {targets_verdict(outcomes)}"
     elapsed = (meta.get("timing") or {}).get("elapsed_s", 0.0)
     lines = ["# torquebench report", "",
              f"Robot `{meta.get('robot')}`, {elapsed:.0f} s in total"

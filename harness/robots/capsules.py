@@ -91,7 +91,7 @@ def fit_capsule(points: np.ndarray) -> Capsule:
 def link_capsules(meshes: dict[int, np.ndarray], model: pin.Model, geometry: ArmGeometry
                   ) -> tuple[Capsule | None, ...]:
     """Per link of geometry.links, the capsule fitted to its body's points (per joint, as
-    harness.robots.collision.robot_body_points gives them) in
+    harness.robots.collision.body_points gives them) in
     the frame of the joint moving it (m), None without any; model: the arm's Pinocchio
     model the points were read with."""
     data = model.createData()

@@ -2,12 +2,13 @@
 
 A body's ellipsoid is the smallest one holding its links' collision geometry (else their
 visual geometry) from the URDF, in its joint's frame, where the standard parameters are.
-A body without geometry the harness can read (none in the file, an MJCF, meshes other than
-STL) gets one around the segment from its joint to its child joint, a quarter of the
-segment thick (at least MIN_RADIUS); a last body without geometry a sphere of MIN_RADIUS
-about its nominal centre of mass. Each is grown about its centre until it holds the URDF's
-own body (a bound the robot's file breaks is a wrong bound, and generated data are that
-body's); the consistent fit grows it again to hold its prior's body.
+A body without geometry the harness can read (none in the file, an MJCF, meshes it cannot
+read: Arm.unread_geometry names them) gets one around the segment from its joint to its
+child joint, a quarter of the segment thick (at least MIN_RADIUS); a last body without
+geometry a sphere of MIN_RADIUS about its nominal centre of mass. Each is grown about its
+centre until it holds the URDF's own body (a bound the robot's file breaks is a wrong
+bound, and generated data are that body's); the consistent fit grows it again to hold its
+prior's body.
 """
 
 from __future__ import annotations
