@@ -42,9 +42,15 @@ def _close(a, b):
     assert np.linalg.norm(a - b) <= TOL * max(np.linalg.norm(b), 1e-9), (a, b)
 
 
-def test_the_urdf_gives_the_models_gravity(fitted):
+def test_the_urdf_gives_the_models_gravity(fitted, capsys):
+    capsys.readouterr()
     code, out = _export(fitted, "urdf")
     assert code == 0
+    # the armature the URDF cannot hold is said to be left out (issue #58)
+    line = capsys.readouterr().out
+    physical = json.loads((fitted / "m.json").read_text())["metrics"]["physical"]
+    armature = physical["joint_parameters"]["armature"]
+    assert any(armature) and "armature (" in line and "is not in it" in line
     exported = pin.buildModelFromUrdf(str(out))
     data = exported.createData()
     model = load_torque_model(str(fitted / "m.json"), Arm.of("ur5"))  # its torque leaves offsets out
@@ -94,11 +100,16 @@ def test_the_csv_is_labelled(fitted):
     code, out = _export(fitted, "csv")
     assert code == 0
     rows = list(csv.reader(out.read_text().splitlines()))
-    assert rows[0] == ["item", "parameter", "value", "unit", "nominal"]
+    assert rows[0] == ["item", "parameter", "value", "unit", "nominal", "about"]
     table = {(r[0], r[1]): r for r in rows[1:]}
-    assert len(rows) == 1 + 13 * 6
+    assert len(rows) == 1 + 13 * 6 and all(len(r) == 6 for r in rows)
     assert table[("shoulder_link", "mass")][3] == "kg"
     assert table[("shoulder_link", "Ixx")][3] == "kg m^2"
+    # which frame (issue #58): the link's, not the centre of mass MODEL.json's bodies are at
+    assert "about the origin of the link frame" in table[("shoulder_link", "Ixx")][5]
+    assert "not about the centre of mass" in table[("shoulder_link", "Iyz")][5]
+    assert table[("shoulder_link", "mc_x")][5].startswith("in the link frame")
+    assert table[("shoulder_link", "mass")][5] == table[("shoulder_pan_joint", "coulomb")][5] == ""
     assert table[("shoulder_pan_joint", "viscous")][3] == "N m s/rad"
     assert table[("shoulder_pan_joint", "coulomb")][3] == "N m"
     physical = json.loads((fitted / "m.json").read_text())["metrics"]["physical"]

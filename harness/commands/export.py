@@ -19,7 +19,9 @@ def register(sub) -> None:
                    help="urdf: the robot's URDF with each body's <inertial> and each joint's "
                    "<dynamics damping friction>; mjcf: MuJoCo's model with the inertials, "
                    "armature, damping, frictionloss; csv: body or joint, parameter, value, unit, "
-                   "nominal (a model without bodies: its terms)")
+                   "nominal, about (first moments and inertias about the link frame, its "
+                   "joint's, not the centre of mass; a model without bodies: its terms). "
+                   "URDF has no armature: the line written says what was left out")
     p.add_argument("--out", required=True, help="output file")
     p.set_defaults(func=run)
 

@@ -89,7 +89,7 @@ def run(args) -> int:
         from harness.replay.video import render_video
 
         render_video(model, trace, args.video, required=True)
-    print(summary(args.plan, plant.label, result))
+    print(summary(args.plan, arm.label, result, _plant_words(args.plant)))
     return 0
 
 
@@ -123,11 +123,22 @@ def plan_capsules(capsules, geometry):
     return planned
 
 
-def summary(plan: str, plant: str, result) -> str:
-    """The line `replay` prints: energy against the plan's, clearance, tracking."""
+def _plant_words(plant: str | None) -> str:
+    """What the replay line says of a --plant: the dynamics it stands for."""
+    if plant is None:
+        return ""
+    if Path(plant).suffix.lower() == ".json":
+        return f"the dynamics {plant} identified"
+    return f"the dynamics of {plant}"
+
+
+def summary(plan: str, robot: str, result, plant: str = "") -> str:
+    """The line `replay` prints: the robot the plan ran on (and the plant's dynamics where
+    --plant gave them), energy against the plan's, clearance, tracking."""
     change = (f", {100 * result.energy_error:+.1f} %" if math.isfinite(result.energy_error)
               else "")
     clearance = result.min_clearance  # to the links' surfaces, as the plan measures it
-    return (f"replayed {plan} on {plant}: energy {result.energy:.4f} J (plan "
+    on = f"{robot} with {plant}" if plant else robot
+    return (f"replayed {plan} on {on}: energy {result.energy:.4f} J (plan "
             f"{result.energy_planned:.4f} J{change}), min clearance {1000 * clearance:.1f} mm, "
             f"tracking rms {result.tracking_rms:.2e} rad")

@@ -6,7 +6,8 @@ joint armature, viscous, Coulomb). urdf: every moving link's <inertial> and its 
 <dynamics damping friction> (the links below it that the identification held fixed - welded
 links, a gripper's fingers - are in its parameters and left massless; URDF has no armature);
 mjcf: MuJoCo's model of the robot with the same inertials, armature, damping, frictionloss;
-csv: body or joint, parameter, value, unit, nominal. A model without bodies (the sparse fit on
+csv: body or joint, parameter, value, unit, nominal, about (the frame of a body's first
+moment and inertia: its link frame, not the centre of mass). A model without bodies (the sparse fit on
 base atoms, a feature model) exports its terms as csv and refuses urdf/mjcf in one line.
 """
 
@@ -31,10 +32,17 @@ BODY_UNITS = (("mass", "kg"), ("mc_x", "kg m"), ("mc_y", "kg m"), ("mc_z", "kg m
               ("Ixx", "kg m^2"), ("Ixy", "kg m^2"), ("Iyy", "kg m^2"), ("Ixz", "kg m^2"),
               ("Iyz", "kg m^2"), ("Izz", "kg m^2"))
 JOINT_UNITS = (("armature", "kg m^2"), ("viscous", "N m s/rad"), ("coulomb", "N m"))
+# the csv's `about` column: what frame a body's parameter is in (MODEL.json's consistent fit
+# gives the same standard parameters; a URDF's <inertial> is about the centre of mass)
+LINK_FRAME = "the link frame (its joint's)"
+ABOUT = {"mc": f"in {LINK_FRAME}",
+         "I": f"about the origin of {LINK_FRAME} in its axes; not about the centre of mass"}
+CSV_HEADER = "item,parameter,value,unit,nominal,about"
 
 
 def body_table(params: np.ndarray, arm: Arm) -> list[tuple]:
-    """(body or joint, parameter, value, unit, nominal) rows of 13 dof standard parameters."""
+    """(body or joint, parameter, value, unit, nominal, about) rows of 13 dof standard
+    parameters (about: the frame a body's first moment or inertia is in, ABOUT)."""
     model = _pinocchio(arm, params)
     nominal = arm.nominal.atom_parameters()
     dof = model.nv
@@ -44,11 +52,12 @@ def body_table(params: np.ndarray, arm: Arm) -> list[tuple]:
         body = next((f.name for f in model.frames if f.parentJoint == j + 1
                      and f.type == pin.FrameType.BODY), names[j])
         for k, (name, unit) in enumerate(BODY_UNITS):
-            rows.append((body, name, params[10 * j + k], unit, nominal[10 * j + k]))
+            about = ABOUT.get(name[:2] if name.startswith("mc") else name[:1], "")
+            rows.append((body, name, params[10 * j + k], unit, nominal[10 * j + k], about))
     for i, (name, unit) in enumerate(JOINT_UNITS):
         for j in range(dof):
             k = (10 + i) * dof + j
-            rows.append((names[j], name, params[k], unit, nominal[k]))
+            rows.append((names[j], name, params[k], unit, nominal[k], ""))
     return rows
 
 
@@ -158,7 +167,7 @@ def export_model(payload: dict, arm: Arm, fmt: str, out: str | Path) -> str:
                             f"nominal|flat for a {fmt}")
         text = _csv(term_table(payload), "joint,term,coefficient,unit")
     elif fmt == "csv":
-        text = _csv(body_table(params, arm), "item,parameter,value,unit,nominal")
+        text = _csv(body_table(params, arm), CSV_HEADER)
     elif fmt == "urdf":
         text = export_urdf(params, arm)
     else:
@@ -173,5 +182,11 @@ def export_model(payload: dict, arm: Arm, fmt: str, out: str | Path) -> str:
     atomic_write(out, lambda tmp: Path(tmp).write_text(text), suffix="." + fmt)
     if params is None:
         return "the model's terms (it has no bodies)"
-    return f"robot {arm.label}'s " + ("URDF with the identified bodies" if fmt == "urdf"
-                                  else "identified bodies and joints beside the URDF's")
+    if fmt == "csv":
+        return (f"robot {arm.label}'s identified bodies and joints beside the URDF's (first "
+                f"moments and inertias about {LINK_FRAME}, not the centre of mass)")
+    armature = params[10 * arm.pinocchio.nv:11 * arm.pinocchio.nv]
+    dropped = ("" if not np.any(armature) else "; the identified armature ("
+               + ", ".join(f"{a:.3g}" for a in armature) + " kg m^2) is not in it: URDF has "
+               "none (--format mjcf or csv keeps it)")
+    return f"robot {arm.label}'s URDF with the identified bodies{dropped}"

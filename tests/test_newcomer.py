@@ -1,0 +1,52 @@
+"""Small things a newcomer met (issue #58): the test run prints no CasADi notice, the slow
+marker says what the Makefile does, replay names the robot (and the plant's dynamics)."""
+
+from __future__ import annotations
+
+import json
+import re
+import tomllib
+import warnings
+from pathlib import Path
+from types import SimpleNamespace
+
+import casadi as ca
+import numpy as np
+
+from harness.cli import main
+from harness.commands.replay import _plant_words, summary
+from tests.test_replay import quintic_plan
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_casadis_numpy_notice_is_not_printed_by_the_tests():
+    """CasADi 3.8's 20-line FutureWarning on np.allclose(DM, ...) (pytest filterwarnings)."""
+    with warnings.catch_warnings(record=True) as caught:
+        assert np.allclose(ca.DM([1.0, 2.0]), [[1.0], [2.0]])
+    assert not [w for w in caught if "casadi" in str(w.message)]
+
+
+def test_the_slow_marker_says_what_make_test_does():
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["pytest"]["ini_options"]
+    slow = next(m for m in config["markers"] if m.startswith("slow:"))
+    makefile = (ROOT / "Makefile").read_text()
+    test_rule = re.search(r"^test:.*?(?=^\S)", makefile, re.M | re.S).group(0)
+    assert '-m "not slow"' in test_rule and "make test-slow" in slow
+    assert "run in make test" not in slow and "make test leaves them out" in slow
+
+
+def test_replay_names_the_robot_and_the_plants_dynamics(tmp_path, capsys):
+    """`replay --plant model.json` said 'replayed plan.json on model.json'."""
+    plan = tmp_path / "plan.json"
+    plan.write_text(json.dumps(quintic_plan()))
+    urdf = ROOT / "models" / "lynxmotion" / "lynxmotion.urdf"
+    capsys.readouterr()
+    assert main(["replay", "--plan", str(plan), "--plant", str(urdf),
+                 "--out", str(tmp_path / "r.json")]) == 0
+    line = capsys.readouterr().out.strip()
+    assert line.startswith(f"replayed {plan} on lynxmotion with the dynamics of {urdf}: energy ")
+    result = SimpleNamespace(energy_error=0.01, energy=1.0, energy_planned=0.99,
+                             min_clearance=0.05, tracking_rms=1e-3)
+    assert summary("p.json", "ur5", result, _plant_words("model.json")).startswith(
+        "replayed p.json on ur5 with the dynamics model.json identified: energy 1.0000 J")
