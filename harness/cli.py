@@ -24,7 +24,7 @@ from harness import interrupt  # noqa: E402 - after the environment set-up above
 from harness.errors import UserError  # noqa: E402
 
 COMMANDS = ["generate", "ingest", "identify", "predict", "plan", "replay", "closeloop", "bench",
-            "study", "sweep", "excite", "export"]
+            "study", "sweep", "excite", "export", "robots"]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,5 +1,6 @@
 """Small things a newcomer met (issue #58): the test run prints no CasADi notice, the slow
-marker says what the Makefile does, replay names the robot (and the plant's dynamics)."""
+marker says what the Makefile does, replay names the robot (and the plant's dynamics),
+`torquebench robots` lists where the robots are."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ import numpy as np
 
 from harness.cli import main
 from harness.commands.replay import _plant_words, summary
+from harness.robots.registry import ROBOTS, erd_robots_dir
 from tests.test_replay import quintic_plan
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -50,3 +52,14 @@ def test_replay_names_the_robot_and_the_plants_dynamics(tmp_path, capsys):
                              min_clearance=0.05, tracking_rms=1e-3)
     assert summary("p.json", "ur5", result, _plant_words("model.json")).startswith(
         "replayed p.json on ur5 with the dynamics model.json identified: energy 1.0000 J")
+
+
+def test_robots_lists_the_registered_and_example_robot_datas_urdfs(capsys):
+    assert main(["robots"]) == 0
+    out = capsys.readouterr().out
+    for name in ROBOTS:
+        assert f"  {name}" in out
+    ur3 = erd_robots_dir() / "ur_description" / "urdf" / "ur3_robot.urdf"
+    assert f"  {ur3}\n" in out and str(erd_robots_dir()) in out
+    assert main(["robots", "--registered"]) == 0
+    assert str(ur3) not in capsys.readouterr().out
