@@ -259,7 +259,8 @@ def test_a_robot_given_by_its_file_gets_the_same_sections(tmp_path):
     assert list(report["sections"]) == ["identification", "closeloop"] and report["ok"]
     assert "paper" not in report["sections"]["identification"]["results"]  # no extras
     assert sorted(p.name for p in (out / "plants").iterdir()) == [
-        "lynxmotion_control.xml", "lynxmotion_coupled.xml", "lynxmotion_effects.xml"]
+        "lynxmotion_control.xml", "lynxmotion_coupled.xml", "lynxmotion_effects.xml",
+        "lynxmotion_payload.xml"]
 
 
 def test_clearance_is_a_target_where_no_path_was_designed():
