@@ -108,3 +108,15 @@ def test_replay_json_names_the_unread_geometry(tmp_path, capsys):
     unread = json.loads(out.read_text())["unread_geometry"]
     assert [(u["link"], u["file"]) for u in unread] == [("l2", "meshes/missing.dae")]
     assert "not found" in unread[0]["reason"]
+
+
+def test_plan_json_names_the_unread_geometry(tmp_path, capsys):
+    _cube_obj(tmp_path / "cube.obj", 0.04)
+    _arm(tmp_path, "cube.obj", "meshes/missing.dae")
+    out = tmp_path / "plan.json"
+    assert main(["plan", "--no-compile", "--model", "pinocchio", "--robot",
+                 str(tmp_path / "arm.urdf"), "--start", "0.2,0.1", "--goal", "1.0,-0.5",
+                 "--obstacle-from", "0.3,0.3,0.5", "--obstacle-to", "0.3,0.3,0.9",
+                 "--torque-limit", "none", "--out", str(out)]) == 0
+    unread = json.loads(out.read_text())["unread_geometry"]
+    assert [(u["link"], u["file"]) for u in unread] == [("l2", "meshes/missing.dae")]

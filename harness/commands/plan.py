@@ -216,7 +216,8 @@ def _run(args, arm: Arm, model_file, notice: BuildNotice) -> int:
     if not result.feasible:  # the torque limits' diagnosis builds IPOPT's NLP: only now
         raise PlanningError(torque_diagnosis(planner, scenario)
                             or infeasible(result.problems, config, scenario, either))
-    write_json(args.out, to_json(result, scenario, config, args.model))
+    write_json(args.out, {**to_json(result, scenario, config, args.model),  # links whose
+                          "unread_geometry": [u._asdict() for u in arm.unread_geometry]})  # mesh failed
     if args.trajectory:
         write_trajectory(args.trajectory, control_trajectory(
             result.execution, model, scenario.duration, args.rate or DEFAULT_RATE))
