@@ -20,6 +20,8 @@ from dataclasses import dataclass
 import cvxpy as cp
 import numpy as np
 
+from identification.conic import solve_conic
+
 MARGIN = 0.05  # a nominal body at least this fraction of its mass inside (tr(J Q) / m)
 MAX_POINTS = 400  # hull vertices the enclosing ellipsoid is fitted on
 GROWTH = 1.1  # semi-axes' factor per step while growing an ellipsoid to hold a body
@@ -72,10 +74,7 @@ def enclosing(points: np.ndarray, thickness: float = 0.01) -> Ellipsoid:
     problem = cp.Problem(cp.Maximize(cp.log_det(a)), [cp.norm(unit @ a + b[None, :], axis=1) <= 1])
     with warnings.catch_warnings():  # an inaccurate optimum is still an ellipsoid: held below
         warnings.filterwarnings("ignore", "Solution may be inaccurate")
-        try:
-            problem.solve(solver=cp.CLARABEL)
-        except cp.SolverError:
-            problem.solve(solver=cp.SCS)
+        solve_conic(problem, "the bounding ellipsoid", stacklevel=4)
     if a.value is None:
         raise ValueError(f"no enclosing ellipsoid ({problem.status})")
     values, vectors = np.linalg.eigh(np.asarray(a.value))

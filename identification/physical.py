@@ -28,12 +28,12 @@ not; issue #57). Several runs have an offset each. Solved by Clarabel (SCS if it
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 
 import cvxpy as cp
 import numpy as np
 
+from identification.conic import solve_conic
 from identification.friction import FrictionLaw, choose_law
 from identification.regression.base import run_centring
 
@@ -174,16 +174,7 @@ def _solve(A, tau, law_cols, laws, scale, nominal, lam: float, used: list[str], 
         if not law.keeps_coulomb:
             constraints.append(x[12 * dof + j] == 0)
     problem = cp.Problem(cp.Minimize(cost), constraints)
-    try:
-        problem.solve(solver=cp.CLARABEL)
-        used.append("CLARABEL")
-    except cp.SolverError as exc:
-        # SCS is first order: looser than Clarabel's interior point, so never silently
-        warnings.warn(f"the consistent fit's Clarabel solve failed ({' '.join(str(exc).split())[:80]});"
-                      " solved by SCS instead (first order, looser tolerances)", RuntimeWarning,
-                      stacklevel=3)
-        problem.solve(solver=cp.SCS)
-        used.append("SCS")
+    used.append(solve_conic(problem, "the consistent fit", stacklevel=4))
     if y.value is None:
         raise ValueError(f"the consistent fit did not solve ({problem.status})")
     # armature, friction and the laws' coefficients are >= 0 only to the solver's tolerance

@@ -28,6 +28,7 @@ import casadi as ca
 import cvxpy as cp
 import numpy as np
 
+from identification.conic import solve_conic
 from identification.library.chain import KinematicChain, rnea
 from identification.physical import pseudo_inertia
 from identification.torque_model import as_states
@@ -113,10 +114,7 @@ def consistent_fit(base, target, effects, regressor, w, reach: float = REACH,
     j = cp.bmat(pseudo_inertia(x))
     problem = cp.Problem(cp.Minimize(cp.sum_squares(r @ v - z)),
                          [(j + j.T) / 2 >> 0, cp.norm(x[1:4]) <= reach * x[0]])
-    try:
-        problem.solve(solver=cp.CLARABEL)
-    except cp.SolverError:
-        problem.solve(solver=cp.SCS)
+    solve_conic(problem, "the payload fit")
     if v.value is None:
         raise ValueError(f"payload fit failed ({problem.status})")
     coef = np.asarray(v.value) / scale
