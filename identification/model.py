@@ -105,6 +105,7 @@ def model_payload(result, robot: dict, heldout: dict, scored_against: str) -> di
     payload = {"robot": robot, **model_to_dict(result.model),
                "metrics": {**result.metrics(), "heldout": heldout,
                            "scored_against": scored_against}}
+    payload["robot"] = robot  # the caller's record (a robot file's path too), not the chain's
     if result.lagrangian():
         payload["lagrangian"] = result.lagrangian()
     if isinstance(result.model, KinematicModel):  # readable: bodies, what each atom sums

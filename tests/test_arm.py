@@ -128,3 +128,17 @@ def test_the_models_an_arm_hands_out_agree():
     lower, upper = arm.position_limits
     np.testing.assert_allclose(lower, arm.pinocchio.lowerPositionLimit, atol=1e-9)
     np.testing.assert_allclose(upper, arm.pinocchio.upperPositionLimit, atol=1e-9)
+
+
+def test_a_model_of_a_robot_given_by_its_file_finds_it_again(tmp_path, capsys):
+    """identify on a user's URDF records the file, so export (and plan, predict) need no
+    --robot: the README's own walk (it refused with 'pass --robot', the record held the
+    file's stem only)."""
+    urdf = str(Arm.of("ur5").entry.urdf)
+    data, model = tmp_path / "d.npz", tmp_path / "m.json"
+    assert main(["generate", "--robot", urdf, "--samples", "600", "--out", str(data)]) == 0
+    assert main(["identify", "--data", str(data), "--out", str(model)]) == 0
+    assert json.loads(model.read_text())["robot"]["file"] == str(Path(urdf).resolve())
+    assert main(["export", "--model", str(model), "--format", "csv",
+                 "--out", str(tmp_path / "m.csv")]) == 0
+    capsys.readouterr()

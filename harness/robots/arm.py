@@ -116,8 +116,10 @@ class Arm:
 
     @cached_property
     def record(self) -> dict:
-        """What a MODEL.json records of its robot: name and kinematics hash."""
-        return {"name": self.chain.name, "hash": self.chain.digest()}
+        """What a MODEL.json records of its robot: name and kinematics hash, and for a robot
+        given by its file that file's absolute path (so later commands find it)."""
+        record = {"name": self.chain.name, "hash": self.chain.digest()}
+        return record if self.registered else {**record, "file": self.reference}
 
     # --- geometry and limits ---------------------------------------------------------------
     @cached_property

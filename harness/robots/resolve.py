@@ -25,8 +25,8 @@ def recorded_robot(record) -> str | None:
     if not isinstance(record, dict):
         return None
     robot = record.get("robot") or record.get("plant")
-    if isinstance(robot, dict):
-        robot = robot.get("name")
+    if isinstance(robot, dict):  # a model's record: the robot's file where it has one
+        robot = robot.get("file") or robot.get("name")
     return robot if robot not in (None, "") else None
 
 
