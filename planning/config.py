@@ -108,6 +108,24 @@ def nominal_iteration_ms(dof: int) -> float:
     return round(0.5 * (dof / 3) ** 1.5, 3)
 
 
+@dataclass(frozen=True)
+class BankOptions:
+    """A bank of plans, one per homotopy class of the motion around the obstacle, re-planned
+    warm at every obstacle sample, the cheapest followed (planning.bank). size 1: one plan,
+    Algorithm 2 as the paper's."""
+
+    size: int = 1  # classes held at most
+    # the share of a re-plan's budget the plan followed gets when the bank holds others
+    followed_share: float = 0.5
+    # the arm switches class when another plan's energy to go is lower by this fraction
+    hysteresis: float = 0.01
+    # forecasts in a row a class's plan may miss the threshold on before it is dropped
+    patience: int = 20
+    # the global search's iterations per start before its finalists (it hands every plan to
+    # the bank as it goes: a shallower screen hands the classes over sooner)
+    screen_iterations: int = 10
+
+
 @dataclass(frozen=True, kw_only=True)
 class PlannerConfig:
     """How trajectories are scored and constrained (the formulation), which segment planner
@@ -172,6 +190,7 @@ class PlannerConfig:
     penalty: PenaltyOptions = field(default_factory=PenaltyOptions)
     anytime: AnytimeOptions = field(default_factory=AnytimeOptions)
     global_search: GlobalSearchOptions = field(default_factory=GlobalSearchOptions)
+    bank: BankOptions = field(default_factory=BankOptions)
 
     def __post_init__(self):
         name = ALIASES.get(self.replanner, self.replanner)
@@ -188,6 +207,10 @@ class PlannerConfig:
         """This configuration with these anytime-SQP options changed."""
         return dataclasses.replace(self, anytime=dataclasses.replace(self.anytime, **changes))
 
+    def with_bank(self, **changes) -> PlannerConfig:
+        """This configuration with these bank options changed."""
+        return dataclasses.replace(self, bank=dataclasses.replace(self.bank, **changes))
+
     def with_global_search(self, **changes) -> PlannerConfig:
         """This configuration with these global-search options changed."""
         return dataclasses.replace(self, global_search=dataclasses.replace(self.global_search,
@@ -196,7 +219,8 @@ class PlannerConfig:
 
 # what true_energy_config changes of PlannerConfig's defaults
 TRUE_ENERGY = dict(energy_quadrature="gauss", energy_samples=20, starts=4, rest_at_goal=True,
-                   replanner="anytime", global_search=GlobalSearchOptions(enabled=True))
+                   replanner="anytime", global_search=GlobalSearchOptions(enabled=True),
+                   bank=BankOptions(size=4))
 
 
 def true_energy_config(geometry: ArmGeometry, lower, upper, **changes) -> PlannerConfig:

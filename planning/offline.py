@@ -29,6 +29,11 @@ class Offline:
     def offers(self, t: float) -> bool:
         return self.primary.offers(t)
 
+    def account(self) -> dict | None:
+        """The primary's bank account (planning.replanning.bank_account)."""
+        from planning.replanning import bank_account
+        return bank_account(self.primary)
+
     def prepare(self, goal) -> None:
         self.primary.prepare(goal)  # the fallback's built only if a plan needs it
 

@@ -7,6 +7,7 @@ import dataclasses
 
 from identification.torque_model import TorqueModel
 from planning.anytime.planner import AnytimePlanner
+from planning.bank.planner import BankPlanner
 from planning.config import PlannerConfig, Scenario, nominal_iteration_ms
 from planning.globalsearch.planner import GlobalSearchPlanner
 from planning.offline import Offline
@@ -36,8 +37,11 @@ def segment_planner(model: TorqueModel, config: PlannerConfig,
     solver = Planner(model, config) if solver is None else solver
     if not uses_anytime(config):
         return PenaltyLoop(solver)
-    planner = AnytimePlanner(model, config)
+    planner = anytime = AnytimePlanner(model, config)
     planner = Polished(planner, solver) if config.penalty.polish else planner
+    if config.bank.size > 1:  # the global search's plans seed the bank
+        return BankPlanner(planner, anytime.anytime, GlobalSearchPlanner(
+            planner, model, config, hand_over=False) if config.global_search.enabled else None)
     return GlobalSearchPlanner(planner, model, config) if config.global_search.enabled \
         else planner
 

@@ -29,7 +29,7 @@ from planning.config import Scenario
 from planning.errors import PlanningError
 from planning.formulation.clearance import link_clearances, predicted_clearance
 from planning.formulation.obstacle import predict_linear
-from planning.types import DEADLINE, ITERATE, LATE, ObstacleForecast, Segment, SegmentPlan, SegmentPlanner
+from planning.types import DEADLINE, ITERATE, KEPT, LATE, ObstacleForecast, Segment, SegmentPlan, SegmentPlanner
 
 TRIGGER_TOLERANCE = 1e-3  # m: predicted dips smaller than this do not trigger a re-plan
 PREDICTION_TOLERANCE = 1e-3  # m: a forecast this close to the last one brings nothing new
@@ -46,6 +46,7 @@ class Execution:
     replan_failures: tuple[str, ...] = ()  # failed re-plans: the arm kept its last plan
     solve_cpu_ms: tuple[float, ...] = ()  # CPU time of the planning thread, per solve_ms entry
     clock_ms: tuple[float, ...] = ()  # on the budget's clock (SegmentPlan.clock_ms), per entry
+    bank: dict | None = None  # a bank of plans' account (planning.bank.planner), if one planned
 
 
 def check_start(planner: SegmentPlanner, scenario: Scenario) -> None:
@@ -95,9 +96,13 @@ def execute(planner: SegmentPlanner, scenario: Scenario, replan: bool = True,
         q, qd, _ = plan.trajectory.state(t)
         new = planner.plan(Segment(q[0], qd[0], t, T - t, goal, forecast, realtime=True,
                                    deadline_ms=planner.config.replan_deadline_ms), warm=latest)
+        if new is latest:  # the arm goes on as it was: nothing was planned
+            continue
         solve_ms.append(new.solve_ms)
         solve_cpu.append(new.solve_cpu_ms)
         clock_ms.append(new.clock_ms)
+        if new.status == KEPT:  # a bank re-planned other classes, the arm goes on as it was
+            continue
         if not new.success:
             replan_failures.append(new.status)
             if new.status.startswith(DEADLINE):
@@ -115,7 +120,14 @@ def execute(planner: SegmentPlanner, scenario: Scenario, replan: bool = True,
         segments.append(plan)
         times.append(float(t))
     return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures),
-                     tuple(replan_failures), tuple(solve_cpu), tuple(clock_ms))
+                     tuple(replan_failures), tuple(solve_cpu), tuple(clock_ms),
+                     bank_account(planner))
+
+
+def bank_account(planner) -> dict | None:
+    """The account of the bank of plans that planned (None: one plan at a time)."""
+    account = getattr(planner, "account", None)
+    return None if account is None else account()
 
 
 def forecast_at(obstacle, t: float) -> ObstacleForecast:
@@ -136,12 +148,18 @@ def same_prediction(old: ObstacleForecast, new: ObstacleForecast) -> bool:
 
 
 def _stale(planner: SegmentPlanner, plan: SegmentPlan, forecast: ObstacleForecast) -> bool:
+    return stale(planner.config, plan, forecast)
+
+
+def stale(config, plan: SegmentPlan, forecast: ObstacleForecast | None) -> bool:
     """True if the plan must be re-planned for this forecast: it comes within the threshold
     (Algorithm 2), or it was bent round the obstacle (a positive penalty) and now keeps more
     than the threshold everywhere: the obstacle has moved off its detour, whose energy a
     re-plan can save (docs/realtime.md, 'planning.replanning')."""
-    clearance = predicted_clearance(planner.config.geometry, plan.trajectory, forecast)
-    threshold = planner.config.threshold
+    if forecast is None:
+        return False
+    clearance = predicted_clearance(config.geometry, plan.trajectory, forecast)
+    threshold = config.threshold
     return clearance < threshold - TRIGGER_TOLERANCE or \
         ((plan.penalty > 0.0 or plan.detour) and clearance > threshold + TRIGGER_TOLERANCE)
 

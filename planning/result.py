@@ -159,6 +159,7 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
         # machine and load) or "cpu" (plan --realtime)
         "clock": "cpu" if config.anytime.iteration_ms is None else "nominal",
         "global_search": report(config, segments),
+        "bank": result.execution.bank,
         "deadline_misses": sum(f.startswith(DEADLINE) for f in result.execution.replan_failures),
         "timing": timing(result.execution, config),
         "end_error": result.end_error, "limit_violation": result.limit_violation,

@@ -17,6 +17,8 @@ if TYPE_CHECKING:
 
 ITERATE = "feasible iterate"  # status of a re-plan stopped short of convergence, followed
 DEADLINE = "deadline exceeded"  # status of a re-plan abandoned at its deadline
+KEPT = "kept"  # status of a bank's re-plan that re-planned other classes only: the arm goes
+# on with the plan it follows (planning.bank.planner)
 LATE = " (converged late)"  # ... whose last solve succeeded (converged, or a real-time
 # iterate within the constraints): the next re-plan starts from it
 

@@ -17,6 +17,7 @@ from planning.types import SegmentPlan
 
 _SEARCH = None  # the worker's MultiStart
 _FOUND = None  # the worker's end of the queue of (search number, plan)
+_EVERY = False  # the worker sends every plan found, not only the better ones
 
 
 def cores() -> int:
@@ -32,11 +33,15 @@ class Background:
     better plans sent back on a queue as they are found. A search that raised, or a worker
     that died, is counted in `failures` and the loop goes on without it."""
 
-    def __init__(self, model, config: PlannerConfig):
+    def __init__(self, model, config: PlannerConfig, every: bool = False):
+        """every: the worker sends every plan it finds (a bank's), not only those better
+        than the ones before."""
         context = multiprocessing.get_context("fork")
         # a Queue, not a SimpleQueue: its puts never block the worker on a full pipe
         self._found = context.Queue()
-        self._pool = ProcessPoolExecutor(1, context, _start, (model, config, self._found))
+        self._pool = ProcessPoolExecutor(1, context, _start, (model, config, self._found,
+                                                              every))
+        self._taken: list[SegmentPlan] = []  # every plan received, not taken yet
         self._future: Future | None = None
         self._future_number = 0  # the number the running search was submitted with
         self._number = 0  # of the current search: plans of an older one are dropped
@@ -64,7 +69,14 @@ class Background:
         """The best plan the search has found so far, once (None if none is new)."""
         self._drain()
         plan, self._latest = self._latest, None
+        self._taken = []
         return plan
+
+    def ready_all(self) -> list[SegmentPlan]:
+        """Every plan received and not taken yet, in the order found."""
+        self._drain()
+        plans, self._taken, self._latest = self._taken, [], None
+        return plans
 
     def done(self) -> bool:
         """Whether the search has found a plan not taken yet."""
@@ -103,12 +115,13 @@ class Background:
                 return
             if number == self._number:
                 self._latest = plan
+                self._taken.append(plan)
                 self.received += 1
 
 
-def _start(model, config: PlannerConfig, found) -> None:
-    global _SEARCH, _FOUND
-    _SEARCH, _FOUND = MultiStart(model, config), found
+def _start(model, config: PlannerConfig, found, every: bool = False) -> None:
+    global _SEARCH, _FOUND, _EVERY
+    _SEARCH, _FOUND, _EVERY = MultiStart(model, config), found, every
     found.cancel_join_thread()  # the worker exits whatever the planning process left unread
 
 
@@ -117,9 +130,13 @@ def _search(number: int, segment: tuple, warm: SegmentPlan | None) -> int:
     sent = [0]
 
     def found(plan: SegmentPlan, better: bool) -> None:
-        if better:
+        if better or _EVERY:
             _FOUND.put((number, plan))
             sent[0] += 1
 
-    _SEARCH.search(*segment, warm, found=found)
+    if _EVERY:  # a bank's: it holds the plan followed, and wants the classes soon
+        _SEARCH.search(*segment, None, found=found,
+                       screen=_SEARCH.config.bank.screen_iterations)
+    else:
+        _SEARCH.search(*segment, warm, found=found)
     return sent[0]

@@ -40,8 +40,8 @@ class MultiStart:
     @collection_deferred
     def search(self, q0, qd0, t_begin: float, duration: float, goal,
                forecast: ObstacleForecast | None, warm: SegmentPlan | None = None,
-               found: Callable[[SegmentPlan, bool], None] | None = None
-               ) -> tuple[SegmentPlan, list[SegmentPlan]]:
+               found: Callable[[SegmentPlan, bool], None] | None = None,
+               screen: int = SCREEN_ITERATIONS) -> tuple[SegmentPlan, list[SegmentPlan]]:
         """The best plan (objective) from the warm plan's shape (if any) and every start
         point, its times those of the whole search, and every plan. found(plan, better), if
         given, sees every plan as it is solved, better: whether it is usable and scores better
@@ -68,7 +68,7 @@ class MultiStart:
             for x0 in points:
                 solved(solver.solve(*segment, x0=x0))
         else:  # every start a few iterations, the best FINALISTS on to convergence
-            solver.max_iterations = SCREEN_ITERATIONS
+            solver.max_iterations = screen
             for x0 in points:
                 solved(solver.solve(*segment, None, x0=x0, budget_ms=math.inf)[0])
             solver.max_iterations = 200

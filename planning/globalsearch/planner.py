@@ -24,7 +24,7 @@ from planning.anytime.safety import SafetyCheck
 from planning.config import PlannerConfig
 from planning.formulation.clearance import predicted_clearance
 from planning.globalsearch.background import Background, cores
-from planning.globalsearch.multistart import MultiStart, objective
+from planning.globalsearch.multistart import SCREEN_ITERATIONS, MultiStart, objective
 from planning.replanning import same_prediction
 from planning.types import Segment, SegmentPlan, SegmentPlanner
 
@@ -36,13 +36,18 @@ SAMPLE_TOLERANCE = 1e-9  # s
 class GlobalSearchPlanner:
     """`inner`'s plans, its re-plans adopting the global search's plans when they win."""
 
-    def __init__(self, inner: SegmentPlanner, model: TorqueModel, config: PlannerConfig):
-        self.inner, self.config = inner, config
+    def __init__(self, inner: SegmentPlanner, model: TorqueModel, config: PlannerConfig,
+                 hand_over: bool = True):
+        """hand_over False: the search's plans are not adopted by a re-plan but collected
+        (GlobalSearchPlanner.collect) by a bank of plans (planning.bank): every plan it
+        finds, each entering when the search's work up to it is done."""
+        self.inner, self.config, self.hand_over = inner, config, hand_over
         lagged = config.anytime.iteration_ms is not None or not config.global_search.background
         # with one core the search would take the real-time loop's: the loop runs alone
         self.mode = "lagged" if lagged else ("process" if cores() > 1 else "one core")
         self._search = MultiStart(model, config) if lagged else None
-        self._background = Background(model, config) if self.mode == "process" else None
+        self._background = Background(model, config, every=not hand_over) \
+            if self.mode == "process" else None
         self.check = self._search.check if lagged else SafetyCheck(model, config,
                                                                     config.compile_code)
         self.searches = self.adoptions = 0
@@ -76,8 +81,10 @@ class GlobalSearchPlanner:
             self._forget()
             return self.inner.plan(problem)
         self._settle = problem.t_begin + problem.duration - self.config.settle_horizon
-        offered = self._offered(problem.t_begin)
-        result = self._replan(problem, warm, offered)
+        if self.hand_over:
+            result = self._replan(problem, warm, self._offered(problem.t_begin))
+        else:
+            result = self.inner.plan(problem, warm)
         # searched from the plan the arm will be on when the offer enters: the re-plan's if
         # it succeeded, else the one it started from; the search starts once it is done
         self._launch(problem, result if result.success else warm, result.clock_ms)
@@ -121,6 +128,17 @@ class GlobalSearchPlanner:
         if self._background is not None:
             self._background.forget()
 
+    def collect(self, t: float) -> list[SegmentPlan]:
+        """The plans found that enter by sample time t, taken (a bank's: hand_over False;
+        under CPU clocks the best the other process has sent)."""
+        if t > self._settle - SAMPLE_TOLERANCE:
+            return []
+        if self._background is not None:
+            return self._background.ready_all()
+        ready = [offer for offer in self._offers if offer[0] <= t + SAMPLE_TOLERANCE]
+        self._offers = self._offers[len(ready):]
+        return [plan for _, plan in ready]
+
     def _offered(self, t: float) -> SegmentPlan | None:
         """The plan offered at t, taken (None if none)."""
         if self._background is not None:
@@ -153,10 +171,12 @@ class GlobalSearchPlanner:
                 self.searches -= 1  # the worker failed: the loop goes on alone
             return
         # planned from where the plan followed will be `lag` samples on: the plan re-solved
-        # then starts near its own start
+        # then starts near its own start; a bank's from where the arm is now (it re-plans
+        # every plan it takes from the arm's state), entering when its work is done
         period = float(forecast.times[1] - forecast.times[0])
         end = min(problem.t_begin + problem.duration - period, self._settle)
-        due = problem.t_begin + self.config.global_search.lag * period
+        lag = self.config.global_search.lag if self.hand_over else 1
+        due = problem.t_begin + (lag if self.hand_over else 0) * period
         if due >= end:
             return
         # each plan better than those before enters when the search's work up to it on the
@@ -166,16 +186,21 @@ class GlobalSearchPlanner:
 
         def found(plan: SegmentPlan, better: bool) -> None:
             work[0] += plan.clock_ms
-            samples = max(self.config.global_search.lag,
-                          math.ceil(work[0] / (1e3 * period) - 1e-9))
+            samples = max(lag, math.ceil(work[0] / (1e3 * period) - 1e-9))
             enters = problem.t_begin + samples * period
+            if not self.hand_over and enters < end:  # a bank takes every plan found
+                offers.append((enters, plan))
+                return
             if not better or enters >= end:
                 return
             if offers and offers[-1][0] >= enters - SAMPLE_TOLERANCE:
                 offers.pop()  # a better plan is done by the same sample
             offers.append((enters, plan))
 
-        self._search.search(*_segment(problem, warm, due), warm, found=found)
+        # a bank holds the plan followed already: its shape is no start of the search
+        self._search.search(*_segment(problem, warm, due), warm if self.hand_over else None,
+                            found=found, screen=SCREEN_ITERATIONS if self.hand_over else
+                            self.config.bank.screen_iterations)
         self._offers = offers
 
 
@@ -198,7 +223,12 @@ def report(config: PlannerConfig, segments) -> dict | None:
     options = config.global_search
     if not options.enabled or config.replanner != "anytime":
         return None
-    if config.anytime.iteration_ms is not None or not options.background:
+    if config.bank.size > 1 and (config.anytime.iteration_ms is not None or
+                                 not options.background):
+        mode = ("nominal: each search on a re-plan's forecast from the arm's state, every "
+                "plan handed to the bank when the search's work up to it on the budgets' "
+                "clock is done")
+    elif config.anytime.iteration_ms is not None or not options.background:
         mode = (f"nominal: each search on a re-plan's forecast, each better plan offered when "
                 f"the search's work up to it on the budgets' clock is done, at least "
                 f"{options.lag} obstacle samples later")

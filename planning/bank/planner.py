@@ -1,0 +1,315 @@
+"""A bank of plans, one per homotopy class of the motion around the obstacle
+(planning.bank.classes), as a SegmentPlanner (planning.types): topology-driven re-planning
+(de Groot, Ferranti, Gavrila & Alonso-Mora, IEEE T-RO 2024) on Algorithm 2.
+
+- **Members**: each a plan and the class it is held in, re-planned warm from the arm's state
+  at every obstacle sample while the bank holds more than one and the obstacle comes near.
+  A re-plan that leaves its class does not replace its member's plan: it joins the bank as
+  its new class's plan (or replaces that class's plan if it spends less), and the member
+  keeps its plan, to be re-planned again from where the arm is at the next sample. So the
+  way the arm was on is kept when a forecast pushes a re-plan round the other side.
+- **Discovery**: the first plan's starts seed the bank, and the global search
+  (planning.globalsearch.planner, hand_over False) hands every plan it finds to the bank
+  when the search's work up to it is done (on the nominal clock; under CPU clocks, when the
+  other process sends it): each joins as its class's plan, or replaces it if it scores
+  better, and is re-planned from the arm's state at that sample like any member.
+- **Followed**: the cheapest plan re-planned from the arm's state at this sample
+  (planning.globalsearch.multistart.objective: safe first, then the energy to go plus the
+  weighted violation); the arm switches class only if that spends less than the plan
+  followed by more than the hysteresis (BankOptions.hysteresis).
+- **Dropped**: a member whose plan has missed the threshold on BankOptions.patience
+  forecasts in a row, and the costliest when a class needs room (BankOptions.size).
+- **The work counts whole**: a re-plan's clock_ms, CPU and wall times are those of all the
+  bank's solves at that sample. They share the re-plan's budget: the plan followed first
+  (all of it when the bank holds no other, else BankOptions.followed_share), the others
+  what it leaves, in turn.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+from planning.bank.classes import label, motion_class, same_class
+from planning.globalsearch.multistart import objective
+from planning.replanning import stale
+from planning.types import ITERATE, KEPT, Segment, SegmentPlan, SegmentPlanner
+
+SWITCHED = " (bank: switched class)"
+
+
+@dataclass(eq=False)
+class Member:
+    """One class's plan: its class, its last plan and how many forecasts in a row it missed
+    the threshold on."""
+
+    found: tuple
+    plan: SegmentPlan
+    blocked: int = 0
+    replanned: float = -1.0  # the last sample time it was re-planned at (s)
+    # the last plan of it that kept the threshold (what it promises while a re-plan from
+    # the arm's state, gone on from, has not yet reached it)
+    promise: SegmentPlan | None = None
+
+    def __post_init__(self):
+        self.promise = self.plan if self.promise is None else self.promise
+
+
+@dataclass
+class BankRecord:
+    """PLAN.json's `bank`: each re-plan's classes, their energies to go and the one followed,
+    and the switches."""
+
+    replans: list = field(default_factory=list)
+    switches: list = field(default_factory=list)
+    admitted: int = 0
+    dropped: int = 0
+    found: int = 0  # plans the global search handed to the bank
+
+    def to_json(self, size: int, mode: str) -> dict:
+        return {"size": size, "mode": mode, "admitted": self.admitted,
+                "dropped": self.dropped, "search_plans": self.found,
+                "switches": self.switches, "replans": self.replans}
+
+
+class BankPlanner:
+    """`inner`'s plans (a SegmentPlanner), kept one per homotopy class (the module's
+    docstring). anytime: inner's SQP (planning.anytime.solver.Anytime: its safety check
+    scores the plans, its round cost says when a re-plan no longer fits the budget); search:
+    the global search around inner (hand_over False), or None."""
+
+    def __init__(self, inner: SegmentPlanner, anytime, search=None):
+        self.inner, self.anytime, self.search = inner, anytime, search
+        self.check = anytime.check
+        self.front = inner if search is None else search  # plans the plan followed
+        self.config = inner.config
+        self.options = self.config.bank
+        self._forget()
+
+    def _forget(self) -> None:
+        self.members: list[Member] = []
+        self.followed: Member | None = None
+        self.record = BankRecord()
+        self._settle = math.inf
+
+    @property
+    def solver_ms(self) -> float:
+        return self.inner.solver_ms
+
+    def account(self) -> dict:
+        """PLAN.json's `bank`: how its work was counted, the classes admitted and dropped,
+        the search's plans it took, the switches, and at each re-plan the classes re-planned
+        from the arm's state (their energies to go, J, and whether they keep the threshold)
+        and the one followed."""
+        clock = "nominal" if self.config.anytime.iteration_ms is not None else "cpu"
+        mode = (f"{clock}: every class's re-plan at a sample in this thread, sharing the "
+                f"re-plan's budget, the plan followed first; the global search's plans "
+                f"handed over when its work up to them is done" +
+                ("" if clock == "nominal" else " (another process where there are cores)"))
+        return self.record.to_json(self.options.size, mode)
+
+    def prepare(self, goal) -> None:
+        self.front.prepare(goal)
+
+    def offers(self, t: float) -> bool:
+        """Whether the bank re-plans at t though the plan followed is safe: it holds another
+        class before the settle horizon, or the search hands it plans."""
+        return len(self.members) > 1 and t < self._settle - 1e-9 or self.front.offers(t)
+
+    def plan_cold(self, problem: Segment, starts: int | None = None
+                  ) -> tuple[SegmentPlan, list[SegmentPlan]]:
+        best, plans = self.front.plan_cold(problem, starts)
+        self._forget()
+        self._settle = problem.t_begin + problem.duration - self.config.settle_horizon
+        self.followed = self._admit(best, problem)
+        for plan in sorted(plans, key=lambda p: self._score(p, problem)):
+            if plan.success:
+                self._admit(plan, problem)
+        return best, plans
+
+    def plan(self, problem: Segment, warm: SegmentPlan | None = None) -> SegmentPlan:
+        """A re-plan of the bank: the plan followed re-planned if Algorithm 2 must (it dips
+        below the threshold, is stale or unconverged), the search's plans admitted, then the
+        other classes re-planned from the arm's state with what the budget has left:
+        first those whose plan promises to spend less than the plan followed (by the
+        hysteresis), cheapest first, then the one re-planned longest ago. warm itself if the
+        arm goes on as it was (nothing re-planned that it follows)."""
+        if warm is None:
+            return self.front.plan(problem)
+        if self.followed is None:  # a plan not made by plan_cold: a bank of its own
+            self._settle = problem.t_begin + problem.duration - self.config.settle_horizon
+            self.followed = self._admit(warm, problem)
+        spent = [0.0, 0.0, 0.0]  # clock, wall, CPU ms of the bank's solves at this sample
+        total, followed = self._budget(problem), self.followed
+        t = problem.t_begin
+        must = warm.status.startswith(ITERATE) or stale(self.config, warm, problem.forecast)
+        rest = dataclasses.replace(warm, trajectory=warm.trajectory.restrict(
+            t, problem.duration))
+        current = self._score(rest, problem)
+        promising = t < self._settle - 1e-9 and self._promising(current, problem)
+        if must and promising and current[0] == 0:
+            must = False  # safe, only to improve: the budget goes to a better class
+        if must:  # the plan followed first, with the budget the others may need
+            share = total * self.options.followed_share if promising else total
+            new = self._replan(problem, warm, share, spent, self.front)
+            if not new.success:
+                return self._timed(new, spent)
+            followed = self._placed(followed, new, problem)
+            current = self._score(new, problem)
+        else:
+            new = rest
+        candidates = [(followed, new)]
+        if t < self._settle - 1e-9:
+            for found in ([] if self.search is None else self.search.collect(t)):
+                self.record.found += 1
+                if found.success:
+                    self._admit(found, problem)
+            for member in self._to_replan(followed, current, problem):
+                left = total - spent[0]
+                if member not in self.members or left < self.round_ms():
+                    continue
+                again = self._replan(problem, member.plan, left, spent)
+                member.replanned = t
+                if again.success and self._placed(member, again, problem) is member:
+                    candidates.append((member, again))
+        for member in self.members:
+            if member is not followed and all(m is not member for m, _ in candidates):
+                member.blocked += self._score(member.plan, problem)[0] > 0
+        chosen, plan = self._choose(candidates, problem)
+        self._drop()
+        self._account(problem, candidates, chosen)
+        if chosen is not followed:
+            self.record.switches.append({"t": round(t, 9), "from": label(followed.found),
+                                         "to": label(chosen.found)})
+            plan = dataclasses.replace(plan, status=plan.status + SWITCHED)
+        self.followed = chosen
+        if plan is rest:
+            return warm if not spent[0] else self._timed(dataclasses.replace(
+                warm, status=KEPT), spent)
+        return self._timed(plan, spent)
+
+    def _promising(self, current: tuple, problem: Segment) -> bool:
+        return any(self._better(member, current, problem) for member in self.members
+                   if member is not self.followed)
+
+    def _better(self, member: Member, current: tuple, problem: Segment) -> bool:
+        """Whether member's plan (its last that kept the threshold), from now on, keeps the
+        threshold and spends less than the plan followed (current: its objective) by the
+        hysteresis."""
+        score = self._score(member.promise, problem)
+        if score[0] > 0:
+            return False
+        return current[0] > 0 or score[1] < current[1] * (1 - self.options.hysteresis)
+
+    def _to_replan(self, followed: Member, current: tuple, problem: Segment) -> list[Member]:
+        """The other members to re-plan, in order: the promising ones, cheapest first, then
+        the one re-planned longest ago."""
+        others = [m for m in self.members if m is not followed]
+        promising = sorted((m for m in others if self._better(m, current, problem)),
+                           key=lambda m: self._score(m.promise, problem))
+        rest = sorted((m for m in others if m not in promising), key=lambda m: m.replanned)
+        return promising + rest[:1]
+
+    def round_ms(self) -> float:
+        return self.anytime.round_ms()
+
+    # -- the bank's bookkeeping ------------------------------------------------------------
+
+    def _replan(self, problem: Segment, warm: SegmentPlan, budget: float, spent,
+                planner: SegmentPlanner | None = None) -> SegmentPlan:
+        new = (planner or self.inner).plan(dataclasses.replace(problem,
+                                                               budget_ms=max(budget, 0.0)), warm)
+        spent[0] += new.clock_ms
+        spent[1] += new.solve_ms
+        spent[2] += new.solve_cpu_ms
+        return new
+
+    def _budget(self, problem: Segment) -> float:
+        budget = self.config.anytime.replan_budget_ms if problem.budget_ms is None \
+            else problem.budget_ms
+        return budget if problem.deadline_ms is None else min(budget, problem.deadline_ms)
+
+    def _timed(self, plan: SegmentPlan, spent) -> SegmentPlan:
+        return dataclasses.replace(plan, clock_ms=spent[0], solve_ms=spent[1],
+                                   solve_cpu_ms=spent[2])
+
+    def _class(self, plan: SegmentPlan, problem: Segment) -> tuple:
+        return motion_class(self.config.geometry, plan.trajectory, problem.forecast,
+                            self.config.threshold, problem.t_begin)
+
+    def _score(self, plan: SegmentPlan, problem: Segment) -> tuple[int, float]:
+        rest = dataclasses.replace(plan, trajectory=plan.trajectory.restrict(
+            problem.t_begin, problem.duration))
+        return objective(self.check, self.config, rest, problem.t_begin, problem.duration,
+                         problem.forecast)
+
+    def _admit(self, plan: SegmentPlan, problem: Segment) -> Member | None:
+        """The plan as its class's member: a new class (room made by dropping the costliest
+        if the bank is full), or its class's plan if it scores better; the member, or None if
+        it was not kept."""
+        found = self._class(plan, problem)
+        score = self._score(plan, problem)
+        for member in self.members:
+            if same_class(member.found, found):
+                if score < self._score(member.promise, problem):
+                    member.plan, member.promise, member.blocked = plan, plan, 0
+                return member
+        if len(self.members) >= self.options.size:
+            worst = max((m for m in self.members if m is not self.followed),
+                        key=lambda m: self._score(m.plan, problem), default=None)
+            if worst is None or self._score(worst.plan, problem) <= score:
+                return None
+            self._remove(worst)
+        member = Member(found, plan)
+        self.members.append(member)
+        self.record.admitted += len(self.members) > 1
+        return member
+
+    def _placed(self, member: Member, new: SegmentPlan, problem: Segment) -> Member:
+        """Where a successful re-plan of member's plan belongs: member itself if it kept the
+        class or misses the threshold (its plan replaced), else the member of its new class
+        (admitted), member keeping its old plan."""
+        unsafe = self._score(new, problem)[0] > 0
+        member.blocked = member.blocked + 1 if unsafe else 0
+        member.replanned = problem.t_begin
+        found = None if unsafe else self._class(new, problem)
+        if unsafe or same_class(found, member.found):
+            member.plan = new
+            # an unconverged re-plan from the arm's state is gone on from; what the class
+            # promises stays the better of it and the last promise until one converges
+            if not unsafe and (not new.status.startswith(ITERATE) or self._score(
+                    new, problem) < self._score(member.promise, problem)):
+                member.promise = new
+            return member
+        other = self._admit(new, problem)
+        return member if other is None else other
+
+    def _remove(self, member: Member) -> None:
+        self.members.remove(member)
+        self.record.dropped += 1
+
+    def _choose(self, candidates, problem: Segment) -> tuple[Member, SegmentPlan]:
+        """The candidate to follow: the cheapest, unless the one followed (first) is within
+        the hysteresis of it."""
+        scored = [(self._score(plan, problem), member, plan) for member, plan in candidates]
+        first = scored[0]
+        best = min(scored, key=lambda s: s[0])
+        if best[1] is first[1] or best[0][0] < first[0][0]:
+            return best[1], best[2]
+        margin = self.options.hysteresis * max(first[0][1], 1e-9)
+        return (best[1], best[2]) if best[0][1] < first[0][1] - margin else (first[1], first[2])
+
+    def _drop(self) -> None:
+        for member in list(self.members):
+            if member is not self.followed and member.blocked >= self.options.patience:
+                self._remove(member)
+
+    def _account(self, problem: Segment, candidates, chosen: Member) -> None:
+        entries = []
+        for member, plan in candidates:
+            score = self._score(plan, problem)
+            entries.append({"class": label(member.found), "energy_to_go": round(score[1], 6),
+                            "safe": score[0] == 0})
+        self.record.replans.append({"t": round(problem.t_begin, 9), "classes": entries,
+                                    "held": len(self.members), "followed": label(chosen.found)})
