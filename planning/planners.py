@@ -41,7 +41,7 @@ def segment_planner(model: TorqueModel, config: PlannerConfig,
     planner = Polished(planner, solver) if config.penalty.polish else planner
     if config.bank.size > 1:  # the global search's plans seed the bank
         return BankPlanner(planner, anytime.anytime, GlobalSearchPlanner(
-            planner, model, config, hand_over=False) if config.global_search.enabled else None)
+            planner, model, config, bank=True) if config.global_search.enabled else None)
     return GlobalSearchPlanner(planner, model, config) if config.global_search.enabled \
         else planner
 

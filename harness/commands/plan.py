@@ -149,6 +149,13 @@ def register(sub) -> None:
                         "follows its last plan; deadline_misses in PLAN.json) and the first "
                         "plan shares the cold budget; default: nominal clocks, and the first "
                         "plan solved to convergence, by the other method if need be")
+    p.add_argument("--bank", type=int, default=None, metavar="N",
+                   help="anytime: keep a plan on each way round the obstacle (a bank of at "
+                        "most N homotopy classes: which side each link passes it), every "
+                        "class re-planned from the arm's state within the re-plan's shared "
+                        "budget, the cheapest followed; the global search's plans join it. "
+                        "PLAN.json's bank has each re-plan's classes and the switches "
+                        f"(default {TRUE_ENERGY['bank'].size}; 1: one plan, re-planned)")
     p.add_argument("--global-search", action=argparse.BooleanOptionalAction,
                    default=None,
                    help="anytime: a global search beside the re-plans, solving the forecast "

@@ -60,6 +60,9 @@ def config_from_options(args, arm: Arm) -> PlannerConfig:
     if args.replan_iterations:
         penalty["replan_iterations"] = args.replan_iterations
     search = {} if args.global_search is None else {"enabled": args.global_search}
+    if args.bank is not None and args.bank < 1:
+        raise UserError(f"--bank must be a whole number >= 1, got {args.bank}")
+    bank = {} if args.bank is None else {"size": args.bank}
     config = dataclasses.replace(
         base, **fields, geometry=link_geometry(args, arm, base.geometry),
         torque_limit=torque_limit(args, arm, dof), **rate_limits(args, arm, dof),
@@ -67,7 +70,8 @@ def config_from_options(args, arm: Arm) -> PlannerConfig:
         quick_build=not (args.realtime or args.deadline_ms),  # -O0 first where no CPU decides
         penalty=dataclasses.replace(base.penalty, **penalty),
         anytime=dataclasses.replace(base.anytime, **anytime_options(args)),
-        global_search=dataclasses.replace(base.global_search, **search))
+        global_search=dataclasses.replace(base.global_search, **search),
+        bank=dataclasses.replace(base.bank, **bank))
     _check_together(config)
     return config
 

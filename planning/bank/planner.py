@@ -33,7 +33,9 @@ from dataclasses import dataclass, field
 
 from planning.bank.classes import label, motion_class, same_class
 from planning.globalsearch.multistart import objective
+from planning.globalsearch.planner import ADOPTED
 from planning.replanning import stale
+from planning.anytime.solver import CONVERGED
 from planning.types import ITERATE, KEPT, Segment, SegmentPlan, SegmentPlanner
 
 SWITCHED = " (bank: switched class)"
@@ -92,6 +94,7 @@ class BankPlanner:
         self.followed: Member | None = None
         self.record = BankRecord()
         self._settle = math.inf
+        self._current: tuple | None = None  # the objective of the plan followed, this sample
 
     @property
     def solver_ms(self) -> float:
@@ -115,14 +118,15 @@ class BankPlanner:
     def offers(self, t: float) -> bool:
         """Whether the bank re-plans at t though the plan followed is safe: it holds another
         class before the settle horizon, or the search hands it plans."""
-        return len(self.members) > 1 and t < self._settle - 1e-9 or self.front.offers(t)
+        return t < self._settle - 1e-9 and (len(self.members) > 1 or self.search is not None) \
+            or self.front.offers(t)
 
     def plan_cold(self, problem: Segment, starts: int | None = None
                   ) -> tuple[SegmentPlan, list[SegmentPlan]]:
         best, plans = self.front.plan_cold(problem, starts)
         self._forget()
         self._settle = problem.t_begin + problem.duration - self.config.settle_horizon
-        self.followed = self._admit(best, problem)
+        self.followed = self._seed(best, problem)
         for plan in sorted(plans, key=lambda p: self._score(p, problem)):
             if plan.success:
                 self._admit(plan, problem)
@@ -139,17 +143,24 @@ class BankPlanner:
             return self.front.plan(problem)
         if self.followed is None:  # a plan not made by plan_cold: a bank of its own
             self._settle = problem.t_begin + problem.duration - self.config.settle_horizon
-            self.followed = self._admit(warm, problem)
+            self.followed = self._seed(warm, problem)
         spent = [0.0, 0.0, 0.0]  # clock, wall, CPU ms of the bank's solves at this sample
         total, followed = self._budget(problem), self.followed
         t = problem.t_begin
-        must = warm.status.startswith(ITERATE) or stale(self.config, warm, problem.forecast)
+        must = warm.status.startswith(ITERATE) or stale(self.config, warm, problem.forecast) \
+            or self.front.offers(t)  # the search offers a better plan of its own
         rest = dataclasses.replace(warm, trajectory=warm.trajectory.restrict(
             t, problem.duration))
-        current = self._score(rest, problem)
+        current = self._current = self._score(rest, problem)
+        if t < self._settle - 1e-9:  # the search's plans, each to its class
+            for found in ([] if self.search is None else self.search.collect(t)):
+                self.record.found += 1
+                if found.success:
+                    self._admit(found, problem)
         promising = t < self._settle - 1e-9 and self._promising(current, problem)
-        if must and promising and current[0] == 0:
-            must = False  # safe, only to improve: the budget goes to a better class
+        if must and promising and current[0] == 0 and not stale(self.config, warm,
+                                                                problem.forecast):
+            must = False  # safe and only to improve: the budget goes to a better class
         if must:  # the plan followed first, with the budget the others may need
             share = total * self.options.followed_share if promising else total
             new = self._replan(problem, warm, share, spent, self.front)
@@ -161,10 +172,6 @@ class BankPlanner:
             new = rest
         candidates = [(followed, new)]
         if t < self._settle - 1e-9:
-            for found in ([] if self.search is None else self.search.collect(t)):
-                self.record.found += 1
-                if found.success:
-                    self._admit(found, problem)
             for member in self._to_replan(followed, current, problem):
                 left = total - spent[0]
                 if member not in self.members or left < self.round_ms():
@@ -178,11 +185,14 @@ class BankPlanner:
                 member.blocked += self._score(member.plan, problem)[0] > 0
         chosen, plan = self._choose(candidates, problem)
         self._drop()
+        self._merge(problem)
         self._account(problem, candidates, chosen)
-        if chosen is not followed:
+        if chosen is not followed and not same_class(chosen.found, followed.found):
             self.record.switches.append({"t": round(t, 9), "from": label(followed.found),
                                          "to": label(chosen.found)})
             plan = dataclasses.replace(plan, status=plan.status + SWITCHED)
+        elif chosen is not followed:  # a better plan of the same class: the search's
+            plan = dataclasses.replace(plan, status=plan.status + ADOPTED)
         self.followed = chosen
         if plan is rest:
             return warm if not spent[0] else self._timed(dataclasses.replace(
@@ -197,10 +207,14 @@ class BankPlanner:
         """Whether member's plan (its last that kept the threshold), from now on, keeps the
         threshold and spends less than the plan followed (current: its objective) by the
         hysteresis."""
-        score = self._score(member.promise, problem)
-        if score[0] > 0:
-            return False
-        return current[0] > 0 or score[1] < current[1] * (1 - self.options.hysteresis)
+        return self._cheaper(self._score(member.promise, problem), current)
+
+    def _cheaper(self, score: tuple, current: tuple) -> bool:
+        """Whether a plan of this objective keeps the threshold and spends less than the
+        plan followed (current: its objective) by the hysteresis."""
+        if score[0] != current[0]:
+            return score[0] < current[0]
+        return score[1] < current[1] * (1 - self.options.hysteresis)
 
     def _to_replan(self, followed: Member, current: tuple, problem: Segment) -> list[Member]:
         """The other members to re-plan, in order: the promising ones, cheapest first, then
@@ -244,27 +258,46 @@ class BankPlanner:
         return objective(self.check, self.config, rest, problem.t_begin, problem.duration,
                          problem.forecast)
 
+    def _seed(self, plan: SegmentPlan, problem: Segment) -> Member:
+        """The plan the arm follows first, the bank's first member whatever it promises."""
+        member = Member(self._class(plan, problem), plan)
+        self.members = [member]
+        return member
+
     def _admit(self, plan: SegmentPlan, problem: Segment) -> Member | None:
-        """The plan as its class's member: a new class (room made by dropping the costliest
-        if the bank is full), or its class's plan if it scores better; the member, or None if
-        it was not kept."""
-        found = self._class(plan, problem)
-        score = self._score(plan, problem)
-        for member in self.members:
-            if same_class(member.found, found):
-                if score < self._score(member.promise, problem):
-                    member.plan, member.promise, member.blocked = plan, plan, 0
-                return member
+        """The plan as a new member (a lineage) unless a member of its class already
+        promises as much, or it misses the threshold; room made by dropping the member
+        (not the one followed) that promises least, if the plan promises more. The member,
+        or None if it was not kept."""
+        found, score = self._class(plan, problem), self._score(plan, problem)
+        if score[0] > 0 and not (self._current is not None and score < self._current):
+            return None  # a plan that misses the threshold, unless the plan followed does worse
+        if any(same_class(m.found, found) and self._score(m.promise, problem) <= score
+               for m in self.members):
+            return None
         if len(self.members) >= self.options.size:
             worst = max((m for m in self.members if m is not self.followed),
-                        key=lambda m: self._score(m.plan, problem), default=None)
-            if worst is None or self._score(worst.plan, problem) <= score:
+                        key=lambda m: self._score(m.promise, problem), default=None)
+            if worst is None or self._score(worst.promise, problem) <= score:
                 return None
             self._remove(worst)
         member = Member(found, plan)
         self.members.append(member)
         self.record.admitted += len(self.members) > 1
         return member
+
+    def _merge(self, problem: Segment) -> None:
+        """Of two members of one class whose plans both converged, the one promising less
+        leaves (not the one followed): the class's lineages met."""
+        done = [m for m in self.members if m.promise.status.startswith(CONVERGED)]
+        for i, first in enumerate(done):
+            for second in done[i + 1:]:
+                if first in self.members and second in self.members and \
+                        same_class(first.found, second.found):
+                    worse = max((first, second), key=lambda m: (
+                        m is not self.followed, self._score(m.promise, problem)))
+                    if worse is not self.followed:
+                        self._remove(worse)
 
     def _placed(self, member: Member, new: SegmentPlan, problem: Segment) -> Member:
         """Where a successful re-plan of member's plan belongs: member itself if it kept the

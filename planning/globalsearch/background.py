@@ -69,13 +69,12 @@ class Background:
         """The best plan the search has found so far, once (None if none is new)."""
         self._drain()
         plan, self._latest = self._latest, None
-        self._taken = []
         return plan
 
     def ready_all(self) -> list[SegmentPlan]:
         """Every plan received and not taken yet, in the order found."""
         self._drain()
-        plans, self._taken, self._latest = self._taken, [], None
+        plans, self._taken = self._taken, []
         return plans
 
     def done(self) -> bool:
@@ -110,11 +109,12 @@ class Background:
     def _drain(self) -> None:
         while True:
             try:
-                number, plan = self._found.get_nowait()
+                number, plan, better = self._found.get_nowait()
             except queue.Empty:
                 return
             if number == self._number:
-                self._latest = plan
+                if better:
+                    self._latest = plan
                 self._taken.append(plan)
                 self.received += 1
 
@@ -131,12 +131,12 @@ def _search(number: int, segment: tuple, warm: SegmentPlan | None) -> int:
 
     def found(plan: SegmentPlan, better: bool) -> None:
         if better or _EVERY:
-            _FOUND.put((number, plan))
+            _FOUND.put((number, plan, better))
             sent[0] += 1
 
     if _EVERY:  # a bank's: it holds the plan followed, and wants the classes soon
-        _SEARCH.search(*segment, None, found=found,
-                       screen=_SEARCH.config.bank.screen_iterations)
+        from planning.globalsearch.planner import bank_search
+        _SEARCH.search(*segment, None, found=found, **bank_search(_SEARCH.config))
     else:
         _SEARCH.search(*segment, warm, found=found)
     return sent[0]

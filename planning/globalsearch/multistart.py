@@ -41,7 +41,8 @@ class MultiStart:
     def search(self, q0, qd0, t_begin: float, duration: float, goal,
                forecast: ObstacleForecast | None, warm: SegmentPlan | None = None,
                found: Callable[[SegmentPlan, bool], None] | None = None,
-               screen: int = SCREEN_ITERATIONS) -> tuple[SegmentPlan, list[SegmentPlan]]:
+               screen: int = SCREEN_ITERATIONS, finalists: int = FINALISTS
+               ) -> tuple[SegmentPlan, list[SegmentPlan]]:
         """The best plan (objective) from the warm plan's shape (if any) and every start
         point, its times those of the whole search, and every plan. found(plan, better), if
         given, sees every plan as it is solved, better: whether it is usable and scores better
@@ -72,7 +73,7 @@ class MultiStart:
             for x0 in points:
                 solved(solver.solve(*segment, None, x0=x0, budget_ms=math.inf)[0])
             solver.max_iterations = 200
-            for i in sorted(range(len(plans)), key=scores.__getitem__)[:FINALISTS]:
+            for i in sorted(range(len(plans)), key=scores.__getitem__)[:finalists]:
                 solved(solver.solve(*segment, plans[i], budget_ms=math.inf)[0])
         best = plans[min(range(len(plans)), key=scores.__getitem__)]
         wall, cpu = clock.read()

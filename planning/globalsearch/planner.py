@@ -24,7 +24,7 @@ from planning.anytime.safety import SafetyCheck
 from planning.config import PlannerConfig
 from planning.formulation.clearance import predicted_clearance
 from planning.globalsearch.background import Background, cores
-from planning.globalsearch.multistart import SCREEN_ITERATIONS, MultiStart, objective
+from planning.globalsearch.multistart import MultiStart, objective
 from planning.replanning import same_prediction
 from planning.types import Segment, SegmentPlan, SegmentPlanner
 
@@ -37,16 +37,16 @@ class GlobalSearchPlanner:
     """`inner`'s plans, its re-plans adopting the global search's plans when they win."""
 
     def __init__(self, inner: SegmentPlanner, model: TorqueModel, config: PlannerConfig,
-                 hand_over: bool = True):
-        """hand_over False: the search's plans are not adopted by a re-plan but collected
-        (GlobalSearchPlanner.collect) by a bank of plans (planning.bank): every plan it
-        finds, each entering when the search's work up to it is done."""
-        self.inner, self.config, self.hand_over = inner, config, hand_over
+                 bank: bool = False):
+        """bank: a bank of plans' search (planning.bank): from the arm's state at the
+        re-plan, shallower (bank_search), and every plan it finds is also collected
+        (GlobalSearchPlanner.collect) as it enters, when the search's work up to it is done."""
+        self.inner, self.config, self.bank = inner, config, bank
         lagged = config.anytime.iteration_ms is not None or not config.global_search.background
         # with one core the search would take the real-time loop's: the loop runs alone
         self.mode = "lagged" if lagged else ("process" if cores() > 1 else "one core")
         self._search = MultiStart(model, config) if lagged else None
-        self._background = Background(model, config, every=not hand_over) \
+        self._background = Background(model, config, every=bank) \
             if self.mode == "process" else None
         self.check = self._search.check if lagged else SafetyCheck(model, config,
                                                                     config.compile_code)
@@ -81,10 +81,7 @@ class GlobalSearchPlanner:
             self._forget()
             return self.inner.plan(problem)
         self._settle = problem.t_begin + problem.duration - self.config.settle_horizon
-        if self.hand_over:
-            result = self._replan(problem, warm, self._offered(problem.t_begin))
-        else:
-            result = self.inner.plan(problem, warm)
+        result = self._replan(problem, warm, self._offered(problem.t_begin))
         # searched from the plan the arm will be on when the offer enters: the re-plan's if
         # it succeeded, else the one it started from; the search starts once it is done
         self._launch(problem, result if result.success else warm, result.clock_ms)
@@ -123,20 +120,21 @@ class GlobalSearchPlanner:
         # the running search's plans still to be offered: (sample time, plan), each better
         # than the ones before it, in the order the other core finds them
         self._offers: list[tuple[float, SegmentPlan]] = []
+        self._harvest: list[tuple[float, SegmentPlan]] = []  # a bank's: every plan found
         self._searched = None  # the forecast of the last search
         self._settle = math.inf  # offers enter before this time (the motion's settle horizon)
         if self._background is not None:
             self._background.forget()
 
     def collect(self, t: float) -> list[SegmentPlan]:
-        """The plans found that enter by sample time t, taken (a bank's: hand_over False;
-        under CPU clocks the best the other process has sent)."""
+        """Every plan found that entered by sample time t, taken once (a bank's; under CPU
+        clocks, those the other process has sent)."""
         if t > self._settle - SAMPLE_TOLERANCE:
             return []
         if self._background is not None:
             return self._background.ready_all()
-        ready = [offer for offer in self._offers if offer[0] <= t + SAMPLE_TOLERANCE]
-        self._offers = self._offers[len(ready):]
+        ready = [entry for entry in self._harvest if entry[0] <= t + SAMPLE_TOLERANCE]
+        self._harvest = self._harvest[len(ready):]
         return [plan for _, plan in ready]
 
     def _offered(self, t: float) -> SegmentPlan | None:
@@ -156,7 +154,7 @@ class GlobalSearchPlanner:
         waits for."""
         forecast = problem.forecast
         if self.mode == "one core" or forecast is None or len(forecast.times) < 2 or \
-                self._offers or (self._background is not None and (
+                self._offers or self._harvest or (self._background is not None and (
                     self._background.busy() or self._background.done())):
             return
         if self._searched is not None and same_prediction(self._searched, forecast):
@@ -175,22 +173,21 @@ class GlobalSearchPlanner:
         # every plan it takes from the arm's state), entering when its work is done
         period = float(forecast.times[1] - forecast.times[0])
         end = min(problem.t_begin + problem.duration - period, self._settle)
-        lag = self.config.global_search.lag if self.hand_over else 1
-        due = problem.t_begin + (lag if self.hand_over else 0) * period
+        lag = 1 if self.bank else self.config.global_search.lag
+        due = problem.t_begin + (0 if self.bank else lag) * period
         if due >= end:
             return
         # each plan better than those before enters when the search's work up to it on the
         # budgets' clock is done, if that is later (docs/realtime.md, 'Offers when the
         # search is done', 'Offers as the search goes')
-        offers, work = [], [after_ms]
+        offers, work, harvest = [], [after_ms], []
 
         def found(plan: SegmentPlan, better: bool) -> None:
             work[0] += plan.clock_ms
             samples = max(lag, math.ceil(work[0] / (1e3 * period) - 1e-9))
             enters = problem.t_begin + samples * period
-            if not self.hand_over and enters < end:  # a bank takes every plan found
-                offers.append((enters, plan))
-                return
+            if self.bank and enters < end:  # a bank takes every plan found
+                harvest.append((enters, plan))
             if not better or enters >= end:
                 return
             if offers and offers[-1][0] >= enters - SAMPLE_TOLERANCE:
@@ -198,10 +195,16 @@ class GlobalSearchPlanner:
             offers.append((enters, plan))
 
         # a bank holds the plan followed already: its shape is no start of the search
-        self._search.search(*_segment(problem, warm, due), warm if self.hand_over else None,
-                            found=found, screen=SCREEN_ITERATIONS if self.hand_over else
-                            self.config.bank.screen_iterations)
-        self._offers = offers
+        self._search.search(*_segment(problem, warm, due), None if self.bank else warm,
+                            found=found, **(bank_search(self.config) if self.bank else {}))
+        self._offers, self._harvest = offers, harvest
+
+
+def bank_search(config: PlannerConfig) -> dict:
+    """How a search runs for a bank of plans (planning.bank): each start screened
+    BankOptions.screen_iterations and no finalists (the bank re-plans every plan it takes to
+    convergence itself), so the classes reach it sooner and the next search starts sooner."""
+    return {"screen": config.bank.screen_iterations, "finalists": 0}
 
 
 def _rest(plan: SegmentPlan, problem: Segment):

@@ -1,0 +1,77 @@
+"""The bank of plans (planning.bank): classes read as the side each link passes the obstacle
+(closed-form poses of the paper's arm), what counts as one way round, and on the README's
+UR5 crossing a bank that keeps the class the single re-planned plan leaves, within the
+re-plan's budget on the nominal clock."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from harness.cli import main
+from planning.bank.classes import label, same_class, sides
+from planning.formulation.kinematics import paper_arm
+
+ARM = paper_arm()  # at q = 0 the upper arm runs from (0, 0, 0.086) to (0.146, 0, 0.086) m
+THRESHOLD = 0.08
+UR5_CROSSING = ["--robot", "ur5", "--model", "pinocchio", "--obstacle-from",
+                "0.37,-0.06,0.15", "--obstacle-to", "0.37,-0.06,0.65"]
+
+
+@pytest.mark.parametrize("offset, side", [((0, 0, -0.09), "above"), ((0, 0, 0.09), "below"),
+                                          ((0, 0.09, 0), "right"), ((0, -0.09, 0), "left")])
+def test_the_side_a_link_passes_is_the_obstacle_seen_from_the_base(offset, side):
+    """The forearm (elbow to end effector, x from 0.146 to 0.333 m at z = 0.086 m) with the
+    obstacle 9 cm below, above, to the left (+y) or right of its middle: the link passes
+    above, below, right or left of it (seen from the base, looking at the obstacle); the
+    upper arm, farther than the threshold plus NEAR, counts in no class."""
+    centre = np.array([0.24, 0.0, 0.086]) + offset
+    found = sides(ARM, np.zeros((1, 3)), centre[None], THRESHOLD)
+    assert found == ((1, side),)
+    assert label(found) == f"link 2 {side}"
+
+
+def test_a_link_beyond_or_before_the_obstacle_is_read_along_the_radial():
+    """The end effector's tip at x = 0.333 m with the obstacle 9 cm farther out along x: the
+    forearm passes before it; pulled back in, beyond."""
+    tip = np.array([0.333, 0.0, 0.086])
+    assert sides(ARM, np.zeros((1, 3)), (tip + [0.09, 0, 0])[None], THRESHOLD) == \
+        ((1, "before"),)
+    inside = np.array([0.10, 0.0, 0.086 + 0.20])  # above the upper arm, near no link
+    assert sides(ARM, np.zeros((1, 3)), inside[None], THRESHOLD) == ()
+
+
+def test_one_way_round_is_no_link_on_opposite_sides():
+    above, below = ((2, "above"),), ((2, "below"),)
+    assert not same_class(above, below)
+    assert same_class(above, ((2, "above"), (3, "above")))  # one more link near: one way
+    assert same_class(above, ((2, "left"),))  # a diagonal pass
+    assert not same_class(above, ((4, "above"),))  # near links wholly different
+    assert same_class((), ()) and not same_class((), above)
+
+
+@pytest.mark.slow
+def test_the_bank_keeps_the_class_the_single_plan_leaves(tmp_path):
+    """The README's UR5 crossing: one re-planned plan takes the forearm over the rising
+    obstacle and stays there; the bank keeps the way under it, found by the global search,
+    and switches to it. It spends less than half, keeps the threshold, and each re-plan's
+    work, every class's together, stays within the re-plan's budget on the nominal clock
+    (one iteration's overrun at most, as a single plan's)."""
+    plans = {}
+    for size in (1, 4):
+        out = tmp_path / f"bank{size}.json"
+        assert main(["plan", *UR5_CROSSING, "--bank", str(size), "--out", str(out)]) == 0
+        plans[size] = json.loads(out.read_text())
+    one, bank = plans[1], plans[4]
+    assert one["bank"] is None and bank["bank"]["size"] == 4
+    assert bank["energy"] < 0.5 * one["energy"]
+    assert bank["min_clearance"] >= bank["threshold"] - 2e-3
+    switches = bank["bank"]["switches"]
+    assert switches and switches[0]["to"] != switches[0]["from"]
+    assert not same_class(*(tuple(tuple(side.rsplit(" ", 1)) for side in s.split(", "))
+                            for s in (switches[0]["from"], switches[0]["to"])))
+    timing = bank["timing"]
+    tick = bank["iteration_ms"]
+    assert max(timing["replan_clock_ms"]) <= timing["replan_budget_ms"] + tick
