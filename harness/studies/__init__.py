@@ -26,6 +26,9 @@ STUDIES = {
     "first_plan": "the first plan on a new 7-DOF robot (Panda), compilation included, the "
                   "second run's, a --realtime first plan's, and the same plan from the quick "
                   "and the optimized build",
+    "bank": "the bank of plans (plan's default re-planner) on fresh random scenarios (seed "
+            "9784, 20 Lynxmotion, 5 UR5, 5 Panda) against one plan re-planned and the "
+            "penalty loop: executed energy, clearance, re-plan CPU",
     "closeloop_plants": "closing the loop on the Lynxmotion's hand-written plants, with both "
                         "declared models (Pinocchio and the identified one)",
 }

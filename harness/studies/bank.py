@@ -1,0 +1,156 @@
+"""Study `bank`: the bank of plans (planning.bank, `plan`'s default re-planner) scored on
+scenarios no default was chosen on (issue 55).
+
+Seed 9784, drawn once (Python's secrets.randbelow, 2026-11-28) after the bank's defaults were
+set on the development scenarios (the realtime study's 20, seed 2026, and docs/realtime.md's
+nine UR5 and Panda crossings): 20 random Lynxmotion scenarios and 5 each on the UR5 (6
+joints) and the Panda (7), drawn by planning.scenarios.random_scenarios (an obstacle crossing
+the unobstructed optimum's links mid-motion, swaying). Each is planned as a user plans it,
+`torquebench plan --robot R --model pinocchio --start .. --goal .. --obstacle-from ..
+--obstacle-to .. --obstacle-sway .. --sway-periods ..` (nominal clocks, the same plans on any
+machine), three ways: the default (the bank), `--bank 1` (one plan re-planned, the default
+before the bank) and `--replanner penalty` (the paper's penalty loop). A plan that `plan`
+refuses (no feasible plan: exit 2) is reported apart, not counted as within.
+
+The quick form (the smoke test) plans 2 Lynxmotion scenarios.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from harness.cli import main
+from harness.plan.arm_config import planner_config
+from harness.report.results import Context, SectionResult, Target, check
+from harness.robots.arm import Arm
+from planning.penalty.solver import Planner
+from planning.scenarios import random_scenarios
+
+SEED = 9784  # drawn once; see the module's docstring
+ROBOTS = (("lynxmotion", 20), ("ur5", 5), ("panda", 5))
+WAYS = (("bank", ()), ("one plan", ("--bank", "1")), ("penalty loop", ("--replanner", "penalty")))
+WITHIN = 0.005  # the issue's bar: within 0.5 % of the penalty loop, or below
+CPU_MAX_MS, CPU_MEDIAN_MS = 10.0, 2.0  # the bank's re-plan CPU on the Lynxmotion
+
+
+def run(ctx: Context) -> SectionResult:
+    robots = (("lynxmotion", 2),) if ctx.quick else ROBOTS
+    ways = WAYS[:2] if ctx.quick else WAYS
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for offset, (name, count) in enumerate(robots):
+            for i, scenario in enumerate(draw(name, count, SEED + offset)):
+                row = {"robot": name, "scenario": i, **scenario_text(scenario)}
+                for way, extra in ways:
+                    row[way] = planned(name, scenario, extra, Path(tmp) / f"{name}{i}{way}.json")
+                rows.append(row)
+    return SectionResult("\n".join(table(rows, ways)), {"seed": SEED, "rows": rows},
+                         checks(rows), [] if ctx.quick else targets(rows))
+
+
+def draw(name: str, count: int, seed: int) -> list:
+    """The robot's random scenarios (planning.scenarios), from its unobstructed optimum."""
+    arm = Arm.of(name)
+    config = planner_config(arm)
+    planner = Planner(arm.nominal, config)
+
+    def free_motion(start, goal, duration):
+        return planner.solve(start, (0.0,) * len(start), duration, goal).trajectory
+
+    return random_scenarios(count, seed, free_motion, config.geometry, config.lower,
+                            config.upper, config.threshold)
+
+
+def scenario_text(scenario) -> dict:
+    obstacle = scenario.obstacle
+    return {"start": scenario.start, "goal": scenario.goal, "obstacle_from": obstacle.start,
+            "obstacle_to": obstacle.end, "sway": obstacle.sway, "periods": obstacle.periods}
+
+
+def planned(robot: str, scenario, extra: tuple, out: Path) -> dict:
+    """`plan` on the scenario: executed energy (J), smallest clearance (m), re-plan CPU and
+    clock (ms); {"refused": why} when plan exits 2."""
+    text = scenario_text(scenario)
+    vec = lambda v: ",".join(f"{x:.6g}" for x in v)  # noqa: E731
+    argv = ["plan", "--robot", robot, "--model", "pinocchio", "--start", vec(text["start"]),
+            "--goal", vec(text["goal"]), "--obstacle-from", vec(text["obstacle_from"]),
+            "--obstacle-to", vec(text["obstacle_to"]), "--obstacle-sway", vec(text["sway"]),
+            "--sway-periods", f"{text['periods']:.6g}", *extra, "--out", str(out)]
+    errors = io.StringIO()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(errors):
+        code = main(argv)
+    if code != 0:
+        return {"refused": errors.getvalue().strip().splitlines()[-1:]}
+    plan = json.loads(out.read_text())
+    timing = plan["timing"]
+    return {"energy": plan["energy"], "min_clearance": plan["min_clearance"],
+            "threshold": plan["threshold"], "replan_cpu_ms": timing["replan_cpu_ms"],
+            "replan_clock_ms": timing["replan_clock_ms"],
+            "switches": len((plan.get("bank") or {}).get("switches", []))}
+
+
+def excess(row: dict, way: str, against: str) -> float | None:
+    """How much more `way` spent than `against` (a fraction), None if either was refused."""
+    if "energy" not in row[way] or "energy" not in row.get(against, {}):
+        return None
+    return row[way]["energy"] / row[against]["energy"] - 1.0
+
+
+def table(rows: list[dict], ways) -> list[str]:
+    names = [way for way, _ in ways]
+    lines = [f"Seed {SEED} (drawn once). Executed energy (J) of each way; the bank's excess "
+             "over the penalty loop and over one plan; its class switches.", "",
+             "| robot | # | " + " | ".join(names) + " | bank vs penalty | bank vs one plan "
+             "| switches |", "|---|---|" + "---|" * (len(names) + 3)]
+    for row in rows:
+        cells = [f"{row[w]['energy']:.4f}" if "energy" in row[w] else "refused" for w in names]
+        gaps = [excess(row, "bank", other) for other in ("penalty loop", "one plan")]
+        lines.append(f"| {row['robot']} | {row['scenario']} | " + " | ".join(cells) + " | " +
+                     " | ".join("-" if g is None else f"{100 * g:+.2f} %" for g in gaps) +
+                     f" | {row['bank'].get('switches', '-')} |")
+    return lines
+
+
+def within(rows: list[dict], robots: tuple[str, ...]) -> tuple[int, int, int]:
+    """Of the rows on these robots whose penalty loop planned: how many the bank planned
+    within WITHIN of it or below; how many were counted; how many the penalty loop could not
+    plan (reported apart)."""
+    chosen = [r for r in rows if r["robot"] in robots]
+    counted = [r for r in chosen if "energy" in r["penalty loop"]]
+    good = sum(1 for r in counted if (excess(r, "bank", "penalty loop") or np.inf) <= WITHIN)
+    return good, len(counted), len(chosen) - len(counted)
+
+
+def checks(rows: list[dict]) -> list:
+    planned_rows = [r["bank"] for r in rows if "energy" in r["bank"]]
+    low = min((p["min_clearance"] - p["threshold"] for p in planned_rows), default=0.0)
+    return [check("the bank's executions keep the threshold (2 mm tolerance)", low >= -2e-3,
+                  f"smallest clearance minus threshold {1e3 * low:+.1f} mm"),
+            check("the bank plans every scenario one plan plans",
+                  all("energy" in r["bank"] for r in rows if "energy" in r["one plan"]),
+                  "refusals: " + str(sum("energy" not in r["bank"] for r in rows)))]
+
+
+def targets(rows: list[dict]) -> list[Target]:
+    found = []
+    for label, robots, bar in (("Lynxmotion", ("lynxmotion",), 19),
+                               ("6- and 7-joint arms", ("ur5", "panda"), None)):
+        good, counted, apart = within(rows, robots)
+        found.append(Target(f"{label}: scenarios within 0.5 % of the penalty loop or below",
+                            good, counted if bar is None else min(bar, counted), "",
+                            lower_is_better=False,
+                            note=f"of {counted}; {apart} the penalty loop could not plan"))
+    cpu = [ms for r in rows if r["robot"] == "lynxmotion" and "energy" in r["bank"]
+           for ms in r["bank"]["replan_cpu_ms"]]
+    if cpu:
+        found += [Target("Lynxmotion: the bank's re-plan CPU, max", float(np.max(cpu)),
+                         CPU_MAX_MS, "ms", timing=True),
+                  Target("Lynxmotion: the bank's re-plan CPU, median", float(np.median(cpu)),
+                         CPU_MEDIAN_MS, "ms", timing=True)]
+    return found
