@@ -7,6 +7,8 @@ import pytest
 
 from harness.robots.arm import Arm
 from planning.anytime.planner import AnytimePlanner
+from planning.bank.planner import BankPlanner
+from planning.globalsearch.planner import GlobalSearchPlanner
 from planning.config import JSON_NAMES, PenaltyOptions
 from planning.globalsearch.planner import GlobalSearchPlanner
 from planning.penalty.planner import PenaltyLoop
@@ -25,11 +27,22 @@ def baseline():
                                         ("anytime", AnytimePlanner), ("sqp", AnytimePlanner)])
 def test_the_factory_picks_the_replanner_the_config_names(baseline, name, kind):
     config = lynx_default_config(replanner=name, compile_code=False).with_global_search(
-        enabled=False)
+        enabled=False).with_bank(size=1)
     planner = segment_planner(baseline, config)
     assert isinstance(planner, kind) and isinstance(planner, SegmentPlanner)
     assert planner.config.replanner in ("penalty", "anytime")
     assert JSON_NAMES[planner.config.replanner] in ("fatrop", "sqp")
+
+
+def test_the_default_anytime_planner_is_a_bank_around_it(baseline):
+    """plan's default: the anytime SQP in a bank of plans, the global search its own; a bank
+    of one is the anytime SQP with the search handing over its better plans."""
+    config = lynx_default_config(compile_code=False)
+    bank = segment_planner(baseline, config)
+    assert isinstance(bank, BankPlanner) and isinstance(bank, SegmentPlanner)
+    assert isinstance(bank.inner, AnytimePlanner) and bank.search.bank
+    one = segment_planner(baseline, config.with_bank(size=1))
+    assert isinstance(one, GlobalSearchPlanner) and not one.bank
 
 
 def test_the_split_rule_and_real_time_iterations_keep_the_penalty_loop(baseline):
@@ -41,7 +54,7 @@ def test_the_split_rule_and_real_time_iterations_keep_the_penalty_loop(baseline)
 
 def test_the_anytime_sqps_cold_plans_are_polished_by_the_penalty_loop(baseline):
     config = lynx_default_config(compile_code=False).with_penalty(polish=1).with_global_search(
-        enabled=False)
+        enabled=False).with_bank(size=1)
     planner = segment_planner(baseline, config)
     assert isinstance(planner, Polished) and isinstance(planner.inner, AnytimePlanner)
 
@@ -49,7 +62,8 @@ def test_the_anytime_sqps_cold_plans_are_polished_by_the_penalty_loop(baseline):
 def test_the_global_search_goes_around_the_anytime_sqp_only(baseline):
     """On by default (true_energy_config): the anytime SQP, polished or not, inside it; the
     penalty loop never gets one."""
-    config = lynx_default_config(compile_code=False).with_anytime(iteration_ms=0.5)
+    config = lynx_default_config(compile_code=False).with_anytime(iteration_ms=0.5).with_bank(
+        size=1)
     planner = segment_planner(baseline, config.with_penalty(polish=1))
     assert isinstance(planner, GlobalSearchPlanner) and isinstance(planner, SegmentPlanner)
     assert isinstance(planner.inner, Polished)
