@@ -29,7 +29,16 @@ from planning.config import Scenario
 from planning.errors import PlanningError
 from planning.formulation.clearance import link_clearances, predicted_clearance
 from planning.formulation.obstacle import predict_linear
-from planning.types import DEADLINE, ITERATE, KEPT, LATE, ObstacleForecast, Segment, SegmentPlan, SegmentPlanner
+from planning.types import (
+    DEADLINE,
+    ITERATE,
+    KEPT,
+    LATE,
+    ObstacleForecast,
+    Segment,
+    SegmentPlan,
+    SegmentPlanner,
+)
 
 TRIGGER_TOLERANCE = 1e-3  # m: predicted dips smaller than this do not trigger a re-plan
 PREDICTION_TOLERANCE = 1e-3  # m: a forecast this close to the last one brings nothing new

@@ -9,10 +9,12 @@
   keeps its plan, to be re-planned again from where the arm is at the next sample. So the
   way the arm was on is kept when a forecast pushes a re-plan round the other side.
 - **Discovery**: the first plan's starts seed the bank, and the global search
-  (planning.globalsearch.planner, hand_over False) hands every plan it finds to the bank
-  when the search's work up to it is done (on the nominal clock; under CPU clocks, when the
-  other process sends it): each joins as its class's plan, or replaces it if it scores
-  better, and is re-planned from the arm's state at that sample like any member.
+  (planning.globalsearch.planner with bank True: from the arm's state, shallow) hands every
+  plan it finds to the bank when the search's work up to it is done (on the nominal clock;
+  under CPU clocks, when the other process sends it); each joins as a new lineage unless a
+  member of its class already promises as much. Two lineages of one class merge when both
+  have converged. The search still hands its better plans to the plan followed, as without
+  a bank (planning.globalsearch.planner).
 - **Followed**: the cheapest plan re-planned from the arm's state at this sample
   (planning.globalsearch.multistart.objective: safe first, then the energy to go plus the
   weighted violation); the arm switches class only if that spends less than the plan
@@ -29,57 +31,23 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass, field
 
+from planning.anytime.solver import CONVERGED
 from planning.bank.classes import label, motion_class, same_class
+from planning.bank.members import BankRecord, Member, cheaper, choose
 from planning.globalsearch.multistart import objective
 from planning.globalsearch.planner import ADOPTED
 from planning.replanning import stale
-from planning.anytime.solver import CONVERGED
 from planning.types import ITERATE, KEPT, Segment, SegmentPlan, SegmentPlanner
 
 SWITCHED = " (bank: switched class)"
-
-
-@dataclass(eq=False)
-class Member:
-    """One class's plan: its class, its last plan and how many forecasts in a row it missed
-    the threshold on."""
-
-    found: tuple
-    plan: SegmentPlan
-    blocked: int = 0
-    replanned: float = -1.0  # the last sample time it was re-planned at (s)
-    # the last plan of it that kept the threshold (what it promises while a re-plan from
-    # the arm's state, gone on from, has not yet reached it)
-    promise: SegmentPlan | None = None
-
-    def __post_init__(self):
-        self.promise = self.plan if self.promise is None else self.promise
-
-
-@dataclass
-class BankRecord:
-    """PLAN.json's `bank`: each re-plan's classes, their energies to go and the one followed,
-    and the switches."""
-
-    replans: list = field(default_factory=list)
-    switches: list = field(default_factory=list)
-    admitted: int = 0
-    dropped: int = 0
-    found: int = 0  # plans the global search handed to the bank
-
-    def to_json(self, size: int, mode: str) -> dict:
-        return {"size": size, "mode": mode, "admitted": self.admitted,
-                "dropped": self.dropped, "search_plans": self.found,
-                "switches": self.switches, "replans": self.replans}
 
 
 class BankPlanner:
     """`inner`'s plans (a SegmentPlanner), kept one per homotopy class (the module's
     docstring). anytime: inner's SQP (planning.anytime.solver.Anytime: its safety check
     scores the plans, its round cost says when a re-plan no longer fits the budget); search:
-    the global search around inner (hand_over False), or None."""
+    the global search around inner (bank True), or None."""
 
     def __init__(self, inner: SegmentPlanner, anytime, search=None):
         self.inner, self.anytime, self.search = inner, anytime, search
@@ -174,7 +142,7 @@ class BankPlanner:
         if t < self._settle - 1e-9:
             for member in self._to_replan(followed, current, problem):
                 left = total - spent[0]
-                if member not in self.members or left < self.round_ms():
+                if member not in self.members or left < self.anytime.round_ms():
                     continue
                 again = self._replan(problem, member.plan, left, spent)
                 member.replanned = t
@@ -210,11 +178,7 @@ class BankPlanner:
         return self._cheaper(self._score(member.promise, problem), current)
 
     def _cheaper(self, score: tuple, current: tuple) -> bool:
-        """Whether a plan of this objective keeps the threshold and spends less than the
-        plan followed (current: its objective) by the hysteresis."""
-        if score[0] != current[0]:
-            return score[0] < current[0]
-        return score[1] < current[1] * (1 - self.options.hysteresis)
+        return cheaper(score, current, self.options.hysteresis)
 
     def _to_replan(self, followed: Member, current: tuple, problem: Segment) -> list[Member]:
         """The other members to re-plan, in order: the promising ones, cheapest first, then
@@ -224,9 +188,6 @@ class BankPlanner:
                            key=lambda m: self._score(m.promise, problem))
         rest = sorted((m for m in others if m not in promising), key=lambda m: m.replanned)
         return promising + rest[:1]
-
-    def round_ms(self) -> float:
-        return self.anytime.round_ms()
 
     # -- the bank's bookkeeping ------------------------------------------------------------
 
@@ -323,15 +284,9 @@ class BankPlanner:
         self.record.dropped += 1
 
     def _choose(self, candidates, problem: Segment) -> tuple[Member, SegmentPlan]:
-        """The candidate to follow: the cheapest, unless the one followed (first) is within
-        the hysteresis of it."""
-        scored = [(self._score(plan, problem), member, plan) for member, plan in candidates]
-        first = scored[0]
-        best = min(scored, key=lambda s: s[0])
-        if best[1] is first[1] or best[0][0] < first[0][0]:
-            return best[1], best[2]
-        margin = self.options.hysteresis * max(first[0][1], 1e-9)
-        return (best[1], best[2]) if best[0][1] < first[0][1] - margin else (first[1], first[2])
+        """The candidate to follow (members.choose)."""
+        return choose([(self._score(plan, problem), member, plan)
+                       for member, plan in candidates], self.options.hysteresis)
 
     def _drop(self) -> None:
         for member in list(self.members):
@@ -339,10 +294,6 @@ class BankPlanner:
                 self._remove(member)
 
     def _account(self, problem: Segment, candidates, chosen: Member) -> None:
-        entries = []
-        for member, plan in candidates:
-            score = self._score(plan, problem)
-            entries.append({"class": label(member.found), "energy_to_go": round(score[1], 6),
-                            "safe": score[0] == 0})
-        self.record.replans.append({"t": round(problem.t_begin, 9), "classes": entries,
-                                    "held": len(self.members), "followed": label(chosen.found)})
+        self.record.replan(problem.t_begin, [(member.found, self._score(plan, problem))
+                                             for member, plan in candidates],
+                           len(self.members), chosen.found)

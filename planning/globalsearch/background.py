@@ -12,7 +12,7 @@ from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 
 from planning.config import PlannerConfig
-from planning.globalsearch.multistart import MultiStart
+from planning.globalsearch.multistart import MultiStart, bank_search
 from planning.types import SegmentPlan
 
 _SEARCH = None  # the worker's MultiStart
@@ -135,7 +135,6 @@ def _search(number: int, segment: tuple, warm: SegmentPlan | None) -> int:
             sent[0] += 1
 
     if _EVERY:  # a bank's: it holds the plan followed, and wants the classes soon
-        from planning.globalsearch.planner import bank_search
         _SEARCH.search(*segment, None, found=found, **bank_search(_SEARCH.config))
     else:
         _SEARCH.search(*segment, warm, found=found)

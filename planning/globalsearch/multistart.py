@@ -107,3 +107,10 @@ def objective(check, config: PlannerConfig, plan: SegmentPlan, t_begin: float,
 
 def _timed(plan: SegmentPlan, wall: float, cpu: float) -> SegmentPlan:
     return dataclasses.replace(plan, solve_ms=wall, solve_cpu_ms=cpu)
+
+
+def bank_search(config: PlannerConfig) -> dict:
+    """How a search runs for a bank of plans (planning.bank): each start screened
+    BankOptions.screen_iterations and no finalists (the bank re-plans every plan it takes to
+    convergence itself), so the classes reach it sooner and the next search starts sooner."""
+    return {"screen": config.bank.screen_iterations, "finalists": 0}

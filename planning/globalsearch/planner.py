@@ -24,7 +24,7 @@ from planning.anytime.safety import SafetyCheck
 from planning.config import PlannerConfig
 from planning.formulation.clearance import predicted_clearance
 from planning.globalsearch.background import Background, cores
-from planning.globalsearch.multistart import MultiStart, objective
+from planning.globalsearch.multistart import MultiStart, bank_search, objective
 from planning.replanning import same_prediction
 from planning.types import Segment, SegmentPlan, SegmentPlanner
 
@@ -198,13 +198,6 @@ class GlobalSearchPlanner:
         self._search.search(*_segment(problem, warm, due), None if self.bank else warm,
                             found=found, **(bank_search(self.config) if self.bank else {}))
         self._offers, self._harvest = offers, harvest
-
-
-def bank_search(config: PlannerConfig) -> dict:
-    """How a search runs for a bank of plans (planning.bank): each start screened
-    BankOptions.screen_iterations and no finalists (the bank re-plans every plan it takes to
-    convergence itself), so the classes reach it sooner and the next search starts sooner."""
-    return {"screen": config.bank.screen_iterations, "finalists": 0}
 
 
 def _rest(plan: SegmentPlan, problem: Segment):
