@@ -8,7 +8,6 @@ import pytest
 from harness.robots.arm import Arm
 from planning.anytime.planner import AnytimePlanner
 from planning.bank.planner import BankPlanner
-from planning.globalsearch.planner import GlobalSearchPlanner
 from planning.config import JSON_NAMES, PenaltyOptions
 from planning.globalsearch.planner import GlobalSearchPlanner
 from planning.penalty.planner import PenaltyLoop

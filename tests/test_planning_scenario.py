@@ -110,7 +110,10 @@ def test_plan_command_writes_the_contract(tmp_path):
     samples = 2.0 * np.arange(1, 201) / 200
     assert np.all(np.min(np.abs(t[:, None] - samples[None]), axis=0) < 1e-12)
     assert plan["replans"] == len(plan["coefficients"]) - 1
-    assert len(plan["solve_ms"]) == plan["replans"] + 1
+    # one entry per solve: the plans followed, failed re-plans, and a bank's re-plans of its
+    # other classes only (the arm going on as it was)
+    kept = plan["bank"]["kept"] if plan["bank"] else 0
+    assert len(plan["solve_ms"]) == plan["replans"] + 1 + len(plan["replan_failures"]) + kept
 
 
 def test_plan_command_bad_input_exits_2_without_file(tmp_path, capsys):

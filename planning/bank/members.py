@@ -36,10 +36,11 @@ class BankRecord:
     admitted: int = 0
     dropped: int = 0
     found: int = 0  # plans the global search handed to the bank
+    kept: int = 0  # re-plans of other classes only, the arm going on as it was
 
     def to_json(self, size: int, mode: str) -> dict:
         return {"size": size, "mode": mode, "admitted": self.admitted,
-                "dropped": self.dropped, "search_plans": self.found,
+                "dropped": self.dropped, "search_plans": self.found, "kept": self.kept,
                 "switches": self.switches, "replans": self.replans}
 
     def replan(self, t: float, candidates: list, held: int, followed: tuple) -> None:

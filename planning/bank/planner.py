@@ -163,6 +163,7 @@ class BankPlanner:
             plan = dataclasses.replace(plan, status=plan.status + ADOPTED)
         self.followed = chosen
         if plan is rest:
+            self.record.kept += bool(spent[0])
             return warm if not spent[0] else self._timed(dataclasses.replace(
                 warm, status=KEPT), spent)
         return self._timed(plan, spent)
