@@ -131,7 +131,8 @@ def within(rows: list[dict], robots: tuple[str, ...]) -> tuple[int, int, int]:
     plan (reported apart)."""
     chosen = [r for r in rows if r["robot"] in robots]
     counted = [r for r in chosen if "energy" in r["penalty loop"]]
-    good = sum(1 for r in counted if (excess(r, "bank", "penalty loop") or np.inf) <= WITHIN)
+    gaps = [excess(r, "bank", "penalty loop") for r in counted]
+    good = sum(1 for gap in gaps if gap is not None and gap <= WITHIN)
     return good, len(counted), len(chosen) - len(counted)
 
 
