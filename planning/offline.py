@@ -9,6 +9,7 @@ import math
 
 from planning.formulation.clearance import predicted_clearance
 from planning.formulation.limits import LIMIT_TOLERANCE, limit_excess
+from planning.replanning import bank_account
 from planning.timing import collection_deferred
 from planning.types import Segment, SegmentPlan, SegmentPlanner
 
@@ -31,7 +32,6 @@ class Offline:
 
     def account(self) -> dict | None:
         """The primary's bank account (planning.replanning.bank_account)."""
-        from planning.replanning import bank_account
         return bank_account(self.primary)
 
     def prepare(self, goal) -> None:

@@ -2,29 +2,20 @@
 (planning.bank.classes), as a SegmentPlanner (planning.types): topology-driven re-planning
 (de Groot, Ferranti, Gavrila & Alonso-Mora, IEEE T-RO 2024) on Algorithm 2.
 
-- **Members**: each a plan and the class it is held in, re-planned warm from the arm's state
-  at every obstacle sample while the bank holds more than one and the obstacle comes near.
-  A re-plan that leaves its class does not replace its member's plan: it joins the bank as
-  its new class's plan (or replaces that class's plan if it spends less), and the member
-  keeps its plan, to be re-planned again from where the arm is at the next sample. So the
-  way the arm was on is kept when a forecast pushes a re-plan round the other side.
-- **Discovery**: the first plan's starts seed the bank, and the global search
-  (planning.globalsearch.planner with bank True: from the arm's state, shallow) hands every
-  plan it finds to the bank when the search's work up to it is done (on the nominal clock;
-  under CPU clocks, when the other process sends it); each joins as a new lineage unless a
-  member of its class already promises as much. Two lineages of one class merge when both
-  have converged. The search still hands its better plans to the plan followed, as without
-  a bank (planning.globalsearch.planner).
-- **Followed**: the cheapest plan re-planned from the arm's state at this sample
-  (planning.globalsearch.multistart.objective: safe first, then the energy to go plus the
-  weighted violation); the arm switches class only if that spends less than the plan
-  followed by more than the hysteresis (BankOptions.hysteresis).
-- **Dropped**: a member whose plan has missed the threshold on BankOptions.patience
-  forecasts in a row, and the costliest when a class needs room (BankOptions.size).
-- **The work counts whole**: a re-plan's clock_ms, CPU and wall times are those of all the
-  bank's solves at that sample. They share the re-plan's budget: the plan followed first
-  (all of it when the bank holds no other, else BankOptions.followed_share), the others
-  what it leaves, in turn.
+- **Members**: lineages of plans, each held in its class and re-planned warm from the arm's
+  state. A re-plan that leaves its class joins as a new lineage; the member keeps its plan.
+- **Discovery**: the first plan's starts, and every plan the global search finds
+  (planning.globalsearch.planner with bank True) once its work up to it is done, unless a
+  member of its class already promises as much. Two converged lineages of one class merge.
+- **Followed**: the cheapest plan re-planned from the arm's state at this sample (safe
+  first, then the energy to go: planning.globalsearch.multistart.objective); a switch of
+  class only past BankOptions.hysteresis.
+- **Dropped**: a member missing the threshold on BankOptions.patience forecasts in a row,
+  and the one promising least when a better plan needs room (BankOptions.size).
+- **Budget**: the plan followed gets the whole re-plan budget unless another member
+  promises less (then BankOptions.followed_share; a safe plan re-planned only to improve
+  yields its turn); the others share what it leaves. Every solve of a sample counts:
+  clock_ms, CPU and wall times are the whole bank's (docs/realtime.md, 'The bank of plans').
 """
 
 from __future__ import annotations
@@ -63,6 +54,7 @@ class BankPlanner:
         self.record = BankRecord()
         self._settle = math.inf
         self._current: tuple | None = None  # the objective of the plan followed, this sample
+        self._scores: dict = {}  # this sample's objectives (BankPlanner._score)
 
     @property
     def solver_ms(self) -> float:
@@ -115,8 +107,10 @@ class BankPlanner:
         spent = [0.0, 0.0, 0.0]  # clock, wall, CPU ms of the bank's solves at this sample
         total, followed = self._budget(problem), self.followed
         t = problem.t_begin
-        must = warm.status.startswith(ITERATE) or stale(self.config, warm, problem.forecast) \
-            or self.front.offers(t)  # the search offers a better plan of its own
+        self._scores = {}
+        dips = stale(self.config, warm, problem.forecast)
+        must = warm.status.startswith(ITERATE) or dips or self.front.offers(t)  # the
+        # search offers a better plan of its own
         rest = dataclasses.replace(warm, trajectory=warm.trajectory.restrict(
             t, problem.duration))
         current = self._current = self._score(rest, problem)
@@ -126,8 +120,7 @@ class BankPlanner:
                 if found.success:
                     self._admit(found, problem)
         promising = t < self._settle - 1e-9 and self._promising(current, problem)
-        if must and promising and current[0] == 0 and not stale(self.config, warm,
-                                                                problem.forecast):
+        if must and promising and current[0] == 0 and not dips:
             must = False  # safe and only to improve: the budget goes to a better class
         if must:  # the plan followed first, with the budget the others may need
             share = total * self.options.followed_share if promising else total
@@ -215,10 +208,16 @@ class BankPlanner:
                             self.config.threshold, problem.t_begin)
 
     def _score(self, plan: SegmentPlan, problem: Segment) -> tuple[int, float]:
-        rest = dataclasses.replace(plan, trajectory=plan.trajectory.restrict(
-            problem.t_begin, problem.duration))
-        return objective(self.check, self.config, rest, problem.t_begin, problem.duration,
-                         problem.forecast)
+        """The plan's objective from the segment's start on, each (plan, segment) scored
+        once per sample (the entries hold both, so no id is reused while they stand)."""
+        key = (id(plan), id(problem))
+        if key not in self._scores:
+            rest = dataclasses.replace(plan, trajectory=plan.trajectory.restrict(
+                problem.t_begin, problem.duration))
+            self._scores[key] = (plan, problem, objective(
+                self.check, self.config, rest, problem.t_begin, problem.duration,
+                problem.forecast))
+        return self._scores[key][2]
 
     def _seed(self, plan: SegmentPlan, problem: Segment) -> Member:
         """The plan the arm follows first, the bank's first member whatever it promises."""
