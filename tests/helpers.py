@@ -84,3 +84,16 @@ def lynxmotion_motion(n: int = 4000, seed: int = 0, duration: float = 20.0) -> M
     [0, pi], q3 in [-pi, 0]) with a 0.1 rad margin."""
     centre = [0.0, np.pi / 2, -np.pi / 2]
     return multisine(n, 3, seed, centre, np.pi / 2 - 0.1, duration)
+
+
+def fail_clarabel(monkeypatch) -> None:
+    """Every cvxpy solve asked of Clarabel raises a SolverError; other solvers solve."""
+    import cvxpy as cp
+    solve = cp.Problem.solve
+
+    def failing(self, *args, solver=None, **kwargs):
+        if solver == cp.CLARABEL:
+            raise cp.SolverError("Clarabel failed (forced for the test)")
+        return solve(self, *args, solver=solver, **kwargs)
+
+    monkeypatch.setattr(cp.Problem, "solve", failing)

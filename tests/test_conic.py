@@ -8,19 +8,14 @@ import numpy as np
 import pytest
 
 from identification.conic import solve_conic
+from tests.helpers import fail_clarabel
 
 
 def test_a_failed_clarabel_solve_is_said_and_scs_solves(monkeypatch):
     x = cp.Variable((2, 2), PSD=True)
     problem = cp.Problem(cp.Minimize(cp.sum_squares(x - np.diag([1.0, -1.0]))))
     assert solve_conic(problem, "the test fit") == "CLARABEL"
-    solve = cp.Problem.solve
-
-    def failing(self, *args, solver=None, **kwargs):
-        if solver == cp.CLARABEL:
-            raise cp.SolverError("Clarabel failed")
-        return solve(self, *args, solver=solver, **kwargs)
-    monkeypatch.setattr(cp.Problem, "solve", failing)
+    fail_clarabel(monkeypatch)
     with pytest.warns(RuntimeWarning, match="the test fit's Clarabel solve failed.*SCS"):
         assert solve_conic(problem, "the test fit") == "SCS"
     np.testing.assert_allclose(x.value, np.diag([1.0, 0.0]), atol=1e-3)

@@ -22,6 +22,7 @@ from identification.metrics import rel_error
 from identification.model import model_from_dict, model_to_dict
 from identification.physical import fit_physical, min_pseudo_eigenvalues, pseudo_inertia
 from identification.regression.consistent import ConsistentRegressor
+from tests.helpers import fail_clarabel
 
 
 def test_pseudo_inertia_says_which_bodies_are_physical():
@@ -130,7 +131,6 @@ def test_consistent_model_reads_back_from_model_json(lynx):
 def test_a_fallback_to_scs_is_warned_and_recorded(lynx, monkeypatch):
     """When Clarabel fails, the fit says so (a warning the CLI prints) and records the solver
     it took; a normal fit records Clarabel."""
-    import cvxpy as cp
 
     library, _, _ = lynx
     data = generate(Arm.of("lynxmotion"), 600, 0.01, 3, "inverse")
@@ -138,14 +138,7 @@ def test_a_fallback_to_scs_is_warned_and_recorded(lynx, monkeypatch):
     fit = fit_physical(atoms, data.qd, data.tau, np.zeros(39), lambdas=(1e-6,),
                        choose_friction=False)
     assert fit.validation["solver"] == "CLARABEL"
-    solve = cp.Problem.solve
-
-    def clarabel_fails(self, *args, solver=None, **kwargs):
-        if solver == cp.CLARABEL:
-            raise cp.SolverError("forced for the test")
-        return solve(self, *args, solver=solver, **kwargs)
-
-    monkeypatch.setattr(cp.Problem, "solve", clarabel_fails)
+    fail_clarabel(monkeypatch)
     with pytest.warns(RuntimeWarning, match="solved by SCS"):
         fit = fit_physical(atoms, data.qd, data.tau, np.zeros(39), lambdas=(1e-6,),
                            choose_friction=False)
