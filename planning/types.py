@@ -13,7 +13,7 @@ import numpy as np
 from planning.formulation.trajectory import PolynomialTrajectory
 
 if TYPE_CHECKING:
-    from planning.config import PlannerConfig
+    from planning.config import PlannerConfig, Scenario
 
 ITERATE = "feasible iterate"  # status of a re-plan stopped short of convergence, followed
 DEADLINE = "deadline exceeded"  # status of a re-plan abandoned at its deadline
@@ -77,6 +77,21 @@ class Segment:
     deadline_ms: float | None = None  # ms after which a re-plan is abandoned (status DEADLINE)
     # a re-plan of Algorithm 2, which may follow an iterate short of convergence (ITERATE)
     realtime: bool = False
+
+    @classmethod
+    def from_rest(cls, start, duration: float, goal,
+                  forecast: ObstacleForecast | None = None) -> Segment:
+        """The segment from rest at start at time 0 to goal at `duration`."""
+        return cls(np.asarray(start, float), np.zeros(len(start)), 0.0, duration,
+                   np.asarray(goal, float), forecast)
+
+    @classmethod
+    def of(cls, scenario: Scenario, forecast: ObstacleForecast | None = None,
+           **fields) -> Segment:
+        """The scenario's whole motion as one segment, past the obstacle as forecast; fields:
+        the segment's other fields (x0, budget_ms, ...)."""
+        return cls(scenario.start, scenario.start_velocity, 0.0, scenario.duration,
+                   scenario.goal, forecast, **fields)
 
 
 @runtime_checkable

@@ -10,6 +10,7 @@ from harness.robots.arm import Arm
 from harness.robots.baseline import PinocchioModel
 from identification.signals import multisine
 from identification.torque_model import Motion
+from planning.types import Segment
 
 
 def lynx_config(**changes):
@@ -64,7 +65,7 @@ def random_crossing(planner, seed: int):
     config = planner.config
 
     def free_motion(start, goal, duration):
-        return planner.solve(start, (0.0,) * len(start), duration, goal).trajectory
+        return planner.solve(Segment(start, (0.0,) * len(start), 0.0, duration, goal)).trajectory
 
     case = random_scenarios(1, seed, free_motion, config.geometry, config.lower, config.upper)[0]
     t = case.obstacle.sample_times

@@ -55,8 +55,7 @@ def test_no_plan_overruns_its_nominal_budget(nominal):
         case, forecast = random_crossing(numbers, seed=seed)
         planner.prepare(case.goal)
         for budget in (4.0, 7.0, 11.0):
-            plan = planner.plan(Segment(case.start, case.start_velocity, 0.0, case.duration,
-                                        case.goal, forecast, budget_ms=budget))
+            plan = planner.plan(Segment.of(case, forecast, budget_ms=budget))
             assert plan.clock_ms <= budget
             cut |= plan.clock_ms > budget - 4.0
     assert cut
@@ -106,8 +105,7 @@ def test_a_late_re_plan_is_dropped_under_real_time_clocks(baseline):
     config = lynx_default_config(compile_code=False, torque_limit=None)
     planner, numbers = AnytimePlanner(baseline, config), Planner(baseline, config)
     case, forecast = random_crossing(numbers, seed=7)
-    first = planner.plan_cold(Segment(case.start, case.start_velocity, 0.0, case.duration,
-                                      case.goal, forecast))[0]
+    first = planner.plan_cold(Segment.of(case, forecast))[0]
     q, qd, _ = first.trajectory.state(0.2)
     replan = Segment(q[0], qd[0], 0.2, case.duration - 0.2, case.goal, forecast, realtime=True)
     assert planner.plan(replan, warm=first).success

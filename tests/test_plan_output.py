@@ -22,6 +22,7 @@ from harness.robots.inertials import set_standard_parameters
 from models import MODELS
 from planning.formulation.clearance import link_clearances
 from planning.penalty.solver import Planner
+from planning.types import Segment
 from tests.helpers import lynx_config, lynx_scenario
 
 RATE = 200.0
@@ -71,13 +72,12 @@ def test_feedforward_is_pinocchio_rnea_at_the_rows(planned):
 def test_velocity_limit_holds_between_the_nlp_samples():
     scenario = lynx_scenario(obstacle=None)
     model = Arm.of("lynxmotion").nominal
-    free = Planner(model, lynx_config(rest_at_goal=True)).solve(
-        scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
+    free = Planner(model, lynx_config(rest_at_goal=True)).solve(Segment.of(scenario))
     t = np.linspace(0, scenario.duration, 2001)
     peak = np.abs(free.trajectory.state(t)[1]).max()
     limit = 0.9 * peak
     limited = Planner(model, lynx_config(rest_at_goal=True, velocity_limit=(limit,) * 3)).solve(
-        scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
+        Segment.of(scenario))
     assert limited.success
     assert np.abs(limited.trajectory.state(t)[1]).max() <= limit
 

@@ -295,8 +295,8 @@ def test_a_forecast_no_motion_can_clear_gets_the_minimum_violation_plan(planner)
     forecast = ObstacleForecast(times, case.obstacle.position(times))
     anytime = Anytime(planner.model, planner.config)
     anytime.prepare(goal)
-    plan, _, _ = anytime.solve(case.start, case.start_velocity, 0.0, 2.0, goal, forecast,
-                              budget_ms=1e5)
+    plan, _, _ = anytime.solve(Segment(case.start, case.start_velocity, 0.0, 2.0, goal, forecast,
+                                       budget_ms=1e5))
     assert plan.success and MIN_VIOLATION in plan.status
     lowest = link_clearances(planner.config.geometry, plan.trajectory.position(times),
                              forecast.centres).min()
@@ -344,8 +344,8 @@ def test_iterates_whose_own_rows_miss_the_threshold_are_passed_over_soundly(plan
     anytime = Anytime(planner.model, planner.config)
     anytime.prepare(goal)
     calls.clear()
-    plan, _, _ = anytime.solve(lynx_scenario().start, lynx_scenario().start_velocity, 0.0, 2.0, goal,
-                              forecast, budget_ms=1e5)
+    plan, _, _ = anytime.solve(Segment(lynx_scenario().start, lynx_scenario().start_velocity, 0.0,
+                                       2.0, goal, forecast, budget_ms=1e5))
     assert MIN_VIOLATION in plan.status and calls and any(passed)
     for chosen, full in calls:
         assert chosen.x is full.x and chosen.rank == full.rank
@@ -361,7 +361,7 @@ def test_no_garbage_collection_runs_inside_a_plan(planner):
     case, forecast = random_crossing(planner, seed=5)
     segments = AnytimePlanner(planner.model, planner.config)
     segments.prepare(case.goal)
-    problem = Segment(case.start, case.start_velocity, 0.0, case.duration, case.goal, forecast)
+    problem = Segment.of(case, forecast)
     inside, collections = [False], []
 
     def watch(phase, info):
@@ -402,8 +402,7 @@ def test_a_plan_out_of_budget_returns_its_best_iterate(planner):
     anytime = Anytime(planner.model, planner.config)
     anytime.prepare(case.goal)
     x0 = planner.initial_guess(case.start, case.start_velocity, case.duration, case.goal)
-    plan, _, _ = anytime.solve(case.start, case.start_velocity, 0.0, case.duration, case.goal,
-                              forecast, x0=x0, budget_ms=0.0)
+    plan, _, _ = anytime.solve(Segment.of(case, forecast, x0=x0, budget_ms=0.0))
     assert plan.status.startswith(ITERATE) and plan.iterations == 0
     start = planner.trajectory(x0, case.start, case.start_velocity, 0.0, case.duration)
     assert np.allclose(plan.trajectory.coefficients, start.coefficients)
@@ -462,8 +461,7 @@ def test_a_budget_counted_in_iterations_gives_the_same_plan_under_any_load(basel
     x0 = planner.initial_guess(case.start, case.start_velocity, case.duration, case.goal)
 
     def plan():
-        return anytime.solve(case.start, case.start_velocity, 0.0, case.duration, case.goal,
-                            forecast, x0=x0, budget_ms=6.0)[0]
+        return anytime.solve(Segment.of(case, forecast, x0=x0, budget_ms=6.0))[0]
 
     quiet = plan()
     stop = threading.Event()
@@ -490,8 +488,7 @@ def test_a_cold_start_off_the_rest_rows_is_restored(planner):
     assert np.abs(bumped.state(case.duration)[1]).max() > 1e-2
     anytime = Anytime(planner.model, planner.config)
     anytime.prepare(case.goal)
-    plan, _, _ = anytime.solve(case.start, case.start_velocity, 0.0, case.duration, case.goal,
-                              forecast, x0=x0, budget_ms=0.0)
+    plan, _, _ = anytime.solve(Segment.of(case, forecast, x0=x0, budget_ms=0.0))
     assert plan.success and plan.iterations == 0
     q, qd, _ = plan.trajectory.state(case.duration)
     assert np.allclose(q[0], case.goal, atol=1e-8) and np.allclose(qd[0], 0.0, atol=1e-8)
@@ -527,8 +524,8 @@ def test_a_quick_build_makes_the_torque_limited_nlp_when_a_plan_first_needs_it(b
         anytime = Anytime(baseline, config)
         anytime.prepare(goal)
         assert any(torque for _, torque in anytime._problems) is not quick
-        plans[quick], _, _ = anytime.solve(np.zeros(3), np.zeros(3), 0.0, duration, goal, None,
-                                           budget_ms=1000.0)
+        plans[quick], _, _ = anytime.solve(Segment(np.zeros(3), np.zeros(3), 0.0, duration, goal,
+                                                   budget_ms=1000.0))
         assert any(torque for _, torque in anytime._problems)
     plan = plans[True]
     assert plan.success

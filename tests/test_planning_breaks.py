@@ -19,6 +19,7 @@ from planning.formulation.trajectory import PolynomialTrajectory
 from planning.penalty.loop import plan_multistart, plan_segment
 from planning.penalty.solver import Planner
 from planning.starts import rank
+from planning.types import Segment
 from tests.helpers import lynx_config, lynx_scenario, random_crossing
 
 
@@ -79,8 +80,7 @@ def test_split_plan_prices_its_own_energy_and_beats_gauss_on_the_paper_scenario(
     for rule in ("split", "gauss"):
         config = lynx_config(energy_quadrature=rule, energy_samples=24, power_breaks=7)
         planner = Planner(baseline, config)
-        plan, _, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0,
-                                  scenario.duration, scenario.goal, None)
+        plan, _, _ = plan_segment(planner, Segment.of(scenario))
         t = np.linspace(0.0, scenario.duration, 8001)
         dense = np.trapezoid(np.abs(power(baseline, *plan.trajectory.state(t))), t)
         results[rule] = plan.energy, dense
@@ -138,8 +138,8 @@ def test_polished_cold_plan_spends_less_and_replans_warm_from_it(baseline):
                            penalty=PenaltyOptions(polish=1))
     planner = Planner(baseline, config)
     case, forecast = random_crossing(planner, 2)
-    args = (case.start, case.start_velocity, 0.0, case.duration, case.goal)
-    best, _, _, plans = plan_multistart(planner, *args, forecast)
+    segment = Segment.of(case, forecast)
+    best, _, _, plans = plan_multistart(planner, segment)
     unpolished = min(plans, key=lambda plan: rank(planner, plan))
     assert best.success and rank(planner, best)[2] < rank(planner, unpolished)[2]
     assert best.layout == ("split", 40, False) != unpolished.layout
@@ -157,8 +157,8 @@ def test_polished_cold_plan_spends_less_and_replans_warm_from_it(baseline):
     assert np.isclose(rank(planner, beyond)[2], rank(planner, best)[2], rtol=1e-9)
     assert min([beyond, *plans], key=lambda plan: rank(planner, plan)) is not beyond
     q, qd, _ = best.trajectory.state(0.5)
-    replan, _, _ = plan_segment(planner, q[0], qd[0], 0.5, case.duration - 0.5, case.goal,
-                                forecast, warm=best)  # (its multipliers would not fit)
+    replan, _, _ = plan_segment(planner, Segment(q[0], qd[0], 0.5, case.duration - 0.5, case.goal,
+                                                 forecast), warm=best)  # (its multipliers would not fit)
     assert replan.success
     with pytest.raises(ValueError, match="multiple of power_breaks"):
         _ = Planner(baseline, dataclasses.replace(config, power_breaks=6)).polisher

@@ -42,8 +42,8 @@ def test_the_search_escapes_a_warm_start_in_the_wrong_class(baseline, config):
     numbers = Planner(baseline, config)
     case, forecast = random_crossing(numbers, seed=3)
     search = MultiStart(baseline, config)
-    segment = (case.start, case.start_velocity, 0.0, case.duration, case.goal, forecast)
-    best, plans = search.search(*segment)
+    segment = Segment.of(case, forecast)
+    best, plans = search.search(segment)
     scores = [objective(search.check, config, plan, 0.0, case.duration, forecast)
               for plan in plans]
     safe = [i for i, score in enumerate(scores) if not score[0]]
@@ -51,8 +51,8 @@ def test_the_search_escapes_a_warm_start_in_the_wrong_class(baseline, config):
     wrong = plans[worst]
     assert scores[worst][1] > 1.05 * min(scores[i][1] for i in safe)  # another class
     anytime = AnytimePlanner(baseline, config)
-    replan = anytime.plan(Segment(*segment, realtime=True), warm=wrong)
-    found, _ = search.search(*segment, warm=wrong)
+    replan = anytime.plan(dataclasses.replace(segment, realtime=True), warm=wrong)
+    found, _ = search.search(segment, warm=wrong)
     ours, theirs = (objective(search.check, config, plan, 0.0, case.duration, forecast)
                     for plan in (replan, found))
     assert not theirs[0] and theirs[1] <= ours[1]
@@ -83,9 +83,8 @@ def test_ipopt_on_the_elastic_nlp_agrees_with_the_penalty_loop(baseline, config)
     numbers = Planner(baseline, far)
     case, forecast = random_crossing(numbers, seed=5)
     forecast = dataclasses.replace(forecast, centres=forecast.centres + 5.0)
-    penalty = numbers.solve(case.start, case.start_velocity, case.duration, case.goal, None)
-    elastic = IpoptElastic(baseline, config).solve(case.start, case.start_velocity, 0.0,
-                                                   case.duration, case.goal, forecast)
+    penalty = numbers.solve(Segment.of(case))
+    elastic = IpoptElastic(baseline, config).solve(Segment.of(case, forecast))
     assert penalty.success and elastic.success
     assert elastic.penalty == pytest.approx(0.0, abs=1e-9)
     assert elastic.energy == pytest.approx(penalty.energy, rel=1e-5)
@@ -99,8 +98,7 @@ def test_with_one_core_the_real_time_loop_runs_alone(baseline, config, monkeypat
     planner = GlobalSearchPlanner(AnytimePlanner(baseline, live), baseline, live)
     assert planner.mode == "one core"
     case = lynx_scenario()
-    first = planner.plan(Segment(case.start, case.start_velocity, 0.0, case.duration,
-                                 case.goal, None, budget_ms=math.inf))
+    first = planner.plan(Segment.of(case, None, budget_ms=math.inf))
     assert not planner.offers(0.5)
     assert "one core" in report(live, (first,))["mode"]
     assert planner.searches == 0
@@ -136,8 +134,9 @@ def test_each_better_plan_enters_when_the_search_work_up_to_it_is_done(baseline,
         args, best, plans = searches[-1]
         period = float(problem.forecast.times[1] - problem.forecast.times[0])
         work = (after_ms + np.cumsum([plan.clock_ms for plan in plans])) / (1e3 * period)
-        scores = [objective(self.check, config, plan, args[2], args[3], args[5])
-                  for _, plan in self._offers]
+        segment = args[0]
+        scores = [objective(self.check, config, plan, segment.t_begin, segment.duration,
+                            segment.forecast) for _, plan in self._offers]
         assert scores == sorted(scores, reverse=True) and len(set(scores)) == len(scores)
         for due, plan in self._offers:
             index = next(i for i, p in enumerate(plans) if p is plan)
@@ -145,7 +144,8 @@ def test_each_better_plan_enters_when_the_search_work_up_to_it_is_done(baseline,
             assert due - problem.t_begin == pytest.approx(samples * period, abs=1e-9)
             checked.append(samples)
             early.append(samples < work[-1] - 1)
-        every = [objective(self.check, config, plan, args[2], args[3], args[5])
+        every = [objective(self.check, config, plan, segment.t_begin, segment.duration,
+                           segment.forecast)
                  for plan in plans]
         first = every.index(min(every))  # the search's best
         assert best.trajectory is plans[first].trajectory
@@ -168,9 +168,9 @@ def test_the_other_process_sends_each_better_plan_as_found(baseline, config):
     live = config.with_anytime(iteration_ms=None)
     numbers = Planner(baseline, live)
     case, forecast = random_crossing(numbers, seed=3)
-    segment = (case.start, case.start_velocity, 0.0, case.duration, case.goal, forecast)
+    segment = Segment.of(case, forecast)
     better = []
-    here, _ = MultiStart(baseline, live).search(*segment, found=lambda plan, b: better.append(b))
+    here, _ = MultiStart(baseline, live).search(segment, found=lambda plan, b: better.append(b))
     worker = background.Background(baseline, live)
 
     def finished():

@@ -9,6 +9,7 @@ import numpy as np
 import planning.formulation.nlp as nlp_module
 from harness.robots.arm import Arm
 from planning.formulation.nlp import PlanningNLP
+from planning.types import Segment
 from tests.helpers import lynx_config, lynx_default_config
 
 
@@ -49,7 +50,7 @@ def test_goal_limit_rows_are_built_only_where_the_goal_is_on_a_limit():
     model = Arm.of("lynxmotion").nominal
     planner = Planner(model, lynx_config(penalty=PenaltyOptions(solver="ipopt")))
     start, goal = (1.0, 0.6, -0.8), (-0.5, 1.2, -1.4)
-    plan = planner.solve(start, (0.0, 0.0, 0.0), 2.0, goal)
+    plan = planner.solve(Segment(start, (0.0, 0.0, 0.0), 0.0, 2.0, goal))
     pruned = planner._relaxed_for(goal).nlp
     assert pruned.quotient_rows == {} and pruned.g.numel() < planner.nlp.g.numel()
     full = ca.nlpsol("full", "ipopt", {"x": planner.nlp.x, "p": planner.nlp.p,

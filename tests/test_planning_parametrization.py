@@ -24,7 +24,7 @@ from planning.formulation.trajectory import (
 )
 from planning.penalty.solver import Planner
 from planning.result import executed_energy, sample_execution
-from planning.types import ObstacleForecast
+from planning.types import ObstacleForecast, Segment
 from tests.helpers import central_difference as _central_difference
 from tests.helpers import lynx_config
 
@@ -70,7 +70,7 @@ def test_boundary_conditions_hold_for_every_degree(baseline, degree):
     config = lynx_config(degree=degree, energy_quadrature="gauss", energy_samples=8,
                            rest_at_goal=True)
     qd0 = np.array([0.2, -0.1, 0.3])
-    plan = Planner(baseline, config).solve(Q0, qd0, 1.5, GOAL, t_begin=0.5)
+    plan = Planner(baseline, config).solve(Segment(Q0, qd0, 0.5, 1.5, GOAL))
     assert plan.success
     trajectory = plan.trajectory
     assert trajectory.coefficients.shape == (3, degree + 1)

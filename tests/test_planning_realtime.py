@@ -25,7 +25,7 @@ from planning.replanning import execute, forecast_at
 from planning.result import evaluate
 from planning.scenarios import random_scenarios, swaying_scenario
 from planning.starts import start_points
-from planning.types import DEADLINE, ITERATE, LATE
+from planning.types import DEADLINE, ITERATE, LATE, Segment
 from tests.helpers import lynx_config, lynx_scenario, random_crossing, segments
 
 
@@ -93,8 +93,8 @@ def test_sqpmethod_status_comes_from_the_kkt_conditions_of_its_point(capfd):
 
 def test_fatrop_and_ipopt_find_the_same_optimum(baseline):
     scenario = lynx_scenario()
-    args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
-    plans = {name: Planner(baseline, lynx_config(penalty=PenaltyOptions(solver=name))).solve(*args)
+    segment = Segment.of(scenario)
+    plans = {name: Planner(baseline, lynx_config(penalty=PenaltyOptions(solver=name))).solve(segment)
              for name in ("fatrop", "ipopt")}
     assert all(plan.success for plan in plans.values())
     fatrop, ipopt = plans["fatrop"], plans["ipopt"]
@@ -121,13 +121,12 @@ def test_start_points_keep_the_boundary_conditions(baseline):
 def test_a_replan_past_its_deadline_is_dropped_and_counted(baseline):
     planner = Planner(baseline, lynx_config(replan_deadline_ms=1e-6))
     scenario = lynx_scenario()
-    first, _, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0,
-                               scenario.duration, scenario.goal,
-                               forecast_at(scenario.obstacle, 0.0))
+    first, _, _ = plan_segment(planner, Segment.of(scenario, forecast_at(scenario.obstacle, 0.0)))
     t = 0.5
     q, qd, _ = first.trajectory.state(t)
-    late, _, cpu = plan_segment(planner, q[0], qd[0], t, scenario.duration - t, scenario.goal,
-                                forecast_at(scenario.obstacle, t), warm=first, deadline_ms=1e-6)
+    late, _, cpu = plan_segment(planner, Segment(q[0], qd[0], t, scenario.duration - t, scenario.goal,
+                                                 forecast_at(scenario.obstacle, t), deadline_ms=1e-6),
+                                warm=first)
     assert not late.success and late.status.startswith(DEADLINE) and cpu > 1e-6
     assert late.status == DEADLINE + LATE  # its last solve converged, after the deadline
     run = execute(segments(planner), scenario)
@@ -148,7 +147,7 @@ def test_a_late_but_converged_replan_is_the_next_warm_start(baseline, monkeypatc
         calls.append((warm, result))
         return result
 
-    free = planner.solve(lynx_scenario().start, (0.0,) * 3, 2.0, lynx_scenario().goal).trajectory
+    free = planner.solve(Segment.from_rest(lynx_scenario().start, 2.0, lynx_scenario().goal)).trajectory
     scenario = swaying_scenario(free, planner.config.geometry, lynx_scenario())  # every forecast is new
     monkeypatch.setattr(loop, "plan", recording)
     run = execute(loop, scenario)
@@ -168,7 +167,7 @@ def test_random_scenarios_are_seeded_and_put_the_obstacle_in_the_way(baseline):
     paths = {}
 
     def free_motion(start, goal, duration):
-        paths[(start, goal)] = planner.solve(start, (0.0, 0.0, 0.0), duration, goal).trajectory
+        paths[(start, goal)] = planner.solve(Segment(start, (0.0, 0.0, 0.0), 0.0, duration, goal)).trajectory
         return paths[(start, goal)]
 
     cases = random_scenarios(3, 11, free_motion, config.geometry, config.lower, config.upper)
@@ -195,16 +194,15 @@ def test_a_warm_solve_the_fast_solver_cannot_finish_is_rescued_by_ipopt(baseline
     scenario = lynx_scenario()
     capped = Planner(baseline, lynx_config(penalty=PenaltyOptions(warm_max_iterations=1)))
     full = Planner(baseline, lynx_config())
-    first, _, _ = plan_segment(full, scenario.start, scenario.start_velocity, 0.0,
-                               scenario.duration, scenario.goal, forecast_at(scenario.obstacle, 0.0))
+    first, _, _ = plan_segment(full, Segment.of(scenario, forecast_at(scenario.obstacle, 0.0)))
     t = 0.5
     q, qd, _ = first.trajectory.state(t)
     reference_path = first.trajectory.restrict(t, scenario.duration - t)
     seen = screen(forecast_at(scenario.obstacle, t), reference_path, full.config.geometry,
                   full.config.threshold, full.config.obstacle_slots).subset
-    args = (q[0], qd[0], scenario.duration - t, scenario.goal, seen, t)
-    rescued = capped.solve(*args, warm=first, reference=reference_path)
-    reference = full.solve(*args, warm=first, reference=reference_path)
+    segment = Segment(q[0], qd[0], t, scenario.duration - t, scenario.goal, seen)
+    rescued = capped.solve(segment, warm=first, reference=reference_path)
+    reference = full.solve(segment, warm=first, reference=reference_path)
     assert rescued.success and rescued.status == "Solve_Succeeded"  # IPOPT's word
     assert reference.success and reference.status != "Solve_Succeeded"  # fatrop's
     assert abs(rescued.energy + rescued.penalty - reference.energy - reference.penalty) \
@@ -213,7 +211,7 @@ def test_a_warm_solve_the_fast_solver_cannot_finish_is_rescued_by_ipopt(baseline
     # answer would come too late; fatrop's unfinished solve is returned unsuccessful
     late = Planner(baseline, lynx_config(penalty=PenaltyOptions(warm_max_iterations=1, max_iterations=1)))
     for warm in (first, None):
-        dropped = late.solve(*args, warm=warm, reference=reference_path, rescue=False)
+        dropped = late.solve(segment, warm=warm, reference=reference_path, rescue=False)
         assert not dropped.success and dropped.status != "Solve_Succeeded"
     assert not late._rescue  # no IPOPT built, none run
 
@@ -227,11 +225,11 @@ def test_each_start_point_reaches_a_plan_of_its_own(baseline):
     planner = Planner(baseline, config)
     case, forecast = random_crossing(planner, 2)
     t = case.obstacle.sample_times
-    args = (case.start, case.start_velocity, 0.0, case.duration, case.goal, forecast)
-    free = planner.solve(case.start, case.start_velocity, case.duration, case.goal)
-    through_free, _, _ = plan_segment(planner, *args, warm=free)
-    direct, _, _ = plan_segment(planner, *args)
-    best, _, _, plans = plan_multistart(planner, *args, count=4)
+    segment = Segment.of(case, forecast)
+    free = planner.solve(Segment.of(case))
+    through_free, _, _ = plan_segment(planner, segment, warm=free)
+    direct, _, _ = plan_segment(planner, segment)
+    best, _, _, plans = plan_multistart(planner, segment, count=4)
     assert plans[0].energy == direct.energy  # the first start: the planner's initial guess
     assert all(plan.success for plan in (through_free, *plans))
     assert direct.energy + direct.penalty < 0.5 * (through_free.energy + through_free.penalty)
@@ -256,16 +254,16 @@ def test_a_warm_plan_its_rounds_leave_beyond_a_joint_limit_is_not_successful(bas
     With the default rounds the limits settle. A cold plan is returned as it is."""
     planner = Planner(baseline, lynx_config(energy_quadrature="gauss", energy_samples=20))
     case, forecast = random_crossing(planner, 5)
-    args = (case.start, case.start_velocity, 0.0, case.duration, case.goal, forecast)
+    segment = Segment.of(case, forecast)
     limits = planner.config.lower, planner.config.upper
-    free = planner.solve(case.start, case.start_velocity, case.duration, case.goal)
-    unsettled, _, _ = plan_segment(planner, *args, warm=free, rounds=1)
+    free = planner.solve(Segment.of(case))
+    unsettled, _, _ = plan_segment(planner, segment, warm=free, rounds=1)
     assert limit_excess(unsettled.trajectory, *limits) > LIMIT_TOLERANCE
     assert not unsettled.success
     assert unsettled.status.startswith("joint limits exceeded by")
-    settled, _, _ = plan_segment(planner, *args, warm=free)
+    settled, _, _ = plan_segment(planner, segment, warm=free)
     assert settled.success and limit_excess(settled.trajectory, *limits) <= LIMIT_TOLERANCE
-    cold, _, _ = plan_segment(planner, *args, rounds=1)
+    cold, _, _ = plan_segment(planner, segment, rounds=1)
     assert cold.success and limit_excess(cold.trajectory, *limits) > LIMIT_TOLERANCE
 
 
@@ -304,18 +302,16 @@ def test_a_real_time_iteration_is_followed_only_where_it_is_feasible_and_cheaper
     The same re-plan without `iterate` is solved out."""
     scenario = lynx_scenario()
     planner = Planner(baseline, lynx_config(penalty=PenaltyOptions(replan_iterations=1)))
-    first, _, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0,
-                               scenario.duration, scenario.goal,
-                               forecast_at(scenario.obstacle, 0.0))
+    first, _, _ = plan_segment(planner, Segment.of(scenario, forecast_at(scenario.obstacle, 0.0)))
     t, duration = 0.5, scenario.duration - 0.5
     q, qd, _ = first.trajectory.state(t)
     reference = first.trajectory.restrict(t, duration)
     seen = screen(forecast_at(scenario.obstacle, t), reference, planner.config.geometry,
                   planner.config.threshold, planner.config.obstacle_slots).subset
-    args = (q[0], qd[0], duration, scenario.goal, seen, t)
+    segment = Segment(q[0], qd[0], t, duration, scenario.goal, seen)
     alpha = first.penalty_weight  # the weight a re-plan starts from
-    step = planner.solve(*args, warm=first, reference=reference, alpha=alpha, iterate=True)
-    converged = planner.solve(*args, warm=first, reference=reference, alpha=alpha)
+    step = planner.solve(segment, warm=first, reference=reference, alpha=alpha, iterate=True)
+    converged = planner.solve(segment, warm=first, reference=reference, alpha=alpha)
     assert step.status == ITERATE and step.success and step.iterations == 1
     assert converged.status != ITERATE and converged.success
     end = step.trajectory.position(np.array([scenario.duration]))[0]
@@ -323,7 +319,8 @@ def test_a_real_time_iteration_is_followed_only_where_it_is_feasible_and_cheaper
     config = planner.config
     assert limit_excess(step.trajectory, config.lower, config.upper) <= LIMIT_TOLERANCE
     solvers = planner._relaxed_for(scenario.goal)
-    p = planner.parameters(*args[:5], t, reference, alpha)
+    p = planner.parameters(segment.q0, segment.qd0, segment.duration, segment.goal,
+                           segment.forecast, t, reference, alpha)
     x0 = planner._warm_start(first, t, duration, solvers.nlp, p)["x0"]
     start_cost = sum(float(v) for v in solvers.parts(x0, p))
     cost = step.energy + step.penalty
@@ -361,17 +358,13 @@ def test_cold_plans_settling_and_polishing_never_stop_at_an_iterate(baseline):
     scenario = lynx_scenario()
     planner = Planner(baseline, lynx_config(penalty=PenaltyOptions(
         replan_iterations=1, polish=1, polish_samples=16)))
-    plan, _, _, plans = plan_multistart(planner, scenario.start, scenario.start_velocity, 0.0,
-                                        scenario.duration, scenario.goal,
-                                        forecast_at(scenario.obstacle, 0.0))
+    plan, _, _, plans = plan_multistart(planner, Segment.of(scenario, forecast_at(scenario.obstacle, 0.0)))
     assert plan.success and plan.status != ITERATE
     assert all(p.status != ITERATE for p in plans)
     assert planner.polisher.config.penalty.replan_iterations is None
     assert all(s.iterate is None for s in planner.polisher._relaxed.values())
     assert all(s.iterate is None for s in planner._rescue.values())
-    again, _, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0,
-                               scenario.duration, scenario.goal,
-                               forecast_at(scenario.obstacle, 0.0), warm=plan)
+    again, _, _ = plan_segment(planner, Segment.of(scenario, forecast_at(scenario.obstacle, 0.0)), warm=plan)
     assert again.status != ITERATE  # a warm plan_segment call outside Algorithm 2
     with pytest.raises(ValueError, match="replan_iterations"):
         Planner(baseline, lynx_config(penalty=PenaltyOptions(replan_iterations=0)))

@@ -16,6 +16,7 @@ from planning.formulation.energy import absolute_energy
 from planning.penalty.solver import Planner
 from planning.replanning import execute
 from planning.result import evaluate
+from planning.types import Segment
 from tests.helpers import lynx_config, lynx_scenario, perturbed_model, segments
 
 
@@ -183,10 +184,10 @@ def test_warm_replan_finds_the_cold_optimum(paper, baseline):
 
     plan, t = avoided.execution.segments[-1], 0.5
     q, qd, _ = plan.trajectory.state(t)
-    args = (planner, q[0], qd[0], t, scenario.duration - t, scenario.goal,
-            forecast_at(scenario.obstacle, t))
-    warm, _, _ = plan_segment(*args, warm=plan)
-    cold, _, _ = plan_segment(*args)
+    segment = Segment(q[0], qd[0], t, scenario.duration - t, scenario.goal,
+                      forecast_at(scenario.obstacle, t))
+    warm, _, _ = plan_segment(planner, segment, warm=plan)
+    cold, _, _ = plan_segment(planner, segment)
     assert warm.success and cold.success
     assert np.isclose(warm.energy + warm.penalty, cold.energy + cold.penalty, rtol=1e-6)
     assert np.allclose(warm.trajectory.coefficients, cold.trajectory.coefficients, atol=1e-4)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -10,7 +12,7 @@ from planning.config import Scenario
 from planning.formulation.clearance import link_clearances
 from planning.formulation.screening import Screen, near_samples, screen, uncovered
 from planning.penalty.solver import Planner
-from planning.types import ObstacleForecast
+from planning.types import ObstacleForecast, Segment
 from tests.helpers import lynx_config, lynx_scenario
 
 
@@ -37,8 +39,7 @@ def test_screen_thins_to_the_slots_and_reports_the_gap():
     scenario = lynx_scenario()
     baseline = Arm.of("lynxmotion").nominal
     planner = Planner(baseline, lynx_config())
-    free = planner.solve(scenario.start, scenario.start_velocity, scenario.duration,
-                         scenario.goal)
+    free = planner.solve(Segment.of(scenario))
     forecast = _known_path(scenario)
     geometry, threshold = planner.config.geometry, planner.config.threshold
     wide = screen(forecast, free.trajectory, geometry, threshold, slots=1000)
@@ -61,20 +62,20 @@ def test_samples_above_the_threshold_leave_the_optimum_unchanged():
     scenario = lynx_scenario()
     baseline = Arm.of("lynxmotion").nominal
     planner = Planner(baseline, lynx_config(obstacle_slots=40))
-    args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
-    free = planner.solve(*args)
+    segment = Segment.of(scenario)
+    free = planner.solve(segment)
     forecast = _known_path(scenario)
     geometry, threshold = planner.config.geometry, planner.config.threshold
     seen = screen(forecast, free.trajectory, geometry, threshold, slots=12, margin=0.0).subset
-    plan = planner.solve(*args, seen, reference=free.trajectory)
+    plan = planner.solve(dataclasses.replace(segment, forecast=seen), reference=free.trajectory)
     clearance = link_clearances(geometry, plan.trajectory.position(forecast.times),
                                 forecast.centres).min(axis=1)
     clear = np.flatnonzero((clearance > threshold + 1e-3) & ~np.isin(forecast.times, seen.times))
     added = clear[np.argsort(clearance[clear])[:20]]  # the nearest ones that stay clear
     assert len(added) == 20 and clearance[added].min() < threshold + 0.05
     keep = np.sort(np.concatenate([np.flatnonzero(np.isin(forecast.times, seen.times)), added]))
-    more = planner.solve(*args, ObstacleForecast(forecast.times[keep], forecast.centres[keep]),
-                         reference=free.trajectory)
+    more = planner.solve(dataclasses.replace(segment, forecast=ObstacleForecast(
+        forecast.times[keep], forecast.centres[keep])), reference=free.trajectory)
     assert plan.success and more.success and plan.penalty > 0
     assert np.allclose(more.trajectory.coefficients, plan.trajectory.coefficients, atol=1e-5)
     assert more.energy + more.penalty == pytest.approx(plan.energy + plan.penalty, rel=1e-6)

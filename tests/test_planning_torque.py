@@ -18,6 +18,7 @@ from planning.penalty.solver import Planner
 from planning.replanning import execute
 from planning.result import TORQUE_TOLERANCE, evaluate, to_json
 from planning.scenarios import swaying_scenario
+from planning.types import Segment
 from tests.helpers import lynx_config, lynx_scenario, segments
 
 
@@ -51,7 +52,7 @@ def test_overdriving_plan_is_refused_without_file(tmp_path, capsys):
     # a short move, within the velocity limits (0.0706 s on the planner's polynomial), too
     # fast for the motors
     code = main(["plan", "--no-compile", "--model", "pinocchio", "--goal", "1.1,0.3,-1.2",
-                 "--duration", "0.08", "--out", str(out)])
+                 "--duration", "0.08", "--starts", "1", "--out", str(out)])
     assert code == 2
     assert not out.exists()
     err = capsys.readouterr().err.strip()
@@ -66,8 +67,8 @@ def test_torque_diagnosis_counts_the_limits_as_a_plan_does(baseline, monkeypatch
     motion passes them beyond the tolerance a plan's result allows (planning.result); a
     motion within it reaches the goal, and the failure lies elsewhere (the clearance)."""
     scenario = dataclasses.replace(lynx_scenario(), duration=0.12, obstacle=None)
-    args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
-    motion = Planner(baseline, lynx_config(torque_limit=None)).solve(*args)
+    segment = Segment.of(scenario)
+    motion = Planner(baseline, lynx_config(torque_limit=None)).solve(segment)
     t = np.linspace(0.0, scenario.duration, 4001)
     peak = np.abs(baseline.torque(*motion.trajectory.state(t))).max(axis=0)
     planner = Planner(baseline, lynx_config(torque_limit=tuple(peak / (1 + over))))

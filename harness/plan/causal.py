@@ -35,8 +35,7 @@ class CausalMultiStart:
         self.search.prepare(goal)
 
     def plan(self, problem: Segment, warm: SegmentPlan | None = None) -> SegmentPlan:
-        return self.search.search(problem.q0, problem.qd0, problem.t_begin, problem.duration,
-                                  problem.goal, problem.forecast, warm)[0]
+        return self.search.search(problem, warm)[0]
 
     def plan_cold(self, problem: Segment, starts: int | None = None
                   ) -> tuple[SegmentPlan, list[SegmentPlan]]:

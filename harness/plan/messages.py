@@ -20,6 +20,7 @@ from planning.formulation.limits import LIMIT_TOLERANCE
 from planning.penalty.solver import Planner
 from planning.planners import uses_anytime
 from planning.result import torque_problems
+from planning.types import Segment
 
 PEAK_GRID = 2001  # points of [0, 1] at which peak_factor bounds the speed (a lower bound)
 
@@ -152,15 +153,15 @@ def torque_diagnosis(planner: Planner, scenario: Scenario) -> str | None:
     config, model = planner.config, planner.model
     if config.torque_limit is None:
         return None
-    args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
-    limited = planner.solve(*args)
+    segment = Segment.of(scenario)
+    limited = planner.solve(segment)
     # within the limits as a plan's result counts them (a plan that passes between the NLP's
     # samples by less than planning.result's tolerance reaches the goal)
     t = np.linspace(0.0, scenario.duration, 201)
     if limited.success and not torque_problems(
             np.abs(model.torque(*limited.trajectory.state(t))).max(axis=0), config.torque_limit):
         return None
-    free = Planner(model, dataclasses.replace(config, torque_limit=None)).solve(*args)
+    free = Planner(model, dataclasses.replace(config, torque_limit=None)).solve(segment)
     peak = np.abs(model.torque(*free.trajectory.state(t))).max(axis=0)
     limit = np.asarray(config.torque_limit)
     j = int(np.argmax(peak / limit))

@@ -32,6 +32,7 @@ from harness.report.results import Context, SectionResult, Target, check
 from harness.robots.arm import Arm
 from planning.penalty.solver import Planner
 from planning.scenarios import random_scenarios
+from planning.types import Segment
 
 SEED = 9784  # drawn once; see the module's docstring
 ROBOTS = (("lynxmotion", 20), ("ur5", 5), ("panda", 5))
@@ -66,7 +67,7 @@ def draw(name: str, count: int, seed: int) -> list:
     planner = Planner(arm.nominal, config)
 
     def free_motion(start, goal, duration):
-        return planner.solve(start, (0.0,) * len(start), duration, goal).trajectory
+        return planner.solve(Segment.from_rest(start, duration, goal)).trajectory
 
     lower, upper = np.asarray(config.lower), np.asarray(config.upper)
     if name != "lynxmotion":  # start and goal within +-SPAN: reachable in 2 s

@@ -43,15 +43,14 @@ class AnytimePlanner:
         if problem.deadline_ms is not None:
             budget = min(budget, problem.deadline_ms)
         self.anytime.prepare(problem.goal)  # built once: not part of a plan's time
-        segment = (problem.q0, problem.qd0, problem.t_begin, problem.duration, problem.goal,
-                   problem.forecast)
+        segment = dataclasses.replace(problem, budget_ms=budget)
         if warm is not None and config.anytime.replan_starts:
             clock = Stopwatch()
-            plan = self.anytime.best_of(*segment, warm, config.anytime.replan_starts, budget)
+            plan = self.anytime.best_of(segment, warm, config.anytime.replan_starts)
             wall, cpu = clock.read()
             plan = dataclasses.replace(plan, solve_ms=wall, solve_cpu_ms=cpu)
         else:
-            plan = self.anytime.solve(*segment, warm, problem.x0, budget)[0]
+            plan = self.anytime.solve(segment, warm)[0]
         return self._in_time(plan, problem.deadline_ms)
 
     def _in_time(self, plan: SegmentPlan, deadline_ms: float | None) -> SegmentPlan:

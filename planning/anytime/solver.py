@@ -34,7 +34,7 @@ from planning.formulation.nlp import PlanningNLP
 from planning.formulation.problem import ProblemNumbers
 from planning.formulation.screening import MARGIN, near_samples, on_horizon, uncovered
 from planning.starts import start_points
-from planning.types import ITERATE, ObstacleForecast, SegmentPlan
+from planning.types import ITERATE, ObstacleForecast, Segment, SegmentPlan
 
 CONVERGED = "converged"
 MIN_VIOLATION = "minimum violation"
@@ -87,7 +87,7 @@ class Anytime(ProblemNumbers):
         lower, upper = np.asarray(self.config.lower), np.asarray(self.config.upper)
         start = np.clip(np.asarray(goal, float) + 0.1, lower, upper)
         far = ObstacleForecast(np.array([0.5, 1.0]), np.full((2, 3), 10.0))
-        self.solve(start, np.zeros(len(start)), 0.0, 1.0, goal, far, budget_ms=5.0)
+        self.solve(Segment(start, np.zeros(len(start)), 0.0, 1.0, goal, far, budget_ms=5.0))
         for problem in self._problems.values():  # the first calls' costs predict nothing
             problem.sqp.forget()
         self.rounds.clear()
@@ -112,20 +112,24 @@ class Anytime(ProblemNumbers):
             self._building += (time.perf_counter() - began[0], time.thread_time() - began[1])
         return self._problems[key]
 
-    def solve(self, q0, qd0, t_begin: float, duration: float, goal,
-             forecast: ObstacleForecast | None, warm: SegmentPlan | None = None,
-             x0: np.ndarray | None = None, budget_ms: float | None = None
-             ) -> tuple[SegmentPlan, float, float]:
-        """One plan (cold from x0, default the initial guess) or re-plan (warm); the plan and
-        its wall and CPU time (ms, end to end)."""
+    def solve(self, segment: Segment, warm: SegmentPlan | None = None
+              ) -> tuple[SegmentPlan, float, float]:
+        """One plan of the segment (cold from segment.x0, default the initial guess) or
+        re-plan (warm), within segment.budget_ms on the budget's clock (default the config's
+        re-plan budget); the plan and its wall and CPU time (ms, end to end)."""
+        q0, qd0, t_begin, duration, goal, forecast = (
+            segment.q0, segment.qd0, segment.t_begin, segment.duration, segment.goal,
+            segment.forecast)
         wall, cpu = time.perf_counter(), time.thread_time()
         building = self._building.copy()  # a problem built during this plan: not its time
         config = self.config
         clock = Clock(config.anytime.iteration_ms)  # what the budget counts
-        budget = config.anytime.replan_budget_ms if budget_ms is None else budget_ms
+        budget = config.anytime.replan_budget_ms if segment.budget_ms is None \
+            else segment.budget_ms
         times, centres = on_horizon(forecast, t_begin, duration)
         if warm is None:
-            x0 = self.initial_guess(q0, qd0, duration, goal) if x0 is None else x0
+            x0 = self.initial_guess(q0, qd0, duration, goal) if segment.x0 is None \
+                else segment.x0
             reference = self.trajectory(x0, q0, qd0, t_begin, duration)
         else:
             reference = warm.trajectory.restrict(t_begin, duration)
@@ -180,8 +184,7 @@ class Anytime(ProblemNumbers):
                                    solve_cpu_ms=elapsed[1], clock_ms=clock.ms())
         if self.record is not None and warm is not None:
             solver, solves = self._solver_ms() - spent
-            self.record.append(((q0, qd0, t_begin, duration, goal, forecast, warm), plan,
-                                solver, solves))
+            self.record.append(((segment, warm), plan, solver, solves))
         return plan, *elapsed
 
     def _solver_ms(self) -> np.ndarray:
@@ -202,16 +205,14 @@ class Anytime(ProblemNumbers):
         then the energy actually spent (dense integral) plus the clearance penalty (J)."""
         return (not plan.success, self.check.energy(plan.trajectory) + plan.penalty)
 
-    def best_of(self, q0, qd0, t_begin: float, duration: float, goal,
-                forecast: ObstacleForecast | None, warm: SegmentPlan | None, starts: int,
-                budget_ms: float) -> SegmentPlan:
+    def best_of(self, segment: Segment, warm: SegmentPlan | None, starts: int) -> SegmentPlan:
         """The best (planning.starts.rank) of the plan from `warm` and of cold plans from
-        `starts` start points (planning.starts), each with budget_ms of CPU: a multi-start
-        re-plan (AnytimeOptions.replan_starts)."""
-        segment = (q0, qd0, t_begin, duration, goal, forecast)
-        plans = [] if warm is None else [self.solve(*segment, warm, budget_ms=budget_ms)[0]]
-        for x0 in start_points(self, q0, qd0, duration, goal, starts):
-            plans.append(self.solve(*segment, None, x0=x0, budget_ms=budget_ms)[0])
+        `starts` start points (planning.starts), each with segment.budget_ms of CPU: a
+        multi-start re-plan (AnytimeOptions.replan_starts)."""
+        plans = [] if warm is None else [self.solve(segment, warm)[0]]
+        for x0 in start_points(self, segment.q0, segment.qd0, segment.duration, segment.goal,
+                               starts):
+            plans.append(self.solve(dataclasses.replace(segment, x0=x0))[0])
         return min(plans, key=self.rank)
 
     def _bounds(self, problem: _Problem, goal, near: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -13,7 +13,7 @@ from concurrent.futures.process import BrokenProcessPool
 
 from planning.config import PlannerConfig
 from planning.globalsearch.multistart import MultiStart, bank_search
-from planning.types import SegmentPlan
+from planning.types import Segment, SegmentPlan
 
 _SEARCH = None  # the worker's MultiStart
 _FOUND = None  # the worker's end of the queue of (search number, plan)
@@ -50,7 +50,7 @@ class Background:
         self.failures = 0  # searches that raised, or a worker that died
         self._broken = False
 
-    def submit(self, segment: tuple, warm: SegmentPlan | None) -> bool:
+    def submit(self, segment: Segment, warm: SegmentPlan | None) -> bool:
         """Start a search unless one is running or a plan is still on offer; whether it
         started."""
         if self._broken or self.busy() or self.done():
@@ -125,7 +125,7 @@ def _start(model, config: PlannerConfig, found, every: bool = False) -> None:
     found.cancel_join_thread()  # the worker exits whatever the planning process left unread
 
 
-def _search(number: int, segment: tuple, warm: SegmentPlan | None) -> int:
+def _search(number: int, segment: Segment, warm: SegmentPlan | None) -> int:
     """The search; how many plans it sent."""
     sent = [0]
 
@@ -135,7 +135,7 @@ def _search(number: int, segment: tuple, warm: SegmentPlan | None) -> int:
             sent[0] += 1
 
     if _EVERY:  # a bank's: it holds the plan followed, and wants the classes soon
-        _SEARCH.search(*segment, None, found=found, **bank_search(_SEARCH.config))
+        _SEARCH.search(segment, None, found=found, **bank_search(_SEARCH.config))
     else:
-        _SEARCH.search(*segment, warm, found=found)
+        _SEARCH.search(segment, warm, found=found)
     return sent[0]

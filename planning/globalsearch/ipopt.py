@@ -19,7 +19,7 @@ from planning.formulation.problem import ProblemNumbers
 from planning.formulation.screening import MARGIN, near_samples, on_horizon, uncovered
 from planning.penalty import backends
 from planning.timing import Stopwatch
-from planning.types import ObstacleForecast, SegmentPlan
+from planning.types import ObstacleForecast, Segment, SegmentPlan
 
 ROUNDS = 6  # screening rounds at most
 MAX_ITERATIONS = 1000
@@ -50,14 +50,17 @@ class IpoptElastic(ProblemNumbers):
             self._solvers[key] = (nlp, solver, parts)
         return self._solvers[key]
 
-    def solve(self, q0, qd0, t_begin: float, duration: float, goal,
-              forecast: ObstacleForecast | None, x0: np.ndarray | None = None) -> SegmentPlan:
-        """One plan from x0 (its coefficients; default the initial guess), to convergence."""
+    def solve(self, segment: Segment) -> SegmentPlan:
+        """One plan of the segment from segment.x0 (its coefficients; default the initial
+        guess), to convergence."""
+        q0, qd0, t_begin, duration, goal, forecast = (
+            segment.q0, segment.qd0, segment.t_begin, segment.duration, segment.goal,
+            segment.forecast)
         clock, config = Stopwatch(), self.config
         nlp, solver, parts = self._solver(goal)
         times, centres = on_horizon(forecast, t_begin, duration)
         check = self.check.against(times, centres, t_begin, duration)
-        x0 = self.initial_guess(q0, qd0, duration, goal) if x0 is None else x0
+        x0 = self.initial_guess(q0, qd0, duration, goal) if segment.x0 is None else segment.x0
         nc = self.model.dof * (config.degree - 1)
         x = np.zeros(nlp.x.numel())
         x[:nc] = np.asarray(x0)[:nc]

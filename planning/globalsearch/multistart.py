@@ -18,7 +18,7 @@ from planning.config import PlannerConfig
 from planning.globalsearch.ipopt import IpoptElastic
 from planning.globalsearch.starts import all_starts
 from planning.timing import Stopwatch, collection_deferred
-from planning.types import ObstacleForecast, SegmentPlan
+from planning.types import ObstacleForecast, Segment, SegmentPlan
 
 # the anytime SQP's search: every start SCREEN_ITERATIONS iterations a round, then the best
 # FINALISTS on from there to convergence (docs/realtime.md, 'planning.globalsearch')
@@ -38,18 +38,21 @@ class MultiStart:
         self.solver.prepare(goal)
 
     @collection_deferred
-    def search(self, q0, qd0, t_begin: float, duration: float, goal,
-               forecast: ObstacleForecast | None, warm: SegmentPlan | None = None,
+    def search(self, segment: Segment, warm: SegmentPlan | None = None,
                found: Callable[[SegmentPlan, bool], None] | None = None,
                screen: int = SCREEN_ITERATIONS, finalists: int = FINALISTS
                ) -> tuple[SegmentPlan, list[SegmentPlan]]:
-        """The best plan (objective) from the warm plan's shape (if any) and every start
-        point, its times those of the whole search, and every plan. found(plan, better), if
-        given, sees every plan as it is solved, better: whether it is usable and scores better
-        than all before it (the search's offers as it goes)."""
+        """The best plan (objective) of the segment from the warm plan's shape (if any) and
+        every start point, its times those of the whole search, and every plan (each solved
+        to convergence, whatever segment.budget_ms). found(plan, better), if given, sees
+        every plan as it is solved, better: whether it is usable and scores better than all
+        before it (the search's offers as it goes)."""
         clock, solver = Stopwatch(), self.solver
+        q0, qd0, t_begin, duration, goal, forecast = (
+            segment.q0, segment.qd0, segment.t_begin, segment.duration, segment.goal,
+            segment.forecast)
         self.prepare(goal)
-        segment = (q0, qd0, t_begin, duration, goal, forecast)
+        segment = dataclasses.replace(segment, budget_ms=math.inf)
         points = all_starts(solver, q0, qd0, duration, goal, self.config)
         if warm is not None:
             points.insert(0, shape_of(warm, t_begin, duration))
@@ -67,14 +70,14 @@ class MultiStart:
 
         if isinstance(solver, IpoptElastic):
             for x0 in points:
-                solved(solver.solve(*segment, x0=x0))
+                solved(solver.solve(dataclasses.replace(segment, x0=x0)))
         else:  # every start a few iterations, the best FINALISTS on to convergence
             solver.max_iterations = screen
             for x0 in points:
-                solved(solver.solve(*segment, None, x0=x0, budget_ms=math.inf)[0])
+                solved(solver.solve(dataclasses.replace(segment, x0=x0))[0])
             solver.max_iterations = 200
             for i in sorted(range(len(plans)), key=scores.__getitem__)[:finalists]:
-                solved(solver.solve(*segment, plans[i], budget_ms=math.inf)[0])
+                solved(solver.solve(segment, plans[i])[0])
         best = plans[min(range(len(plans)), key=scores.__getitem__)]
         wall, cpu = clock.read()
         return _timed(best, wall, cpu), plans

@@ -195,7 +195,7 @@ class GlobalSearchPlanner:
             offers.append((enters, plan))
 
         # a bank holds the plan followed already: its shape is no start of the search
-        self._search.search(*_segment(problem, warm, due), None if self.bank else warm,
+        self._search.search(_segment(problem, warm, due), None if self.bank else warm,
                             found=found, **(bank_search(self.config) if self.bank else {}))
         self._offers, self._harvest = offers, harvest
 
@@ -205,12 +205,12 @@ def _rest(plan: SegmentPlan, problem: Segment):
     return plan.trajectory.restrict(problem.t_begin, problem.duration)
 
 
-def _segment(problem: Segment, warm: SegmentPlan, t: float) -> tuple:
+def _segment(problem: Segment, warm: SegmentPlan, t: float) -> Segment:
     """The search's segment from t (>= problem.t_begin) on: from the state the plan followed,
     warm, reaches then, with the re-plan's forecast."""
     q, qd, _ = warm.trajectory.state(t)
-    return (q[0], qd[0], t, problem.t_begin + problem.duration - t, problem.goal,
-            problem.forecast)
+    return Segment(q[0], qd[0], t, problem.t_begin + problem.duration - t, problem.goal,
+                   problem.forecast)
 
 
 def report(config: PlannerConfig, segments) -> dict | None:

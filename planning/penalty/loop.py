@@ -16,38 +16,40 @@ from planning.formulation.screening import screen
 from planning.penalty.solver import Planner
 from planning.starts import rank, start_points
 from planning.timing import Stopwatch, collection_deferred
-from planning.types import DEADLINE, ITERATE, LATE, ObstacleForecast, SegmentPlan
+from planning.types import DEADLINE, ITERATE, LATE, ObstacleForecast, Segment, SegmentPlan
 
 LIMIT_SETTLED = 1e-8  # rad: a plan this close to its limits (dense grid) needs no re-solve
 UNCHANGED = 1e-9  # rad: a re-solve that moves no coefficient further has settled
 
 
 @collection_deferred
-def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goal,
-                 forecast: ObstacleForecast | None, warm: SegmentPlan | None = None,
-                 rounds: int = 4, x0: np.ndarray | None = None,
-                 deadline_ms: float | None = None, settle_breaks: bool = True,
-                 iterate: bool = False) -> tuple[SegmentPlan, float, float]:
+def plan_segment(planner: Planner, segment: Segment, warm: SegmentPlan | None = None,
+                 rounds: int = 4, settle_breaks: bool = True) -> tuple[SegmentPlan, float, float]:
     """Plan one segment: screened solves (see _screened), with the penalty weight raised
     while the solution still dips below the threshold (exterior penalty method).
 
-    deadline_ms: CPU time (ms) after which no further solve starts; a plan that took longer
+    segment.deadline_ms: CPU time (ms) after which no further solve starts; a plan that took longer
     is returned unsuccessful with status DEADLINE (it would arrive too late to be followed).
     Under a deadline no solve goes on with IPOPT when the fast solver cannot finish it (its
     answer would come too late: planning.penalty.solver.Planner._solve).
     settle_breaks: re-solve until the split quadrature's breaks are the plan's own power sign
     changes (False: solved once with those of the start; plan_multistart settles the best).
-    iterate: a re-plan of Algorithm 2 with real-time iterations (config.penalty.replan_iterations):
+    segment.realtime: a re-plan of Algorithm 2 with real-time iterations
+    (config.penalty.replan_iterations):
     its warm solve is capped and its iterate (status ITERATE) returned if it keeps the
     threshold and the limits; otherwise it is solved out from there as without them.
 
     Without a warm start, the problem with the obstacle is solved directly from a start
-    point x0 (default: the planner's initial guess), whose motion is the screening
+    point segment.x0 (default: the planner's initial guess), whose motion is the screening
     reference (solving the unobstructed optimum first and going on from it was slower,
     (docs/realtime.md, 'planning.penalty.loop')). Returns
     the plan and the wall and CPU time (ms, planning thread) of the whole call, end to end:
     solves, screening, checks and bookkeeping.
     """
+    q0, qd0, t_begin, duration, goal, forecast, x0 = (
+        segment.q0, segment.qd0, segment.t_begin, segment.duration, segment.goal,
+        segment.forecast, segment.x0)
+    deadline_ms, iterate = segment.deadline_ms, segment.realtime
     planner.prepare(goal)  # the solvers for this goal, built once: not part of a plan's time
     clock = Stopwatch()
     config = planner.config
@@ -60,20 +62,20 @@ def plan_segment(planner: Planner, q0, qd0, t_begin: float, duration: float, goa
         reference = planner.trajectory(x0, q0, qd0, t_begin, duration)
         subset = screen(forecast, reference, config.geometry, config.threshold,
                         config.obstacle_slots).subset
-        warm = planner.solve(q0, qd0, duration, goal, subset, t_begin, reference=reference,
-                             alpha=alpha, x0=x0)
+        warm = planner.solve(dataclasses.replace(segment, forecast=subset, x0=x0),
+                             reference=reference, alpha=alpha)
         seen = set(subset.times) if warm.success else None
     elif warm is None:
-        warm = planner.solve(q0, qd0, duration, goal, None, t_begin, alpha=alpha, x0=x0)
+        warm = planner.solve(segment, alpha=alpha)
         seen = set()  # a failed unobstructed solve is reported as it is
     else:
         seen = None
     budget = np.inf if deadline_ms is None else deadline_ms
     iterate = iterate and replan and config.penalty.replan_iterations is not None
     while True:
-        plan, lowest = _screened(planner, q0, qd0, t_begin, duration, goal, forecast, warm,
-                                 seen, alpha, rounds, lambda: clock.cpu_ms() > budget,
-                                 settle_breaks, rescue=deadline_ms is None, iterate=iterate)
+        plan, lowest = _screened(planner, segment, warm, seen, alpha, rounds,
+                                 lambda: clock.cpu_ms() > budget, settle_breaks,
+                                 rescue=deadline_ms is None, iterate=iterate)
         if clock.cpu_ms() > budget:
             status = DEADLINE + (LATE if plan.success else "")
             return dataclasses.replace(plan, success=False, status=status), *clock.read()
@@ -120,8 +122,7 @@ def _within_limits(plan: SegmentPlan, config, warm: bool) -> SegmentPlan:
 
 
 @collection_deferred
-def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, goal,
-                    forecast: ObstacleForecast | None, count: int | None = None
+def plan_multistart(planner: Planner, segment: Segment, count: int | None = None
                     ) -> tuple[SegmentPlan, float, float, list[SegmentPlan]]:
     """The best of `count` (default config.starts) cold plans of one segment (plan_segment
     from each start point of planning.starts), ranked converged first, then within the joint
@@ -131,24 +132,24 @@ def plan_multistart(planner: Planner, q0, qd0, t_begin: float, duration: float, 
     With config.penalty.polish the best distinct plans are re-solved by planner.polisher (see
     _polished)."""
     count = planner.config.starts if count is None else count
+    goal = segment.goal
     split = planner.config.energy_quadrature == "split"
     if planner.polisher is not None:
         planner.polisher.prepare(goal)  # its solvers' build is not part of a plan's time
     plans, wall, cpu = [], 0.0, 0.0
-    for x0 in start_points(planner, q0, qd0, duration, goal, count):
-        plan, ms, cpu_ms = plan_segment(planner, q0, qd0, t_begin, duration, goal, forecast,
-                                        x0=x0, settle_breaks=not split)
+    for x0 in start_points(planner, segment.q0, segment.qd0, segment.duration, goal, count):
+        plan, ms, cpu_ms = plan_segment(planner, dataclasses.replace(segment, x0=x0),
+                                        settle_breaks=not split)
         plans.append(plan)
         wall, cpu = wall + ms, cpu + cpu_ms
     clock = Stopwatch()  # the ranking (a dense integral per plan) and polishing are plan time
     ranked = sorted(plans, key=lambda plan: rank(planner, plan))
     best = ranked[0]
     if split and best.success:
-        settled, _, _ = plan_segment(planner, q0, qd0, t_begin, duration, goal, forecast,
-                                     warm=best)
+        settled, _, _ = plan_segment(planner, segment, warm=best)
         best = settled if settled.success else best
     if planner.polisher is not None:
-        best = _polished(planner, best, ranked, (q0, qd0, t_begin, duration, goal, forecast))
+        best = _polished(planner, best, ranked, segment)
     ms, cpu_ms = clock.read()
     return best, wall + ms, cpu + cpu_ms, plans
 
@@ -157,7 +158,7 @@ DISTINCT = 1e-3  # rad: cold plans whose coefficients all agree this closely are
 
 
 def _polished(planner: Planner, best: SegmentPlan, ranked: list[SegmentPlan],
-              segment: tuple) -> SegmentPlan:
+              segment: Segment) -> SegmentPlan:
     """The plan that spends least of `best` and the config.penalty.polish best distinct converged
     plans of `ranked`, each solved again, warm from its motion, by planner.polisher (the
     split quadrature at config.penalty.polish_samples nodes, breaks settled). The many starts
@@ -171,13 +172,13 @@ def _polished(planner: Planner, best: SegmentPlan, ranked: list[SegmentPlan],
             picked.append(plan)
     candidates = [best]
     for plan in picked:
-        polished, _, _ = plan_segment(planner.polisher, *segment, warm=plan)
+        polished, _, _ = plan_segment(planner.polisher, segment, warm=plan)
         if polished.success:
             candidates.append(polished)
     return min(candidates, key=lambda plan: rank(planner, plan))
 
 
-def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan,
+def _screened(planner: Planner, segment: Segment, plan: SegmentPlan,
               seen: set | None, alpha: float, rounds: int,
               late=lambda: False, settle_breaks: bool = True,
               rescue: bool = True, iterate: bool = False) -> tuple[SegmentPlan, float | None]:
@@ -193,8 +194,9 @@ def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan
     convergence ends the rounds (the next sample goes on from it). Returns the plan and
     its smallest clearance over the forecast when the last screen was of it (None: not
     known)."""
-    config = planner.config
-    reference, chosen = plan.trajectory.restrict(t_begin, duration), set(seen or ())
+    config, forecast = planner.config, segment.forecast
+    reference = plan.trajectory.restrict(segment.t_begin, segment.duration)
+    chosen = set(seen or ())
     for round_ in range(rounds):
         screened = screen(forecast, reference, config.geometry, config.threshold,
                           config.obstacle_slots) if forecast is not None else None
@@ -205,14 +207,14 @@ def _screened(planner: Planner, q0, qd0, t_begin, duration, goal, forecast, plan
         if (settled and (round_ > 0 or seen is not None)) or late():
             return plan, None if screened is None else screened.lowest
         chosen |= set() if subset is None else set(subset.times)
-        attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin, warm=plan,
-                                reference=reference, alpha=alpha, rescue=rescue,
-                                iterate=iterate)
+        screened_segment = dataclasses.replace(segment, forecast=subset, x0=None)
+        attempt = planner.solve(screened_segment, warm=plan, reference=reference, alpha=alpha,
+                                rescue=rescue, iterate=iterate)
         if attempt.status == ITERATE:
             return attempt, None
         if not attempt.success and not late():  # a warm start far from the optimum can stall
-            attempt = planner.solve(q0, qd0, duration, goal, subset, t_begin,
-                                    reference=reference, alpha=alpha, rescue=rescue)
+            attempt = planner.solve(screened_segment, reference=reference, alpha=alpha,
+                                    rescue=rescue)
         unchanged = attempt.success and plan.success and np.allclose(
             attempt.trajectory.coefficients, reference.coefficients, rtol=0.0, atol=UNCHANGED)
         plan, reference = attempt, attempt.trajectory

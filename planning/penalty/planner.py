@@ -28,15 +28,10 @@ class PenaltyLoop:
         self.planner.prepare(goal)
 
     def plan(self, problem: Segment, warm: SegmentPlan | None = None) -> SegmentPlan:
-        plan, wall, cpu = plan_segment(
-            self.planner, problem.q0, problem.qd0, problem.t_begin, problem.duration,
-            problem.goal, problem.forecast, warm=warm, x0=problem.x0,
-            deadline_ms=problem.deadline_ms, iterate=problem.realtime)
+        plan, wall, cpu = plan_segment(self.planner, problem, warm=warm)
         return dataclasses.replace(plan, solve_ms=wall, solve_cpu_ms=cpu)
 
     def plan_cold(self, problem: Segment, starts: int | None = None
                   ) -> tuple[SegmentPlan, list[SegmentPlan]]:
-        best, wall, cpu, plans = plan_multistart(
-            self.planner, problem.q0, problem.qd0, problem.t_begin, problem.duration,
-            problem.goal, problem.forecast, starts)
+        best, wall, cpu, plans = plan_multistart(self.planner, problem, starts)
         return dataclasses.replace(best, solve_ms=wall, solve_cpu_ms=cpu), plans

@@ -40,8 +40,8 @@ class Polished:
         best, plans = self.inner.plan_cold(problem, starts)
         clock = Stopwatch()
         ranked = sorted(plans, key=lambda plan: rank(self.planner, plan))
-        segment = (problem.q0, problem.qd0, problem.t_begin, problem.duration, problem.goal,
-                   problem.forecast)
+        segment = Segment(problem.q0, problem.qd0, problem.t_begin, problem.duration,
+                          problem.goal, problem.forecast)  # warm solves, with no deadline
         polished = _polished(self.planner, best, ranked, segment)
         ms, cpu = clock.read()
         return dataclasses.replace(polished, solve_ms=best.solve_ms + ms,

@@ -19,7 +19,7 @@ from planning.formulation.problem import ProblemNumbers, _breaks
 from planning.formulation.quadrature import splits_evenly
 from planning.formulation.trajectory import PolynomialTrajectory
 from planning.penalty import backends, realtime_iteration
-from planning.types import ObstacleForecast, SegmentPlan
+from planning.types import Segment, SegmentPlan
 
 # a warm IPOPT rescue still unconverged after this many iterations is better restarted cold
 # (docs/realtime.md, 'planning.penalty.solver')
@@ -143,32 +143,32 @@ class Planner(ProblemNumbers):
         tau = self.model.torque(*trajectory.state(t))
         return float(np.max(np.abs(tau) - np.asarray(self.config.torque_limit)))
 
-    def solve(self, q0, qd0, duration: float, goal, forecast: ObstacleForecast | None = None,
-              t_begin: float = 0.0, warm: SegmentPlan | None = None,
-              reference: PolynomialTrajectory | None = None,
-              alpha: float | None = None, x0: np.ndarray | None = None,
+    def solve(self, segment: Segment, warm: SegmentPlan | None = None,
+              reference: PolynomialTrajectory | None = None, alpha: float | None = None,
               rescue: bool = True, iterate: bool = False) -> SegmentPlan:
-        """Plan from (q0, qd0) at t_begin to goal at t_begin + duration.
+        """Plan the segment: from (q0, qd0) at t_begin to goal at t_begin + duration, past the
+        obstacle samples of its forecast; a cold solve starts from segment.x0 (default:
+        initial_guess).
 
         reference: a motion on the same horizon whose turning points get limit constraints
         in addition to the fixed samples (see PlanningNLP, planning.formulation.limits).
         alpha: penalty weight (J/m^2 per sample), default config.penalty_weight.
-        x0: start point of a cold solve (default: initial_guess).
         rescue: a solve the fast solver cannot finish goes on with IPOPT (see _solve); False
         for a re-plan under a deadline, whose answer would come too late.
         iterate: a warm solve first takes config.penalty.replan_iterations feasible-SQP iterations
         and returns their iterate, status ITERATE, if it has not converged (see _solve).
         """
+        q0, qd0, t_begin, duration, goal = (segment.q0, segment.qd0, segment.t_begin,
+                                            segment.duration, segment.goal)
         alpha = self.config.penalty_weight if alpha is None else float(alpha)
-        p = self.parameters(q0, qd0, duration, goal, forecast, t_begin, reference, alpha)
-        if x0 is None:
-            x0 = self.initial_guess(q0, qd0, duration, goal)
-        segment = (q0, qd0, duration, t_begin, p, alpha, x0)
-        plan = self._solve(self._relaxed_for(goal), goal, warm, segment, rescue, iterate)
+        p = self.parameters(q0, qd0, duration, goal, segment.forecast, t_begin, reference, alpha)
+        x0 = self.initial_guess(q0, qd0, duration, goal) if segment.x0 is None else segment.x0
+        inputs = (q0, qd0, duration, t_begin, p, alpha, x0)
+        plan = self._solve(self._relaxed_for(goal), goal, warm, inputs, rescue, iterate)
         if not plan.success or self.torque_excess(plan.trajectory) <= 0:
             return plan
         # the relaxed optimum overdrives a motor: solve again with the torque rows
-        limited = self._solve(self._torque_limited(goal), goal, warm, segment, rescue, iterate)
+        limited = self._solve(self._torque_limited(goal), goal, warm, inputs, rescue, iterate)
         return dataclasses.replace(limited, solve_ms=plan.solve_ms + limited.solve_ms,
                                    solve_cpu_ms=plan.solve_cpu_ms + limited.solve_cpu_ms)
 

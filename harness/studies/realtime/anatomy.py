@@ -41,6 +41,7 @@ from planning.penalty.loop import plan_segment
 from planning.penalty.planner import PenaltyLoop
 from planning.penalty.solver import Planner
 from planning.replanning import execute, forecast_at
+from planning.types import Segment
 
 
 class RecordingPlanner(Planner):
@@ -111,14 +112,16 @@ def call_costs(baseline, config) -> dict:
     planner = Planner(baseline, config)
     scenario, t = motion_scenario(Arm.of(DEFAULT_ROBOT)), 0.71
     forecast0 = forecast_at(scenario.obstacle, 0.0)
-    plan, _, _ = plan_segment(planner, scenario.start, scenario.start_velocity, 0.0,
-                              scenario.duration, scenario.goal, forecast0)
+    plan, _, _ = plan_segment(planner, Segment(scenario.start, scenario.start_velocity, 0.0,
+                                               scenario.duration, scenario.goal, forecast0))
     for time_ in scenario.obstacle.sample_times[:-1:5]:
         if time_ >= t - 1e-9:
             break
         q, qd, _ = plan.trajectory.state(time_)
-        new, _, _ = plan_segment(planner, q[0], qd[0], time_, scenario.duration - time_,
-                                 scenario.goal, forecast_at(scenario.obstacle, time_), warm=plan)
+        new, _, _ = plan_segment(planner, Segment(q[0], qd[0], time_, scenario.duration - time_,
+                                                  scenario.goal,
+                                                  forecast_at(scenario.obstacle, time_)),
+                                 warm=plan)
         plan = new if new.success else plan
     duration = scenario.duration - t
     q, qd, _ = plan.trajectory.state(t)

@@ -31,7 +31,7 @@ from planning.planners import segment_planner
 from planning.replanning import Execution, execute
 from planning.result import evaluate, to_json
 from planning.scenarios import random_scenarios
-from planning.types import DEADLINE
+from planning.types import DEADLINE, Segment
 
 
 @dataclass(frozen=True)
@@ -67,7 +67,7 @@ def scenarios(baseline, config: PlannerConfig, setup: Setup) -> list[Scenario]:
     planner = Planner(baseline, dataclasses.replace(config, compile_code=False))
 
     def free_motion(start, goal, duration):
-        return planner.solve(start, (0.0,) * len(start), duration, goal).trajectory
+        return planner.solve(Segment.from_rest(start, duration, goal)).trajectory
 
     return random_scenarios(setup.scenarios, setup.seed, free_motion, config.geometry,
                             config.lower, config.upper, config.threshold)

@@ -24,7 +24,7 @@ from planning.config import PlannerConfig, Scenario
 from planning.formulation.energy import dense_energy
 from planning.globalsearch.multistart import objective
 from planning.replanning import Execution, execute
-from planning.types import ObstacleForecast
+from planning.types import ObstacleForecast, Segment
 
 TOLERANCE = 0.005  # relative: "within 0.5 %"
 
@@ -50,8 +50,10 @@ def per_replan(baseline, config: PlannerConfig, cases: list[Scenario], starts: i
             if index % stride:
                 continue
             count += 1
-            best, _ = reference.search(*inputs)
-            ours, theirs = (objective(anytime.check, config, p, *inputs[2:4], inputs[5])
+            segment, warm = inputs
+            best, _ = reference.search(segment, warm)
+            ours, theirs = (objective(anytime.check, config, p, segment.t_begin,
+                                      segment.duration, segment.forecast)
                             for p in (plan, best))
             gaps.append(_gap(ours, theirs))
             safe_misses += bool(ours[0] and not theirs[0])
@@ -78,8 +80,7 @@ def one_shot(baseline, config: PlannerConfig, cases: list[Scenario],
     for case in cases:
         times = case.obstacle.sample_times
         known = ObstacleForecast(times, case.obstacle.position(times))
-        plan, _ = search.search(case.start, case.start_velocity, 0.0, case.duration,
-                                case.goal, known)
+        plan, _ = search.search(Segment.of(case, known))
         runs.append(Execution((plan,), (0.0,), (plan.solve_ms,),
                               () if plan.success else (plan.status,), (), (plan.solve_cpu_ms,)))
     return runs

@@ -19,7 +19,7 @@ from planning.planners import segment_planner
 from planning.replanning import execute
 from planning.result import PlanResult, evaluate, sample_execution
 from planning.scenarios import swaying_scenario
-from planning.types import ObstacleForecast
+from planning.types import ObstacleForecast, Segment
 
 
 def plan_scenario(model, scenario, config: PlannerConfig, avoid=True) -> PlanResult:
@@ -138,12 +138,12 @@ def speed_study(baseline, scenario, quick: bool, config: PlannerConfig) -> dict:
     out = timings.summary()
     obstacle = scenario.obstacle
     forecast = ObstacleForecast(obstacle.sample_times, obstacle.position(obstacle.sample_times))
-    free = planner.solve(scenario.start, scenario.start_velocity, scenario.duration,
-                         scenario.goal)
+    segment = Segment.of(scenario)
+    free = planner.solve(segment)
     subset = screen(forecast, free.trajectory, planner.config.geometry,
                     planner.config.threshold, planner.config.obstacle_slots).subset
     args = (scenario.start, scenario.start_velocity, scenario.duration, scenario.goal)
-    ipopt = planner.solve(*args, subset, 0.0, reference=free.trajectory)
+    ipopt = planner.solve(dataclasses.replace(segment, forecast=subset), reference=free.trajectory)
     p = planner.parameters(*args, subset, 0.0, free.trajectory)
     scipy = solve_trust_constr(planner, planner.initial_guess(*args), p,
                                max_iterations=20 if quick else 150)
