@@ -15,10 +15,12 @@ export MKL_NUM_THREADS ?= 1
 
 install: $(STAMP)
 
+# uv (from PyPI, like every other package) installs the wheels in parallel: about 25 s here
+# against about 105 s for pip; `pip install .` works as well (make install-check)
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[dev]'
+	$(PY) -m pip install --quiet uv
+	$(VENV)/bin/uv pip install --quiet --python $(PY) -e '.[dev]'
 	touch $(STAMP)
 
 # the fast cross-checks (a few minutes); the slow ones (whole benches, sweeps, studies, arms

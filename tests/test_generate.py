@@ -1,5 +1,7 @@
 """`torquebench generate`: data from MuJoCo, cross-checked against Pinocchio."""
 
+import contextlib
+import io
 import json
 import subprocess
 import sys
@@ -7,14 +9,25 @@ import sys
 import numpy as np
 import pytest
 
+from harness.cli import main
 from harness.data.generate import generate
 from harness.robots.arm import Arm
 from identification.excitation.fourier import random_excitation
 
 
-def run_cli(*args, cwd=None):
+def run_process(*args):
+    """The command as a user runs it: `python -m harness`, in a process of its own."""
     return subprocess.run([sys.executable, "-m", "harness", *args], capture_output=True,
-                          text=True, cwd=cwd)
+                          text=True)
+
+
+def run_cli(*args):
+    """The command in this process (harness.cli.main, as the entry point calls it): its exit
+    status and what it printed, without paying a new interpreter's imports."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(list(args))
+    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def test_excitation_derivatives_match_finite_differences():
@@ -62,7 +75,7 @@ def test_measured_mode_estimates_states_well_enough_for_torque():
 
 def test_generate_cli_writes_the_contract(tmp_path):
     out = tmp_path / "d.npz"
-    res = run_cli("generate", "--samples", "300", "--noise", "0.01", "--seed", "4", "--out", str(out))
+    res = run_process("generate", "--samples", "300", "--noise", "0.01", "--seed", "4", "--out", str(out))
     assert res.returncode == 0, res.stderr
     with np.load(out) as npz:
         assert {"t", "q", "qd", "qdd", "tau", "tau_clean", "meta"} <= set(npz.files)

@@ -4,17 +4,19 @@ alone), anatomy (where a warm re-plan's time goes)."""
 
 from __future__ import annotations
 
-import subprocess
+import runpy
 import sys
-from pathlib import Path
 
 import pytest
 
 
 @pytest.mark.parametrize("tool, option", [("ways", "--ways"), ("oneshot", "--scenarios"),
                                           ("anatomy", "--split")])
-def test_tool_help(tool, option):
-    proc = subprocess.run([sys.executable, "-m", f"harness.studies.realtime.{tool}", "--help"],
-                          capture_output=True, text=True, timeout=120,
-                          cwd=Path(__file__).resolve().parents[1])
-    assert proc.returncode == 0 and option in proc.stdout, proc.stderr
+def test_tool_help(tool, option, monkeypatch, capsys):
+    """`python -m harness.studies.realtime.TOOL --help`, run as that command runs the module
+    (as __main__), in this process."""
+    monkeypatch.setattr(sys, "argv", [f"{tool}.py", "--help"])
+    with pytest.raises(SystemExit) as exit_:
+        runpy.run_module(f"harness.studies.realtime.{tool}", run_name="__main__",
+                         alter_sys=True)
+    assert exit_.value.code == 0 and option in capsys.readouterr().out
