@@ -31,7 +31,7 @@ class KinematicModel:
     laws: tuple[FrictionLaw, ...] = ()  # per joint, with its column's coefficient below
     law_coefficients: np.ndarray | None = None  # (empty: viscous-coulomb on every joint)
 
-    def _law_terms(self) -> list[tuple[int, FrictionLaw, float]]:
+    def law_terms(self) -> list[tuple[int, FrictionLaw, float]]:
         """(joint, law, coefficient) of every joint whose law has a column of its own."""
         return [(j, law, float(self.law_coefficients[j])) for j, law in enumerate(self.laws)
                 if law.has_column]
@@ -40,25 +40,33 @@ class KinematicModel:
     def dof(self) -> int:
         return self.library.dof
 
+    def law_torque(self, qd) -> np.ndarray:
+        """(n, dof) N m: the part of the torque the laws' own columns give at joint velocities
+        qd (n, dof) (a sigmoid's or a Stribeck's friction; zero on the other joints), what a
+        rigid body with armature, viscous damping and dry friction does not have."""
+        qd = np.atleast_2d(np.asarray(qd, float))
+        tau = np.zeros_like(qd)
+        for j, law, c in self.law_terms():
+            tau[:, j] = c * law.column(qd[:, j])
+        return tau
+
     def torque(self, q, qd, qdd) -> np.ndarray:
         """Torques (n, dof) in N m at states of shape (n, dof)."""
         q, qd, qdd = as_states(q, qd, qdd, self.dof)
         kept = np.flatnonzero(self.coefficients)
         tau = (self.library.evaluate(q, qd, qdd)[:, :, kept] @ self.coefficients[kept]
                if len(kept) else np.zeros_like(q))
-        for j, law, c in self._law_terms():
-            tau[:, j] += c * law.column(qd[:, j])
-        return tau
+        return tau + self.law_torque(qd)
 
     def symbolic_torque(self, q, qd, qdd):
         """CasADi (dof, 1) expression of the same model."""
         import casadi
 
         tau = self.library.symbolic(q, qd, qdd) @ self.coefficients
-        if not self._law_terms():
+        if not self.law_terms():
             return tau
         own = [0] * self.dof
-        for j, law, c in self._law_terms():
+        for j, law, c in self.law_terms():
             own[j] = c * law.column(qd[j], casadi)
         return tau + casadi.vertcat(*own)
 
@@ -67,7 +75,7 @@ class KinematicModel:
         names = self.library.names
         return ([(names[k], float(self.coefficients[k])) for k in np.flatnonzero(self.coefficients)
                  if self.library.acts_on[j, k]]
-                + [(law.term(j + 1), c) for i, law, c in self._law_terms() if i == j])
+                + [(law.term(j + 1), c) for i, law, c in self.law_terms() if i == j])
 
     def equations(self, digits: int = 4) -> list[str]:
         """Per joint: tau_j = sum of coefficient [unit] * Y_j[atom] (N m)."""

@@ -76,8 +76,13 @@ def run(args) -> int:
         problem = rendering_problem(model)
         if problem:
             raise UserError(f"cannot render the video {args.video}: {problem}")
-    result, trace = replay(model, reference, plant.feedforward, geometry=geometry)
+    result, trace = replay(model, reference, plant.feedforward, geometry=geometry,
+                           friction=plant.friction)
     write_json(args.out, {**result_json(result, plant.label, plant.feedforward_label),
+                          # friction the plant's joints felt as applied torques (MuJoCo's
+                          # joints have no such law): harness.replay.friction
+                          "plant_friction": list(plant.friction.described) if plant.friction
+                          else [],
                           "robot": arm.reference, "links": geometry.link_names,
                           "link_min_clearance": trace.clearance.min(axis=0),
                           # m, mj_geomDistance of each link capsule to the obstacle sphere

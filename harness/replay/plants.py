@@ -12,6 +12,7 @@ import numpy as np
 
 from harness.errors import UserError
 from harness.io import read_json
+from harness.replay.friction import PlantFriction
 from harness.robots.arm import Arm
 from harness.robots.inertials import PARAMETERS_KEY, model_standard_parameters, set_standard_parameters
 from harness.robots.scene import build_scene, replay_scene
@@ -22,12 +23,15 @@ from planning.formulation.kinematics import ArmGeometry
 
 @dataclass(frozen=True)
 class ReplayPlant:
-    """The MuJoCo plant, the feed-forward model and how REPLAY.json names them."""
+    """The MuJoCo plant, the feed-forward model and how REPLAY.json names them; friction:
+    what the plant's joints feel beyond MuJoCo's own (an identified model's sigmoid or
+    Stribeck law), None when nothing."""
 
     model: mujoco.MjModel
     feedforward: TorqueModel
     label: str
     feedforward_label: str
+    friction: PlantFriction | None = None
 
 
 def replay_plant(plant: str | None, arm: Arm, radii: tuple[float, ...] = (),
@@ -81,8 +85,10 @@ def _check_scene(model: mujoco.MjModel, arm: Arm, path: Path, tolerance: float =
 
 def _identified(path: Path, arm: Arm, radii: tuple[float, ...],
                 geometry: ArmGeometry | None) -> ReplayPlant:
-    """The arm's scene with the bodies a MODEL.json identified, its own torque the
-    feed-forward."""
+    """The arm's scene with the bodies, armature, damping and dry friction a MODEL.json
+    identified, the friction of its laws with a column of their own applied as a torque the
+    joints feel (MuJoCo has no such friction), its own torque the feed-forward. Its sensor
+    offsets are in neither: an offset is the run's, not a torque the motors spend."""
     payload = read_json(path, "model")
     parameters = model_standard_parameters(payload)
     if parameters is None:
@@ -91,4 +97,5 @@ def _identified(path: Path, arm: Arm, radii: tuple[float, ...],
                         "the robot's base atoms has no bodies; identify with --prior nominal|flat "
                         "or pass a URDF or MJCF with the identified inertials as --plant")
     model = set_standard_parameters(build_scene(arm, radii, geometry).compile(), parameters)
-    return ReplayPlant(model, load_torque_model(str(path), arm), str(path), str(path))
+    feedforward = load_torque_model(str(path), arm)
+    return ReplayPlant(model, feedforward, str(path), str(path), PlantFriction.of(feedforward))

@@ -25,6 +25,7 @@ import numpy as np
 
 from harness.errors import UserError
 from harness.replay.clearance import ClearanceProbe
+from harness.replay.friction import PlantFriction
 from harness.replay.reference import PlanReference, check_joint_limits
 from identification.torque_model import TorqueModel
 from planning.formulation.kinematics import ArmGeometry
@@ -90,9 +91,12 @@ def _pd_gains(model: mujoco.MjModel, q: np.ndarray, gains: TrackingGains):
 
 def simulate(model: mujoco.MjModel, reference: PlanReference, feedforward: TorqueModel,
              gains: TrackingGains = TrackingGains(),
-             geometry: ArmGeometry | None = None) -> ReplayTrace:
-    """Track reference on model (the plant) and record every simulation step; clearance is
-    measured to the links of geometry (default: the Lynxmotion's)."""
+             geometry: ArmGeometry | None = None,
+             friction: PlantFriction | None = None) -> ReplayTrace:
+    """Track reference on model (the plant), its joints also feeling `friction` (an identified
+    model's friction MuJoCo's joints cannot have, harness.replay.friction), and record every
+    simulation step; clearance is measured to the links of geometry (default: the
+    Lynxmotion's)."""
     joints, gear = plant_joint_map(model, reference.dof)
     if feedforward.dof != reference.dof:
         raise UserError(f"feedforward model has {feedforward.dof} joints, the plan {reference.dof}")
@@ -115,6 +119,8 @@ def simulate(model: mujoco.MjModel, reference: PlanReference, feedforward: Torqu
         probe.move_obstacle(data, obstacle[k])
         tau = tau_ff[k] + kp[k] @ (q_ref[k] - data.qpos) + kd[k] @ (qd_ref[k] - data.qvel)
         data.ctrl[:] = tau[joints] / gear
+        if friction is not None:
+            friction.apply(data)
         rows["q"][k], rows["qd"][k] = data.qpos, data.qvel
         # mj_step evaluates forces and kinematics at the pre-step state, recorded here.
         (mujoco.mj_step if k < n else mujoco.mj_forward)(model, data)
@@ -185,7 +191,8 @@ def summarize(trace: ReplayTrace, reference: PlanReference, dt: float) -> Replay
 
 def replay(model: mujoco.MjModel, reference: PlanReference, feedforward: TorqueModel,
            gains: TrackingGains = TrackingGains(),
-           geometry: ArmGeometry | None = None) -> tuple[ReplayResult, ReplayTrace]:
+           geometry: ArmGeometry | None = None,
+           friction: PlantFriction | None = None) -> tuple[ReplayResult, ReplayTrace]:
     """Simulate and summarize: the measured result and its time series."""
-    trace = simulate(model, reference, feedforward, gains, geometry)
+    trace = simulate(model, reference, feedforward, gains, geometry, friction)
     return summarize(trace, reference, model.opt.timestep), trace
