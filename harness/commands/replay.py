@@ -29,7 +29,8 @@ def register(subparsers) -> None:
                    help="what is simulated: an MJCF scene with its motors (as it is), a URDF or "
                         "MJCF of the robot with other dynamics (a scene built around it, its "
                         "Pinocchio model the feedforward), or a MODEL.json with per-body "
-                        "parameters (the identified dynamics, its torque the feedforward); "
+                        "parameters (the identified dynamics, friction laws MuJoCo lacks applied as "
+                        "joint torques, its torque the feedforward); "
                         "default: the robot's scene with floor, light, obstacle")
     p.add_argument("--out", required=True, help="REPLAY.json to write")
     p.add_argument("--video", default=None, help="also render the replay to this mp4")
