@@ -40,10 +40,12 @@ def test_next_run_scores_what_it_says():
     np.testing.assert_allclose(errors["least_squares"], ls, rtol=1e-6)
     # every joint judged carries load, and the rule judges at least one joint (never vacuous)
     rms = np.sqrt((truth ** 2).sum(axis=0) / len(truth))
-    # (joints numbered from 1, as the report's tables number them)
+    # *_from_1 numbers joints from 1, as the report's tables; the older fields from 0
+    assert out["rule_joints"] == [j - 1 for j in out["rule_joints_from_1"]]
+    assert out["rule_holds_on"] == [j - 1 for j in out["rule_holds_on_from_1"]]
     assert out["rule_joints"] and all(rms[j - 1] > min(RULE_RMS, 0.25 * rms.max())
-                                      for j in out["rule_joints"])
-    for j in out["rule_holds_on"]:
+                                      for j in out["rule_joints_from_1"])
+    for j in out["rule_holds_on_from_1"]:
         assert errors["identified"][j - 1] <= min(errors["nominal"][j - 1], ls[j - 1] * (1 + 1e-6))
     assert out["median_ratio_to_least_squares"] == pytest.approx(
         np.median(errors["identified"] / ls), rel=1e-6)

@@ -79,7 +79,8 @@ def test_the_gap_is_blank_where_met_and_figures_compared_read_apart():
 
 def test_the_next_run_numbers_joints_from_1_in_json_and_markdown_alike():
     run = {"seed": 1, "errors": {"identified": [0.00304, 0.1], "least_squares": [0.00276, 0.2]},
-           "rule_joints": [1, 2], "rule_holds_on": [2]}
+           "rule_joints": [0, 1], "rule_holds_on": [1],
+           "rule_joints_from_1": [1, 2], "rule_holds_on_from_1": [2]}
     table = next_run_markdown([run, {**run, "seed": 2}])
     assert table[-1] == "| 2 | 0.00304, 0.1 | 0.00276, 0.2 | [1, 2] | [2] |"
     target = rule_targets([dict(run, median_ratio_to_least_squares=1.0),
