@@ -63,3 +63,21 @@ def test_robots_lists_the_registered_and_example_robot_datas_urdfs(capsys):
     assert f"  {ur3}\n" in out and str(erd_robots_dir()) in out
     assert main(["robots", "--registered"]) == 0
     assert str(ur3) not in capsys.readouterr().out
+
+
+def test_the_replay_table_says_what_separates_its_two_clearances():
+    """The table showed 80.0 mm centre to link beside 48.0 mm surface distance and never said
+    that the difference is the link capsule's radius plus the obstacle's."""
+    from harness.bench.replay import _markdown, surface_note
+    from harness.replay.reference import plan_reference
+    from harness.replay.simulate import replay
+    from harness.robots.arm import Arm
+    from harness.robots.scene import replay_scene
+
+    arm = Arm.of("lynxmotion")
+    model = replay_scene(arm)
+    note = surface_note(model, arm.geometry)
+    assert "(radius 12 mm)" in note and "(radius 20 mm)" in note and ", 32 mm." in note
+    _, trace = replay(model, plan_reference(quintic_plan()), arm.nominal, geometry=arm.geometry)
+    np.testing.assert_allclose(trace.clearance - trace.surface, 0.032, atol=1e-9)  # the run's
+    assert note in _markdown("lynxmotion", {}, {}, {}, note)

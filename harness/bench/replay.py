@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.replay.checks import checks, pairs, role, table_row
+from harness.replay.clearance import ClearanceProbe
 from harness.replay.figures import power_figure, tracking_figure
 from harness.replay.reference import plan_reference
 from harness.replay.simulate import ReplayResult, ReplayTrace, replay
@@ -85,11 +86,32 @@ def run(ctx: Context) -> SectionResult:
                for name, r in results.items()}
     results_json = {"robot": robot, "plans": payload, "identified_energy_ratio": ratios,
                     "videos": [Path(v).name for v in videos]}
-    return SectionResult(_markdown(robot, results, verdicts, ratios), results_json, out_checks,
-                         targets, headline, figures)
+    note = surface_note(model, geometry)
+    return SectionResult(_markdown(robot, results, verdicts, ratios, note), results_json,
+                         out_checks, targets, headline, figures)
 
 
-def _markdown(robot, results, verdicts, ratios) -> str:
+def surface_note(model, geometry) -> str:
+    """What separates the table's two clearance columns, with the scene's radii: the surface
+    distance is MuJoCo's between the link capsules and the obstacle sphere."""
+    probe = ClearanceProbe.of(model, geometry)
+    if not probe.has_surface:
+        return "No surface distance: the scene has no link capsules or no obstacle sphere."
+    links = sorted({round(float(model.geom_size[g][0]) * 1e3, 1) for g in probe.link_geoms})
+    obstacle = float(model.geom_size[probe.obstacle_geom][0]) * 1e3
+    text = ("'min clearance centre–segment' is the planner's measure, from the obstacle's "
+            "centre to each link; 'min surface distance' is MuJoCo's, between the scene's link "
+            "capsules (radius " + " / ".join(f"{r:g}" for r in links) + " mm) and the obstacle "
+            f"sphere (radius {obstacle:g} mm). ")
+    if probe.radii:  # the capsules are the planner's: the first column is already less them
+        return text + (f"The planner's distance is already to the capsule's surface: the two "
+                       f"differ by the obstacle's radius, {obstacle:g} mm. λ bounds the first.")
+    return text + ("The planner's links are lines (the first column is to their centre line): "
+                   "the two differ by a capsule's radius plus the obstacle's, "
+                   + " / ".join(f"{r + obstacle:g}" for r in links) + " mm. λ bounds the first.")
+
+
+def _markdown(robot, results, verdicts, ratios, note: str = "") -> str:
     lines = [f"Scene of `{robot}`; MuJoCo forward simulation at 0.5 ms through one motor per "
              "joint, Pinocchio feedforward + PD. 'energy of plan, dense': the plan's torques "
              "integrated densely along it (the planner's own figure may be a coarse "
@@ -98,7 +120,8 @@ def _markdown(robot, results, verdicts, ratios) -> str:
              "| deviation from planned | min clearance centre–segment [mm] "
              "| min surface distance [mm] | λ [mm] | tracking RMS [mrad] | max error [mrad] "
              "| checks |", "|---|---|---|---|---|---|---|---|---|---|---|",
-             *(table_row(name, r, verdicts[name]) for name, r in results.items())]
+             *(table_row(name, r, verdicts[name]) for name, r in results.items()),
+             *(["", note] if note else [])]
     for scenario, ratio in ratios.items():
         lines += ["", f"{scenario}: identified vs closed-form plan, replayed (true) energy "
                   f"{100 * (ratio - 1):+.2f} %."]
