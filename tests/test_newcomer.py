@@ -13,6 +13,7 @@ from types import SimpleNamespace
 
 import casadi as ca
 import numpy as np
+import pytest
 
 from harness.cli import main
 from harness.commands.replay import _plant_words, summary
@@ -81,3 +82,29 @@ def test_the_replay_table_says_what_separates_its_two_clearances():
     _, trace = replay(model, plan_reference(quintic_plan()), arm.nominal, geometry=arm.geometry)
     np.testing.assert_allclose(trace.clearance - trace.surface, 0.032, atol=1e-9)  # the run's
     assert note in _markdown("lynxmotion", {}, {}, {}, note)
+
+
+def _link(name: str) -> str:
+    return (f'<link name="{name}"><inertial><mass value="1"/><origin xyz="0 0 0.1"/><inertia '
+            'ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>')
+
+
+def _joint(name: str, parent: str, child: str, xyz: str) -> str:
+    return (f'<joint name="{name}" type="revolute"><parent link="{parent}"/><child '
+            f'link="{child}"/><origin xyz="{xyz}"/><axis xyz="0 1 0"/><limit lower="-1" '
+            'upper="1" effort="10" velocity="1"/></joint>')
+
+
+def test_a_robot_that_is_not_a_serial_chain_is_refused_naming_its_joints(tmp_path):
+    """The refusal said 'joint 3 does not follow joint 2'; the URDF's names tell more."""
+    from harness.errors import UserError
+    from harness.robots.arm import Arm
+
+    urdf = tmp_path / "forked.urdf"
+    urdf.write_text('<?xml version="1.0"?><robot name="forked"><link name="base"/>'
+                    + "".join(_link(n) for n in "abc")
+                    + _joint("shoulder", "base", "a", "0 0 0") + _joint("elbow", "a", "b", "0 0 0.2")
+                    + _joint("thumb", "a", "c", "0 0.1 0.2") + "</robot>")
+    with pytest.raises(UserError, match="joint 'thumb' does not follow joint 'elbow' "
+                                        r"\(it hangs on joint 'shoulder'\): not a serial chain"):
+        Arm.of(str(urdf)).chain  # noqa: B018 - reading it checks the chain

@@ -106,8 +106,11 @@ class Arm:
             raise UserError(f"robot {self.reference}: {exc}") from None
         branches = [j for j, p in enumerate(chain.parents) if p != j - 1]
         if branches:
-            raise UserError(f"robot {self.reference}: joint {branches[0] + 1} does not follow "
-                            f"joint {branches[0]}: not a serial chain")
+            j, names = branches[0], self.pinocchio.names  # chain joint j is Pinocchio's j + 1
+            parent = chain.parents[j]
+            on = "the base" if parent < 0 else f"joint '{names[parent + 1]}'"
+            raise UserError(f"robot {self.reference}: joint '{names[j + 1]}' does not follow "
+                            f"joint '{names[j]}' (it hangs on {on}): not a serial chain")
         return chain
 
     @property
