@@ -49,6 +49,24 @@ def test_trajectory_columns_rate_and_rest_at_goal(planned):
     assert np.allclose(rows[-1, 4:7], 0.0, atol=1e-9)
 
 
+def test_trajectory_is_the_executed_motion(planned):
+    """The CSV is what PLAN.json says was executed (every re-plan), not the first plan: on
+    the paper's scenario the re-plans move the motion away from the first plan (#56 item 4)."""
+    plan, (_, rows), _ = planned
+    t, q, qd = (np.asarray(plan[key]) for key in ("t", "q", "qd"))
+    first = plan["segments"][0]
+    s = (t - first["t_begin"]) / first["duration"]
+    first_q = np.stack([np.polynomial.polynomial.polyval(s, c) for c in plan["coefficients"][0]], 1)
+    assert plan["replans"] > 0 and np.abs(first_q - q).max() > 0.05  # re-planning changed it
+    # the CSV's times on PLAN.json's grid (1/RATE s against 1/500 s: every 0.01 s)
+    where = np.searchsorted(t, rows[:, 0])
+    common = (where < len(t)) & np.isclose(t[np.minimum(where, len(t) - 1)], rows[:, 0],
+                                           rtol=0, atol=1e-12)
+    assert common.sum() > 100
+    assert np.allclose(rows[common, 1:4], q[where[common]], rtol=0, atol=1e-9)
+    assert np.allclose(rows[common, 4:7], qd[where[common]], rtol=0, atol=1e-9)
+
+
 def test_trajectory_keeps_the_urdf_limits(planned):
     plan, (_, rows), _ = planned
     model = Arm.of("lynxmotion").pinocchio
