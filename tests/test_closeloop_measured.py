@@ -139,26 +139,41 @@ def test_the_extended_model_symbolic_form_equals_its_torque(loop):
 
 # --- several runs against the declared model (closeloop --data A,B --validate C) ---------
 
-def _run_file(path, seed: int, viscous: float = VISCOUS, samples: int = 1200, robot="lynxmotion"):
+REST = 60  # samples at rest before a run's motion (a real log's start)
+
+
+def _run_file(path, seed: int, viscous: float = VISCOUS, samples: int = 1200, robot="lynxmotion",
+              offset=(0.01, 0.0, 0.0), rest: int = REST):
+    """A run of the Lynxmotion with viscous friction on joint 2, white noise and a sensor
+    offset of its own, its first `rest` samples held at the motion's start."""
     m = lynxmotion_motion(samples, seed=seed)
-    tau = LYNX.nominal.torque(m.q, m.qd, m.qdd)
-    tau[:, 1] += viscous * m.qd[:, 1]
-    tau += 0.005 * np.random.default_rng(seed).normal(size=tau.shape) + np.array([0.01, 0, 0])
-    np.savez(path, t=m.t, q=m.q, qd=m.qd, qdd=m.qdd, tau=tau,
-             meta=np.array(json.dumps({"robot": robot})))
+    still = np.zeros((rest, 3))
+    q, qd, qdd = (np.concatenate([np.repeat(m.q[:1], rest, axis=0), m.q]),
+                  np.concatenate([still, m.qd]), np.concatenate([still, m.qdd]))
+    tau = LYNX.nominal.torque(q, qd, qdd)
+    tau[:, 1] += viscous * qd[:, 1]
+    tau += 0.005 * np.random.default_rng(seed).normal(size=tau.shape) + np.asarray(offset)
+    t = np.arange(len(q)) * (m.t[1] - m.t[0])
+    np.savez(path, t=t, q=q, qd=qd, qdd=qdd, tau=tau, meta=np.array(json.dumps({"robot": robot})))
     return m, tau
 
 
 def test_runs_and_validate_write_heldout_and_a_model_predict_reads(tmp_path, capsys):
+    """The held-out run is scored with its offset from its first rest, never refitted on the
+    samples scored; `predict --offset-from-rest` with the written model reproduces the
+    scores."""
     files = [tmp_path / f"r{i}.npz" for i in range(3)]
     for i, f in enumerate(files):
-        _run_file(f, seed=10 + i)
+        _run_file(f, seed=10 + i, offset=(0.01, -0.02 * i, 0.03 * i))
     out = tmp_path / "cl"
     assert main(["closeloop", "--data", f"{files[0]},{files[1]}", "--validate", str(files[2]),
                  "--out", str(out)]) == 0
     payload = json.loads((out / "closeloop.json").read_text())
     assert payload["heldout"]["files"] == [str(files[2])]
     assert payload["heldout"]["after"] == payload["error_after"]
+    held = payload["heldout_runs"][0]
+    assert held["offset_samples"] == REST and held["scored_samples"] == 1200
+    assert "first rest" in held["offset_from"]
     named = {(e["effect"], e["joint"]): e for e in payload["effects"]}
     assert set(named) == {("viscous", 2)}, named
     assert named["viscous", 2]["unit"] == "N m s/rad" and len(named["viscous", 2]["per_run"]) == 2
@@ -166,16 +181,45 @@ def test_runs_and_validate_write_heldout_and_a_model_predict_reads(tmp_path, cap
     assert all(a <= b for a, b in zip(payload["error_after"], payload["error_before"],
                                       strict=True))
     assert main(["predict", "--model", str(out / "model.json"), "--data", str(files[2]),
-                 "--out", str(tmp_path / "p.npz")]) == 0
-    predicted = np.load(tmp_path / "p.npz")["tau"]
-    measured = np.load(files[2])["tau"]
-    offset = np.mean(measured - predicted, axis=0)  # the held-out run's own, refitted
-    np.testing.assert_allclose(offset, payload["heldout_sensor_offsets"][0], atol=1e-12)
-    np.testing.assert_allclose(np.linalg.norm(predicted + offset - measured, axis=0)
-                               / np.linalg.norm(measured, axis=0),
-                               payload["heldout"]["after"], rtol=1e-9)
+                 "--offset-from-rest", "--out", str(tmp_path / "p.npz")]) == 0
+    predicted = np.load(tmp_path / "p.npz")
+    assert int(predicted["rest_samples"]) == REST
+    np.testing.assert_allclose(predicted["offset"][0], payload["heldout_sensor_offsets"][0],
+                               atol=1e-12)
+    np.testing.assert_allclose(predicted["rel_error"], payload["heldout"]["after"], rtol=1e-9)
+    np.testing.assert_allclose(predicted["offset"][0], [0.01, -0.04, 0.06], atol=0.003)
     model = json.loads((out / "model.json").read_text())
     assert model["offsets"] == [0.0] * 3 and len(model["sensor_offsets"]["heldout"]) == 1
+
+
+def test_a_run_scored_whole_without_a_rest_has_no_offset_and_says_so(tmp_path):
+    """No offset is fitted on the samples scored: a held-out run without a rest before its
+    motion is scored with none, and a --holdout tail takes its run's offset from the run's
+    trained part."""
+    from harness.closeloop.runs import read_runs, run_runs
+
+    files = [tmp_path / f"r{i}.npz" for i in range(3)]
+    for i, f in enumerate(files):
+        _run_file(f, seed=20 + i, offset=(0.05, 0.0, 0.0), rest=0)
+    train, validate = read_runs(f"{files[0]},{files[1]}", str(files[2]))
+    whole = run_runs(train, LYNX, validate=validate)
+    assert [r.to_json()["offset_from"] for r in whole.scored] == [
+        "none known (no rest before the motion): 0 N m"]
+    np.testing.assert_array_equal(whole.heldout_offsets, 0.0)
+    tails = run_runs(train, LYNX, holdout=0.25)
+    assert all("trained samples" in r.source for r in tails.scored)
+    np.testing.assert_allclose(tails.heldout_offsets[:, 0], 0.05, atol=0.005)
+
+
+def test_first_rest_counts_the_still_samples_before_the_motion():
+    from identification.closeloop.offsets import MIN_REST, REST_SPEED, first_rest
+
+    qd = np.zeros((50, 2))
+    qd[30:, 1] = 2 * REST_SPEED
+    assert first_rest(qd) == 30
+    qd[MIN_REST - 1:, 0] = 2 * REST_SPEED
+    assert first_rest(qd) == 0  # too short a stillness to calibrate on
+    assert first_rest(np.zeros((MIN_REST, 2))) == MIN_REST
 
 
 def test_an_effect_of_one_run_only_is_not_named_with_two():

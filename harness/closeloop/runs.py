@@ -9,7 +9,8 @@ of the physically consistent fit pulled toward it (identification.regression.con
 a wrong mass or centre of mass, named as such rather than absorbed by springs and friction.
 Effects are chosen by identification.closeloop.runs; scores are on the --validate runs, or
 without them on the last --holdout of every run (the rest trains), each scored run with its
-own sensor offset refitted, before and after alike (identification.closeloop.leftover).
+sensor offset taken from samples the score does not count (its first rest, else the run's
+trained part; identification.closeloop.offsets), before and after alike.
 """
 
 from __future__ import annotations
@@ -24,7 +25,8 @@ from harness.data.runs import KEYS, Runs, load_runs, split_files
 from harness.errors import UserError
 from harness.robots.arm import Arm
 from harness.robots.torque_models import load_torque_model, read_model
-from identification.closeloop.leftover import LEFT, Leftover, leftover, offset_error, run_offsets
+from identification.closeloop.leftover import LEFT, Leftover, leftover
+from identification.closeloop.offsets import ScoredRun, run_tail, scored_error, scored_offsets, whole_run
 from identification.closeloop.payload import REACH
 from identification.closeloop.runs import (
     AGREE,
@@ -82,7 +84,8 @@ class RunsRun:
     error_after: np.ndarray
     left: Leftover
     model_json: dict
-    heldout_offsets: np.ndarray  # (held runs, dof) N m, each refitted on the closed model
+    heldout_offsets: np.ndarray  # (held runs, dof) N m, each under the closed model
+    scored: list[ScoredRun]  # what each held-out run is scored on, its offset from where
 
     def to_json(self) -> dict:
         r, left = self.loop, self.left
@@ -96,6 +99,7 @@ class RunsRun:
                "sensor_offsets": r.offsets.tolist(),
                "training_sensor_offsets": r.run_offsets.tolist(),
                "heldout_sensor_offsets": self.heldout_offsets.tolist(),
+               "heldout_runs": [s.to_json() for s in self.scored],
                "data": {"files": self.train_files},
                "selection": {"folds": r.folds, "path": [list(p) for p in r.path],
                              "not_named": [{"joint": j, "effect": e, "validation_gain": g,
@@ -113,10 +117,15 @@ class RunsRun:
                                    "against the measured torque, on " + (
                                        "the --validate runs" if self.validate_files else
                                        f"the last {self.holdout:.0%} of every run") +
-                                   ", before and after alike with each scored run's own "
-                                   "sensor offset refitted (a constant per joint fitted on "
-                                   "that run's residual): an offset is the run's, not the "
-                                   "robot's",
+                                   ", before and after alike with each scored run's "
+                                   "sensor offset (a constant per joint: the model's mean "
+                                   "residual) taken from samples the score does not count: "
+                                   "the run's first rest (at most 0.01 rad/s on every joint, "
+                                   "at least 10 samples, left out of the score), else the "
+                                   "run's trained part; a run scored whole without a rest "
+                                   "has none (0 N m). heldout_runs says which, run by run; "
+                                   "`predict --offset-from-rest` on a --validate log "
+                                   "reproduces its figures",
                "model": "model.json"}
         if self.validate_files:
             out["heldout"] = {"files": self.validate_files, "before": out["error_before"],
@@ -137,11 +146,12 @@ def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs |
         if held[0][0].shape[1] != dof:
             raise UserError(f"--validate logs have {held[0][0].shape[1]} joints, robot "
                             f"{arm.label} has {dof}")
-        train = runs
+        train, scored = runs, [whole_run(r) for r in held]
     else:
         cut = [int(round(len(r[0]) * (1.0 - holdout))) for r in runs]
         train = [tuple(a[:c] for a in r) for r, c in zip(runs, cut, strict=True)]
         held = [tuple(a[c:] for a in r) for r, c in zip(runs, cut, strict=True)]
+        scored = [run_tail(t, h) for t, h in zip(train, held, strict=True)]
     if declared == "pinocchio":
         spec, model = "pinocchio", arm.nominal
     else:
@@ -154,10 +164,11 @@ def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs |
         loop = close_loop_runs(model, train, inertial, body=last_body(arm), reach=reach)
     except IdentificationError as exc:
         raise UserError(f"{','.join(data.files)}: {exc}") from None
-    before, after = offset_error(model, held), offset_error(loop.model, held)
-    heldout_offsets = run_offsets(loop.model, held)
+    before, after = scored_error(model, scored), scored_error(loop.model, scored)
+    heldout_offsets = scored_offsets(loop.model, scored)
     payload = model_payload(arm, spec, inertial, loop.terms, loop.run_offsets, heldout_offsets)
     name = "the robot's nominal model (URDF/MJCF)" if declared == "pinocchio" else declared
     return RunsRun(arm.reference, name, list(data.files),
                    [] if validate is None else list(validate.files), holdout, loop, before,
-                   after, leftover(loop.model, held), payload, heldout_offsets)
+                   after, leftover(loop.model, [s.scored for s in scored]), payload,
+                   heldout_offsets, scored)

@@ -10,6 +10,7 @@ from harness.io import write_npz
 from harness.robots.registry import DEFAULT_ROBOT
 from harness.robots.resolve import resolve_arm
 from harness.robots.torque_models import read_model, torque_model
+from identification.closeloop.offsets import MIN_REST, REST_SPEED, first_rest, residual_offset
 from identification.metrics import rel_error
 from identification.model import sensor_offsets
 
@@ -28,6 +29,12 @@ def register(sub) -> None:
                    "read, the model's fitted sensor offset included; the offset also as 'offset' "
                    "(zeros for a model that fits none); with a torque in the data, also 'rel_error', "
                    "its per-joint relative error ||tau_hat - tau|| / ||tau||")
+    p.add_argument("--offset-from-rest", action="store_true",
+                   help="the sensor offset of this log taken from its first rest (the samples "
+                   "before any joint moves faster than 0.01 rad/s, at least 10: the model's "
+                   "mean residual there) instead of the model's fitted one, and rel_error "
+                   "scored on the samples after the rest, as `closeloop` scores a --validate "
+                   "log; needs the data's tau")
     p.set_defaults(func=run)
 
 
@@ -39,17 +46,37 @@ def run(args) -> int:
     if states["q"].shape[1] != model.dof:
         raise UserError(f"data has {states['q'].shape[1]} joints, model has {model.dof}")
     tau = model.torque(states["q"], states["qd"], states["qdd"])
-    offset = sensor_offsets(model)
-    measured = "tau_clean" not in states  # a log's sensor reads the offset too
+    offset, start = sensor_offsets(model), 0
+    if args.offset_from_rest:
+        offset, start = _offset_from_rest(args.data, states, model)
+    measured = "tau_clean" not in states or args.offset_from_rest  # a log reads the offset
     if measured:
         tau = tau + offset
     scored = {}
     if "tau" in states:  # what the sensor read: against the torque the model says it reads
-        scored["rel_error"] = rel_error(tau, states["tau"])
+        scored["rel_error"] = rel_error(tau[start:], states["tau"][start:])
+    if args.offset_from_rest:
+        scored["rest_samples"] = np.array(start)
     write_npz(args.out, tau=tau, offset=np.broadcast_to(offset, (len(tau), model.dof)), **scored)
-    print(f"wrote {args.out}: tau {tau.shape}"
-          + (", the fitted sensor offset included (measured log)" if measured else ""))
-    if scored:
+    print(f"wrote {args.out}: tau {tau.shape}" + (
+        f", the sensor offset from the log's first rest ({start} samples) included"
+        if args.offset_from_rest else
+        ", the fitted sensor offset included (measured log)" if measured else ""))
+    if "rel_error" in scored:
         errors = ", ".join(f"{e:.4g}" for e in scored["rel_error"])
-        print(f"relative error against the data's tau, per joint: [{errors}]")
+        where = f" after its first rest (samples {start}-{len(tau) - 1})" if start else ""
+        print(f"relative error against the data's tau{where}, per joint: [{errors}]")
     return 0
+
+
+def _offset_from_rest(path: str, states: dict, model) -> tuple[np.ndarray, int]:
+    """The log's offset from its first rest (identification.closeloop.offsets) and the rest's
+    length in samples."""
+    if "tau" not in states:
+        raise UserError(f"{path}: --offset-from-rest needs the log's torque (tau)")
+    rest = first_rest(states["qd"])
+    if not rest:
+        raise UserError(f"{path}: no rest at its start (every joint below {REST_SPEED:g} rad/s "
+                        f"for at least {MIN_REST} samples) to take the sensor offset from")
+    calibration = tuple(states[k][:rest] for k in ("q", "qd", "qdd", "tau"))
+    return residual_offset(model, calibration), rest

@@ -5,7 +5,8 @@ than LEFT noise sigmas RMS (the noise from second differences of the residual, r
 identification.closeloop.residual.noise_sigma): structure the catalogue does not span.
 What is left is described by its correlation with the joint's position, velocity and the
 time within its run (a drift). A sensor offset is a property of a run, not of the robot:
-every run's residual is taken with its own offset refitted (run_offsets), as the scores are.
+the residual's shape is described about each run's own mean (the scores take the offset
+from samples they do not count: identification.closeloop.offsets).
 """
 
 from __future__ import annotations
@@ -15,7 +16,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from identification.closeloop.residual import noise_sigma
-from identification.metrics import rel_error
 
 LEFT = 1.0  # noise sigmas RMS of structure left: twice the noise's power
 ROUNDING = 1e-9  # of the joint's torque RMS: a residual below it is rounding, not structure
@@ -54,24 +54,9 @@ def _corr(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.where(den > 0, np.sum(a * b, axis=0) / np.maximum(den, 1e-300), 0.0)
 
 
-def run_offsets(model, runs: list[tuple[np.ndarray, ...]]) -> np.ndarray:
-    """(runs, dof) each run's sensor offset (N m): the per-joint constant fitted by least
-    squares on its residual tau - model, i.e. the residual's mean over the run."""
-    return np.array([np.mean(r[3] - model.torque(r[0], r[1], r[2]), axis=0) for r in runs])
-
-
-def offset_error(model, runs: list[tuple[np.ndarray, ...]]) -> np.ndarray:
-    """(dof,) relative error ||tau_hat - tau|| / ||tau|| over runs [(q, qd, qdd, tau)], where
-    tau_hat is model plus each run's own sensor offset refitted (run_offsets)."""
-    offsets = run_offsets(model, runs)
-    estimate = np.concatenate([model.torque(r[0], r[1], r[2]) + c
-                               for r, c in zip(runs, offsets, strict=True)])
-    return rel_error(estimate, np.concatenate([r[3] for r in runs]))
-
-
 def leftover(model, runs: list[tuple[np.ndarray, ...]]) -> Leftover:
-    """The residual of model on runs [(q, qd, qdd, tau)] (held out), per joint, each run's
-    own sensor offset refitted (run_offsets)."""
+    """The residual of model on runs [(q, qd, qdd, tau)] (held out), per joint, about each
+    run's own mean."""
     residuals = [r[3] - model.torque(r[0], r[1], r[2]) for r in runs]
     residuals = [r - r.mean(axis=0) for r in residuals]
     res = np.concatenate(residuals)
