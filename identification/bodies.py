@@ -16,6 +16,8 @@ import numpy as np
 from identification.library.kinematic import KinematicLibrary, atom_names, atom_unit
 from identification.physical import CONSISTENT_TOL
 
+AT_COM = ("the centre of mass, along the joint frame's axes (the standard parameters and the "
+          "CSV export's inertias are about the joint frame's origin)")
 JOINT_DYNAMICS = (("armature", "kg m^2"), ("viscous", "N m s/rad"), ("coulomb", "N m"))
 
 
@@ -40,9 +42,10 @@ def bodies_payload(physical: dict) -> dict:
         m0, c0, inertia0 = _inertials(nominal[10 * j:10 * j + 10])
         bodies.append({"joint": j + 1,
                        "mass": {"value": m, "unit": "kg", "nominal": m0},
-                       "com": {"value": c.tolist(), "unit": "m", "nominal": c0.tolist()},
+                       "com": {"value": c.tolist(), "unit": "m", "nominal": c0.tolist(),
+                               "frame": "the joint's frame"},
                        "inertia_at_com": {"value": inertia.tolist(), "unit": "kg m^2",
-                                          "nominal": inertia0.tolist()},
+                                          "nominal": inertia0.tolist(), "about": AT_COM},
                        "consistent": bool(eig[j] >= -CONSISTENT_TOL)})
         if physical.get("plausible"):  # fitted inside its link's bounding ellipsoid
             bodies[-1]["plausible"] = bool(physical["plausible"][j])

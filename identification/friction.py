@@ -33,6 +33,17 @@ STRIBECK_SPEEDS = (0.01, 0.03, 0.1)  # rad/s
 SIGMOID_SLOPES = (3.0, 10.0, 30.0, 100.0)  # s/rad
 SIGMOID_SHIFTS = (-0.03, 0.0, 0.03)  # rad/s
 LAWS = ("viscous", "viscous-coulomb", "stribeck", "sigmoid")
+DESCRIPTIONS = {  # MODEL.json's friction entries, for people
+    "viscous": "viscous friction only (the joint's viscous atom, N m s/rad): no shape "
+               "parameters, so shape is []",
+    "viscous-coulomb": "viscous and Coulomb friction (the joint's viscous and coulomb atoms): "
+                       "no shape parameters, so shape is []",
+    "stribeck": "viscous + Coulomb + a Stribeck term F_s sign(qd) exp(-(qd / v_s)^2) (its "
+                "coefficient F_s in N m): shape is [v_s] in rad/s",
+    "sigmoid": "viscous + Gaz et al.'s sigmoid Coulomb phi (s(slope (qd + shift)) - "
+               "s(slope shift)) in place of the coulomb atom (phi in N m): shape is [slope "
+               "in s/rad, shift in rad/s]",
+}
 
 
 def sigmoid_friction(qd: np.ndarray, steepness: float, shift: float) -> np.ndarray:
@@ -93,7 +104,8 @@ class FrictionLaw:
         return self.name
 
     def to_dict(self) -> dict:
-        return {"law": self.name, "shape": list(self.shape)}
+        """{"law", "shape"} (read back) and a "description" of both for people."""
+        return {"law": self.name, "shape": list(self.shape), "description": DESCRIPTIONS[self.name]}
 
     @classmethod
     def from_dict(cls, payload) -> FrictionLaw:

@@ -3,7 +3,8 @@
 A model on a feature library (identification.feature_model.IdentifiedModel) and a model on
 a robot's base atoms (identification.kinematic_model.KinematicModel, `"library":
 "kinematic"`) share the CLI contract: {"dof", "joints": [{"terms", "coefficients",
-"offset"}], "library", "method"}; a kinematic model also records the robot it was identified
+"offset"}], "library", "method"} (beside, for people: each joint's "coefficient_units",
+identification.units); a kinematic model also records the robot it was identified
 for (`robot`: name and a hash of its kinematics), the base atoms (`atoms`) and, when chosen,
 each joint's friction law (`friction`). Reading a kinematic model needs that robot's
 KinematicLibrary (another robot is an error). `model_payload` adds what `identify` measured.
@@ -22,6 +23,12 @@ from identification.feature_model import IdentifiedModel, JointModel
 from identification.friction import FrictionLaw
 from identification.kinematic_model import KinematicModel
 from identification.library.kinematic import KinematicLibrary
+from identification.units import (
+    COEFFICIENT_UNITS,
+    atom_coefficient_unit,
+    feature_unit,
+    standard_parameter_labels,
+)
 
 KINEMATIC = "kinematic"  # the "library" of a model on a robot's base atoms
 
@@ -76,7 +83,10 @@ def joint_entries(payload: dict, dof: int | None = None) -> list[dict]:
 def _feature_dict(model: IdentifiedModel) -> dict:
     return {"dof": model.dof, "library": model.library, "method": model.method,
             "joints": [{"terms": list(jm.terms), "coefficients": list(jm.coefficients),
-                        "offset": jm.offset} for jm in model.joints]}
+                        "offset": jm.offset,
+                        "coefficient_units": [feature_unit(t, model.dof) for t in jm.terms]}
+                       for jm in model.joints],
+            "units": COEFFICIENT_UNITS}
 
 
 def _kinematic_dict(model: KinematicModel) -> dict:
@@ -87,7 +97,11 @@ def _kinematic_dict(model: KinematicModel) -> dict:
             **({"friction": [law.to_dict() for law in model.laws]} if model.laws else {}),
             "joints": [{"terms": [n for n, _ in model.joint_terms(j)],
                         "coefficients": [c for _, c in model.joint_terms(j)],
-                        "offset": float(model.offsets[j])} for j in range(model.dof)]}
+                        "offset": float(model.offsets[j]),
+                        "coefficient_units": [atom_coefficient_unit(n)
+                                              for n, _ in model.joint_terms(j)]}
+                       for j in range(model.dof)],
+            "units": COEFFICIENT_UNITS}
 
 
 _WRITERS = {IdentifiedModel: _feature_dict, KinematicModel: _kinematic_dict}
@@ -113,6 +127,10 @@ def model_payload(result, robot: dict, heldout: dict, scored_against: str) -> di
 
         if result.physical and "standard_parameters" in result.physical:
             payload.update(bodies_payload(result.physical))
+            physical = payload["metrics"].get("physical")
+            if isinstance(physical, dict):  # the flat list labelled: names, units, frame
+                payload["metrics"]["physical"] = {
+                    **physical, **standard_parameter_labels(result.model.dof)}
         payload["base_parameters"] = base_parameters(result.model.library)
     return payload
 

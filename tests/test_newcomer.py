@@ -108,3 +108,36 @@ def test_a_robot_that_is_not_a_serial_chain_is_refused_naming_its_joints(tmp_pat
     with pytest.raises(UserError, match="joint 'thumb' does not follow joint 'elbow' "
                                         r"\(it hangs on joint 'shoulder'\): not a serial chain"):
         Arm.of(str(urdf)).chain  # noqa: B018 - reading it checks the chain
+
+
+def test_model_json_labels_its_numbers(tmp_path):
+    """MODEL.json's coefficients had no units, its standard parameters were a bare list and
+    its friction's 'shape: []' was unexplained; a loader reads the labelled file back."""
+    from harness.robots.arm import Arm
+    from identification.feature_model import IdentifiedModel, JointModel
+    from identification.model import load_model, model_to_dict
+
+    feature = IdentifiedModel(2, (JointModel(("qd1^2*sin(q2)", "qdd1", "qd2", "cos(q1)", "q2"),
+                                             (1.0,) * 5), JointModel((), ())), "paper", "coupled")
+    assert model_to_dict(feature)["joints"][0]["coefficient_units"] == [
+        "N m s^2/rad^2", "N m s^2/rad", "N m s/rad", "N m", "N m/rad"]
+    data, out = tmp_path / "d.npz", tmp_path / "m.json"
+    assert main(["generate", "--robot", "lynxmotion", "--samples", "1200", "--seed", "2",
+                 "--out", str(data)]) == 0
+    assert main(["identify", "--data", str(data), "--prior", "nominal", "--out", str(out)]) == 0
+    payload = json.loads(out.read_text())
+    for joint in payload["joints"]:
+        assert len(joint["coefficient_units"]) == len(joint["terms"])
+        units = dict(zip(joint["terms"], joint["coefficient_units"], strict=True))
+        assert all(u == payload["base_parameters"][t]["unit"] for t, u in units.items())
+    assert "per unit of its term" in payload["units"]
+    assert all("shape" in law["description"] for law in payload["friction"])
+    physical = payload["metrics"]["physical"]
+    names, units = physical["standard_parameter_names"], physical["standard_parameter_units"]
+    assert len(names) == len(units) == len(physical["standard_parameters"]) == 30
+    assert names[:5] == ["m1", "mcx1", "mcy1", "mcz1", "Ixx1"] and units[:5] == [
+        "kg", "kg m", "kg m", "kg m", "kg m^2"]
+    assert "not at the centre of mass" in physical["standard_parameters_frame"]
+    assert payload["bodies"][0]["inertia_at_com"]["about"].startswith("the centre of mass")
+    arm = Arm.of("lynxmotion")
+    assert load_model(out, lambda: arm.library).dof == 3
