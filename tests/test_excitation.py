@@ -224,3 +224,18 @@ def test_an_information_design_holds_more_information_than_a_condition_design():
     for d in designs.values():
         assert d.limits.violation(d.trajectory.q, d.trajectory.qd, d.trajectory.qdd) <= 1e-9
         assert np.abs(d.trajectory.qd[[0, -1]]).max() < 1e-9
+
+
+def test_the_designed_excitation_is_scored_on_draws_no_setting_was_chosen_on():
+    """The bench scores the design on fresh draws and a fresh judge motion: none of them is a
+    seed its settings (top frequency, criterion) or the identification's were chosen on, nor
+    one the bench's other identification figures use (#56 item 1)."""
+    from harness.bench.identification import FRESH_SEED, LEVELS, NEXT_RUNS
+    from harness.identify.excitation import FRESH_DRAWS, FRESH_JUDGE, QUICK_FRESH_DRAWS
+    from harness.identify.excitation_criteria import JUDGE, SEEDS
+
+    chosen_on = set(SEEDS) | {JUDGE} | set(range(1, 11)) | set(range(601, 623))
+    used = chosen_on | {FRESH_SEED} | set(NEXT_RUNS) | {s for seeds in LEVELS.values() for s in seeds}
+    fresh = set(FRESH_DRAWS) | {FRESH_JUDGE}
+    assert set(QUICK_FRESH_DRAWS) <= set(FRESH_DRAWS) and len(FRESH_DRAWS) >= 10
+    assert not fresh & used, sorted(fresh & used)

@@ -119,7 +119,7 @@ def run(ctx: Context) -> SectionResult:
                               "the best single run, on run 3, worst joint (worst seed)",
                               max(max(a["ratio"]) for a in across), WORSE, "x"))
     excitation_targets, excitation = excitation_comparison(
-        arm, fits[default], default, baseline, judges[1], draws, ctx.quick)
+        arm, fits[default], default, baseline, ctx.quick)
     targets += excitation_targets
     errors = np.median([d[default]["sines"] for d in draws], axis=0)
     oracle = np.median([d["oracle"]["sines"] for d in draws], axis=0)

@@ -14,14 +14,16 @@ from __future__ import annotations
 import sys
 
 from harness.data.excite import design_for
-from harness.data.generate import SAMPLE_RATE, generate
+from harness.data.generate import SAMPLE_RATE
 from harness.identify.excitation import along_design
 from harness.identify.fits import arm_identification
-from harness.identify.scoring import NOISE, SAMPLES, fixed_fit, score_draw, sines_motion
+from harness.identify.scoring import SAMPLES, fixed_fit, sines_motion
 from harness.robots.arm import Arm
 from identification.excitation.criteria import CRITERIA
 
-SEEDS, JUDGE = (101, 102, 103), 1005  # the bench's first draws and judge motion
+# the development draws the criterion was chosen on (the bench scores the design on fresh
+# ones: harness.identify.excitation.FRESH_DRAWS)
+SEEDS, JUDGE = (101, 102, 103), 1005
 
 
 def compare(arm: Arm) -> dict:
@@ -33,9 +35,7 @@ def compare(arm: Arm) -> dict:
         designed = design_for(arm, SAMPLES / SAMPLE_RATE, SAMPLE_RATE, seed=1, criterion=criterion)
         rows = []
         for seed in SEEDS:
-            draw = score_draw(generate(arm, SAMPLES, NOISE, seed, "inverse"), {"fit": fit},
-                              baseline, [judge])
-            r = along_design(arm, designed, fit, "fit", baseline, judge, draw)
+            r = along_design(arm, designed, fit, "fit", baseline, judge, seed)
             rows.append({"seed": seed, "bench": r["median_ratio"],
                          "same": r["same_sensor_median_ratio"]})
         out[criterion] = {"condition": designed.condition,
@@ -44,7 +44,7 @@ def compare(arm: Arm) -> dict:
 
 
 if __name__ == "__main__":
-    for criterion, r in compare(sys.argv[1] if len(sys.argv) > 1 else "lynxmotion").items():
+    for criterion, r in compare(Arm.of(sys.argv[1] if len(sys.argv) > 1 else "lynxmotion")).items():
         ratios = "; ".join(f"seed {d['seed']}: {d['bench']:.2f}x bench noise, {d['same']:.2f}x "
                            "same sensor" for d in r["draws"])
         print(f"{criterion}: condition {r['condition']:.3g} (default {r['default_condition']:.3g}); "
