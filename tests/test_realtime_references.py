@@ -12,3 +12,14 @@ def test_a_safe_execution_where_the_reference_lost_the_clearance_counts_as_withi
     assert out["within"] == 3  # 0.4 % above, below, and the rescued one
     assert out["feasible_where_the_reference_is_not"] == 1 and out["both_infeasible"] == 1
     assert out["excess_pct"][3] is None and out["scenarios"] == 6
+
+
+def test_the_realtime_study_scores_scenarios_no_setting_was_chosen_on():
+    """The study's default scenarios are not the development set its settings were chosen on,
+    and a target scored on that set says so (#56 item 2)."""
+    from harness.studies.realtime.measure import DEVELOPMENT_SEED, Setup
+    from harness.studies.realtime.section import _scenarios
+
+    assert Setup().seed != DEVELOPMENT_SEED
+    assert "not a held-out score" in _scenarios(DEVELOPMENT_SEED)
+    assert "no setting was chosen on it" in _scenarios(Setup().seed)

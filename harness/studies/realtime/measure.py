@@ -33,13 +33,19 @@ from planning.result import evaluate, to_json
 from planning.scenarios import random_scenarios
 from planning.types import DEADLINE, Segment
 
+DEVELOPMENT_SEED = 2026
+
 
 @dataclass(frozen=True)
 class Setup:
     """What the study runs: scenario count and seed, the references' starts, the deadline."""
 
     scenarios: int = 20
-    seed: int = 2026
+    # drawn once on 2026-11-28 (numpy.random.default_rng().integers(10_000)): scenarios no
+    # setting was chosen on. The planner's settings (the search's screens, warm_radius,
+    # settle_horizon, offers as found) were chosen on DEVELOPMENT_SEED's, which `--seed 2026`
+    # still gives for development, never for the targets' record
+    seed: int = 8744
     # random starts of each reference's multi-start (docs/realtime.md, 'planning.globalsearch')
     reference_starts: int = 2
     replan_stride: int = 4  # (i) on every this many re-plans

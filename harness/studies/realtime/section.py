@@ -33,14 +33,23 @@ def run(ctx: Context) -> SectionResult:
                100 * per["within"] / max(per["replans"], 1), 95.0, "%",
                lower_is_better=False, timing=True),
         Target("scenarios whose executed energy is within 0.5 % of the causal multi-start "
-               "planner's", causal["within"], 18 * causal["scenarios"] / 20, "scenarios",
-               lower_is_better=False, timing=True),
+               "planner's, or feasible where it is not"
+               + _scenarios(study["setup"]["seed"]), causal["within"],
+               18 * causal["scenarios"] / 20, "scenarios", lower_is_better=False, timing=True),
         *_clearance_targets(study),
     ]
     if ctx.quick:  # the smoke-test size plans uncompiled: not comparable with the targets
         targets = []
     return SectionResult("\n".join(measure.markdown_lines(study)), {"timing": study}, [],
                          targets)
+
+
+def _scenarios(seed: int) -> str:
+    """Which scenarios a target is scored on."""
+    if seed == measure.DEVELOPMENT_SEED:
+        return (f" (seed {seed}: the development scenarios the planner's settings were chosen "
+                "on, not a held-out score)")
+    return f" (seed {seed}, drawn once: no setting was chosen on it)"
 
 
 def _anytime_targets(row: dict, per: dict) -> list[Target]:
