@@ -25,9 +25,11 @@ from harness.identify.fits import arm_identification
 from harness.identify.next_run import markdown as next_run_markdown
 from harness.identify.next_run import next_run, rule_targets, runs_against_single
 from harness.identify.scoring import (
+    FLAT,
     HOLDOUT,
     NOISE,
     ORACLE,
+    PRIOR,
     SAMPLES,
     closed_form_gap,
     fixed_fit,
@@ -54,8 +56,6 @@ EXACT = 1e-6  # noise-free held-out relative error
 AGREEMENT = 1e-9  # Pinocchio vs MuJoCo, relative to the largest torque
 MEDIAN_TARGET, JOINT_TARGET = 1.1, 1.6  # x oracle on the other family's motion
 WORSE = 1.05  # several runs against the best single run on a run not fitted (issue #57; full only)
-# `identify --prior nominal` given a URDF whose inertias are wrong, and `--prior flat`
-PRIOR, FLAT = "consistent, perturbed URDF prior", "consistent, no prior"
 
 
 def run(ctx: Context) -> SectionResult:

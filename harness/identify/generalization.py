@@ -18,7 +18,9 @@ from harness.data.generate import SAMPLE_RATE
 from harness.data.sensors import torque_noise
 from harness.identify.fits import arm_identification
 from harness.identify.scoring import (
+    FLAT,
     NOISE,
+    PRIOR,
     SAMPLES,
     Spectrum,
     fixed_fit,
@@ -34,7 +36,7 @@ OUTSIDE = Spectrum(count=(3, 7), band=(0.2, 2.0), fill=0.5, stream=104729)
 BIAS = 0.2  # sensor offset, x the noise std (generate's default)
 SEEDS, QUICK_SEEDS = (701, 702, 703), (701,)  # seeds no bench section scores
 JUDGE_SEED = 1707  # the fresh motions' seed (the bench's is 1005)
-SPARSE, PRIOR, FLAT = "sparse default", "consistent, perturbed URDF prior", "consistent, no prior"
+SPARSE = "sparse default"
 
 
 def outside_dataset(arm: Arm, seed: int, samples: int = SAMPLES, noise: float = NOISE) -> Dataset:

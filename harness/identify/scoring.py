@@ -31,6 +31,11 @@ from identification.regression.torque import TorqueRegressor
 
 SAMPLES, NOISE, HOLDOUT = 4000, 0.05, 0.25
 ORACLE = "unbiased weighted least squares on the true base-parameter structure, no prior"
+# the consistent fit pulled toward a URDF whose inertias are off, and without the pull; both
+# keep each body inside its link's ellipsoid, which is grown to hold the URDF's own body
+# (identification.ellipsoids): where the URDF generated the data, that bound holds the truth
+PRIOR = "consistent, perturbed URDF prior"
+FLAT = "consistent, no prior (bounds grown to hold the URDF's bodies)"
 FILL = 0.85  # of each joint's range the sines motion may sweep
 
 
