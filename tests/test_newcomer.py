@@ -141,3 +141,31 @@ def test_model_json_labels_its_numbers(tmp_path):
     assert payload["bodies"][0]["inertia_at_com"]["about"].startswith("the centre of mass")
     arm = Arm.of("lynxmotion")
     assert load_model(out, lambda: arm.library).dof == 3
+
+
+def test_excite_and_generate_print_one_condition_number(tmp_path, capsys):
+    """`excite` printed 32 for the default excitation while `generate` along it printed
+    'normalized condition 44.2, excitation condition 3.71': two definitions, named apart."""
+    from harness.data.generate import condition_number
+    from harness.robots.arm import Arm
+
+    def figure(line: str) -> float:
+        return float(re.search(r"excitation condition number ([0-9.e+-]+)", line).group(1))
+
+    traj = tmp_path / "traj.csv"
+    assert main(["excite", "--robot", "lynxmotion", "--duration", "5", "--rate", "200",
+                 "--iterations", "2", "--harmonics", "5", "--seed", "1", "--out", str(traj)]) == 0
+    excite = capsys.readouterr().out
+    designed = figure(excite)
+    default = float(re.search(r"generate's default excitation's ([0-9.e+-]+)", excite).group(1))
+    assert main(["generate", "--robot", "lynxmotion", "--excitation", str(traj),
+                 "--out", str(tmp_path / "along.npz")]) == 0
+    assert figure(capsys.readouterr().out) == designed
+    assert main(["generate", "--robot", "lynxmotion", "--samples", "1000", "--seed", "1",
+                 "--out", str(tmp_path / "default.npz")]) == 0
+    assert figure(capsys.readouterr().out) == default
+    data = np.load(tmp_path / "default.npz")
+    meta = json.loads(str(data["meta"]))
+    q, qd, qdd = (np.asarray(data[k]) for k in ("q", "qd", "qdd"))
+    assert meta["condition_number"] == pytest.approx(condition_number(Arm.of("lynxmotion"), q, qd, qdd))
+    assert "excitation_condition" in meta  # the older figure kept

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from harness.data.excitation_file import write_trajectory
 from harness.data.excite import DEFAULT_ACCELERATION, ITERATIONS, design_for, floor_below_home
+from harness.data.generate import CONDITION_MEANING, CONDITION_WORDS
 from harness.errors import UserError
 from harness.robots.resolve import resolve_arm
 from identification.excitation.criteria import CRITERIA
@@ -56,9 +57,8 @@ def run(args) -> int:
     write_trajectory(args.out, designed.trajectory)
     n = len(designed.trajectory.t)
     print(f"wrote {args.out}: {n} samples at {args.rate:g} Hz over {args.duration:g} s, at rest at "
-          f"both ends; condition number {designed.condition:.3g} (generate's default excitation "
-          f"{designed.default_condition:.3g}; the identification's atoms and offsets, columns "
-          "normalized)")
+          f"both ends; {CONDITION_WORDS} {designed.condition:.3g} (generate's default "
+          f"excitation's {designed.default_condition:.3g}; {CONDITION_MEANING})")
     return 0
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from harness.data.excitation_file import read_trajectory
-from harness.data.generate import generate
+from harness.data.generate import CONDITION_MEANING, CONDITION_WORDS, generate
 from harness.io import write_npz
 from harness.robots.resolve import resolve_arm
 
@@ -41,10 +41,8 @@ def run(args) -> int:
     write_npz(args.out, **ds.arrays())
     meta = ds.meta
     line = (f"wrote {args.out}: {samples} samples, mode {args.mode}, "
-            f"noise {args.noise:g}, {_library(meta)}, "
-            f"excitation condition {meta['excitation_condition']:.3g} (the rigid-body base "
-            "regressor's, columns normalized; `excite` prints the identification's, with "
-            "friction and offsets)")
+            f"noise {args.noise:g}, {_library(meta)}; {CONDITION_WORDS} "
+            f"{meta['condition_number']:.3g} ({CONDITION_MEANING})")
     print(line)
     if args.mode == "measured":
         print("  estimated-state error (rel RMS per joint): "
@@ -54,8 +52,8 @@ def run(args) -> int:
 
 
 def _library(meta: dict) -> str:
-    return (f"{meta['library']} library rank {meta['library_rank']}/{meta['library_size']}, "
-            f"normalized condition {meta['library_condition']:.3g}")
+    return (f"{meta['library']} library rank {meta['library_rank']}/{meta['library_size']} "
+            f"(its columns' condition {meta['library_condition']:.3g} on this motion)")
 
 
 def _fmt(values) -> str:

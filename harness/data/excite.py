@@ -17,11 +17,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from harness.data.excitation_file import Trajectory
-from harness.data.generate import SAMPLE_RATE, default_excitation
+from harness.data.generate import CONDITION_POINTS, SAMPLE_RATE, condition_number, default_excitation
 from harness.errors import UserError
 from harness.robots.arm import Arm
 from harness.robots.scene import LINK_RADIUS
-from identification.excitation.criteria import log_condition
 from identification.excitation.design import ExcitationDesign, ExcitationLimits, optimize_excitation
 from identification.excitation.regressor import AtomRegressor
 
@@ -32,7 +31,6 @@ ITERATIONS = 60  # SLSQP's, at most: about two minutes for a 7-joint arm at 20 h
 # predicted on other motions was larger under both noise models, and slower excitations left
 # inertia weak against torque noise (docs/identification.md, 'Top frequency')
 TOP_FREQUENCY, HARMONICS, MAX_HARMONICS = 1.0, (5, 20), 20  # Hz, default range, most allowed
-CONDITION_POINTS = 200  # samples over the duration at which conditions are compared
 
 
 @dataclass(frozen=True)
@@ -140,8 +138,8 @@ def design_for(arm: Arm, duration: float, rate: float, acceleration: float = DEF
     grid = np.linspace(0.0, duration, CONDITION_POINTS, endpoint=False)
     default, _ = default_excitation(arm, max(int(round(duration * SAMPLE_RATE)), 10), seed)
     return DesignedExcitation(design, trajectory,
-                              float(np.exp(log_condition(regressor, *design.excitation.evaluate(grid)))),
-                              float(np.exp(log_condition(regressor, *default.evaluate(grid)))), limits)
+                              condition_number(arm, *design.excitation.evaluate(grid)),
+                              condition_number(arm, *default.evaluate(grid)), limits)
 
 
 def floor_below_home(arm: Arm, floor: float | None) -> float | None:

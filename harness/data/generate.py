@@ -24,6 +24,10 @@ from identification.regression.oracle import base_columns
 
 MIN_SAMPLES = 10
 SAMPLE_RATE = 200.0  # Hz, rate of the data handed to identification
+CONDITION_POINTS = 200  # instants of a motion its condition number is computed at
+CONDITION_WORDS = "excitation condition number"  # as generate and excite print it
+CONDITION_MEANING = ("of the identification's base atoms and offsets, columns normalized, at "
+                     f"{CONDITION_POINTS} instants")
 
 
 
@@ -137,8 +141,22 @@ def generate(
     else:
         raise UserError(f"--mode must be 'inverse' or 'measured', got '{mode}'")
     meta.update(library_report(robot, q, qd, qdd, arm.pinocchio))
+    meta["condition_number"] = condition_number(arm, q, qd, qdd)
     tau = tau_clean + torque_noise(tau_clean, noise, bias, rng)
     return Dataset(t, q, qd, qdd, tau, tau_clean, meta, truth)
+
+
+def condition_number(arm: Arm, q, qd, qdd) -> float:
+    """The excitation's condition number, as `generate` and `excite` both print it: that of
+    the identification's regressor (the arm's base atoms, with armature, viscous and Coulomb,
+    and one torque offset per joint: AtomRegressor), its columns scaled to unit norm, at
+    CONDITION_POINTS instants spread evenly over the motion's samples (docs/data.md)."""
+    from identification.excitation.criteria import log_condition
+    from identification.excitation.regressor import AtomRegressor
+
+    n = len(q)
+    rows = np.arange(min(CONDITION_POINTS, n)) * n // min(CONDITION_POINTS, n)
+    return float(np.exp(log_condition(AtomRegressor(arm.library), q[rows], qd[rows], qdd[rows])))
 
 
 def declared_library(arm: Arm):
