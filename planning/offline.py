@@ -27,6 +27,10 @@ class Offline:
         return self.primary.solver_ms + (0.0 if self.fallback is None else
                                          self.fallback.solver_ms)
 
+    @property
+    def search_failures(self) -> int:
+        return getattr(self.primary, "search_failures", 0)
+
     def offers(self, t: float) -> bool:
         return self.primary.offers(t)
 

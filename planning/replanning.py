@@ -56,6 +56,7 @@ class Execution:
     solve_cpu_ms: tuple[float, ...] = ()  # CPU time of the planning thread, per solve_ms entry
     clock_ms: tuple[float, ...] = ()  # on the budget's clock (SegmentPlan.clock_ms), per entry
     bank: dict | None = None  # a bank of plans' account (planning.bank.planner), if one planned
+    search_failures: int = 0  # global searches that failed (planning.globalsearch.background)
 
 
 def check_start(planner: SegmentPlanner, scenario: Scenario) -> None:
@@ -130,7 +131,7 @@ def execute(planner: SegmentPlanner, scenario: Scenario, replan: bool = True,
         times.append(float(t))
     return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures),
                      tuple(replan_failures), tuple(solve_cpu), tuple(clock_ms),
-                     bank_account(planner))
+                     bank_account(planner), getattr(planner, "search_failures", 0))
 
 
 def bank_account(planner) -> dict | None:

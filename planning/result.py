@@ -158,7 +158,7 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
         # the budgets' clock: "nominal" (iteration_ms per SQP iteration: the same plan on any
         # machine and load) or "cpu" (plan --realtime)
         "clock": "cpu" if config.anytime.iteration_ms is None else "nominal",
-        "global_search": report(config, segments),
+        "global_search": report(config, segments, result.execution.search_failures),
         "bank": result.execution.bank,
         "deadline_misses": sum(f.startswith(DEADLINE) for f in result.execution.replan_failures),
         "timing": timing(result.execution, config),

@@ -193,3 +193,37 @@ def test_the_other_process_sends_each_better_plan_as_found(baseline, config):
         assert finished() and not worker.done() and worker.ready() is None
     finally:
         worker.close()
+
+
+def test_a_failed_search_in_the_other_process_is_reported(tmp_path, monkeypatch, capsys):
+    """plan --realtime whose every search in the other process raises: the re-plans go on
+    without them, PLAN.json's global_search counts the failures and stderr has one note
+    (#56 item 8: they were counted and never told)."""
+    import concurrent.futures
+    import json
+
+    from harness.cli import main
+    from planning.globalsearch import planner
+
+    def fails(*args, **kwargs):
+        raise RuntimeError("search failed")
+
+    monkeypatch.setattr(planner, "cores", lambda: 2)  # the search in another process
+    monkeypatch.setattr(MultiStart, "search", fails)  # in the worker too: it is forked
+    submit = background.Background.submit
+
+    def submitted(self, *args):  # the search has failed before the loop goes on
+        started = submit(self, *args)
+        if started:
+            concurrent.futures.wait([self._future])
+        return started
+
+    monkeypatch.setattr(background.Background, "submit", submitted)
+    out = tmp_path / "plan.json"
+    assert main(["plan", "--model", "pinocchio", "--realtime", "--out", str(out)]) == 0
+    plan = json.loads(out.read_text())
+    assert plan["global_search"]["mode"].startswith("another process")
+    failures = plan["global_search"]["failures"]
+    assert failures >= 1
+    notes = [line for line in capsys.readouterr().err.splitlines() if "global search" in line]
+    assert len(notes) == 1 and f"{failures} global search" in notes[0]

@@ -24,6 +24,7 @@ from harness.plan.messages import (
     default_obstacle_notice,
     fallback_note,
     infeasible,
+    search_failure_note,
     torque_diagnosis,
     velocity_diagnosis,
 )
@@ -220,6 +221,7 @@ def _run(args, arm: Arm, model_file, notice: BuildNotice) -> int:
                               realtime=args.realtime, either=either)
     notice.finish()
     fallback_note(planner.config.replanner, config.replanner, args.no_replan)
+    search_failure_note(result.execution.search_failures)
     if not result.feasible:  # the torque limits' diagnosis builds IPOPT's NLP: only now
         raise PlanningError(torque_diagnosis(planner, scenario)
                             or infeasible(result.problems, config, scenario, either))

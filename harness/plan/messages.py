@@ -222,3 +222,12 @@ def fallback_note(asked: str, used: str, followed: bool) -> None:
               f"threshold; this plan is the {JSON_NAMES[used]} re-planner's (its re-plans "
               f"are not bounded in time; --replanner {JSON_NAMES[asked]} to get the error)",
               file=sys.stderr)
+
+
+def search_failure_note(failures: int) -> None:
+    """One note on stderr when global searches in the other process failed (--realtime):
+    the re-plans went on without them (PLAN.json's global_search.failures)."""
+    if failures:
+        print(f"note: {failures} global search{'es' if failures > 1 else ''} in the other "
+              f"process failed; the re-plans went on without {'them' if failures > 1 else 'it'} "
+              "(PLAN.json's global_search.failures)", file=sys.stderr)

@@ -59,6 +59,7 @@ class BankPlanner:
     @property
     def solver_ms(self) -> float:
         return self.inner.solver_ms
+    search_failures = property(lambda self: getattr(self.search, "search_failures", 0))
 
     def account(self) -> dict:
         """PLAN.json's `bank`: how its work was counted, the classes admitted and dropped,

@@ -57,6 +57,16 @@ class GlobalSearchPlanner:
     def solver_ms(self) -> float:
         return self.inner.solver_ms
 
+    @property
+    def search_failures(self) -> int:
+        """Searches in the other process that raised, or a worker that died (the loop went
+        on without them), a search done by now included (one still running is not); 0 on
+        the nominal clock, where a failure raises."""
+        if self._background is None:
+            return 0
+        self._background.busy()  # counts a search that has failed since the last re-plan
+        return self._background.failures
+
     def prepare(self, goal) -> None:
         self.inner.prepare(goal)
         if self._search is not None:
@@ -213,9 +223,10 @@ def _segment(problem: Segment, warm: SegmentPlan, t: float) -> Segment:
                    problem.forecast)
 
 
-def report(config: PlannerConfig, segments) -> dict | None:
-    """PLAN.json's account of the global search (None without one): how it ran and how many
-    of the segments followed were adopted from it."""
+def report(config: PlannerConfig, segments, failures: int = 0) -> dict | None:
+    """PLAN.json's account of the global search (None without one): how it ran, how many
+    of the segments followed were adopted from it and how many searches failed (another
+    process's: the loop went on without them)."""
     options = config.global_search
     if not options.enabled or config.replanner != "anytime":
         return None
@@ -233,4 +244,4 @@ def report(config: PlannerConfig, segments) -> dict | None:
     else:
         mode = "one core: the real-time loop ran alone, no global search"
     return {"mode": mode, "adoptions": sum(s.status.endswith(ADOPTED) for s in segments),
-            "solver": options.solver, "lag_samples": options.lag}
+            "solver": options.solver, "lag_samples": options.lag, "failures": failures}
