@@ -19,8 +19,13 @@ class Offline:
     convergence) and fall back to `fallback`'s (the other method's) when the primary's best
     is not feasible; its re-plans are the primary's, as they are."""
 
-    def __init__(self, primary: SegmentPlanner, fallback: SegmentPlanner | None):
+    def __init__(self, primary: SegmentPlanner, fallback: SegmentPlanner | None,
+                 fallback_name: str | None = None):
+        """fallback_name: PLAN.json's name of the fallback's method ("fatrop", "sqp")."""
         self.primary, self.fallback, self.config = primary, fallback, primary.config
+        self.fallback_name = fallback_name
+        # the fallback's name when the last cold plan is the fallback's, else None
+        self.first_plan_fallback: str | None = None
 
     @property
     def solver_ms(self) -> float:
@@ -50,11 +55,14 @@ class Offline:
     def plan_cold(self, problem: Segment, starts: int | None = None
                   ) -> tuple[SegmentPlan, list[SegmentPlan]]:
         problem = dataclasses.replace(problem, budget_ms=math.inf)
+        self.first_plan_fallback = None
         best, plans = self.primary.plan_cold(problem, starts)
         if self.fallback is None or feasible(self.config, best, problem):
             return best, plans
         other, more = self.fallback.plan_cold(problem, starts)
         chosen = other if feasible(self.config, other, problem) else best
+        if chosen is other:  # its status says how its solve went, not whose it is
+            self.first_plan_fallback = self.fallback_name or "other"
         return dataclasses.replace(chosen, solve_ms=best.solve_ms + other.solve_ms,
                                    solve_cpu_ms=best.solve_cpu_ms + other.solve_cpu_ms,
                                    clock_ms=best.clock_ms + other.clock_ms), plans + more

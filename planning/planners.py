@@ -8,7 +8,7 @@ import dataclasses
 from identification.torque_model import TorqueModel
 from planning.anytime.planner import AnytimePlanner
 from planning.bank.planner import BankPlanner
-from planning.config import PlannerConfig, Scenario, nominal_iteration_ms
+from planning.config import JSON_NAMES, PlannerConfig, Scenario, nominal_iteration_ms
 from planning.globalsearch.planner import GlobalSearchPlanner
 from planning.offline import Offline
 from planning.penalty.planner import PenaltyLoop
@@ -64,7 +64,14 @@ def offline_planner(model: TorqueModel, config: PlannerConfig,
     solver = Planner(model, config) if solver is None else solver
     other = other_method(config)
     return Offline(segment_planner(model, config, solver),
-                   None if other is None else segment_planner(model, other, solver))
+                   None if other is None else segment_planner(model, other, solver),
+                   None if other is None else method_name(other))
+
+
+def method_name(config: PlannerConfig) -> str:
+    """PLAN.json's name of the method planning segments under this configuration: "sqp"
+    (the anytime SQP) or "fatrop" (the penalty loop)."""
+    return JSON_NAMES["anytime" if uses_anytime(config) else "penalty"]
 
 
 def executed(model: TorqueModel, config: PlannerConfig, scenario: Scenario,

@@ -57,6 +57,8 @@ class Execution:
     clock_ms: tuple[float, ...] = ()  # on the budget's clock (SegmentPlan.clock_ms), per entry
     bank: dict | None = None  # a bank of plans' account (planning.bank.planner), if one planned
     search_failures: int = 0  # global searches that failed (planning.globalsearch.background)
+    # the other method's name ("fatrop", "sqp") when the first plan is its (planning.offline)
+    first_plan_fallback: str | None = None
 
 
 def check_start(planner: SegmentPlanner, scenario: Scenario) -> None:
@@ -92,7 +94,8 @@ def execute(planner: SegmentPlanner, scenario: Scenario, replan: bool = True,
     failures, replan_failures = ([] if plan.success else [plan.status]), []
     if obstacle is None or not replan:
         return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures),
-                         (), tuple(solve_cpu), tuple(clock_ms))
+                         (), tuple(solve_cpu), tuple(clock_ms),
+                         first_plan_fallback=getattr(planner, "first_plan_fallback", None))
     planned_with, latest = forecast, plan  # latest: the newest successful solve (converged
     # or a real-time iterate, planning.penalty.realtime_iteration.ITERATE), the next re-plan's warm start
     for t in obstacle.sample_times[:-1]:
@@ -131,7 +134,8 @@ def execute(planner: SegmentPlanner, scenario: Scenario, replan: bool = True,
         times.append(float(t))
     return Execution(tuple(segments), tuple(times), tuple(solve_ms), tuple(failures),
                      tuple(replan_failures), tuple(solve_cpu), tuple(clock_ms),
-                     bank_account(planner), getattr(planner, "search_failures", 0))
+                     bank_account(planner), getattr(planner, "search_failures", 0),
+                     getattr(planner, "first_plan_fallback", None))
 
 
 def bank_account(planner) -> dict | None:

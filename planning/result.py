@@ -150,6 +150,9 @@ def to_json(result: PlanResult, scenario: Scenario, config: PlannerConfig,
         "replan_deadline_ms": config.replan_deadline_ms,
         "replan_iterations": config.penalty.replan_iterations,
         "replanner": JSON_NAMES[config.replanner],  # PLAN.json's names: "fatrop", "sqp"
+        # the other method's name when the first plan is its (the replanner's was not
+        # feasible, planning.offline), else null
+        "first_plan_fallback": result.execution.first_plan_fallback,
         "replan_budget_ms": config.anytime.replan_budget_ms,
         "cold_budget_ms": config.anytime.cold_budget_ms,
         "warm_radius": config.anytime.warm_radius,

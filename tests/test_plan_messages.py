@@ -124,3 +124,26 @@ def test_a_failure_both_re_planners_had_does_not_suggest_the_other():
     assert "did not keep the threshold either" in both and "may find one;" in both
     assert "or --replanner fatrop may find one" in named and "either" not in named
     assert both.count("\n") == named.count("\n") == 0
+
+
+def test_a_first_plan_by_the_other_method_is_recorded(tmp_path, monkeypatch, capsys):
+    """The anytime SQP's first plan made infeasible: the first plan is the penalty loop's
+    (planning.offline), PLAN.json's first_plan_fallback names it, stderr says so once, and
+    the first segment is the penalty loop's though its status reads as any other's
+    (#56 item 9)."""
+    from planning.bank.planner import BankPlanner
+
+    cold = BankPlanner.plan_cold
+
+    def infeasible_first(self, problem, starts=None):
+        best, plans = cold(self, problem, starts)
+        return dataclasses.replace(best, success=False, status="forced failure"), plans
+
+    monkeypatch.setattr(BankPlanner, "plan_cold", infeasible_first)
+    out = tmp_path / "plan.json"
+    assert main(["plan", "--model", "pinocchio", "--no-replan", "--out", str(out)]) == 0
+    plan = json.loads(out.read_text())
+    assert plan["replanner"] == "sqp" and plan["first_plan_fallback"] == "fatrop"
+    assert plan["segments"][0]["status"] != "forced failure"
+    notes = [line for line in capsys.readouterr().err.splitlines() if "first plan" in line]
+    assert len(notes) == 1 and "fatrop" in notes[0]

@@ -23,6 +23,7 @@ from harness.plan.messages import (
     default_obstacle_diagnosis,
     default_obstacle_notice,
     fallback_note,
+    first_plan_note,
     infeasible,
     search_failure_note,
     torque_diagnosis,
@@ -222,6 +223,7 @@ def _run(args, arm: Arm, model_file, notice: BuildNotice) -> int:
     notice.finish()
     fallback_note(planner.config.replanner, config.replanner, args.no_replan)
     search_failure_note(result.execution.search_failures)
+    first_plan_note(result.execution.first_plan_fallback)
     if not result.feasible:  # the torque limits' diagnosis builds IPOPT's NLP: only now
         raise PlanningError(torque_diagnosis(planner, scenario)
                             or infeasible(result.problems, config, scenario, either))

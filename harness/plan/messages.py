@@ -231,3 +231,11 @@ def search_failure_note(failures: int) -> None:
         print(f"note: {failures} global search{'es' if failures > 1 else ''} in the other "
               f"process failed; the re-plans went on without {'them' if failures > 1 else 'it'} "
               "(PLAN.json's global_search.failures)", file=sys.stderr)
+
+
+def first_plan_note(fallback: str | None) -> None:
+    """One note on stderr when the first plan is the other method's (planning.offline): the
+    method planning the segments found no feasible first plan."""
+    if fallback:
+        print(f"note: the first plan is the {fallback} method's: the re-planner's own first "
+              "plan was not feasible (PLAN.json's first_plan_fallback)", file=sys.stderr)
