@@ -169,3 +169,28 @@ def test_excite_and_generate_print_one_condition_number(tmp_path, capsys):
     q, qd, qdd = (np.asarray(data[k]) for k in ("q", "qd", "qdd"))
     assert meta["condition_number"] == pytest.approx(condition_number(Arm.of("lynxmotion"), q, qd, qdd))
     assert "excitation_condition" in meta  # the older figure kept
+
+
+def test_closeloop_says_when_its_leftover_is_the_sensor_noise(tmp_path, capsys):
+    """On a clean simulated robot closeloop names nothing (right) and left the user to guess
+    whether 0.035 after is good: it is what the data's declared noise alone gives."""
+    from harness.closeloop.noise_level import declared_sigma, noise_line
+
+    data = tmp_path / "d.npz"
+    assert main(["generate", "--robot", "lynxmotion", "--samples", "1500", "--seed", "4",
+                 "--out", str(data)]) == 0
+    capsys.readouterr()
+    assert main(["closeloop", "--data", str(data), "--out", str(tmp_path / "cl")]) == 0
+    out = capsys.readouterr().out
+    assert "named [none]" in out and "unexplained joints: none" in out
+    line = next(x for x in out.splitlines() if "the leftover is at the sensor noise's level" in x)
+    after = re.search(r"after \[([^]]*)\]", out).group(1)
+    assert f"error after [{after}] against [" in line
+    assert "that the data's declared noise (0.05 of each joint's torque std) alone gives" in line
+    # the floor: the declared noise's std over the scored torque's RMS, per joint
+    tau = np.load(data)["tau_clean"]
+    sigma, level = declared_sigma([{"noise": 0.05}], [tau])
+    np.testing.assert_allclose(sigma, 0.05 * tau.std(axis=0))
+    assert level == 0.05
+    assert declared_sigma([{}], [tau]) is None
+    assert noise_line([0.2, 0.05], [0.05, 0.05], "x") is None  # joint 1 well above: not said

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
+from harness.closeloop.noise_level import noise_line, runs_line
 from harness.closeloop.run import run_closeloop
 from harness.errors import UserError
 from harness.io import write_json
@@ -56,6 +59,12 @@ def _print(run) -> None:
           f"after [{fmt(f'{e:.3e}' for e in r.error_after)}] unexplained {str(r.unexplained).lower()}")
     print(f"    vs measured torque: before [{fmt(f'{e:.3e}' for e in r.error_before_measured)}] "
           f"after [{fmt(f'{e:.3e}' for e in r.error_after_measured)}]")
+    if run.truth_error_measured is not None and not r.unexplained:
+        line = noise_line(r.error_after_measured, run.truth_error_measured,
+                          "that the plant's own model scores on the same samples (the sensor "
+                          f"noise, {run.data.meta['noise']:g} of each joint's torque std)")
+        if line:
+            print(line)
     if r.candidates:
         print("    not named: " + "; ".join(f"joint {c.term.joint} {c.term.effect} ({c.reason})"
                                          for c in r.candidates))
@@ -70,6 +79,18 @@ def _print_measured(run) -> None:
     print(f"    held-out error vs measured torque: before [{fmt(f'{e:.3f}' for e in r.error_before)}]"
           f" after [{fmt(f'{e:.3f}' for e in r.error_after)}]")
     print(f"    unexplained joints: {list(r.unexplained_joints) or 'none'}")
+    if not r.unexplained_joints:
+        a, held = run.arrays, slice(r.split, None)
+        line = runs_line(r.error_after, [run.meta], [a.get("tau_clean", a["tau"])],
+                         a["tau"][held], r.noise)
+        if line:
+            print(line)
+
+
+def _per_run(runs) -> list[np.ndarray]:
+    """Each run's torque (clean where known), as its meta's noise fraction is of."""
+    tau = runs.arrays.get("tau_clean", runs.arrays["tau"])
+    return np.split(tau, np.cumsum(runs.lengths)[:-1])
 
 
 def _named(named) -> str:
@@ -138,6 +159,12 @@ def _run_data(args) -> int:
     print(f"    error (relative) before [{fmt(f'{e:.3f}' for e in r.error_before)}] "
           f"after [{fmt(f'{e:.3f}' for e in r.error_after)}]")
     print(f"    unexplained joints: {list(r.left.unexplained_joints) or 'none'}")
+    if not r.left.unexplained_joints:
+        scored = held if held is not None else train
+        line = runs_line(r.error_after, scored.metas, _per_run(scored),
+                         np.concatenate([s.scored[3] for s in r.scored]), r.left.noise)
+        if line:
+            print(line)
     print(f"wrote {out / 'closeloop.json'}, {out / 'model.json'}")
     return 0
 
