@@ -1,5 +1,5 @@
 """`torquebench export`: a consistent fit's bodies in the robot's URDF give the model's
-gravity torque in Pinocchio, in its MJCF the model's inverse dynamics in MuJoCo; the csv is
+inverse dynamics in Pinocchio (with the joints' damping and friction), in its MJCF in MuJoCo; the csv is
 labelled; a model without bodies exports its terms and refuses a URDF in one line."""
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from harness.data.generate import generate
 from harness.io import write_npz
 from harness.robots.arm import Arm
 from harness.robots.torque_models import load_torque_model
+from identification.library.kinematic import COULOMB_WIDTH
 
 TOL = 1e-3  # relative, on the torque vector's norm
 
@@ -58,6 +59,30 @@ def test_the_urdf_gives_the_models_gravity(fitted, capsys):
     zero = np.zeros(exported.nv)
     for q in rng.uniform(-np.pi, np.pi, (10, exported.nv)):
         _close(pin.computeGeneralizedGravity(exported, data, q), model.torque(q, zero, zero))
+
+
+def test_the_urdf_gives_the_models_inverse_dynamics(fitted):
+    """Pinocchio's full RNEA on the exported URDF, plus its <dynamics damping friction> (the
+    friction on the model's smoothed sign) and the armature URDF cannot hold, is the model's
+    torque at random states: the inertia's every entry and the joints' friction are written
+    where Pinocchio reads them (#56 item 5: gravity alone missed Iyy and Izz swapped)."""
+    code, out = _export(fitted, "urdf")
+    assert code == 0
+    exported = pin.buildModelFromUrdf(str(out))
+    data = exported.createData()
+    physical = json.loads((fitted / "m.json").read_text())["metrics"]["physical"]
+    joints = physical["joint_parameters"]
+    armature = np.asarray(joints["armature"])
+    assert np.allclose(exported.damping, joints["viscous"], rtol=1e-9, atol=0)
+    assert np.allclose(exported.friction, joints["coulomb"], rtol=1e-9, atol=0)
+    assert np.all(exported.damping > 0) and np.all(exported.friction > 0)  # both compared
+    model = load_torque_model(str(fitted / "m.json"), Arm.of("ur5"))
+    rng = np.random.default_rng(5)
+    for _ in range(10):
+        q, qd, qdd = rng.uniform(-np.pi, np.pi, 6), rng.normal(size=6), rng.normal(size=6)
+        tau = (pin.rnea(exported, data, q, qd, qdd) + armature * qdd + exported.damping * qd
+               + exported.friction * qd / np.sqrt(qd**2 + COULOMB_WIDTH**2))
+        _close(tau, model.torque(q, qd, qdd))
 
 
 def test_the_joint_frame_is_the_child_links_frame():
