@@ -174,6 +174,45 @@ def test_the_ellipsoid_row_keeps_a_body_inside(lynx):
     assert held(free) < 0 and held(bounded) >= -1e-8 and bounded.consistent
 
 
+@pytest.fixture(scope="module")
+def excluded(lynx):
+    """Noise-free data, and a sphere excluding body 2's true centre of mass (the flat fit's
+    body 2 without a bound is the truth: outside)."""
+    nominal = lynx[1].atom_parameters()
+    c = nominal[11:14] / nominal[10]
+    bound = Ellipsoid(c + 0.5 * np.linalg.norm(c) + 0.02, np.full(3, 0.3 * np.linalg.norm(c) + 0.01),
+                      np.eye(3), "test")
+    return generate(Arm.of("lynxmotion"), 800, 0.0, 3, "inverse"), bound
+
+
+def _bounded_fit(lynx, excluded):
+    data, bound = excluded
+    regressor = ConsistentRegressor(None, choose_friction=False, ellipsoids=(None, bound, None))
+    fit = regressor.fit(lynx[0], data.q, data.qd, data.qdd, data.tau)
+    body = fit.physical["standard_parameters"][10:20]
+    return fit.physical, inside(np.array(pseudo_inertia(np.asarray(body))), bound)
+
+
+def test_the_regressors_ellipsoids_keep_a_body_inside_and_say_so(lynx, excluded):
+    """ConsistentRegressor's ellipsoids reach the LMI: body 2 inside its sphere, plausible
+    (#56 item 6: the regressor fitting without them passed every fast test)."""
+    physical, held = _bounded_fit(lynx, excluded)
+    assert held >= -1e-8 and physical["plausible"] == [True, True, True]
+    assert physical["ellipsoids"][1]["source"] == "test"
+
+
+def test_the_plausible_flag_says_when_a_body_is_outside(lynx, excluded, monkeypatch):
+    """The same fit with the LMI's ellipsoid rows dropped: body 2 leaves its sphere and the
+    flag says so (#56 item 6: a flag forced to True passed)."""
+    from identification.regression import consistent
+
+    unbounded = consistent.fit_physical
+    monkeypatch.setattr(consistent, "fit_physical",
+                        lambda *args, bounds=None, **kwargs: unbounded(*args, **kwargs))
+    physical, held = _bounded_fit(lynx, excluded)
+    assert held < 0 and physical["plausible"] == [True, False, True]
+
+
 def test_a_point_mass_is_inside_exactly_when_its_point_is():
     """tr(J Q) of a point mass m at p is m (1 - (p - c)^T S^-2 (p - c)): the closed form."""
     rng = np.random.default_rng(5)
