@@ -224,6 +224,30 @@ def test_an_information_design_holds_more_information_than_a_condition_design():
     for d in designs.values():
         assert d.limits.violation(d.trajectory.q, d.trajectory.qd, d.trajectory.qdd) <= 1e-9
         assert np.abs(d.trajectory.qd[[0, -1]]).max() < 1e-9
+        assert not d.design.stuck and d.design.status is not None and d.design.message
+
+
+def test_a_design_stuck_at_its_random_start_is_reported(capsys, tmp_path, monkeypatch):
+    """SLSQP failing at once (its linesearch: no step from the start): the design is its
+    random start, ExcitationDesign says so with SLSQP's status and message, and excite says
+    so on stderr (#56 item 10: it was reported like any other design)."""
+    from scipy.optimize import OptimizeResult
+
+    from identification.excitation import design
+
+    def failed(fun, x0, **kwargs):
+        return OptimizeResult(x=np.array(x0), nit=1, status=8, success=False,
+                              message="Positive directional derivative for linesearch")
+
+    monkeypatch.setattr(design, "minimize", failed)
+    stuck = design_for(Arm.of("lynxmotion"), 6.0, 50.0, seed=0, iterations=20).design
+    assert stuck.stuck and stuck.status == 8 and "linesearch" in stuck.message
+    assert stuck.condition == stuck.start_condition
+    capsys.readouterr()
+    assert main(["excite", "--robot", "lynxmotion", "--duration", "6", "--rate", "50",
+                 "--iterations", "20", "--out", str(tmp_path / "t.csv")]) == 0
+    notes = [line for line in capsys.readouterr().err.splitlines() if "random start" in line]
+    assert len(notes) == 1 and "linesearch" in notes[0]
 
 
 def test_the_designed_excitation_is_scored_on_draws_no_setting_was_chosen_on():

@@ -55,6 +55,11 @@ def run(args) -> int:
     designed = design_for(arm, args.duration, args.rate, args.accel_limit, args.seed,
                           args.iterations, args.harmonics, args.criterion, args.floor)
     write_trajectory(args.out, designed.trajectory)
+    design = designed.design
+    if design.stuck and args.iterations > 0:
+        print(f"note: the optimizer did not improve on its random start (SLSQP: "
+              f"{design.message or 'no result'}): the file is that start; try another --seed",
+              file=sys.stderr)
     n = len(designed.trajectory.t)
     print(f"wrote {args.out}: {n} samples at {args.rate:g} Hz over {args.duration:g} s, at rest at "
           f"both ends; {CONDITION_WORDS} {designed.condition:.3g} (generate's default "

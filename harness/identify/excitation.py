@@ -83,7 +83,11 @@ def excitation_comparison(arm: Arm, fit, name: str, baseline, quick: bool
     targets = [Target(CONDITION, designed.condition, designed.default_condition),
                *(Target(errors[key], ratios[key], 1.0, "x") for key in NOISES)]
     results = {"condition": designed.condition, "default_condition": designed.default_condition,
-               "iterations": designed.design.iterations, **along[0], "draws": along,
+               "iterations": designed.design.iterations,
+               # SLSQP's last exit status and message, and whether it left its random start
+               "optimizer_status": designed.design.status,
+               "optimizer_message": designed.design.message,
+               "stuck_at_start": designed.design.stuck, **along[0], "draws": along,
                "judge_seed": FRESH_JUDGE, "median_over_draws": ratios["median_ratio"],
                "same_sensor_median_over_draws": ratios["same_sensor_median_ratio"]}
     return targets, results

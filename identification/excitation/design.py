@@ -59,12 +59,17 @@ class ExcitationLimits:
 @dataclass(frozen=True)
 class ExcitationDesign:
     """The designed excitation, the condition of its regressor on the design grid, that of
-    the candidate it started from, and the optimizer's iterations."""
+    the candidate it started from, the optimizer's iterations, SLSQP's exit status and
+    message of its last run (None, "" if it never ran), and whether the design is its random
+    start (no safe iterate improved on it: SLSQP failed or could not move)."""
 
     excitation: FourierExcitation
     condition: float
     start_condition: float
     iterations: int
+    status: int | None = None
+    message: str = ""
+    stuck: bool = False
 
 
 def _basis(t: np.ndarray, w: float, harmonics: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -229,23 +234,25 @@ def optimize_excitation(
     # one BLAS thread: SLSQP's path turns on rounding, and the design must be the same
     # whatever threads the caller's BLAS runs
     with threadpool_limits(limits=1, user_api="blas"):
-        best, used = _descend(objective, start, constraints, iterations, safe)
+        best, used, last = _descend(objective, start, constraints, iterations, safe)
 
     def condition(x) -> float:
         X = x.reshape(dof, k)
         return float(np.exp(log_condition(regressor, Dq @ X.T, Dqd @ X.T, Dqdd @ X.T)))
 
     return ExcitationDesign(_to_excitation(best, dof, harmonics, f0), condition(best),
-                            condition(start), used)
+                            condition(start), used, None if last is None else int(last.status),
+                            "" if last is None else str(last.message), best is start)
 
 
 def _descend(objective, start: np.ndarray, constraints: list[dict], budget: int,
-             safe) -> tuple[np.ndarray, int]:
+             safe) -> tuple[np.ndarray, int, object]:
     """SLSQP on objective from start, again from where it stopped (its linearization may
     fail) while it improves, within budget iterations. Each run's best safe point among its
     iterates and its end point (walked back towards the last safe one if unsafe: SLSQP's
     iterates need not meet the constraints, and may touch between the design grid's points);
-    that point and the iterations used."""
+    that point (start itself if none improved on it), the iterations used and SLSQP's last
+    result (None if it never ran)."""
     # scaled to a unit gradient at the start: SLSQP's first step, along its identity Hessian,
     # is then about 1 rad of coefficients, not a jump far outside the limits that it may
     # never walk back from (docs/identification.md, 'identification.excitation.criteria')
@@ -256,7 +263,7 @@ def _descend(objective, start: np.ndarray, constraints: list[dict], budget: int,
         value, grad = raw(x)
         return scale * value, scale * grad
 
-    best, value, used = start, objective(start)[0], 0
+    best, value, used, result = start, objective(start)[0], 0, None
     while used < budget:
         found = {"x": best, "value": value}
 
@@ -274,7 +281,7 @@ def _descend(objective, start: np.ndarray, constraints: list[dict], budget: int,
         best, value = found["x"], found["value"]
         if result.success:
             break
-    return best, used
+    return best, used, result
 
 
 def _walk_back(safe_x: np.ndarray, x: np.ndarray, safe) -> np.ndarray:
