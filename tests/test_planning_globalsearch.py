@@ -90,6 +90,26 @@ def test_ipopt_on_the_elastic_nlp_agrees_with_the_penalty_loop(baseline, config)
     assert elastic.energy == pytest.approx(penalty.energy, rel=1e-5)
 
 
+def test_ipopt_plans_count_their_work_on_the_budgets_clock(baseline, config):
+    """IPOPT's plans carry clock_ms as the anytime SQP's do (planning.anytime.budget.Clock):
+    nominally iteration_ms per IPOPT iteration and Clock.ROUND_ITERATIONS per screening
+    round, under CPU clocks the solve's CPU; they carried 0, and a nominal-clock search by
+    IPOPT offered its plans as free work (#56 item 11)."""
+    from planning.anytime.budget import Clock
+    from planning.globalsearch.ipopt import ROUNDS
+
+    case, forecast = random_crossing(Planner(baseline, config), seed=5)
+    segment = Segment.of(case, forecast)
+    nominal = IpoptElastic(baseline, config).solve(segment)
+    ticks = nominal.clock_ms / config.anytime.iteration_ms - nominal.iterations
+    rounds = ticks / Clock.ROUND_ITERATIONS
+    assert nominal.iterations > 0 and rounds == pytest.approx(round(rounds), abs=1e-9)
+    assert 1 <= round(rounds) <= ROUNDS
+    live = IpoptElastic(baseline, config.with_anytime(iteration_ms=None)).solve(segment)
+    assert live.iterations == nominal.iterations
+    assert 0 < live.clock_ms <= live.solve_cpu_ms + 1e-6
+
+
 def test_with_one_core_the_real_time_loop_runs_alone(baseline, config, monkeypatch):
     """Under CPU clocks on one core no search runs and the report says so."""
     monkeypatch.setattr(background, "cores", lambda: 1)

@@ -3,7 +3,9 @@ convergence: the global search's other solver (GlobalSearchOptions.solver "ipopt
 realtime study's independent reference. The NLP sees the obstacle samples screened from
 the reference motion's clearances (planning.formulation.screening); a round re-screens from
 its solution while that dips at a sample the solve did not see or leaves a joint limit
-between its constrained points."""
+between its constrained points. Its plans' clock_ms follows the anytime SQP's clock
+(planning.anytime.budget.Clock): on the nominal clock iteration_ms per IPOPT iteration and
+Clock.ROUND_ITERATIONS per round, under CPU clocks the planning thread's CPU."""
 
 from __future__ import annotations
 
@@ -11,6 +13,7 @@ import casadi as ca
 import numpy as np
 
 from identification.torque_model import TorqueModel
+from planning.anytime.budget import Clock
 from planning.anytime.safety import SafetyCheck
 from planning.config import PlannerConfig
 from planning.formulation.limits import LIMIT_TOLERANCE
@@ -58,6 +61,8 @@ class IpoptElastic(ProblemNumbers):
             segment.forecast)
         clock, config = Stopwatch(), self.config
         nlp, solver, parts = self._solver(goal)
+        # the budgets' clock, as the SQP's (its first solve's NLP build left out, as there)
+        budget = Clock(config.anytime.iteration_ms)
         times, centres = on_horizon(forecast, t_begin, duration)
         check = self.check.against(times, centres, t_begin, duration)
         x0 = self.initial_guess(q0, qd0, duration, goal) if segment.x0 is None else segment.x0
@@ -79,6 +84,7 @@ class IpoptElastic(ProblemNumbers):
             solution = solver(x0=x, p=p, lbg=lbg, ubg=ubg, lbx=nlp.lbx)
             stats = solver.stats()
             iterations += int(stats.get("iter_count", 0))
+            budget.tick(int(stats.get("iter_count", 0)) + Clock.ROUND_ITERATIONS)
             x = np.asarray(solution["x"], float).ravel()
             reference = self.trajectory(x, q0, qd0, t_begin, duration)
             safety = check(reference.coefficients)
@@ -98,4 +104,5 @@ class IpoptElastic(ProblemNumbers):
             penalty_weight=config.anytime.elastic_weight, x=x,
             multipliers=(np.asarray(solution["lam_g"], float).ravel(),
                          np.asarray(solution["lam_x"], float).ravel()),
-            layout=("ipopt",) + self._goal_limits(goal), slot_times=times[slots])
+            layout=("ipopt",) + self._goal_limits(goal), slot_times=times[slots],
+            clock_ms=budget.ms())
