@@ -71,6 +71,9 @@ def test_reduced_bench_writes_complete_report(reduced):
     assert ("oracle's (unbiased weighted least squares on the true base-parameter structure, "
             "no prior: a fit that uses prior knowledge can beat it, and that is not an error)"
             in (out / "headline.md").read_text())
+    # why the paper library's rows miss the oracle, from the run's own figures (issue #58)
+    assert "Why the `paper-75` library's rows miss the oracle" in md
+    assert report["sections"][REDUCED]["results"]["paper_library_gap"]["missing"]
 
 
 @pytest.mark.slow

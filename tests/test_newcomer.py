@@ -194,3 +194,41 @@ def test_closeloop_says_when_its_leftover_is_the_sensor_noise(tmp_path, capsys):
     assert level == 0.05
     assert declared_sigma([{}], [tau]) is None
     assert noise_line([0.2, 0.05], [0.05, 0.05], "x") is None  # joint 1 well above: not said
+
+
+def test_the_paper_librarys_miss_is_measured():
+    """The paper library's rows read 103.87x and 749.99x the oracle with no word on why: on
+    the Lynxmotion it lacks joint 1's qd1*qd2*sin(2*q2), so no coefficients reach below a
+    floor there; joints 2 and 3 it spans exactly."""
+    from harness.data.generate import generate
+    from harness.identify.fits import library_named
+    from harness.identify.library_gap import library_gap, markdown
+    from harness.identify.scoring import HOLDOUT, sines_motion
+    from harness.robots.arm import Arm
+    from identification.identify import identify
+
+    arm = Arm.of("lynxmotion")
+    clean = generate(arm, 2000, 0.0, 1, "inverse")
+    prior, paper = library_named("prior", arm), library_named("paper", arm)
+    exact = identify(clean.q, clean.qd, clean.qdd, clean.tau, prior, HOLDOUT, clean.tau_clean)
+    judge = sines_motion(arm, 2000, 5)
+    gap = library_gap(paper, exact.model, prior, [judge], clean, 1500)
+    assert [(m["joint"], m["term"]) for m in gap["missing"]] == [(1, "qd1*qd2*sin(2*q2)")]
+    # the floor is plain least squares of the clean torque on the paper's columns
+    X = paper.evaluate(judge.q, judge.qd, judge.qdd)
+    tau = judge.tau_clean
+    best = [np.linalg.norm(X @ np.linalg.lstsq(X, tau[:, j], rcond=None)[0] - tau[:, j])
+            / np.linalg.norm(tau[:, j]) for j in range(3)]
+    np.testing.assert_allclose(gap["floor"]["sines"], best, rtol=1e-6, atol=1e-9)
+    assert best[0] > 1e-3 and max(best[1:]) < 1e-9
+    # fitted without noise on the draw, the stand-in for the missing term does not carry over
+    part = slice(0, 1500)
+    c = np.linalg.lstsq(paper.evaluate(clean.q[part], clean.qd[part], clean.qdd[part]),
+                        clean.tau_clean[part], rcond=None)[0]
+    carried = np.linalg.norm(X @ c - tau, axis=0) / np.linalg.norm(tau, axis=0)
+    np.testing.assert_allclose(gap["noise_free_fit"]["sines"], carried, rtol=1e-9)
+    assert carried[0] > 3 * best[0]
+    note = markdown(gap, {"sines": np.full(3, best[0] / 100)}, 0.05)
+    assert "lack joint 1: `qd1*qd2*sin(2*q2)`" in note and "100x the oracle's" in note
+    assert f"errs far more on the judges: on `sines`, joint 1: {100 * carried[0]:.2f} %" in note
+    assert "Joints 2, 3 it spans exactly" in note

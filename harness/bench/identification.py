@@ -22,6 +22,8 @@ from harness.data.generate import generate
 from harness.identify.excitation import excitation_comparison
 from harness.identify.excitation import markdown as excitation_markdown
 from harness.identify.fits import arm_identification
+from harness.identify.library_gap import library_gap
+from harness.identify.library_gap import markdown as gap_markdown
 from harness.identify.next_run import markdown as next_run_markdown
 from harness.identify.next_run import next_run, rule_targets, runs_against_single
 from harness.identify.scoring import (
@@ -137,7 +139,13 @@ def run(ctx: Context) -> SectionResult:
                          for level, ds in by_level.items()},
                "summary": summary, "next_run": runs, "runs_against_single": across,
                "excitation": excitation}
-    md = "\n".join([_markdown(results, fits), "", *next_run_markdown(runs), "",
+    note = []
+    if "paper" in fits and hasattr(exact.model, "features"):  # why the paper's rows miss
+        gap = library_gap(fits["paper"].library, exact.model, fits[default].library, judges,
+                          clean, int(round(len(clean.q) * (1 - HOLDOUT))))
+        oracles = {j.name: np.median([d["oracle"][j.name] for d in draws], axis=0) for j in judges}
+        results["paper_library_gap"], note = gap, ["", gap_markdown(gap, oracles, NOISE)]
+    md = "\n".join([_markdown(results, fits), *note, "", *next_run_markdown(runs), "",
                     *excitation_markdown(excitation)])
     out = SectionResult(md, results, checks, targets, headline,
                         outputs={"model": model, "draws": draws})
