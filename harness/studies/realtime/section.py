@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from harness.report.results import Context, SectionResult, Target
 from harness.robots.scene import replay_scene
-from harness.studies.realtime import measure
+from harness.studies.realtime import measure, tables
 
 REPLAN_MEDIAN_MS, REPLAN_MAX_MS, COLD_MAX_MS = 2.0, 10.0, 25.0
 # a re-plan's work outside the anytime SQP's solve (the bar), and beside it
@@ -40,7 +40,7 @@ def run(ctx: Context) -> SectionResult:
     ]
     if ctx.quick:  # the smoke-test size plans uncompiled: not comparable with the targets
         targets = []
-    return SectionResult("\n".join(measure.markdown_lines(study)), {"timing": study}, [],
+    return SectionResult("\n".join(tables.markdown_lines(study)), {"timing": study}, [],
                          targets)
 
 

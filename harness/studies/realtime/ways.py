@@ -18,6 +18,7 @@ from harness.robots.arm import Arm
 from harness.robots.registry import DEFAULT_ROBOT
 from harness.studies.realtime import measure as realtime
 from harness.studies.realtime import options as random_scenarios
+from harness.studies.realtime import tables
 
 
 def main() -> None:
@@ -35,8 +36,8 @@ def main() -> None:
         ways = realtime.fast_ways(realtime.study_config(True, **changes))
     study = realtime.run(baseline, Arm.of(DEFAULT_ROBOT).scene, False, setup, ways,
                          **changes)
-    print("\n".join(realtime.markdown_lines(study)))
-    print(json.dumps(realtime.acceptance(study)))
+    print("\n".join(tables.markdown_lines(study)))
+    print(json.dumps(tables.acceptance(study)))
     print("load average", os.getloadavg())
     if args.out:
         write_json(args.out, study)
