@@ -232,3 +232,36 @@ def test_the_paper_librarys_miss_is_measured():
     assert "lack joint 1: `qd1*qd2*sin(2*q2)`" in note and "100x the oracle's" in note
     assert f"errs far more on the judges: on `sines`, joint 1: {100 * carried[0]:.2f} %" in note
     assert "Joints 2, 3 it spans exactly" in note
+
+
+def _fake_trace(k: int, dof: int = 3, n: int = 50):
+    t = np.linspace(0.0, 1.0, n)
+    q = np.sin(np.outer(t, np.arange(1, dof + 1)))
+    return SimpleNamespace(t=t, q=q + 1e-4 * k, q_ref=q)
+
+
+def test_the_tracking_figure_has_a_panel_per_joint_and_its_legend_beside_the_data():
+    """replay_tracking.png crowded 18 series (6 plans x 3 joints) on one axis under its
+    legend."""
+    from harness.replay.figures import tracking_axes
+    from harness.report.figures import plt
+
+    fig = tracking_axes({f"plan{k}": _fake_trace(k) for k in range(6)})
+    fig.canvas.draw()
+    assert len(fig.axes) == 3 and all(len(ax.lines) == 6 for ax in fig.axes)
+    assert all(ax.get_legend() is None for ax in fig.axes) and len(fig.legends) == 1
+    legend = fig.legends[0].get_window_extent()
+    assert not any(legend.overlaps(ax.get_window_extent()) for ax in fig.axes)
+    assert all("(mrad)" in ax.get_ylabel() for ax in fig.axes)
+    plt.close(fig)
+
+
+def test_figures_write_units_in_parentheses():
+    """Figures wrote '[s]' in some places, '(s)' in others: parentheses everywhere."""
+    bracket = re.compile(r"""(label|title)[^\n]*["'][^"'\n]*\[(s|m|W|mrad|rad|N m|J|mm|-|\{unit\})\]""")
+    offenders = []
+    for path in [*ROOT.glob("harness/**/*.py"), *ROOT.glob("planning/**/*.py")]:
+        text = path.read_text()
+        if "plt" in text or "ax.set" in text:
+            offenders += [f"{path.relative_to(ROOT)}:{m.group(0)}" for m in bracket.finditer(text)]
+    assert not offenders

@@ -35,7 +35,7 @@ def clearance_per_link(trace: ReplayTrace, names, threshold: float, title: str,
     for k, name in enumerate(names):
         ax.plot(trace.t, trace.clearance[:, k], color=f"C{k}", label=name)
     ax.axhline(threshold, color="k", lw=1, label=f"threshold λ = {threshold * 1e3:.0f} mm")
-    ax.set(xlabel="time t [s]", ylabel="obstacle centre to link [m]", title=title,
+    ax.set(xlabel="time t (s)", ylabel="obstacle centre to link (m)", title=title,
            ylim=(0, max(4 * threshold, float(np.percentile(trace.clearance, 60)))))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, ncol=2)

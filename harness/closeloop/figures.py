@@ -49,8 +49,8 @@ def residual_figure(run: CloseLoopRun, path: Path) -> Path | None:
         ax.plot(x, partial[:, j], ".", ms=1.5, alpha=0.4, label="residual")
         ax.plot(x[order], own[order, j], "r-", lw=1.5, label=f"{term.effect} fit")
         name, unit = AXIS[term.effect]
-        ax.set_xlabel(f"{name}{term.joint if term.effect != 'payload' else ''} [{unit}]")
-        ax.set_ylabel(f"residual joint {j + 1} [N m]")
+        ax.set_xlabel(f"{name}{term.joint if term.effect != 'payload' else ''} ({unit})")
+        ax.set_ylabel(f"residual joint {j + 1} (N m)")
         ax.set_title(f"{term.effect} j{term.joint}: {term.coefficient:.4g} {UNITS[term.effect]}",
                      fontsize=9)
         ax.legend(fontsize=7, markerscale=4)
@@ -78,7 +78,7 @@ def error_figure(runs: dict[str, CloseLoopRun], path: Path) -> Path:
         ax.set_yscale("log")
         ax.set_xticks(joints)
         ax.set_xlabel("joint")
-        ax.set_ylabel("held-out rel. RMS torque error [-]")
+        ax.set_ylabel("held-out relative RMS torque error")
         ax.set_title(name, fontsize=9)
         ax.legend(fontsize=6)
     save_figure(fig, path, dpi=110)

@@ -17,25 +17,32 @@ def power_figure(traces: dict[str, ReplayTrace], path: Path) -> Path:
         ax.plot(tr.t, abs(tr.power), color=f"C{i}", label="replayed")
         ax.plot(tr.t, abs(tr.power_reference), color="k", ls="--", lw=1,
                 label="planned (feedforward)")
-        ax.set_ylabel("|P| [W]")
+        ax.set_ylabel("|P| (W)")
         ax.set_title(name, fontsize=9)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="upper right")
-    axes[-1, 0].set_xlabel("time t [s]")
+    axes[-1, 0].set_xlabel("time t (s)")
     fig.suptitle("Power |Σ τ_i q̇_i| over time, replayed in MuJoCo", fontsize=10)
     return save_figure(fig, path)
 
 
+def tracking_axes(traces: dict[str, ReplayTrace]):
+    """One panel per joint (tracking error q - q_ref in mrad), one line per plan in it, the
+    plans' legend outside the panels (18 series on one axis hid each other and the data)."""
+    dof = next(iter(traces.values())).q.shape[1]
+    fig, axes = plt.subplots(dof, 1, figsize=(7.5, 1.5 * dof + 1.0), sharex=True,
+                             squeeze=False, layout="constrained")
+    for j, ax in enumerate(axes[:, 0]):
+        for i, (name, tr) in enumerate(traces.items()):
+            ax.plot(tr.t, (tr.q[:, j] - tr.q_ref[:, j]) * 1000, color=f"C{i}", lw=1, label=name)
+        ax.set_ylabel(f"q{j + 1} − q{j + 1},ref (mrad)", fontsize=8)
+        ax.grid(alpha=0.3)
+    axes[-1, 0].set_xlabel("time t (s)")
+    fig.suptitle("Tracking error of feedforward + PD in MuJoCo, per joint", fontsize=10)
+    fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside right center", fontsize=8)
+    return fig
+
+
 def tracking_figure(traces: dict[str, ReplayTrace], path: Path) -> Path:
-    """Joint tracking error q - q_ref in mrad, per joint and plan."""
-    fig, ax = plt.subplots(figsize=(7, 4))
-    styles = ("-", "--", ":")
-    for i, (name, tr) in enumerate(traces.items()):
-        error = (tr.q - tr.q_ref) * 1000
-        for j in range(error.shape[1]):
-            ax.plot(tr.t, error[:, j], color=f"C{i}", ls=styles[j % 3], label=f"{name}: q{j + 1}")
-    ax.set(xlabel="time t [s]", ylabel="tracking error q − q_ref [mrad]",
-           title="Tracking error of feedforward + PD in MuJoCo")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, ncol=2)
-    return save_figure(fig, path)
+    """Joint tracking error q - q_ref in mrad: a panel per joint, a line per plan."""
+    return save_figure(tracking_axes(traces), path, tight="none")
