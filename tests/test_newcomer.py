@@ -265,3 +265,33 @@ def test_figures_write_units_in_parentheses():
         if "plt" in text or "ax.set" in text:
             offenders += [f"{path.relative_to(ROOT)}:{m.group(0)}" for m in bracket.finditer(text)]
     assert not offenders
+
+
+def test_the_3d_path_names_the_links_and_draws_the_clearance_threshold(monkeypatch):
+    """planning_path3d.png drew the links at mid-time with no legend entry, and no threshold."""
+    import harness.bench.planning.figures as figures
+    from planning.formulation.kinematics import paper_arm
+
+    geometry, t = paper_arm(), np.linspace(0.0, 2.0, 41)
+    q = np.column_stack([np.linspace(1.5, -1.5, 41), np.full(41, 0.6), np.full(41, -0.8)])
+    centre = np.column_stack([np.full(41, 0.15), np.linspace(0.4, -0.35, 41), np.full(41, 0.22)])
+    clearance = np.abs(t - 1.25)[:, None] + np.array([[0.08, 0.1]])  # closest at t = 1.25 s
+    plan = SimpleNamespace(t=t, q=q, obstacle=centre, clearance=clearance)
+    scenario = SimpleNamespace(duration=2.0, obstacle=SimpleNamespace(
+        position=lambda s: np.column_stack([np.full(np.size(s), 0.15),
+                                            0.4 - 0.375 * np.atleast_1d(s),
+                                            np.full(np.size(s), 0.22)])))
+    kept = {}
+    monkeypatch.setattr(figures, "save_figure", lambda fig, path, **_: kept.setdefault("fig", fig))
+    figures.path3d({"unobstructed": plan, "pinocchio": plan}, scenario, geometry, Path("x.png"),
+                   threshold=0.08)
+    fig = kept["fig"]
+    labels = [text.get_text() for legend in fig.legends for text in legend.get_texts()]
+    assert "links at mid-time (t = 1 s), each plan's colour" in labels
+    sphere = next(x for x in labels if x.startswith("clearance threshold λ = 80 mm"))
+    assert "closest approach to pinocchio (t = 1.25 s)" in sphere
+    assert "pinocchio's links then" in labels
+    wire = next(c for c in fig.axes[0].collections if c.get_label() == sphere)
+    ends = np.concatenate([np.asarray(seg) for seg in wire._segments3d])
+    np.testing.assert_allclose(np.linalg.norm(ends - centre[25], axis=1), 0.08, atol=1e-12)
+    figures.plt.close(fig)

@@ -13,10 +13,13 @@ STYLES = {"unobstructed": ("tab:red", ":"), "pinocchio": ("tab:green", "-"),
           "identified": ("tab:orange", "--")}
 
 
-def path3d(executed: dict, scenario, geometry: ArmGeometry, path: Path) -> Path:
+def path3d(executed: dict, scenario, geometry: ArmGeometry, path: Path,
+           threshold: float | None = None) -> Path:
     """Flange paths of the unobstructed optimum and the executed plans, the obstacle's path,
-    and the arm (its links) of each plan at mid-time, when the obstacle crosses."""
-    fig = plt.figure(figsize=(7, 6))
+    the arm (its links) of each plan at mid-time, when the obstacle crosses, and (threshold
+    given, m) the clearance threshold: a sphere of that radius about the obstacle at its
+    closest approach to the closed-form plan, with that plan's links then."""
+    fig = plt.figure(figsize=(7.5, 6.5))
     ax = fig.add_subplot(projection="3d")
     for name, result in executed.items():
         color, style = STYLES.get(name, ("tab:blue", "-"))
@@ -26,13 +29,37 @@ def path3d(executed: dict, scenario, geometry: ArmGeometry, path: Path) -> Path:
         points = geometry.points(result.q[mid])[0]
         for i, j in geometry.links:
             ax.plot(*points[[i, j]].T, color=color, ls=style, lw=2.5, alpha=0.6)
+    ax.plot([], [], color="grey", lw=2.5, alpha=0.6,
+            label=f"links at mid-time (t = {0.5 * scenario.duration:g} s), each plan's colour")
     obstacle = scenario.obstacle.position(np.linspace(0, scenario.duration, 50))
     ax.plot(*obstacle.T, color="black", label="obstacle centre")
     ax.scatter(*scenario.obstacle.position(0.5 * scenario.duration)[0], color="black", s=20)
+    closest = next((n for n in ("pinocchio", *executed) if n in executed and n != "unobstructed"),
+                   None)
+    if threshold and closest is not None:
+        _threshold_sphere(ax, executed[closest], closest, geometry, threshold)
     ax.set(xlabel="x (m)", ylabel="y (m)", zlabel="z (m)",
            title=f"{geometry.name}: flange paths, links at mid-time")
-    ax.legend(fontsize=7, loc="upper left")
-    return save_figure(fig, path)
+    ax.set_aspect("equal")
+    fig.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, 0.04), ncol=2)  # below the axes
+    return save_figure(fig, path, tight="bbox")
+
+
+def _threshold_sphere(ax, result, name: str, geometry: ArmGeometry, threshold: float) -> None:
+    """The obstacle's threshold sphere (radius threshold, m) at the instant the plan's links
+    come closest to its centre, and the plan's links at that instant."""
+    k = int(np.argmin(result.clearance.min(axis=1)))
+    centre = result.obstacle[k]
+    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 24), np.linspace(0, np.pi, 12))
+    sphere = [centre[0] + threshold * np.cos(u) * np.sin(v),
+              centre[1] + threshold * np.sin(u) * np.sin(v), centre[2] + threshold * np.cos(v)]
+    ax.plot_wireframe(*sphere, color="tab:purple", lw=0.4, alpha=0.5,
+                      label=f"clearance threshold λ = {1e3 * threshold:.0f} mm about the obstacle, "
+                            f"at its closest approach to {name} (t = {result.t[k]:.2f} s)")
+    points = geometry.points(result.q[k])[0]
+    for n, (i, j) in enumerate(geometry.links):
+        ax.plot(*points[[i, j]].T, color="tab:purple", lw=1.2,
+                label=f"{name}'s links then" if n == 0 else None)
 
 
 def markdown(r: dict) -> list[str]:

@@ -133,7 +133,7 @@ def run(ctx: Context) -> SectionResult:
     out = SectionResult("\n".join(figures.markdown(results)), results, checks, targets, headline,
                         outputs={"plans": plans})
     out.figures.append(figures.path3d(executed, scenario, config.geometry,
-                                      ctx.figures_dir / "planning_path3d.png"))
+                                      ctx.figures_dir / "planning_path3d.png", config.threshold))
     for extra in arm.entry.extras:
         out.extend(load_extra(extra).planning(ctx, models), extra)
     return out
