@@ -116,9 +116,9 @@ def _markdown(robot, results, verdicts, ratios, note: str = "") -> str:
              "joint, Pinocchio feedforward + PD. 'energy of plan, dense': the plan's torques "
              "integrated densely along it (the planner's own figure may be a coarse "
              "quadrature).", "",
-             "| plan | energy planned [J] | energy of plan, dense [J] | energy replayed [J] "
-             "| deviation from planned | min clearance centre–segment [mm] "
-             "| min surface distance [mm] | λ [mm] | tracking RMS [mrad] | max error [mrad] "
+             "| plan | energy planned (J) | energy of plan, dense (J) | energy replayed (J) "
+             "| deviation from planned | min clearance centre–segment (mm) "
+             "| min surface distance (mm) | λ (mm) | tracking RMS (mrad) | max error (mrad) "
              "| checks |", "|---|---|---|---|---|---|---|---|---|---|---|",
              *(table_row(name, r, verdicts[name]) for name, r in results.items()),
              *(["", note] if note else [])]
