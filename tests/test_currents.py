@@ -63,3 +63,33 @@ def test_a_torque_log_records_its_effort(tmp_path):
     data = np.load(out)
     assert np.allclose(data["tau"], _torque(), atol=1e-9)
     assert json.loads(str(data["meta"]))["effort"] == {"logged": "torque (N m)"}
+
+
+@pytest.mark.parametrize("effort", ["i", "tau"])
+def test_currents_with_unknown_gains_stay_currents(tmp_path, effort):
+    """--gains-unknown: the effort is kept as `current` (A) and the dataset has no torque, so
+    no command takes it for torque (identify --loaded --load-mass identifies the gains)."""
+    header = "t,q1,q2,q3," + ",".join(f"{effort}{j}" for j in (1, 2, 3))
+    path = _log(tmp_path / "log.csv", header, _torque())
+    out = tmp_path / "log.npz"
+    assert main(["ingest", "--csv", str(path), "--robot", "lynxmotion", "--out", str(out),
+                 "--gains-unknown"]) == 0
+    data = np.load(out)
+    assert "tau" not in data.files and np.allclose(data["current"], _torque(), atol=1e-9)
+    effort_meta = json.loads(str(data["meta"]))["effort"]
+    assert effort_meta["current_gains"] is None and "gains unknown" in effort_meta["current"]
+
+
+def test_a_current_dataset_is_never_torque(tmp_path, capsys):
+    path = _log(tmp_path / "log.csv", "t,q1,q2,q3,i1,i2,i3", _torque())
+    data, out = tmp_path / "log.npz", tmp_path / "MODEL.json"
+    assert main(["ingest", "--csv", str(path), "--robot", "lynxmotion", "--out", str(data),
+                 "--gains-unknown"]) == 0
+    capsys.readouterr()
+    assert main(["identify", "--data", str(data), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--current-gains" in err[0] and "--loaded" in err[0]
+    assert not out.exists()
+    args = ["ingest", "--csv", str(path), "--robot", "lynxmotion", "--out", str(tmp_path / "x.npz"),
+            "--gains-unknown", "--current-gains", "1,2,3"]
+    assert main(args) == 2 and "not both" in capsys.readouterr().err

@@ -7,6 +7,7 @@ import sys
 import warnings
 
 from harness.data.runs import join, load_runs, split_files
+from harness.identify.drive_gains import current_or_torque, describe, gain_runs
 from harness.identify.fits import arm_identification
 from harness.io import write_json
 from harness.robots.registry import DEFAULT_ROBOT
@@ -65,17 +66,32 @@ def register(sub) -> None:
                    "the default) or entropic (the LogDet divergence of its pseudo-inertia: "
                    "what the data leave open stays a scaled copy of the nominal body, never a "
                    "degenerate one; docs/identification.md, 'Prior metric')")
+    p.add_argument("--loaded", default=None, metavar="L.npz",
+                   help="for logs of motor currents with unknown drive gains (ingest "
+                   "--gains-unknown): a second run carrying a load of known mass on the last "
+                   "link; the gains are identified with the dynamics from --data (one unloaded "
+                   "run) and this one, reported per joint (MODEL.json drive_gains, N m/A) and "
+                   "used: the model is fitted on --data's gain x current (needs --load-mass)")
+    p.add_argument("--load-mass", type=float, default=None, metavar="KG",
+                   help="with --loaded: the load's mass (kg), which fixes the gains' scale")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
     if not 0.0 < args.holdout < 1.0:  # 0 would score the training data as "held out"
         raise IdentificationError(f"--holdout must be in (0, 1), got {args.holdout}")
-    runs = load_runs(split_files(args.data, "--data"))
+    gains = None  # logs of currents: their drive gains, identified with a loaded run
+    if args.loaded is not None or args.load_mass is not None:
+        runs, _, gains = gain_runs(split_files(args.data, "--data"), args.loaded,
+                                   args.load_mass, args.robot)
+    else:
+        runs = load_runs(split_files(args.data, "--data"))
     held = {"kind": "last_fraction", "fraction": args.holdout, "of": list(runs.files)}
     holdout = args.holdout
     if args.validate is not None:
-        validate = load_runs(split_files(args.validate, "--validate"))
+        validate_files = split_files(args.validate, "--validate")
+        validate = (current_or_torque(validate_files, gains["gains"]) if gains
+                    else load_runs(validate_files))
         held = {"kind": "logs", "logs": list(validate.files), "fitted_on": list(runs.files),
                 "samples": validate.samples}
         holdout = validate.samples / (runs.samples + validate.samples)
@@ -98,8 +114,12 @@ def run(args) -> int:
     # a numerical library's complaint alike)
     for line in dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught):
         print(f"torquebench identify: warning: {' '.join(line.split())}", file=sys.stderr)
-    write_json(args.out, model_payload(result, arm.record, held,
-                                       "tau_clean" if "tau_clean" in data else "tau"))
+    payload = model_payload(result, arm.record, held, "tau_clean" if "tau_clean" in data else "tau")
+    if gains:
+        payload["drive_gains"] = gains
+        for line in describe(gains):
+            print(line)
+    write_json(args.out, payload)
     for line in result.model.equations():
         print(line)
     if result.physical:

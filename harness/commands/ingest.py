@@ -28,6 +28,11 @@ def register(sub) -> None:
     p.add_argument("--current-gains", default=None, metavar="K1,...,Kn",
                    help="the effort columns (tau1..taun, or i1..in) are motor currents (A): "
                    "torque = gain x current, gains in N m/A per joint (recorded in meta)")
+    p.add_argument("--gains-unknown", action="store_true",
+                   help="the effort columns are motor currents (A) whose drive gains are "
+                   "unknown: kept as currents (key 'current', no torque in the dataset); "
+                   "`identify --data THIS.npz --loaded LOADED.npz --load-mass KG` identifies "
+                   "the gains from this run and one carrying a load of known mass")
     p.set_defaults(func=run)
 
 
@@ -41,7 +46,7 @@ def run(args) -> int:
         except ValueError:
             raise UserError(f"--current-gains must be numbers K1,...,Kn (N m/A), got "
                             f"'{args.current_gains}'") from None
-    data = ingest(args.csv, arm, args.rate, args.window, gains)
+    data = ingest(args.csv, arm, args.rate, args.window, gains, args.gains_unknown)
     # what the estimated derivatives reach must pass the dataset loader (a jump in q: a spike)
     check_arrays(f"{args.csv} (estimated derivatives)", data.arrays)
     write_npz(args.out, **data.npz())
@@ -54,5 +59,5 @@ def run(args) -> int:
     print(f"wrote {args.out}: {meta['samples']} samples of {dof} joints at "
           f"{meta['resampling']['rate_out_hz']:.6g} Hz from {meta['raw_samples']} logged "
           f"(steps {meta['raw_step_s']['min'] * 1e3:.3g}-{meta['raw_step_s']['max'] * 1e3:.3g} ms); "
-          f"{how}")
+          f"{how}" + ("; effort: motor currents (A), gains unknown" if args.gains_unknown else ""))
     return 0

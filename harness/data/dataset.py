@@ -54,6 +54,10 @@ def _read_npz(path: Path, keys, optional) -> tuple[dict[str, np.ndarray], object
     try:
         with np.load(path, allow_pickle=False) as npz:
             missing = [k for k in keys if k not in npz.files]
+            if missing == ["tau"] and "current" in npz.files:  # ingest --gains-unknown
+                raise UserError(f"{path} holds motor currents (A) with unknown drive gains, not "
+                                "torque: ingest it with --current-gains K1,...,Kn, or identify "
+                                "the gains with identify --loaded L.npz --load-mass KG")
             if missing:
                 found = ", ".join(npz.files) or "none"
                 raise UserError(f"{path}: missing keys {', '.join(missing)} (found: {found})")

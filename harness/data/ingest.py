@@ -10,7 +10,10 @@
    as logged (resampled).
 4. Optionally decimated to `rate` Hz (every k-th grid sample, after differentiation).
 5. Motor currents: with current gains (N m/A per joint) the effort columns (`tau1..taun`, or
-   `i1..in`) are currents and the torque is gain x current; meta records the gains.
+   `i1..in`) are currents and the torque is gain x current; meta records the gains. With the
+   gains unknown (gains_unknown), the currents are kept as `current` (A) and the dataset has no
+   `tau`: nothing can take it for torque; `identify --loaded L.npz --load-mass KG` identifies
+   the gains (harness.identify.drive_gains).
 
 `meta` records the source, the resampling, the derivative method with its window and the
 time-stamp statistics. There is no `tau_clean`: scores are against the measured torque.
@@ -80,13 +83,29 @@ def estimate(log: Log, grid: np.ndarray, rate: float,
     return out, {**described, "source": source, "estimated": missing}
 
 
-def _currents(log: Log, gains) -> tuple[Log, dict]:
-    """The log with its effort as torque (gain x current, N m) and the effort's description."""
+CURRENT_KEY = "current"  # a dataset of motor currents whose gains are unknown: A, no tau
+
+
+def _currents(log: Log, gains, unknown: bool = False) -> tuple[Log, dict]:
+    """The log with its effort as torque (gain x current, N m), or kept as current (A) when
+    the gains are unknown, and the effort's description."""
     effort = "i" if "i" in log.groups else "tau"
+    columns = f"columns {effort}1..{effort}{log.dof}"
+    if unknown:
+        if gains is not None:
+            raise UserError("give the drive gains (--current-gains) or say they are unknown "
+                            "(--gains-unknown), not both")
+        groups = {k: v for k, v in log.groups.items() if k != effort}
+        groups[CURRENT_KEY] = log.groups[effort]
+        return Log(log.path, log.t, groups), {
+            "logged": f"motor current (A), {columns}", "current_gains": None,
+            "current": "motor current (A), drive gains unknown: no torque in this dataset; "
+                       "identify --loaded L.npz --load-mass KG identifies the gains"}
     if gains is None:
         if effort == "i":
             raise UserError(f"{log.path}: columns i1..in are motor currents: give their drive "
-                            "gains, --current-gains K1,...,Kn (N m/A per joint)")
+                            "gains, --current-gains K1,...,Kn (N m/A per joint), or identify "
+                            "them (--gains-unknown, then identify --loaded --load-mass)")
         return log, {"logged": "torque (N m)"}
     gains = np.asarray(gains, float)
     if gains.shape != (log.dof,) or not np.all(np.isfinite(gains)) or np.any(gains == 0):
@@ -95,18 +114,19 @@ def _currents(log: Log, gains) -> tuple[Log, dict]:
     groups = {k: v for k, v in log.groups.items() if k != effort}
     groups["tau"] = log.groups[effort] * gains
     return Log(log.path, log.t, groups), {
-        "logged": f"motor current (A), columns {effort}1..{effort}{log.dof}",
+        "logged": f"motor current (A), {columns}",
         "current_gains": gains.tolist(), "torque": "gain x current (N m/A x A)"}
 
 
 def ingest(path: str | Path, arm: Arm, rate: float | None = None,
-           window: int | None = None, current_gains=None) -> Ingested:
+           window: int | None = None, current_gains=None, gains_unknown: bool = False) -> Ingested:
     """The log at path of arm (its joints), as a dataset at rate Hz (default: the
     resampling rate, the log's median step); window: the Savitzky-Golay window in samples
     of the resampled grid (default: chosen from the data); current_gains (N m/A per joint):
-    the effort columns are motor currents, the torque gain x current."""
+    the effort columns are motor currents, the torque gain x current; gains_unknown: they
+    are currents kept as `current` (A), the dataset has no torque."""
     dof = arm.dof
-    log, effort = _currents(read_log(path, dof), current_gains)
+    log, effort = _currents(read_log(path, dof), current_gains, gains_unknown)
     grid, grid_rate = uniform_grid(log.t)
     states, derivatives = estimate(log, grid, grid_rate, window)
     every = 1
@@ -116,7 +136,8 @@ def ingest(path: str | Path, arm: Arm, rate: float | None = None,
                             f"got {rate:g}")
         every = max(1, int(round(grid_rate / rate)))
     keep = slice(None, None, every)
-    arrays = {"t": grid[keep], **{k: states[k][keep] for k in ("q", "qd", "qdd", "tau")}}
+    efforts = ("tau",) if "tau" in states else (CURRENT_KEY,)
+    arrays = {"t": grid[keep], **{k: states[k][keep] for k in ("q", "qd", "qdd", *efforts)}}
     steps = np.diff(log.t)
     meta = {"mode": "measured log", "source": Path(path).name, "plant": arm.reference,
             "robot": arm.reference, "robot_hash": arm.record["hash"],
