@@ -23,6 +23,9 @@ STUDIES = {
                       "(UR5, Panda, xArm7, Z1)",
     "prior_tie": "the consistent fit's prior-weight margin (TIE) chosen on draws no bench "
                  "section scores and re-scored on fresh ones (UR5, xArm7, SO-101)",
+    "outside_default": "identify's defaults on data made outside its own path (multisines "
+                       "and a Fourier series of other harmonics, 5 and 10 % noise), fresh "
+                       "draws, judged on fresh motions against the oracle (issue #56 item 15)",
     "first_plan": "the first plan on a new 7-DOF robot (Panda), compilation included, the "
                   "second run's, a --realtime first plan's, and the same plan from the quick "
                   "and the optimized build",
