@@ -13,8 +13,8 @@ plus an offset per joint and, per joint, the column of its friction law
                 tr(J_b Q_b) >= 0 for every body given a bounding ellipsoid Q_b (plausible:
                 its mass inside its link, identification.ellipsoids),
 
-where s_j is joint j's torque scale, r a per-parameter scale of the nominal values (the
-body's largest, so a link with no nominal inertia is not pinned), and
+where s_j is joint j's noise scale (joint_weights), r a per-parameter scale of the nominal
+values (the body's largest, so a link with no nominal inertia is not pinned), and
 J_b = [[tr(I)/2 1 - I, h], [h^T, m]] the pseudo-inertia (Wensing, Wensing & Slotine 2017:
 a body's (m, h, I) is physically consistent iff J_b is positive semidefinite). lam = 0 is
 least squares under the LMI; lam > 0 pulls what the data leave open toward the nominal
@@ -46,9 +46,11 @@ LAMBDAS = (1e-6, 1e-4, 1e-3, 1e-2, 1e-1, 1.0)  # ridge weights tried toward the 
 PRIOR_METRICS = ("ridge", "entropic")
 TIE = 0.02  # a larger weight must predict the validation block this much better (relative
 # mean square), or a prior wins it by chance (docs/identification.md, 'identification.physical')
-SCORES = {False: "mean square of the error in units of each joint's torque std, on the block",
+SCORES = {False: "mean square of the error in units of each joint's weight (its noise), on the block",
           True: "mean over the runs left out of the mean over joints of the squared relative "
                 "error, each run's mean residual (its sensor offset) removed"}
+WEIGHT_FLOOR = 1e-3  # smallest noise-to-torque ratio of a joint, x the largest (joint_weights:
+# a joint whose residual is nil, noise-free data, stays finite)
 CONSISTENT_TOL = 1e-8  # smallest pseudo-inertia eigenvalue still consistent (solver accuracy)
 
 
@@ -215,6 +217,26 @@ def _rows(runs, n: int, validation: float) -> np.ndarray:
     return held
 
 
+def joint_weights(A: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """Per joint, the scale its residual is measured in: its noise (the residual std of the
+    joint's own least squares on every atom with an offset, which no other joint's noise
+    enters; the oracle weighs by its residual too), normalized so that the joints'
+    noise-to-torque-std ratios have an RMS of one (the ridge weights keep their meaning); a
+    ratio at least WEIGHT_FLOOR of the largest. Each joint's torque std instead let a sensor
+    noise of one size on every joint weigh a loaded joint's residual tens of times too little
+    (docs/identification.md, 'identification.physical')."""
+    spread = np.maximum(tau.std(axis=0), 1e-9)
+    ratio = np.empty(len(spread))
+    for j in range(len(spread)):
+        design = np.column_stack([A[:, j], np.ones(len(A))])
+        coef = np.linalg.lstsq(design, tau[:, j], rcond=None)[0]
+        ratio[j] = np.std(tau[:, j] - design @ coef) / spread[j]
+    if ratio.max() <= 1e-12:  # noise-free: no noise to weigh by
+        return spread
+    ratio = np.maximum(ratio, WEIGHT_FLOOR * ratio.max())
+    return spread * ratio / np.sqrt(np.mean(ratio**2))
+
+
 def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np.ndarray,
                  lambdas=LAMBDAS, validation: float = 0.2, choose_friction: bool = True,
                  runs=None, bounds=None, metric: str = "ridge") -> PhysicalFit:
@@ -233,7 +255,7 @@ def fit_physical(atoms: np.ndarray, qd: np.ndarray, tau: np.ndarray, nominal: np
     n, dof, _ = A.shape
     several, centred = run_centring(runs)
     raw_A, raw_tau, A, tau = A, tau, centred(A), centred(tau)
-    scale = np.maximum(tau.std(axis=0), 1e-9)
+    scale = joint_weights(A, tau)
     used, laws = [], (FrictionLaw(),) * dof
     cols = centred(law_columns(laws, qd))
 
