@@ -26,6 +26,9 @@ STUDIES = {
     "outside_default": "identify's defaults on data made outside its own path (multisines "
                        "and a Fourier series of other harmonics, 5 and 10 % noise), fresh "
                        "draws, judged on fresh motions against the oracle (issue #56 item 15)",
+    "prior_metric": "the consistent fit's prior metric, ridge against entropic, under a "
+                    "perturbed URDF prior and the URDF as truth, on fresh draws (Lynxmotion, "
+                    "UR5, Kinova; issue #56 item 3)",
     "first_plan": "the first plan on a new 7-DOF robot (Panda), compilation included, the "
                   "second run's, a --realtime first plan's, and the same plan from the quick "
                   "and the optimized build",
