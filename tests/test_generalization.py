@@ -12,6 +12,7 @@ from harness.robots.arm import Arm
 from harness.studies.generalization import JOINT_TARGET, MEDIAN_TARGET
 
 
+@pytest.mark.slow
 def test_consistent_fit_generalizes_from_another_excitation():
     result = generalization(Arm.of("ur5"), (701,))
     for fit in (PRIOR, FLAT):

@@ -186,7 +186,7 @@ def test_several_runs_in_another_out(tmp_path):
     assert json.loads(other.read_text())["joints"] == json.loads(out.read_text())["joints"]
 
 
-@pytest.mark.parametrize("prior", ["none", "nominal"])
+@pytest.mark.parametrize("prior", ["none", pytest.param("nominal", marks=pytest.mark.slow)])
 def test_two_runs_predict_a_third_no_worse_than_one(tmp_path, prior):
     """Issue #42: two runs of different excitations whose sensors read different offsets (as
     two sessions do) predict a third run at least as well as the first alone, at the median

@@ -33,6 +33,7 @@ def _steep_consistent_fit(tmp_path, robot: str, samples: int) -> str:
     return str(path)
 
 
+@pytest.mark.slow
 def test_a_steep_consistent_fit_plans_with_both_planners(tmp_path):
     model = _steep_consistent_fit(tmp_path, "lynxmotion", 1000)
     for replanner in ("sqp", "fatrop"):

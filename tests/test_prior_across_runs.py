@@ -43,6 +43,7 @@ def test_one_run_still_chooses_on_its_blocks_and_says_so(lynx_runs):
     assert chosen["friction_chosen_on"] == chosen["chosen_on"]
 
 
+@pytest.mark.slow
 def test_the_run_left_out_is_scored_without_its_offset(lynx_runs):
     """A sensor offset of its own on one run changes nothing the runs chose."""
     arm, runs, nominal = lynx_runs

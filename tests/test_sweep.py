@@ -193,6 +193,7 @@ def test_progress_counts_cells_and_reused_ones():
     assert lines[-1].endswith("~0:00 left") and "elapsed" in lines[0]
 
 
+@pytest.mark.slow  # Ray's local start-up: about 20 s of the fast suite's CPU
 def test_a_small_window_of_tasks_runs_every_cell_once(ray_local):
     from harness.sweep.run import ray_cells
 
