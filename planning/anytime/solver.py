@@ -163,11 +163,11 @@ class Anytime(ProblemNumbers):
                 x, q0, qd0, t_begin, duration), check, config, problem.sqp.layout.v)
             chose = clock.ms()
             converged = solution.status == sqp.CONVERGED and chosen.x is solution.x
-            segment = self._segment(problem, chosen, solution, p, times[slots],
+            round_plan = self._segment(problem, chosen, solution, p, times[slots],
                                     self._status(chosen, converged))
             if best is None or chosen.rank < best.rank:
-                best, plan = chosen, segment
-            last = segment
+                best, plan = chosen, round_plan
+            last = round_plan
             more = self._needs_round(chosen, slots, links[slots])
             if more == "torque":
                 torque = True
@@ -176,7 +176,7 @@ class Anytime(ProblemNumbers):
                                (chose - solved) / max(checked, 1))
             if not more or budget - clock.ms() < self.round_ms(clock, problem):
                 break
-            reference = segment.trajectory
+            reference = round_plan.trajectory
         built = self._building - building
         elapsed = (1e3 * (time.perf_counter() - wall - built[0]),
                    1e3 * (time.thread_time() - cpu - built[1]))
