@@ -40,8 +40,13 @@ def estimate_derivatives(q_meas: np.ndarray, cfg: SensorConfig) -> tuple[np.ndar
 
 
 def torque_noise(
-    tau_clean: np.ndarray, level: float, bias: float, rng: np.random.Generator
+    tau_clean: np.ndarray, level: float, bias: float, rng: np.random.Generator,
+    one_sensor: bool = False,
 ) -> np.ndarray:
-    """Non-zero-mean Gaussian torque noise: std = level * std(tau_j), mean = bias * that std."""
+    """Non-zero-mean Gaussian torque noise: std = level * std(tau_j), mean = bias * that std;
+    one_sensor: the same std on every joint, the mean over joints of level * std(tau_j) (one
+    sensor's noise in N m, as much on a loaded joint as on the wrist)."""
     sigma = level * tau_clean.std(axis=0)
+    if one_sensor:
+        sigma = np.full(tau_clean.shape[1], sigma.mean())
     return rng.normal(size=tau_clean.shape) * sigma + bias * sigma

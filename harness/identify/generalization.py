@@ -16,6 +16,7 @@ import numpy as np
 
 from harness.data.dataset import Dataset
 from harness.data.generate import SAMPLE_RATE
+from harness.data.sensors import torque_noise
 from harness.identify.fits import arm_identification
 from harness.identify.scoring import (
     FLAT,
@@ -51,10 +52,8 @@ def outside_dataset(arm: Arm, seed: int, samples: int = SAMPLES, noise: float = 
     motion of the OUTSIDE spectrum."""
     m = sines_motion(arm, samples, seed, spectrum=OUTSIDE)
     rng = np.random.default_rng([seed, 31])
-    sigma = noise * m.tau_clean.std(axis=0)  # as harness.data.sensors.torque_noise
-    if noise_model == "sensor":  # the same N m on a loaded joint as on the wrist
-        sigma = np.full(arm.dof, sigma.mean())
-    tau = m.tau_clean + rng.normal(size=m.tau_clean.shape) * sigma + BIAS * sigma
+    tau = m.tau_clean + torque_noise(m.tau_clean, noise, BIAS, rng,
+                                     one_sensor=noise_model == "sensor")
     return Dataset(np.arange(samples) / SAMPLE_RATE, m.q, m.qd, m.qdd, tau, m.tau_clean,
                    {"seed": seed, "noise": noise, "noise_model": noise_model,
                     "excitation": "outside sines"})
