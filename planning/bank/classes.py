@@ -14,8 +14,13 @@ far from the obstacle share the empty class."""
 
 from __future__ import annotations
 
+import functools
+import math
+
+import casadi as ca
 import numpy as np
 
+from planning.formulation import compiled
 from planning.formulation.kinematics import ArmGeometry
 
 SIDES = (("beyond", "before"), ("left", "right"), ("above", "below"))
@@ -43,18 +48,57 @@ def sides(geometry: ArmGeometry, q: np.ndarray, centres: np.ndarray, threshold: 
     found = []
     for link in range(distance.shape[1]):
         k = int(np.argmin(distance[:, link]))
-        if distance[k, link] > threshold + near:
-            continue
-        radial = centres[k] - base
-        radial[2] = 0.0
-        norm = np.linalg.norm(radial)
-        radial = radial / norm if norm > 1e-9 else np.array([1.0, 0.0, 0.0])
-        up = np.array([0.0, 0.0, 1.0])
-        frame = np.stack([radial, np.cross(up, radial), up])
-        components = frame @ offset[k, link]
-        axis = int(np.argmax(np.abs(components)))
-        found.append((link, SIDES[axis][0 if components[axis] >= 0 else 1]))
+        if distance[k, link] <= threshold + near:
+            found.append((link, _side(base, centres[k], offset[k, link])))
     return tuple(found)
+
+
+def _side(base: np.ndarray, centre: np.ndarray, offset: np.ndarray) -> str:
+    """The side a link passes the obstacle centred at `centre` on: offset (3,) from the
+    centre to the link's nearest point, read in the frame of the horizontal from the arm's
+    base to the centre (radial, tangential: up x radial, and up), reduced to its dominant
+    axis."""
+    x, y = float(centre[0] - base[0]), float(centre[1] - base[1])
+    norm = math.hypot(x, y)
+    x, y = (x / norm, y / norm) if norm > 1e-9 else (1.0, 0.0)
+    components = (x * offset[0] + y * offset[1], -y * offset[0] + x * offset[1], offset[2])
+    axis = max(range(3), key=lambda i: abs(components[i]))
+    return SIDES[axis][0 if components[axis] >= 0 else 1]
+
+
+def near_sides(geometry: ArmGeometry, links: np.ndarray, position, centres: np.ndarray,
+               threshold: float, near: float = NEAR) -> tuple[tuple[int, str], ...]:
+    """`sides` from each link's clearances already known, links (n, links) at the n samples
+    of centres (n, 3): each link's closest approach read off them, the arm's pose
+    (position(k): q (dof,) at sample k) computed only at the samples where a link comes
+    near (the same class as `sides` on every sample, to the clearances' rounding)."""
+    if not len(links):
+        return ()
+    found, closest = [], np.argmin(links, axis=0)
+    base, ends = _frame(geometry)
+    radii = geometry.link_radii
+    for link, k in enumerate(closest.tolist()):
+        if links[k, link] > threshold + near:
+            continue
+        a, b = np.reshape(ends(position(k))[0], (2, -1, 3))[:, link]
+        ab, centre = b - a, centres[k]
+        s = min(max(float((centre - a) @ ab) / max(float(ab @ ab), 1e-300), 0.0), 1.0)
+        offset = a + s * ab - centre
+        if math.sqrt(float(offset @ offset)) - radii[link] <= threshold + near:
+            found.append((link, _side(base, centre, offset)))
+    return tuple(found)
+
+
+@functools.cache
+def _frame(geometry: ArmGeometry) -> tuple:
+    """The arm's base (joint 1's origin: no joint moves it) and its link ends as a function
+    of q (dof,) -> (2 * links * 3,): every link's a ends, then its b ends (CasADi, built once
+    per arm)."""
+    q = ca.SX.sym("q", geometry.dof)
+    ends = geometry.symbolic_link_ends(q)
+    function = ca.Function("link_ends", [q], [ca.vertcat(*[a for a, _ in ends],
+                                                         *[b for _, b in ends])])
+    return geometry.points(np.zeros((1, geometry.dof)))[0, 0], compiled.Buffered(function)
 
 
 def motion_class(geometry: ArmGeometry, trajectory, forecast, threshold: float,

@@ -24,11 +24,10 @@ import dataclasses
 import math
 
 from planning.anytime.solver import CONVERGED
-from planning.bank.classes import label, motion_class, same_class
+from planning.bank.classes import label, same_class
 from planning.bank.members import BankRecord, Member, cheaper, choose
-from planning.globalsearch.multistart import objective
+from planning.bank.scoring import Scores
 from planning.globalsearch.planner import ADOPTED
-from planning.replanning import stale
 from planning.types import ITERATE, KEPT, Segment, SegmentPlan, SegmentPlanner
 
 SWITCHED = " (bank: switched class)"
@@ -54,7 +53,7 @@ class BankPlanner:
         self.record = BankRecord()
         self._settle = math.inf
         self._current: tuple | None = None  # the objective of the plan followed, this sample
-        self._scores: dict = {}  # this sample's objectives (BankPlanner._score)
+        self._scores: Scores | None = None  # this sample's measures of plans
 
     @property
     def solver_ms(self) -> float:
@@ -86,6 +85,7 @@ class BankPlanner:
                   ) -> tuple[SegmentPlan, list[SegmentPlan]]:
         best, plans = self.front.plan_cold(problem, starts)
         self._forget()
+        self._scores = Scores(self.check, self.config, problem)
         self._settle = problem.t_begin + problem.duration - self.config.settle_horizon
         self.followed = self._seed(best, problem)
         for plan in sorted(plans, key=lambda p: self._score(p, problem)):
@@ -102,18 +102,18 @@ class BankPlanner:
         arm goes on as it was (nothing re-planned that it follows)."""
         if warm is None:
             return self.front.plan(problem)
+        self._scores = Scores(self.check, self.config, problem)
         if self.followed is None:  # a plan not made by plan_cold: a bank of its own
             self._settle = problem.t_begin + problem.duration - self.config.settle_horizon
             self.followed = self._seed(warm, problem)
         spent = [0.0, 0.0, 0.0]  # clock, wall, CPU ms of the bank's solves at this sample
         total, followed = self._budget(problem), self.followed
         t = problem.t_begin
-        self._scores = {}
-        dips = stale(self.config, warm, problem.forecast)
-        must = warm.status.startswith(ITERATE) or dips or self.front.offers(t)  # the
-        # search offers a better plan of its own
         rest = dataclasses.replace(warm, trajectory=warm.trajectory.restrict(
             t, problem.duration))
+        dips = self._scores.dips(rest)
+        must = warm.status.startswith(ITERATE) or dips or self.front.offers(t)  # the
+        # search offers a better plan of its own
         current = self._current = self._score(rest, problem)
         if t < self._settle - 1e-9:  # the search's plans, each to its class
             for found in ([] if self.search is None else self.search.collect(t)):
@@ -205,20 +205,12 @@ class BankPlanner:
                                    solve_cpu_ms=spent[2])
 
     def _class(self, plan: SegmentPlan, problem: Segment) -> tuple:
-        return motion_class(self.config.geometry, plan.trajectory, problem.forecast,
-                            self.config.threshold, problem.t_begin)
+        return self._scores.motion_class(plan)
 
     def _score(self, plan: SegmentPlan, problem: Segment) -> tuple[int, float]:
-        """The plan's objective from the segment's start on, each (plan, segment) scored
-        once per sample (the entries hold both, so no id is reused while they stand)."""
-        key = (id(plan), id(problem))
-        if key not in self._scores:
-            rest = dataclasses.replace(plan, trajectory=plan.trajectory.restrict(
-                problem.t_begin, problem.duration))
-            self._scores[key] = (plan, problem, objective(
-                self.check, self.config, rest, problem.t_begin, problem.duration,
-                problem.forecast))
-        return self._scores[key][2]
+        """The plan's objective from the segment's start on, each plan scored once per
+        sample (planning.bank.scoring)."""
+        return self._scores.objective(plan)
 
     def _seed(self, plan: SegmentPlan, problem: Segment) -> Member:
         """The plan the arm follows first, the bank's first member whatever it promises."""
