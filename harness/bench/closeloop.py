@@ -26,7 +26,13 @@ import numpy as np
 
 from harness.closeloop.arm_plants import flange_frame, write_arm_variant
 from harness.closeloop.payload import PayloadTorque
-from harness.closeloop.payload_case import COM_AIM, MASS_AIM, MASS_CHECK, payload_case
+from harness.closeloop.payload_case import (
+    payload_arms,
+    payload_case,
+    payload_checks,
+    payload_markdown,
+    payload_targets,
+)
 from harness.closeloop.plants import Variant
 from harness.closeloop.run import run_closeloop
 from harness.report.results import Context, Row, SectionResult, Target, check
@@ -171,30 +177,12 @@ def run(ctx: Context) -> SectionResult:
                         f"{100 * b:.2f} -> {100 * a:.2f} %" for b, a in zip(
                             results["plants"]["effects"]["error_before"],
                             results["plants"]["effects"]["error_after"], strict=True)))]
-    payload = payload_case(arm, plant_dir)
-    results["payload"] = payload
-    md += ["", payload_markdown(payload)]
-    checks.append(check("payload.named_within_5_percent", payload["named"]
-                        and payload["mass_error"] <= MASS_CHECK,
-                        f"a {payload['true_mass']:.4g} kg load on the last body named "
-                        + (f"{payload['mass']:.4g} kg" if payload["named"] else "not at all")))
-    named = payload["named"]  # not named: the targets have no figure (missed)
-    targets += [Target(f"payload mass error (measured loop, seed {payload['seed']})",
-                       100 * payload["mass_error"] if named else None, 100 * MASS_AIM, "%"),
-                Target(f"payload centre-of-mass error (seed {payload['seed']})",
-                       100 * payload["com_error_m"] if named else None, 100 * COM_AIM, "cm")]
+    results["payload_cases"] = []
+    for case_arm, mu in payload_arms(arm):
+        payload = payload_case(case_arm, plant_dir / f"{case_arm.label}_{mu:g}", mu)
+        results["payload_cases"].append(payload)
+        md += ["", payload_markdown(payload)]
+        checks += payload_checks(payload)
+        targets += payload_targets(payload)
+    results["payload"] = results["payload_cases"][0]
     return SectionResult("\n".join(md), results, checks, targets, headline)
-
-
-def payload_markdown(p: dict) -> str:
-    """The payload case in a sentence."""
-    named = (f"named {p['mass']:.4g} kg ({100 * p['mass_error']:.2f} %), centre of mass "
-             f"({', '.join(f'{c:.3f}' for c in p['com'])}) m ({100 * p['com_error_m']:.2f} cm "
-             "off)" if p["named"] else "no payload named")
-    return (f"Payload case (`closeloop --data` on the arm carrying a load no model declares: "
-            f"{p['true_mass']:.4g} kg at ({', '.join(f'{c:.3f}' for c in p['true_com'])}) m in "
-            f"the last link's frame; inverse dynamics, {100 * p['noise']:g} % noise, seed "
-            f"{p['seed']}, drawn once): {named}; other effects named: "
-            f"{', '.join(p['other_effects']) or 'none'}; held-out error before "
-            f"[{', '.join(f'{x:.3f}' for x in p['error_before'])}], after "
-            f"[{', '.join(f'{x:.3f}' for x in p['error_after'])}].")

@@ -28,13 +28,8 @@ from harness.robots.torque_models import load_torque_model, read_model
 from identification.closeloop.leftover import LEFT, Leftover, leftover
 from identification.closeloop.offsets import ScoredRun, run_tail, scored_error, scored_offsets, whole_run
 from identification.closeloop.payload import REACH
-from identification.closeloop.runs import (
-    AGREE,
-    MIN_GAIN,
-    STRONG_GAIN,
-    RunsLoop,
-    close_loop_runs,
-)
+from identification.closeloop.runs import RunsLoop, close_loop_runs
+from identification.closeloop.verdicts import AGREE, MIN_GAIN, STRONG_GAIN
 from identification.errors import IdentificationError
 from identification.identify import identify
 from identification.kinematic_model import KinematicModel

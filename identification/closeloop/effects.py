@@ -19,6 +19,16 @@ coefficient follow the CLI contract:
                                                 a non-zero q_ref shows up as an offset)
 - `payload`  tau = m * tau_unit(q, qd, qdd)     m in kg, a point mass at the end effector;
                                                 tau_unit couples all joints.
+- `load_friction`
+             tau_j = mu |L_j| sat((qd_j + lead qdd_j) / eps)
+                                                mu in N m per N m: dry friction that grows
+                                                with the torque L_j the joint's gears carry
+                                                (Hamon, Gautier & Garrec, IROS 2010: a load
+                                                presses the gear teeth together), L the rest
+                                                of the model's torque (the declared model and
+                                                its payload); the shape is the joint's Coulomb
+                                                shape. On a measured log only
+                                                (identification.closeloop.runs).
 - `sigmoid`  tau_j = phi1 [s(phi2 (qd_j + phi3)) - s(phi2 phi3)], s(x) = 1 / (1 + e^-x)
                                                 phi1 in N m; the friction model Gaz et al.
                                                 (RA-L 2019) identified on a real Panda:
@@ -59,6 +69,7 @@ JOINT_EFFECTS = ("viscous", "coulomb", "armature", "offset", "spring")
 MEASURED_EFFECTS = ("viscous", "coulomb", "sigmoid", "armature", "spring")
 UNITS = {"viscous": "N m s/rad", "coulomb": "N m", "armature": "kg m^2", "offset": "N m",
          "spring": "N m/rad", "payload": "kg", "sigmoid": "N m",
+         "load_friction": "N m per N m of the joint's load torque",
          "inertial": "1 (x the consistent fit's rigid-body correction)"}
 SIGMOID_STEEPNESS = 10.0  # s/rad, default phi2 of the sigmoid friction
 COULOMB_EPS = 0.01  # rad/s, default half-width of the linear zone
@@ -108,7 +119,7 @@ class EffectTerm:
                        inertia_definition="Ixx, Ixy, Iyy, Ixz, Iyz, Izz (kg m^2) about the "
                                           "centre of mass, axes of the last link's frame",
                        frame="the last link's (its joint's) frame, m")
-        if self.effect == "coulomb":
+        if self.effect in ("coulomb", "load_friction"):
             out.update(lead=self.lead, eps=self.eps)
         if self.effect == "sigmoid":
             out.update(steepness=self.steepness, shift=self.shift)
@@ -172,12 +183,26 @@ def build_dictionary(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
     return EffectDictionary(tuple(effects), np.stack(cols, axis=2))
 
 
+def load_signal(load: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+                lead: float = COULOMB_LEAD, eps: float = COULOMB_EPS) -> np.ndarray:
+    """The (n, dof) per-joint signal of `load_friction` for unit coefficient, under the joints'
+    load torque load (n, dof) N m."""
+    return np.abs(load) * joint_signal("coulomb", q, qd, qdd, lead, eps)
+
+
 def effect_torque(terms: tuple[EffectTerm, ...], q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
-                  payload: PayloadTorque | None = None) -> np.ndarray:
-    """Sum of the terms' torques (n, dof) in N m."""
+                  payload: PayloadTorque | None = None, load: np.ndarray | None = None,
+                  ) -> np.ndarray:
+    """Sum of the terms' torques (n, dof) in N m; load: the joints' load torque (n, dof) N m,
+    needed by a `load_friction` term only."""
     tau = np.zeros_like(q)
     for term in terms:
-        if term.effect == "payload":
+        if term.effect == "load_friction":
+            if load is None:
+                raise ValueError("a load_friction term needs the joints' load torque")
+            tau[:, term.joint - 1] += term.coefficient * load_signal(
+                load, q, qd, qdd, term.lead, term.eps)[:, term.joint - 1]
+        elif term.effect == "payload":
             if payload is None:
                 raise ValueError("a payload term needs the payload torque function")
             tau += term.coefficient * payload(q, qd, qdd)

@@ -13,6 +13,9 @@ from identification.torque_model import TorqueModel, as_states
 class ExtendedModel:
     """tau = declared(q, qd, qdd) + sum of effect terms (N m).
 
+    A `load_friction` term's load is the declared model's torque (with what it sums: the
+    payload, the offsets).
+
     payload / symbolic_payload: the unit-mass end-effector payload torque,
     numeric on (n, dof) arrays and symbolic on CasADi columns; needed only if a
     payload term is present.
@@ -36,8 +39,8 @@ class ExtendedModel:
     def torque(self, q, qd, qdd) -> np.ndarray:
         """Declared torque plus the effects, (n, dof) in N m."""
         q, qd, qdd = as_states(q, qd, qdd, self.dof)
-        tau = self.declared.torque(q, qd, qdd) + effect_torque(
-            self.terms, q, qd, qdd, self._payload)
+        load = self.declared.torque(q, qd, qdd)
+        tau = load + effect_torque(self.terms, q, qd, qdd, self._payload, load)
         if self.fallback:
             cols = [j - 1 for j in self.fallback]
             tau[:, cols] = self.original.torque(q, qd, qdd)[:, cols]
@@ -47,7 +50,8 @@ class ExtendedModel:
         """CasADi form: the declared model's expression plus each effect's."""
         import casadi as ca
 
-        tau = self.declared.symbolic_torque(q, qd, qdd)
+        load = self.declared.symbolic_torque(q, qd, qdd)
+        tau = load
         for t in self.terms:
             if t.effect == "payload":
                 if self._symbolic_payload is None:
@@ -56,13 +60,14 @@ class ExtendedModel:
                 continue
             j = t.joint - 1
             coulomb = sigmoid = 0
-            if t.effect == "coulomb":
+            if t.effect in ("coulomb", "load_friction"):
                 coulomb = ca.fmin(ca.fmax((qd[j] + t.lead * qdd[j]) / t.eps, -1), 1)
             if t.effect == "sigmoid":
                 sigmoid = (1 / (1 + ca.exp(-t.steepness * (qd[j] + t.shift)))
                            - 1 / (1 + np.exp(-t.steepness * t.shift)))
             signal = {"viscous": qd[j], "coulomb": coulomb, "sigmoid": sigmoid,
-                      "armature": qdd[j], "offset": 1.0, "spring": q[j]}[t.effect]
+                      "armature": qdd[j], "offset": 1.0, "spring": q[j],
+                      "load_friction": ca.fabs(load[j]) * coulomb}[t.effect]
             unit = ca.DM.zeros(self.dof, 1)
             unit[j] = 1.0
             tau = tau + t.coefficient * signal * unit

@@ -129,7 +129,7 @@ class MeasuredLoop:
 
 
 def _unit(effect: str, joint: int, shape: tuple[float, float] = ()) -> EffectTerm:
-    if effect == "coulomb":
+    if effect in ("coulomb", "load_friction"):
         return EffectTerm(effect, joint, 1.0, lead=shape[0], eps=shape[1])
     if effect == "sigmoid":
         return EffectTerm(effect, joint, 1.0, steepness=shape[0], shift=shape[1])
@@ -149,18 +149,20 @@ class _Projector:
         return v - self.q @ (self.q.T @ v)
 
 
-def _shape(effect: str, joint: int, project: _Projector, target: np.ndarray, states) -> tuple:
+def fit_shape(effect: str, joint: int, project: _Projector, target: np.ndarray, states,
+              load: np.ndarray | None = None) -> tuple:
     """The shape of a nonlinear effect on joint minimizing the projected residual of the
-    target with the joint's viscous column and the effect's."""
+    target with the joint's viscous column and the effect's (load: the joints' load torque
+    of a `load_friction`)."""
     viscous = project(effect_torque((_unit("viscous", joint),), *states))
 
     def rss(shape) -> float:
-        col = project(effect_torque((_unit(effect, joint, shape),), *states))
+        col = project(effect_torque((_unit(effect, joint, shape),), *states, load=load))
         X = np.concatenate([viscous, col], axis=1)
         c, *_ = np.linalg.lstsq(X, target, rcond=None)
         return float(np.sum((target - X @ c) ** 2))
 
-    if effect == "coulomb":
+    if effect in ("coulomb", "load_friction"):
         grid, lo, hi = COULOMB_SHAPES, (LEAD_RANGE[0], np.log(EPS_RANGE[0])), (LEAD_RANGE[1],
                                                                               np.log(EPS_RANGE[1]))
         to_x, from_x = (lambda s: (s[0], np.log(s[1]))), (lambda x: (x[0], np.exp(x[1])))
@@ -182,7 +184,7 @@ def candidates(project: _Projector, target: np.ndarray, states, dof: int,
     out = []
     for j in range(1, dof + 1):
         for e in effects:
-            shape = _shape(e, j, project, target, states) if e in ("coulomb", "sigmoid") else ()
+            shape = fit_shape(e, j, project, target, states) if e in ("coulomb", "sigmoid") else ()
             out.append(_unit(e, j, shape))
     return out
 

@@ -121,15 +121,16 @@ def consistent_fit(base, target, effects, regressor, w, reach: float = REACH,
     return coef[:p], coef[p:p + k], coef[p + k:]
 
 
-def payload_column(base, target, regressor, w, reach: float = REACH) -> tuple[np.ndarray, np.ndarray] | None:
-    """The payload candidate: (its unit-mass torque column (n, dof), its parameters per kg),
-    the shape fitted beside the base alone; None if the fit gives no mass."""
-    _, _, params = consistent_fit(base, target, np.zeros((*target.shape, 0)), regressor, w,
-                                  reach)
+def payload_column(base, target, regressor, w, reach: float = REACH, beside=None) -> tuple | None:
+    """The payload candidate: (its unit-mass torque column (n, dof), its parameters per kg,
+    its parameters as fitted), the shape fitted beside the base alone (and the columns beside
+    (n, dof, k) when given); None if the fit gives no mass."""
+    beside = np.zeros((*target.shape, 0)) if beside is None else beside
+    _, _, params = consistent_fit(base, target, beside, regressor, w, reach)
     if params[0] < MIN_MASS:
         return None
     unit = params / params[0]
-    return regressor @ unit, unit
+    return regressor @ unit, unit, params
 
 
 def com_spread(base, target, effects, regressor, w, rows: list[np.ndarray], blocks: int,
@@ -149,12 +150,22 @@ def com_spread(base, target, effects, regressor, w, rows: list[np.ndarray], bloc
     return np.array(mass), np.array(com), np.array(std)
 
 
+def com_agreement(com: np.ndarray, std: np.ndarray, within: float) -> bool:
+    """Whether the runs' centres of mass (runs, 3) m agree within `within` combined standard
+    errors (the measured loop holds them to the runs' coefficients' rule,
+    identification.closeloop.verdicts.AGREE: within one, two runs of one load would disagree
+    one time in three)."""
+    diff = np.abs(com[:, None] - com[None, :])
+    return bool(np.all(diff <= within * np.hypot(std[:, None], std[None, :]) + 1e-12))
+
+
 def named_payload(base, target, cols, regressor, w, chosen: list[int], k: int,
-                  rows: list[np.ndarray], blocks: int, reach: float = REACH) -> tuple:
+                  rows: list[np.ndarray], blocks: int, within: float, reach: float = REACH,
+                  ) -> tuple:
     """The joint fit once the payload (candidate k of cols) is among the chosen: the base's
     coefficients, the chosen effects' (the payload's = its mass) in chosen order, its 10
     parameters and, with several runs, what each run alone gives (mass, centre of mass and
-    its standard error) and whether the centres of mass agree within their standard errors."""
+    its standard error) and whether the centres of mass agree (com_agreement)."""
     others = [i for i in chosen if i != k]
     coef_base, coef, params = consistent_fit(base, target, cols[:, :, others], regressor, w,
                                              reach)
@@ -164,11 +175,10 @@ def named_payload(base, target, cols, regressor, w, chosen: list[int], k: int,
     if len(rows) > 1:
         mass, com, std = com_spread(base, target, cols[:, :, others], regressor, w, rows,
                                     blocks, reach)
-        diff = np.abs(com[:, None] - com[None, :])
-        agree = bool(np.all(diff <= np.hypot(std[:, None], std[None, :]) + 1e-12))
+        agree = com_agreement(com, std, within)
         detail = {"per_run_mass": mass.tolist(), "per_run_com": com.tolist(),
                   "per_run_com_std": std.tolist(), "com_agrees": agree,
-                  "com_note": ("the runs' centres of mass agree within their standard errors"
+                  "com_note": (f"the runs' centres of mass agree within {within:g} combined standard errors"
                                if agree else "the runs' centres of mass disagree beyond their "
                                "standard errors: each run's is reported (per_run_com), the "
                                "joint fit's is a compromise, not a measurement")}

@@ -9,9 +9,12 @@ MODEL.json) and the training runs:
    a held-out run in validation gets its own refitted). Rows of joint j weigh 1 / (RMS of
    its target).
 2. Candidates, per joint: `viscous`, `coulomb`, `armature`, `spring` (the Coulomb shape
-   fitted by variable projection, identification.closeloop.measured.candidates), and,
-   when given, `inertial`: the rigid-body correction of the consistent fit pulled toward
-   the declared model (identification.regression.consistent), one column acting on every joint, its
+   fitted by variable projection, identification.closeloop.measured.candidates),
+   `load_friction` (dry friction growing with the joint's load torque, its shape fitted:
+   identification.closeloop.load_friction), when given, a payload on the last body
+   (identification.closeloop.payload), and, when given, `inertial`: the rigid-body
+   correction of the consistent fit pulled toward the declared model
+   (identification.regression.consistent), one column acting on every joint, its
    coefficient a scale (1 = the consistent fit's correction).
 3. Forward selection, validated run by run (leave one run out; one run alone: contiguous
    blocks of it). A candidate is named when it cuts its joint's validation error power by
@@ -22,7 +25,8 @@ MODEL.json) and the training runs:
    it: coloured residuals make the white-noise formula far too small), and, if it has no
    physical reading (a spring: an arm's joints have none; an armature above
    ARMATURE_PLAUSIBLE), it cuts the error power by >= STRONG_GAIN.
-4. The model: D + the named effects, refitted jointly with the offsets on all training runs.
+4. The model: D + the named effects, refitted jointly with the offsets on all training runs
+   (named load friction: alternated with the load of the model fitted).
    The offsets stay out of it: a sensor offset is a property of a run, not of the robot, so
    a new run is scored with its own offset refitted (identification.closeloop.leftover).
 """
@@ -36,24 +40,37 @@ import numpy as np
 from identification.closeloop.crossval import BlockValidation, weighted_fit
 from identification.closeloop.effects import EffectTerm, effect_torque
 from identification.closeloop.extended import ExtendedModel
+from identification.closeloop.load_friction import (
+    EFFECT,
+    refit_under_load,
+    spread_with_and_without,
+    with_payload,
+)
 from identification.closeloop.measured import VALIDATION_BLOCKS, _Projector, candidates
 from identification.closeloop.payload import (
     REACH,
     BodyTorque,
     LastBody,
+    com_spread,
     named_payload,
     payload_column,
+)
+from identification.closeloop.verdicts import (
+    AGREE,
+    MIN_GAIN,
+    RUN_BLOCKS,
+    not_named,
+    per_run,
+    physical_reading,
+    rows_of,
+    verdict,
 )
 from identification.errors import IdentificationError
 from identification.torque_model import TorqueModel, as_states
 
-MIN_GAIN = 0.02  # an effect must cut its joint's validation error power by >= 2 %
-STRONG_GAIN = 0.2  # ... by >= 20 % when its coefficient has no physical reading
-AGREE = 3.0  # combined standard errors within which two runs' coefficients agree
-RUN_BLOCKS = 4  # blocks of a run whose coefficients' spread gives the run's uncertainty
-ARMATURE_PLAUSIBLE = 1.0  # kg m^2: a reflected rotor inertia above it has no physical reading
-RUNS_EFFECTS = ("viscous", "coulomb", "armature", "spring")  # the contract's joint effects (the
-# offset is refitted as the base): one dry-friction name, so runs cannot split it between shapes
+RUNS_EFFECTS = ("viscous", "coulomb", "armature", "spring", EFFECT)  # the contract's joint
+# effects (the offset is refitted as the base): one dry-friction name, so runs cannot split it
+# between shapes; EFFECT: dry friction growing with the joint's load (load_friction)
 FEWER = 0.05  # the rigid-body correction (10 parameters a body) is taken before the payload
 # (10 in all) only if it predicts the validation runs 5 % better: a load is the likelier
 MIN_RUN = 40  # samples: a run shorter than that cannot be validated on
@@ -142,53 +159,6 @@ class RunsLoop:
         return tuple(n.term for n in self.named)
 
 
-def physical_reading(term: EffectTerm) -> bool:
-    """Whether a coefficient reads as a physical property of an arm's joint."""
-    if term.effect == "spring":
-        return False
-    if term.effect == "armature":
-        return term.coefficient <= ARMATURE_PLAUSIBLE
-    return True
-
-
-def _rows(term: EffectTerm, dof: int) -> list[int]:
-    return list(range(dof)) if term.effect in ("inertial", "payload") else [term.joint - 1]
-
-
-def _per_run(base, target, cols, w, runs: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    """Each run's coefficients of the last column (joint fit on the run alone) and their
-    standard errors from the spread over RUN_BLOCKS blocks of the run."""
-    coef, std = [], []
-    for rows in runs:
-        coef.append(weighted_fit(base[rows], target[rows], cols[rows], w)[1][-1])
-        blocks = [weighted_fit(base[b], target[b], cols[b], w)[1][-1]
-                  for b in np.array_split(rows, RUN_BLOCKS)]
-        std.append(np.std(blocks, ddof=1) / np.sqrt(RUN_BLOCKS))
-    return np.array(coef), np.array(std)
-
-
-def _agree(coef: np.ndarray, std: np.ndarray) -> bool:
-    diff = np.abs(coef[:, None] - coef[None, :])
-    return bool(np.all(diff <= AGREE * np.hypot(std[:, None], std[None, :]) + 1e-12))
-
-
-def _verdict(term, gain, fold_gains, coef, per_run, per_run_std, several) -> str:
-    """Why a candidate that improves validation is not named ('' if it is)."""
-    if several and np.min(fold_gains) < 0:
-        worse = int(np.argmin(fold_gains)) + 1
-        return f"makes held-out {'run' if several else 'block'} {worse} worse"
-    if coef < 0:
-        return "its coefficient would be negative (non-physical)"
-    if not physical_reading(replace(term, coefficient=coef)) and gain < STRONG_GAIN:
-        return (f"no physical reading ({coef:.3g}): needs >= {STRONG_GAIN:.0%} of the "
-                f"validation error power, cuts {gain:.1%}")
-    if several and not _agree(per_run, per_run_std):
-        return ("coefficients differ between runs beyond their uncertainty: "
-                + ", ".join(f"{c:.3g} +- {s:.2g}" for c, s in zip(per_run, per_run_std,
-                                                                strict=True)))
-    return ""
-
-
 def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
                     inertial: TorqueModel | None = None,
                     effects=RUNS_EFFECTS, body: LastBody | None = None,
@@ -212,13 +182,23 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
         base[rows, :, r * dof:(r + 1) * dof] = np.eye(dof)
     w = 1.0 / np.maximum(np.std(target, axis=0), 1e-12)
     project = _Projector(base, w)
-    terms = candidates(project, project(target), states, dof, effects)
+    terms = candidates(project, project(target), states, dof, [e for e in effects if e != EFFECT])
     cols = [effect_torque((t,), *states) for t in terms]
+    regressor = None if body is None else body(*states)
+
+    def payload_fit(beside):
+        return None if body is None else payload_column(base, target, regressor, w, reach, beside)
+
+    if EFFECT in effects:  # the load friction and the payload candidates, each knowing the other
+        extra, more, payload = with_payload(project, target, declared.torque(*states), states,
+                                            payload_fit)
+        terms += extra
+        cols += more
+    else:
+        payload = payload_fit(None)
     if inertial is not None:
         terms.append(EffectTerm("inertial", dof, 1.0))
         cols.append(inertial.torque(*states))
-    regressor = None if body is None else body(*states)
-    payload = None if body is None else payload_column(base, target, regressor, w, reach)
     if payload is not None:
         terms.append(EffectTerm("payload", dof, 1.0, params=tuple(payload[1]), body=body.name))
         cols.append(payload[0])
@@ -236,7 +216,7 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
         for i, t in enumerate(terms):
             if i not in chosen:
                 new = cv.sse_folds(chosen + [i])
-                rows = _rows(t, dof)
+                rows = rows_of(t, dof)
                 before = np.maximum(np.sum(sse[:, rows], axis=1), 1e-300)
                 fold_gains = 1.0 - np.sum(new[:, rows], axis=1) / before
                 gain = 1.0 - np.sum(new[:, rows]) / max(np.sum(before), 1e-300)
@@ -248,26 +228,44 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
                 continue
             subset = chosen + [i]
             coef = weighted_fit(base, target, cols[:, :, subset], w)[1][-1]
-            per_run, per_std = (_per_run(base, target, cols[:, :, subset], w, run_rows)
-                                if several else (np.array([coef]), np.array([0.0])))
-            why = _verdict(terms[i], gain, fold_gains, coef, per_run, per_std, several)
+            coefs, stds = (per_run(base, target, cols[:, :, subset], w, run_rows)
+                           if several else (np.array([coef]), np.array([0.0])))
+            why = verdict(terms[i], gain, fold_gains, coef, coefs, stds, several)
             if why:
                 rejected[i] = (gain, why)
                 continue
-            step = (total, gain, i, new, per_run, per_std)
+            step = (total, gain, i, new, coefs, stds)
             break
         if step is None:
             break
-        total, gain, i, sse, per_run, per_std = step
+        total, gain, i, sse, coefs, stds = step
         chosen.append(i)
-        found.append((gain, per_run, per_std))
+        found.append((gain, coefs, stds))
         path.append((f"{terms[i].effect}@{terms[i].joint}", total))
-    coef_base, coef = weighted_fit(base, target, cols[:, :, chosen], w)
-    k, detail = len(terms) - 1, {}
-    if payload is not None and k in chosen:  # its 10 parameters refitted with the rest
-        coef_base, coef, params, detail = named_payload(
-            base, target, cols, regressor, w, chosen, k, run_rows, RUN_BLOCKS, reach)
+    k = len(terms) - 1 if payload is not None else -1  # the payload candidate's index
+
+    def fit(cols: np.ndarray) -> tuple:
+        """The joint fit of the chosen: (base, chosen coefficients, payload parameters or
+        None, the payload's per-run detail); a named payload's 10 parameters with the rest."""
+        if k in chosen:
+            return named_payload(base, target, cols, regressor, w, chosen, k, run_rows,
+                                 RUN_BLOCKS, AGREE, reach)
+        return (*weighted_fit(base, target, cols[:, :, chosen], w), None, {})
+
+    def model_load(out: tuple) -> np.ndarray:
+        """The closed model's torque without its load friction: the load it acts under."""
+        rest = [replace(terms[i], coefficient=float(c), params=(
+            tuple(map(float, out[2])) if i == k else terms[i].params))
+            for i, c in zip(chosen, out[1], strict=True) if terms[i].effect != EFFECT]
+        return closed_model(declared, np.zeros(dof), tuple(rest), inertial, body).torque(*states)
+
+    (coef_base, coef, params, detail), cols = refit_under_load(fit, model_load, terms, cols,
+                                                               chosen, states)
+    if params is not None:
         terms[k] = replace(terms[k], params=tuple(map(float, params)))
+        detail = spread_with_and_without(detail, lambda e: com_spread(
+            base, target, cols[:, :, e], regressor, w, run_rows, RUN_BLOCKS, reach),
+            [i for i in chosen if i != k], terms, AGREE)
     named = tuple(
         Named(replace(terms[i], coefficient=float(c)), tuple(map(float, pr)),
               tuple(map(float, ps)), g, physical_reading(replace(terms[i], coefficient=float(c))),
@@ -277,20 +275,4 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
     run_offsets = coef_base.reshape(len(runs), dof)
     mean = np.average(run_offsets, axis=0, weights=np.diff(lengths))
     return RunsLoop(model, named, mean, run_offsets, "runs" if several else "blocks",
-                    tuple(path), _not_named(terms, chosen, rejected, trials))
-
-
-def _not_named(terms, chosen, rejected, trials) -> tuple[tuple[int, str, float, str], ...]:
-    """Per joint, the best candidate left when selection stopped, its gain and why."""
-    best: dict[int, tuple] = {}
-    for _, gain, i, _, _ in trials:
-        j = terms[i].joint
-        if j not in best or gain > best[j][1]:
-            best[j] = (i, gain)
-    out = []
-    for j in sorted(best):
-        i, gain = best[j]
-        why = rejected[i][1] if i in rejected and gain >= MIN_GAIN else (
-            f"cuts the validation error power by {gain:.1%} < {MIN_GAIN:.0%}")
-        out.append((j, terms[i].effect, float(gain), why))
-    return tuple(out)
+                    tuple(path), not_named(terms, chosen, rejected, trials))

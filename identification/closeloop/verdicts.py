@@ -1,0 +1,81 @@
+"""The measured loop's rules for naming an effect (identification.closeloop.runs): the gains
+it needs, the agreement between runs, the physical reading, and what is said of a candidate
+left out."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from identification.closeloop.crossval import weighted_fit
+from identification.closeloop.effects import EffectTerm
+
+MIN_GAIN = 0.02  # an effect must cut its joint's validation error power by >= 2 %
+STRONG_GAIN = 0.2  # ... by >= 20 % when its coefficient has no physical reading
+AGREE = 3.0  # combined standard errors within which two runs' coefficients agree
+RUN_BLOCKS = 4  # blocks of a run whose coefficients' spread gives the run's uncertainty
+ARMATURE_PLAUSIBLE = 1.0  # kg m^2: a reflected rotor inertia above it has no physical reading
+
+
+def physical_reading(term: EffectTerm) -> bool:
+    """Whether a coefficient reads as a physical property of an arm's joint."""
+    if term.effect == "spring":
+        return False
+    if term.effect == "armature":
+        return term.coefficient <= ARMATURE_PLAUSIBLE
+    return True
+
+
+def rows_of(term: EffectTerm, dof: int) -> list[int]:
+    return list(range(dof)) if term.effect in ("inertial", "payload") else [term.joint - 1]
+
+
+def per_run(base, target, cols, w, runs: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Each run's coefficients of the last column (joint fit on the run alone) and their
+    standard errors from the spread over RUN_BLOCKS blocks of the run."""
+    coef, std = [], []
+    for rows in runs:
+        coef.append(weighted_fit(base[rows], target[rows], cols[rows], w)[1][-1])
+        blocks = [weighted_fit(base[b], target[b], cols[b], w)[1][-1]
+                  for b in np.array_split(rows, RUN_BLOCKS)]
+        std.append(np.std(blocks, ddof=1) / np.sqrt(RUN_BLOCKS))
+    return np.array(coef), np.array(std)
+
+
+def agree(coef: np.ndarray, std: np.ndarray) -> bool:
+    diff = np.abs(coef[:, None] - coef[None, :])
+    return bool(np.all(diff <= AGREE * np.hypot(std[:, None], std[None, :]) + 1e-12))
+
+
+def verdict(term, gain, fold_gains, coef, per_run, per_run_std, several) -> str:
+    """Why a candidate that improves validation is not named ('' if it is)."""
+    if several and np.min(fold_gains) < 0:
+        worse = int(np.argmin(fold_gains)) + 1
+        return f"makes held-out {'run' if several else 'block'} {worse} worse"
+    if coef < 0:
+        return "its coefficient would be negative (non-physical)"
+    if not physical_reading(replace(term, coefficient=coef)) and gain < STRONG_GAIN:
+        return (f"no physical reading ({coef:.3g}): needs >= {STRONG_GAIN:.0%} of the "
+                f"validation error power, cuts {gain:.1%}")
+    if several and not agree(per_run, per_run_std):
+        return ("coefficients differ between runs beyond their uncertainty: "
+                + ", ".join(f"{c:.3g} +- {s:.2g}" for c, s in zip(per_run, per_run_std,
+                                                                strict=True)))
+    return ""
+
+
+def not_named(terms, chosen, rejected, trials) -> tuple[tuple[int, str, float, str], ...]:
+    """Per joint, the best candidate left when selection stopped, its gain and why."""
+    best: dict[int, tuple] = {}
+    for _, gain, i, _, _ in trials:
+        j = terms[i].joint
+        if j not in best or gain > best[j][1]:
+            best[j] = (i, gain)
+    out = []
+    for j in sorted(best):
+        i, gain = best[j]
+        why = rejected[i][1] if i in rejected and gain >= MIN_GAIN else (
+            f"cuts the validation error power by {gain:.1%} < {MIN_GAIN:.0%}")
+        out.append((j, terms[i].effect, float(gain), why))
+    return tuple(out)
