@@ -49,17 +49,23 @@ LOAD_FRICTION = 0.05  # N m per N m: the wrist's load friction of the friction c
 FRICTION_EPS = 0.01  # rad/s: its linear zone
 
 
-def payload_case(arm: Arm, directory: Path, load_friction: float = 0.0) -> dict:
+def loaded_variant(arm: Arm, name: str) -> LoadedVariant:
+    """The gripper-like load on arm's flange: LOAD_MASS kg for an 18 kg arm, scaled by its
+    mass (its inertia by the same factor), LOAD_OFFSET m from the flange."""
+    model = arm.pinocchio
+    scale = sum(model.inertias[j].mass for j in range(1, model.njoints)) / REFERENCE_MASS
+    return LoadedVariant(payload=LOAD_MASS * scale, payload_offset=LOAD_OFFSET,
+                         payload_inertia=tuple(scale * i for i in LOAD_INERTIA), name=name)
+
+
+def payload_case(arm: Arm, directory: Path, load_friction: float = 0.0,
+                 samples: int = SAMPLES) -> dict:
     """The loaded plant of arm written under directory, its data (with load friction mu on the
     wrist when given), the loop's payload and its errors against the plant's load, and the
     loop's model against the unloaded level."""
     model = arm.pinocchio
-    scale = sum(model.inertias[j].mass for j in range(1, model.njoints)) / REFERENCE_MASS
-    variant = LoadedVariant(payload=LOAD_MASS * scale, payload_offset=LOAD_OFFSET,
-                            payload_inertia=tuple(scale * i for i in LOAD_INERTIA),
-                            name="payload")
-    plant = Arm.of(write_arm_variant(arm, variant, Path(directory)))
-    data = generate(plant, SAMPLES, NOISE, SEED, "inverse", robot=arm)
+    plant = Arm.of(write_arm_variant(arm, loaded_variant(arm, "payload"), Path(directory)))
+    data = generate(plant, samples, NOISE, SEED, "inverse", robot=arm)
     rigid = plant.nominal.torque(data.q, data.qd, data.qdd)
     wrist = np.zeros(arm.dof)
     wrist[max(arm.dof - 3, 0):] = load_friction
@@ -74,10 +80,10 @@ def payload_case(arm: Arm, directory: Path, load_friction: float = 0.0) -> dict:
     named = [e for e in effects if e["effect"] == "payload"]
     load = rigid - arm.nominal.torque(data.q, data.qd, data.qdd)
     acts = np.sqrt(np.mean(load**2, 0)) >= LOAD_SHARE * np.sqrt(np.mean(rigid**2, 0))
-    unloaded = unloaded_level(arm, NOISE * data.tau_clean.std(axis=0))
-    held = arrays["tau"][int(round(SAMPLES * 0.75)):]
+    unloaded = unloaded_level(arm, NOISE * data.tau_clean.std(axis=0), samples)
+    held = arrays["tau"][int(round(samples * 0.75)):]
     after = loop.error_after * np.sqrt(np.mean(held**2, axis=0))  # N m RMS
-    out = {"robot": arm.label, "seed": SEED, "samples": SAMPLES, "noise": NOISE,
+    out = {"robot": arm.label, "seed": SEED, "samples": samples, "noise": NOISE,
            "load_friction": load_friction, "true_mass": float(true_mass),
            "true_com": [float(c) for c in true_com], "named": bool(named),
            "other_effects": [f"{e['effect']} j{e['joint']} {e['coefficient']:.4g}"
@@ -94,17 +100,29 @@ def payload_case(arm: Arm, directory: Path, load_friction: float = 0.0) -> dict:
     return out
 
 
-def unloaded_level(arm: Arm, sigma: np.ndarray) -> np.ndarray:
+def unloaded_level(arm: Arm, sigma: np.ndarray, samples: int = SAMPLES) -> np.ndarray:
     """(dof,) the declared model's RMS error per joint (N m) on the loaded case's motion run by
     the arm without the load, with Gaussian noise of std sigma (dof,) N m, its last quarter
     scored with the offset from the run's trained part (as the loaded run's)."""
-    data = generate(arm, SAMPLES, 0.0, SEED, "inverse", bias=0.0)
+    data = generate(arm, samples, 0.0, SEED, "inverse", bias=0.0)
     noise = np.random.default_rng(SEED + 1).normal(size=data.tau.shape) * sigma
     run = (data.q, data.qd, data.qdd, data.tau + noise)
-    cut = int(round(SAMPLES * 0.75))
+    cut = int(round(samples * 0.75))
     relative = scored_error(arm.nominal, [run_tail(tuple(a[:cut] for a in run),
                                                    tuple(a[cut:] for a in run))])
     return relative * np.sqrt(np.mean(run[3][cut:] ** 2, axis=0))
+
+
+def control_case(arm: Arm, directory: Path, samples: int = SAMPLES) -> list[str]:
+    """The body-level effects (payload, rigid-body correction) the loop names on the arm's own
+    plant, which carries no load: none is the answer."""
+    plant = Arm.of(write_arm_variant(arm, LoadedVariant(name="control"), Path(directory)))
+    data = generate(plant, samples, NOISE, SEED, "inverse", robot=arm)
+    arrays = {"q": data.q, "qd": data.qd, "qdd": data.qdd, "tau": data.tau,
+              "tau_clean": data.tau_clean}
+    loop = run_runs(Runs(arrays, (data.meta,), ("control plant",), (len(data.q),)), arm)
+    return [f"{e['effect']} {e['coefficient']:.4g}" for e in loop.to_json()["effects"]
+            if e["effect"] in ("payload", "inertial")]
 
 
 def payload_arms(arm: Arm) -> list[tuple[Arm, float]]:

@@ -38,6 +38,9 @@ STUDIES = {
     "drive_gains": "motor drive gains identified with the dynamics (identify --loaded "
                    "--load-mass) on simulated logs of currents: UR5 and Panda, unloaded and "
                    "loaded runs, 5 % noise, each gain's error (target 3 %)",
+    "payload": "the load a robot carries named by closeloop --data: UR5 and Panda plants with a "
+               "load on the flange, with and without friction that grows with the load, and "
+               "without a load (mass 3 %, centre of mass 1 cm; issue #54)",
     "closeloop_plants": "closing the loop on the Lynxmotion's hand-written plants, with both "
                         "declared models (Pinocchio and the identified one)",
 }

@@ -17,7 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.closeloop.arm_plants import LoadedVariant, write_arm_variant
+from harness.closeloop.arm_plants import write_arm_variant
+from harness.closeloop.payload_case import loaded_variant
 from harness.data.generate import generate
 from harness.identify.drive_gains import gain_runs
 from harness.io import write_npz
@@ -30,10 +31,6 @@ from identification.drive_gains import identify_drive_gains
 SEED = 5309
 SAMPLES, QUICK_SAMPLES, NOISE = 4000, 2000, 0.05
 GAINS = (7.3, 11.0, 5.2, 2.9, 1.7, 0.9, 0.6)  # N m/A, joint 1.. (distinct, motor-like)
-REFERENCE_MASS = 18.0  # kg: the arm LOAD_MASS is sized for (a UR5 or a Panda)
-LOAD_MASS = 2.7  # kg, scaled by the arm's mass
-LOAD_OFFSET = (0.03, -0.02, 0.08)  # m from the flange, in its body's frame
-LOAD_INERTIA = (0.01, 0.012, 0.008)  # kg m^2, principal moments about its centre of mass
 TARGET = 0.03  # every gain within 3 %
 
 
@@ -43,11 +40,7 @@ def current_logs(arm: Arm, directory: Path, seed: int = SEED, samples: int = SAM
     A, as `ingest --gains-unknown` writes them) under directory: their paths, the load's mass,
     the true gains and the load's true parameters (last joint's frame)."""
     directory = Path(directory)
-    model = arm.pinocchio
-    scale = sum(model.inertias[j].mass for j in range(1, model.njoints)) / REFERENCE_MASS
-    variant = LoadedVariant(payload=LOAD_MASS * scale, payload_offset=LOAD_OFFSET,
-                            payload_inertia=tuple(scale * i for i in LOAD_INERTIA), name="load")
-    plant = Arm.of(write_arm_variant(arm, variant, directory))
+    plant = Arm.of(write_arm_variant(arm, loaded_variant(arm, "load"), directory))
     gains = np.asarray(GAINS[:arm.dof] if gains is None else gains, float)
     paths = {}
     for name, (robot, run_seed) in {"unloaded": (arm, seed), "loaded": (plant, seed + 1)}.items():
@@ -60,7 +53,7 @@ def current_logs(arm: Arm, directory: Path, seed: int = SEED, samples: int = SAM
         write_npz(paths[name], t=data.t, q=data.q, qd=data.qd, qdd=data.qdd,
                   current=data.tau / gains, meta=np.array(json.dumps(meta)))
     load = (plant.pinocchio.inertias[-1].toDynamicParameters()
-            - model.inertias[-1].toDynamicParameters())
+            - arm.pinocchio.inertias[-1].toDynamicParameters())
     return {**paths, "mass": float(load[0]), "gains": gains, "load": load}
 
 
