@@ -10,7 +10,7 @@ no rigid-body correction may be named). Scored against the plant's own last body
 loop never sees: the mass within 3 %, the centre of mass within 1 cm, the loaded run's RMS
 error after the loop within 1.3x the declared model's on the same motion unloaded.
 
-The quick form (the smoke test): the UR5 with the wrist's load friction, on 1000 samples.
+The quick form (the smoke test): the UR5 with the wrist's load friction, on 1500 samples.
 """
 
 from __future__ import annotations
@@ -31,7 +31,8 @@ from harness.report.results import Context, SectionResult, check
 from harness.robots.arm import Arm
 
 ROBOTS = ("ur5", "panda")
-QUICK_SAMPLES = 1000
+QUICK_SAMPLES = 1500  # on 1000 (750 trained) the rigid-body correction is named beside the load
+# and takes 7.6 % of its mass (UR5 with the wrist's load friction); 0.04 % on 1500
 
 
 def run(ctx: Context) -> SectionResult:
