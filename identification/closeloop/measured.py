@@ -53,6 +53,7 @@ from identification.closeloop.extended import ExtendedModel
 from identification.closeloop.loop import check_data
 from identification.closeloop.residual import noise_sigma
 from identification.closeloop.selection import EPS_RANGE, LEAD_RANGE
+from identification.closeloop.verdicts import best_left
 from identification.identify import identify
 from identification.kinematic_model import KinematicModel
 from identification.library.kinematic import KinematicLibrary
@@ -225,14 +226,8 @@ def forward_by_validation(cv: BlockValidation, base, target, cols, w, terms) -> 
 def _reasons(trials, terms, unphysical: set[int]) -> tuple[tuple[int, str, float, str], ...]:
     """Per joint, the best candidate left when selection stopped, its gain and why it was
     not named."""
-    best: dict[int, tuple] = {}
-    for _, gain, i, _ in trials:
-        j = terms[i].joint
-        if j not in best or gain > best[j][1]:
-            best[j] = (i, gain)
     out = []
-    for j in sorted(best):
-        i, gain = best[j]
+    for j, i, gain in best_left(terms, ((t[1], t[2]) for t in trials)):
         why = ("its coefficient would be negative (non-physical)" if i in unphysical else
                f"cuts the validation error power by {gain:.1%} < {MIN_GAIN:.0%}")
         out.append((j, f"{terms[i].effect}", float(gain), why))

@@ -65,16 +65,21 @@ def verdict(term, gain, fold_gains, coef, per_run, per_run_std, several) -> str:
     return ""
 
 
-def not_named(terms, chosen, rejected, trials) -> tuple[tuple[int, str, float, str], ...]:
-    """Per joint, the best candidate left when selection stopped, its gain and why."""
+def best_left(terms, gains) -> list[tuple[int, int, float]]:
+    """Per joint, in joint order, the candidate with the largest gain among gains [(gain,
+    index into terms)]: (joint, index, gain)."""
     best: dict[int, tuple] = {}
-    for _, gain, i, _, _ in trials:
+    for gain, i in gains:
         j = terms[i].joint
         if j not in best or gain > best[j][1]:
             best[j] = (i, gain)
+    return [(j, *best[j]) for j in sorted(best)]
+
+
+def not_named(terms, chosen, rejected, trials) -> tuple[tuple[int, str, float, str], ...]:
+    """Per joint, the best candidate left when selection stopped, its gain and why."""
     out = []
-    for j in sorted(best):
-        i, gain = best[j]
+    for j, i, gain in best_left(terms, ((t[1], t[2]) for t in trials)):
         why = rejected[i][1] if i in rejected and gain >= MIN_GAIN else (
             f"cuts the validation error power by {gain:.1%} < {MIN_GAIN:.0%}")
         out.append((j, terms[i].effect, float(gain), why))
