@@ -201,6 +201,8 @@ def timing(execution, config: PlannerConfig) -> dict:
     cpu, clock = execution.solve_cpu_ms[1:], execution.clock_ms[1:]
     budget = config.anytime.replan_budget_ms
     return {"replan_cpu_ms": cpu, "replan_clock_ms": clock, "replan_budget_ms": budget,
+            # what a re-plan's times count: a bank's whole work (planning.bank.work) or a solve
+            "replan_work": (execution.bank or {}).get("work", "the solve's"),
             "replan_cpu_max_ms": max(cpu, default=None),
             "replans_over_budget": sum(ms > budget for ms in cpu)}
 

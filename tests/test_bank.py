@@ -1,18 +1,29 @@
 """The bank of plans (planning.bank): classes read as the side each link passes the obstacle
-(closed-form poses of the paper's arm), what counts as one way round, and on the README's
-UR5 crossing a bank that keeps the class the single re-planned plan leaves, within the
-re-plan's budget on the nominal clock."""
+(closed-form poses of the paper's arm), what counts as one way round, the bank's one check
+per plan giving what the functions it replaces give, its checks counted on the nominal
+clock, and on the README's UR5 crossing a bank that keeps the class the single re-planned
+plan leaves, within the re-plan's budget on the nominal clock."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
 import pytest
 
 from harness.cli import main
-from planning.bank.classes import label, same_class, sides
+from harness.robots.arm import Arm
+from planning.anytime.safety import SafetyCheck
+from planning.bank.classes import label, motion_class, same_class, sides
+from planning.bank.scoring import Scores
+from planning.bank.work import CHECK_ITERATIONS, Work
 from planning.formulation.kinematics import paper_arm
+from planning.formulation.trajectory import PolynomialTrajectory
+from planning.globalsearch.multistart import objective
+from planning.replanning import stale
+from planning.types import ObstacleForecast, Segment, SegmentPlan
+from tests.helpers import lynx_default_config
 
 ARM = paper_arm()  # at q = 0 the upper arm runs from (0, 0, 0.086) to (0.146, 0, 0.086) m
 THRESHOLD = 0.08
@@ -50,6 +61,46 @@ def test_one_way_round_is_no_link_on_opposite_sides():
     assert same_class(above, ((2, "left"),))  # a diagonal pass
     assert not same_class(above, ((4, "above"),))  # near links wholly different
     assert same_class((), ()) and not same_class((), above)
+
+
+def test_one_check_per_plan_gives_the_objective_class_and_stale_test():
+    """planning.bank.scoring on random Lynxmotion motions and forecasts (obstacles passing
+    within 2-12 cm of the links): the objective of multistart.objective, the class of
+    classes.motion_class and the stale test of replanning.stale, each plan checked once."""
+    config = lynx_default_config()
+    check = SafetyCheck(Arm.of("lynxmotion").nominal, config, compile_code=False)
+    rng = np.random.default_rng(55)
+    for trial in range(12):
+        motion = PolynomialTrajectory(0.0, 2.0, rng.normal(size=(3, 5)) * 0.6)
+        t = 0.01 * rng.integers(1, 150)
+        times = np.round(np.arange(t + 0.01, 2.0 + 1e-9, 0.01), 9)
+        link = config.geometry.link_ends(motion.position(times))[1][:, trial % 2]
+        centres = link + rng.normal(size=3) * 0.07 + np.linspace(0, 1, len(times))[:, None] * \
+            rng.normal(size=3) * 0.05
+        forecast = ObstacleForecast(times, centres)
+        plan = SegmentPlan(motion, energy=0.0, penalty=rng.uniform() * (trial % 3 == 0),
+                           success=True, status="", iterations=0, solve_ms=0.0,
+                           solve_cpu_ms=0.0, penalty_weight=0.0, x=np.zeros(0),
+                           multipliers=(np.zeros(0), np.zeros(0)), detour=trial % 4 == 1)
+        problem = Segment(np.zeros(3), np.zeros(3), t, 2.0 - t, np.zeros(3), forecast)
+        scores = Scores(check, config, problem)
+        rest = dataclasses.replace(plan, trajectory=motion.restrict(t, 2.0 - t))
+        assert scores.objective(plan) == pytest.approx(objective(
+            check, config, rest, t, 2.0 - t, forecast), rel=1e-12, abs=1e-12)
+        assert scores.motion_class(plan) == motion_class(config.geometry, motion, forecast,
+                                                         config.threshold, t)
+        assert scores.dips(plan) == stale(config, plan, forecast)
+        assert scores.checked == 1
+
+
+def test_the_checks_count_on_the_nominal_clock():
+    """A sample's work: its solves' clock and CHECK_ITERATIONS iterations per plan checked;
+    under CPU clocks its CPU."""
+    scores = type("Checked", (), {"checked": 3})()
+    work = Work(0.5, scores)
+    work.solved = 4.0
+    assert work.clock_ms() == pytest.approx(4.0 + 3 * CHECK_ITERATIONS * 0.5)
+    assert Work(None, scores).check_ms() == 0.0
 
 
 @pytest.mark.slow

@@ -37,10 +37,12 @@ class BankRecord:
     dropped: int = 0
     found: int = 0  # plans the global search handed to the bank
     kept: int = 0  # re-plans of other classes only, the arm going on as it was
+    checks: int = 0  # plans checked (planning.bank.scoring), what the bank's bookkeeping did
 
     def to_json(self, size: int, mode: str) -> dict:
         return {"size": size, "mode": mode, "admitted": self.admitted,
                 "dropped": self.dropped, "search_plans": self.found, "kept": self.kept,
+                "checks": self.checks,
                 "switches": self.switches, "replans": self.replans}
 
     def replan(self, t: float, candidates: list, held: int, followed: tuple) -> None:

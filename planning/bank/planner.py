@@ -12,10 +12,10 @@
   class only past BankOptions.hysteresis.
 - **Dropped**: a member missing the threshold on BankOptions.patience forecasts in a row,
   and the one promising least when a better plan needs room (BankOptions.size).
-- **Budget**: the plan followed gets the whole re-plan budget unless another member
-  promises less (then BankOptions.followed_share; a safe plan re-planned only to improve
-  yields its turn); the others share what it leaves. Every solve of a sample counts:
-  clock_ms, CPU and wall times are the whole bank's (docs/realtime.md, 'The bank of plans').
+- **Budget**: the plan followed gets the re-plan budget unless another member promises
+  less (then BankOptions.followed_share; a safe plan re-planned only to improve yields its
+  turn); the others share what it leaves. The whole bank's work at a sample counts, its
+  checks of its plans with its solves (planning.bank.work; docs/realtime.md).
 """
 
 from __future__ import annotations
@@ -27,7 +27,9 @@ from planning.anytime.solver import CONVERGED
 from planning.bank.classes import label, same_class
 from planning.bank.members import BankRecord, Member, cheaper, choose
 from planning.bank.scoring import Scores
+from planning.bank.work import Work, described, timed_search
 from planning.globalsearch.planner import ADOPTED
+from planning.timing import collection_deferred
 from planning.types import ITERATE, KEPT, Segment, SegmentPlan, SegmentPlanner
 
 SWITCHED = " (bank: switched class)"
@@ -41,6 +43,7 @@ class BankPlanner:
 
     def __init__(self, inner: SegmentPlanner, anytime, search=None):
         self.inner, self.anytime, self.search = inner, anytime, search
+        self._timed = timed_search(search)  # the nominal clock's, its time left out
         self.check = anytime.check
         self.front = inner if search is None else search  # plans the plan followed
         self.config = inner.config
@@ -67,10 +70,13 @@ class BankPlanner:
         and the one followed."""
         clock = "nominal" if self.config.anytime.iteration_ms is not None else "cpu"
         mode = (f"{clock}: every class's re-plan at a sample in this thread, sharing the "
-                f"re-plan's budget, the plan followed first; the global search's plans "
+                f"re-plan's budget with the bank's checks of its plans, the plan followed "
+                f"first; the global search's plans "
                 f"handed over when its work up to them is done" +
                 ("" if clock == "nominal" else " (another process where there are cores)"))
-        return self.record.to_json(self.options.size, mode)
+        self._checks(None)
+        return {**self.record.to_json(self.options.size, mode),
+                "work": described(clock == "nominal")}
 
     def prepare(self, goal) -> None:
         self.front.prepare(goal)
@@ -85,7 +91,7 @@ class BankPlanner:
                   ) -> tuple[SegmentPlan, list[SegmentPlan]]:
         best, plans = self.front.plan_cold(problem, starts)
         self._forget()
-        self._scores = Scores(self.check, self.config, problem)
+        self._scores = self._checks(Scores(self.check, self.config, problem))
         self._settle = problem.t_begin + problem.duration - self.config.settle_horizon
         self.followed = self._seed(best, problem)
         for plan in sorted(plans, key=lambda p: self._score(p, problem)):
@@ -93,6 +99,7 @@ class BankPlanner:
                 self._admit(plan, problem)
         return best, plans
 
+    @collection_deferred
     def plan(self, problem: Segment, warm: SegmentPlan | None = None) -> SegmentPlan:
         """A re-plan of the bank: the plan followed re-planned if Algorithm 2 must (it dips
         below the threshold, is stale or unconverged), the search's plans admitted, then the
@@ -102,11 +109,11 @@ class BankPlanner:
         arm goes on as it was (nothing re-planned that it follows)."""
         if warm is None:
             return self.front.plan(problem)
-        self._scores = Scores(self.check, self.config, problem)
+        self._scores = self._checks(Scores(self.check, self.config, problem))
         if self.followed is None:  # a plan not made by plan_cold: a bank of its own
             self._settle = problem.t_begin + problem.duration - self.config.settle_horizon
             self.followed = self._seed(warm, problem)
-        spent = [0.0, 0.0, 0.0]  # clock, wall, CPU ms of the bank's solves at this sample
+        work = Work(self.config.anytime.iteration_ms, self._scores, self._timed)
         total, followed = self._budget(problem), self.followed
         t = problem.t_begin
         rest = dataclasses.replace(warm, trajectory=warm.trajectory.restrict(
@@ -125,9 +132,10 @@ class BankPlanner:
             must = False  # safe and only to improve: the budget goes to a better class
         if must:  # the plan followed first, with the budget the others may need
             share = total * self.options.followed_share if promising else total
-            new = self._replan(problem, warm, share, spent, self.front)
+            new = self._replan(problem, warm, min(share, self._left(total, work)), work,
+                               self.front)
             if not new.success:
-                return self._timed(new, spent)
+                return work.timed(new)
             followed = self._placed(followed, new, problem)
             current = self._score(new, problem)
         else:
@@ -135,10 +143,10 @@ class BankPlanner:
         candidates = [(followed, new)]
         if t < self._settle - 1e-9:
             for member in self._to_replan(followed, current, problem):
-                left = total - spent[0]
+                left = self._left(total, work)
                 if member not in self.members or left < self.anytime.round_ms():
                     continue
-                again = self._replan(problem, member.plan, left, spent)
+                again = self._replan(problem, member.plan, left, work)
                 member.replanned = t
                 if again.success and self._placed(member, again, problem) is member:
                     candidates.append((member, again))
@@ -156,11 +164,11 @@ class BankPlanner:
         elif chosen is not followed:  # a better plan of the same class: the search's
             plan = dataclasses.replace(plan, status=plan.status + ADOPTED)
         self.followed = chosen
-        if plan is rest:
-            self.record.kept += bool(spent[0])
-            return warm if not spent[0] else self._timed(dataclasses.replace(
-                warm, status=KEPT), spent)
-        return self._timed(plan, spent)
+        if plan is rest:  # nothing solved: no re-plan (the bookkeeping's work not reported)
+            self.record.kept += bool(work.solved)
+            return warm if not work.solved else work.timed(dataclasses.replace(
+                warm, status=KEPT))
+        return work.timed(plan)
 
     def _promising(self, current: tuple, problem: Segment) -> bool:
         return any(self._better(member, current, problem) for member in self.members
@@ -184,32 +192,32 @@ class BankPlanner:
         rest = sorted((m for m in others if m not in promising), key=lambda m: m.replanned)
         return promising + rest[:1]
 
-    # -- the bank's bookkeeping ------------------------------------------------------------
-
-    def _replan(self, problem: Segment, warm: SegmentPlan, budget: float, spent,
+    def _replan(self, problem: Segment, warm: SegmentPlan, budget: float, work: Work,
                 planner: SegmentPlanner | None = None) -> SegmentPlan:
-        new = (planner or self.inner).plan(dataclasses.replace(problem,
-                                                               budget_ms=max(budget, 0.0)), warm)
-        spent[0] += new.clock_ms
-        spent[1] += new.solve_ms
-        spent[2] += new.solve_cpu_ms
-        return new
+        return work.solve((planner or self.inner).plan,
+                          dataclasses.replace(problem, budget_ms=max(budget, 0.0)), warm)
+
+    def _left(self, total: float, work: Work) -> float:
+        """The budget left to a solve: the checks after it (its plan's, the members' not
+        checked yet) kept back."""
+        after = 1 + self._scores.unchecked([member.plan for member in self.members])
+        return total - work.clock_ms() - work.check_ms() * after
 
     def _budget(self, problem: Segment) -> float:
         budget = self.config.anytime.replan_budget_ms if problem.budget_ms is None \
             else problem.budget_ms
         return budget if problem.deadline_ms is None else min(budget, problem.deadline_ms)
 
-    def _timed(self, plan: SegmentPlan, spent) -> SegmentPlan:
-        return dataclasses.replace(plan, clock_ms=spent[0], solve_ms=spent[1],
-                                   solve_cpu_ms=spent[2])
+    def _checks(self, scores: Scores | None) -> Scores | None:
+        """scores as the sample's, the last sample's checks counted in the record."""
+        self.record.checks += 0 if self._scores is None else self._scores.checked
+        self._scores = scores
+        return scores
 
-    def _class(self, plan: SegmentPlan, problem: Segment) -> tuple:
-        return self._scores.motion_class(plan)
+    def _class(self, plan: SegmentPlan, problem: Segment) -> tuple:  # each plan once a
+        return self._scores.motion_class(plan)  # sample (planning.bank.scoring)
 
     def _score(self, plan: SegmentPlan, problem: Segment) -> tuple[int, float]:
-        """The plan's objective from the segment's start on, each plan scored once per
-        sample (planning.bank.scoring)."""
         return self._scores.objective(plan)
 
     def _seed(self, plan: SegmentPlan, problem: Segment) -> Member:

@@ -40,6 +40,10 @@ class Scores:
             self.times, self.centres = times[keep], np.asarray(self.forecast.centres)[keep]
             self.whole = bool(np.all(keep)) and bool(np.any(keep))
 
+    def unchecked(self, plans) -> int:
+        """How many of the plans are not checked yet."""
+        return sum(id(plan) not in self._entries for plan in plans)
+
     def objective(self, plan: SegmentPlan) -> tuple[int, float]:
         """multistart.objective of the plan's motion from the segment's start on: (2 if
         unusable, 1 if it misses the threshold beyond the penalty tolerance, else 0; the
