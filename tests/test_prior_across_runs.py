@@ -7,6 +7,8 @@ Several runs fitted together are never worse than the best single run on a run n
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pytest
 
@@ -56,12 +58,33 @@ def test_the_run_left_out_is_scored_without_its_offset(lynx_runs):
                                base["validation"]["lambda_errors"], rtol=1e-4)
 
 
+@functools.cache
+def _across(robot: str) -> dict:
+    return runs_against_single(Arm.of(robot), 1)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("robot", ["ur5", pytest.param("panda", marks=pytest.mark.xfail(
     strict=True, reason="measured (seed 1, 2000 samples a run): runs 1+2 / best single run on "
-    "run 3 = 0.66, 0.78, 0.87, 0.77, 1.25, 0.69, 1.25 per joint (each joint weighed by its noise, "
-    "6d685fb; 1.51 on joint 5 before): joints 5 and 7 worse"))])
+    "run 3 = 0.66, 0.78, 0.87, 0.77, 1.25, 0.69, 1.25 per joint; least squares + friction on "
+    "the same runs 0.62, 0.67, 0.88, 1.04, 1.23, 0.68, 1.25: the noise draw, which the per-joint "
+    "best of two single runs picks after the fact (docs/identification.md, 'Several runs "
+    "against the best single run')"))])
 def test_two_runs_are_never_worse_than_the_best_single_run_on_a_third(robot):
-    out = runs_against_single(Arm.of(robot), 1)
+    out = _across(robot)
     assert out["chosen_on"] == "leave one run out over 2 runs" and out["lambda"] in LAMBDAS
     assert max(out["ratio"]) <= WORSE, np.round(out["ratio"], 3).tolist()
+
+
+@pytest.mark.slow
+def test_where_the_pair_misses_least_squares_on_the_same_runs_misses_as_far():
+    """Panda, seed 1: the joints where the pair misses (5 and 7) are the noise draw's, not the
+    consistent fit's choices: least squares + friction on the same runs, each joint weighed by
+    its noise, misses them by as much (over 200 noise draws on these motions it misses some
+    joint on 69 % of them, the pair at or below the best single run in the median on every
+    joint: docs/identification.md, 'Several runs against the best single run')."""
+    out = _across("panda")
+    ratio, peer = np.array(out["ratio"]), np.array(out["least_squares_ratio"])
+    missed = ratio > WORSE
+    assert missed.any() and np.all(peer[missed] > WORSE), (ratio.round(3), peer.round(3))
+    np.testing.assert_allclose(ratio[missed], peer[missed], rtol=0.05)
