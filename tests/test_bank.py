@@ -95,12 +95,12 @@ def test_one_check_per_plan_gives_the_objective_class_and_stale_test():
 
 def test_the_checks_count_on_the_nominal_clock():
     """A sample's work: its solves' clock and CHECK_ITERATIONS iterations per plan checked;
-    under CPU clocks its CPU."""
-    scores = type("Checked", (), {"checked": 3})()
+    under CPU clocks its CPU, a check counted at the most a recent one took."""
+    scores = type("Checked", (), {"checked": 3, "costs": [0.2, 0.5]})()
     work = Work(0.5, scores)
     work.solved = 4.0
     assert work.clock_ms() == pytest.approx(4.0 + 3 * CHECK_ITERATIONS * 0.5)
-    assert Work(None, scores).check_ms() == 0.0
+    assert Work(None, scores).check_ms() == 0.5  # the most a recent check took
 
 
 @pytest.mark.slow

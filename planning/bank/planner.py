@@ -27,7 +27,7 @@ from planning.anytime.solver import CONVERGED
 from planning.bank.classes import label, same_class
 from planning.bank.members import BankRecord, Member, cheaper, choose
 from planning.bank.scoring import Scores
-from planning.bank.work import Work, described, timed_search
+from planning.bank.work import Work, described, recent, timed_search
 from planning.globalsearch.planner import ADOPTED
 from planning.timing import collection_deferred
 from planning.types import ITERATE, KEPT, Segment, SegmentPlan, SegmentPlanner
@@ -43,11 +43,10 @@ class BankPlanner:
 
     def __init__(self, inner: SegmentPlanner, anytime, search=None):
         self.inner, self.anytime, self.search = inner, anytime, search
-        self._timed = timed_search(search)  # the nominal clock's, its time left out
-        self.check = anytime.check
+        self._timed = timed_search(search)  # the global search's, its time left out
+        self.check, self.config, self.options = anytime.check, inner.config, inner.config.bank
         self.front = inner if search is None else search  # plans the plan followed
-        self.config = inner.config
-        self.options = self.config.bank
+        self._costs = recent()  # CPU ms of the recent checks of plans (Scores)
         self._forget()
 
     def _forget(self) -> None:
@@ -91,7 +90,7 @@ class BankPlanner:
                   ) -> tuple[SegmentPlan, list[SegmentPlan]]:
         best, plans = self.front.plan_cold(problem, starts)
         self._forget()
-        self._scores = self._checks(Scores(self.check, self.config, problem))
+        self._scores = self._checks(Scores(self.check, self.config, problem, self._costs))
         self._settle = problem.t_begin + problem.duration - self.config.settle_horizon
         self.followed = self._seed(best, problem)
         for plan in sorted(plans, key=lambda p: self._score(p, problem)):
@@ -109,7 +108,7 @@ class BankPlanner:
         arm goes on as it was (nothing re-planned that it follows)."""
         if warm is None:
             return self.front.plan(problem)
-        self._scores = self._checks(Scores(self.check, self.config, problem))
+        self._scores = self._checks(Scores(self.check, self.config, problem, self._costs))
         if self.followed is None:  # a plan not made by plan_cold: a bank of its own
             self._settle = problem.t_begin + problem.duration - self.config.settle_horizon
             self.followed = self._seed(warm, problem)

@@ -13,6 +13,8 @@ bank of plans')."""
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from planning.bank.classes import motion_class, near_sides
@@ -25,10 +27,12 @@ TOLERANCE = 1e-12  # s: a forecast sample at the segment's end counts (as object
 class Scores:
     """The measures of plans on one segment (a re-plan's: from the arm's state at its sample,
     with its forecast), each plan measured once while this stands. `checked`: how many plans
-    it has checked (the bank's work on the nominal clock)."""
+    it has checked (the bank's work on the nominal clock); costs: where each check's CPU (ms)
+    goes (what a check costs under CPU clocks: planning.bank.work.Work.check_ms)."""
 
-    def __init__(self, check, config, problem: Segment):
+    def __init__(self, check, config, problem: Segment, costs=None):
         self.check, self.config, self.problem = check, config, problem
+        self.costs = [] if costs is None else costs
         self.t, self.duration, self.forecast = problem.t_begin, problem.duration, problem.forecast
         self._entries: dict = {}  # id(plan) -> (plan, clearances, objective); plan held alive
         self._classes: dict = {}
@@ -84,19 +88,22 @@ class Scores:
         key = id(plan)
         if key not in self._entries:
             self.checked += 1
-            rest = plan.trajectory.restrict(self.t, self.duration)
-            energy, config = self.check.energy(rest), self.config
-            if self.forecast is None:
-                self._entries[key] = (plan, None, (2 * (not plan.success), energy))
-                return self._entries[key]
-            if self._bound is None:
-                self._bound = self.check.against(self.times, self.centres, self.t,
-                                                 self.duration)
-            links = self._bound.links(rest.coefficients)
-            violation = float(np.sum(np.maximum(config.threshold - links, 0.0)))
-            unsafe = config.threshold - float(np.min(links, initial=np.inf)) > \
-                config.penalty_tolerance
-            score = (2 * (not plan.success) or int(unsafe),
-                     energy + config.anytime.elastic_weight * violation)
-            self._entries[key] = (plan, links, score)
+            began = time.thread_time()
+            self._entries[key] = self._measured(plan)
+            self.costs.append(1e3 * (time.thread_time() - began))
         return self._entries[key]
+
+    def _measured(self, plan: SegmentPlan) -> tuple:
+        """(plan, its clearances (k, links) or None without a forecast, its objective)."""
+        rest = plan.trajectory.restrict(self.t, self.duration)
+        energy, config = self.check.energy(rest), self.config
+        if self.forecast is None:
+            return plan, None, (2 * (not plan.success), energy)
+        if self._bound is None:
+            self._bound = self.check.against(self.times, self.centres, self.t, self.duration)
+        links = self._bound.links(rest.coefficients)
+        violation = float(np.sum(np.maximum(config.threshold - links, 0.0)))
+        unsafe = config.threshold - float(np.min(links, initial=np.inf)) > \
+            config.penalty_tolerance
+        return plan, links, (2 * (not plan.success) or int(unsafe),
+                             energy + config.anytime.elastic_weight * violation)

@@ -4,7 +4,8 @@ of the planning thread (docs/realtime.md, 'The bank of plans').
 
 On the nominal clock (AnytimeOptions.iteration_ms) the bookkeeping counts CHECK_ITERATIONS
 SQP iterations of the arm per plan checked: a count of what was done, the same on any
-machine. Under CPU clocks it counts its CPU. The times reported (SegmentPlan.solve_ms,
+machine. Under CPU clocks it counts its CPU, and keeps back from a solve's
+budget what its checks after the solve recently cost. The times reported (SegmentPlan.solve_ms,
 solve_cpu_ms) are all the planning thread spent in the bank's re-plan (its solves, the
 global search's checks around the plan followed's, the bank's own) but the global search's
 own work there: on the nominal clock the search itself, run there and then as if on
@@ -14,7 +15,9 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections import deque
 
+from planning.anytime.budget import RECENT
 from planning.types import SegmentPlan
 
 # a plan checked (its dense energy integral, each link's clearance at every forecast sample,
@@ -47,6 +50,11 @@ class TimedSearch:
                 self.wall += 1e3 * (time.perf_counter() - wall)
                 self.cpu += 1e3 * (time.thread_time() - cpu)
         return timed
+
+
+def recent() -> deque:
+    """Where the CPU (ms) of the recent checks of plans goes (Scores.costs)."""
+    return deque(maxlen=RECENT)
 
 
 def timed_search(planner) -> TimedSearch | None:
@@ -90,8 +98,11 @@ class Work:
         return self.solved + self.check_ms() * self.scores.checked
 
     def check_ms(self) -> float:
-        """What a plan checked counts on the budgets' clock (0 under CPU clocks: measured)."""
-        return 0.0 if self.nominal is None else self.nominal * CHECK_ITERATIONS
+        """What a plan checked counts on the budgets' clock: nominally CHECK_ITERATIONS
+        iterations; under CPU clocks the most a recent check took (Scores.costs)."""
+        if self.nominal is None:
+            return max(self.scores.costs, default=0.0)
+        return self.nominal * CHECK_ITERATIONS
 
     def cpu_ms(self) -> float:
         return 1e3 * (time.thread_time() - self.cpu) - self._outside(1)
