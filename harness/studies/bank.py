@@ -43,7 +43,9 @@ SPAN = 1.5
 ROBOTS = (("lynxmotion", 20, None), ("ur5", 5, SPAN), ("panda", 5, SPAN))
 WAYS = (("bank", ()), ("one plan", ("--bank", "1")), ("penalty loop", ("--replanner", "penalty")))
 WITHIN = 0.005  # the issue's bar: within 0.5 % of the penalty loop, or below
-CPU_MAX_MS, CPU_MEDIAN_MS = 10.0, 2.0  # the bank's re-plan CPU on the Lynxmotion
+# the bank's re-plan CPU on the Lynxmotion (PLAN.json's timing.replan_cpu_ms: the whole
+# bank's work at a re-plan, planning.bank.work), over the executions the bank planned
+CPU_MAX_MS, CPU_MEDIAN_MS = 10.0, 2.0
 
 
 def run(ctx: Context) -> SectionResult:
@@ -101,7 +103,9 @@ def planned(robot: str, scenario, extra: tuple, out: Path) -> dict:
     plan = json.loads(out.read_text())
     timing = plan["timing"]
     return {"energy": plan["energy"], "min_clearance": plan["min_clearance"],
-            "threshold": plan["threshold"], "replan_cpu_ms": timing["replan_cpu_ms"],
+            "threshold": plan["threshold"], "replanner": plan["replanner"],
+            "bank_planned": plan.get("bank") is not None,  # not the other method's fallback
+            "replan_cpu_ms": timing["replan_cpu_ms"],
             "replan_clock_ms": timing["replan_clock_ms"],
             "switches": len((plan.get("bank") or {}).get("switches", []))}
 
@@ -124,8 +128,16 @@ def table(rows: list[dict], ways) -> list[str]:
         gaps = [excess(row, "bank", other) for other in ("penalty loop", "one plan")]
         lines.append(f"| {row['robot']} | {row['scenario']} | " + " | ".join(cells) + " | " +
                      " | ".join("-" if g is None else f"{100 * g:+.2f} %" for g in gaps) +
-                     f" | {row['bank'].get('switches', '-')} |")
+                     f" | {switches(row['bank'])} |")
     return lines
+
+
+def switches(result: dict) -> str:
+    """The bank's class switches, or whose plan `plan` gave when the bank's left the
+    threshold (the other method's fallback)."""
+    if result.get("bank_planned", True):
+        return str(result.get("switches", "-"))
+    return f"- ({result['replanner']}'s plan)"
 
 
 def within(rows: list[dict], robots: tuple[str, ...]) -> tuple[int, int, int]:
@@ -158,11 +170,13 @@ def targets(rows: list[dict]) -> list[Target]:
                             good, counted if bar is None else min(bar, counted), "",
                             lower_is_better=False,
                             note=f"of {counted}; {apart} the penalty loop could not plan"))
-    cpu = [ms for r in rows if r["robot"] == "lynxmotion" and "energy" in r["bank"]
-           for ms in r["bank"]["replan_cpu_ms"]]
+    lynx = [r["bank"] for r in rows if r["robot"] == "lynxmotion" and "energy" in r["bank"]]
+    cpu = [ms for r in lynx if r.get("bank_planned", True) for ms in r["replan_cpu_ms"]]
+    fallbacks = f"{sum(not r.get('bank_planned', True) for r in lynx)} executions `plan` " \
+        "fell back to the other method for left out"
     if cpu:
         found += [Target("Lynxmotion: the bank's re-plan CPU, max", float(np.max(cpu)),
-                         CPU_MAX_MS, "ms", timing=True),
+                         CPU_MAX_MS, "ms", timing=True, note=fallbacks),
                   Target("Lynxmotion: the bank's re-plan CPU, median", float(np.median(cpu)),
-                         CPU_MEDIAN_MS, "ms", timing=True)]
+                         CPU_MEDIAN_MS, "ms", timing=True, note=fallbacks)]
     return found
