@@ -11,7 +11,11 @@ within +-1.5 rad). Each is planned as a user plans it,
 --obstacle-to .. --obstacle-sway .. --sway-periods ..` (nominal clocks, the same plans on any
 machine), three ways: the default (the bank), `--bank 1` (one plan re-planned, the default
 before the bank) and `--replanner penalty` (the paper's penalty loop). A plan that `plan`
-refuses (no feasible plan: exit 2) is reported apart, not counted as within.
+refuses (no feasible plan: exit 2) is reported apart, not counted as within. On the
+Lynxmotion the bank is also held to the issue's reference as it was first stated: the causal
+multi-start (harness.plan.causal: Algorithm 2 re-planning by a multi-start of IPOPT to
+convergence at every re-plan, the bench's starts), 19 of 20 within 0.5 % or below; a
+scenario whose reference is infeasible is reported apart and not counted as within.
 
 The quick form (the smoke test) plans 2 Lynxmotion scenarios.
 """
@@ -26,8 +30,10 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.bench.planning.section import CAUSAL_STARTS
 from harness.cli import main
 from harness.plan.arm_config import planner_config
+from harness.plan.causal import against_causal
 from harness.report.results import Context, SectionResult, Target, check
 from harness.robots.arm import Arm
 from planning.penalty.solver import Planner
@@ -58,6 +64,9 @@ def run(ctx: Context) -> SectionResult:
                 row = {"robot": name, "scenario": i, **scenario_text(scenario)}
                 for way, extra in ways:
                     row[way] = planned(name, scenario, extra, Path(tmp) / f"{name}{i}{way}.json")
+                if name == "lynxmotion":  # the quick form: from the detours alone
+                    row["causal"] = causal(name, scenario, row["bank"],
+                                           0 if ctx.quick else CAUSAL_STARTS)
                 rows.append(row)
     return SectionResult("\n".join(table(rows, ways)), {"seed": SEED, "rows": rows},
                          checks(rows), [] if ctx.quick else targets(rows))
@@ -78,6 +87,16 @@ def draw(name: str, count: int, seed: int, span: float | None = None) -> list:
         lower, upper = np.maximum(lower, -span), np.minimum(upper, span)
     return random_scenarios(count, seed, free_motion, config.geometry, lower, upper,
                             config.threshold)
+
+
+def causal(robot: str, scenario, bank: dict, starts: int) -> dict:
+    """The causal multi-start reference on the scenario (its energy, feasibility) and the
+    bank's executed energy over it (%, None when the bank planned nothing)."""
+    arm = Arm.of(robot)
+    ours = bank.get("energy")
+    row = against_causal(arm.nominal, planner_config(arm), scenario,
+                         float("nan") if ours is None else ours, starts)
+    return {**row, "excess_pct": None if ours is None else row["excess_pct"]}
 
 
 def scenario_text(scenario) -> dict:
@@ -129,6 +148,17 @@ def table(rows: list[dict], ways) -> list[str]:
         lines.append(f"| {row['robot']} | {row['scenario']} | " + " | ".join(cells) + " | " +
                      " | ".join("-" if g is None else f"{100 * g:+.2f} %" for g in gaps) +
                      f" | {switches(row['bank'])} |")
+    causal_rows = [r for r in rows if "causal" in r]
+    if causal_rows:
+        lines += ["", "Against the causal multi-start reference (Lynxmotion): its executed "
+                  "energy (J), feasible or not, and the bank's excess over it.", "",
+                  "| # | reference | feasible | bank | bank vs reference |", "|---|---|---|---|---|"]
+        for r in causal_rows:
+            c = r["causal"]
+            gap = "-" if c["excess_pct"] is None else f"{c['excess_pct']:+.3f} %"
+            bank = f"{r['bank']['energy']:.4f}" if "energy" in r["bank"] else "refused"
+            lines.append(f"| {r['scenario']} | {c['reference_J']:.4f} | "
+                         f"{'yes' if c['reference_feasible'] else 'no'} | {bank} | {gap} |")
     return lines
 
 
@@ -170,6 +200,16 @@ def targets(rows: list[dict]) -> list[Target]:
                             good, counted if bar is None else min(bar, counted), "",
                             lower_is_better=False,
                             note=f"of {counted}; {apart} the penalty loop could not plan"))
+    referenced = [r["causal"] for r in rows if "causal" in r]
+    if referenced:
+        good = sum(1 for c in referenced if c["reference_feasible"] and c["excess_pct"] is not None
+                   and c["excess_pct"] <= 100 * WITHIN)
+        apart = sum(not c["reference_feasible"] for c in referenced)
+        found.append(Target("Lynxmotion: scenarios within 0.5 % of the causal multi-start or "
+                            "below (the target as first stated)", good, 19, "",
+                            lower_is_better=False,
+                            note=f"of {len(referenced)}; {apart} whose reference is infeasible "
+                                 "reported apart, not counted as within"))
     lynx = [r["bank"] for r in rows if r["robot"] == "lynxmotion" and "energy" in r["bank"]]
     cpu = [ms for r in lynx if r.get("bank_planned", True) for ms in r["replan_cpu_ms"]]
     fallbacks = f"{sum(not r.get('bank_planned', True) for r in lynx)} executions `plan` " \
