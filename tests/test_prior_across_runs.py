@@ -81,7 +81,7 @@ def test_where_the_pair_misses_least_squares_on_the_same_runs_misses_as_far():
     """Panda, seed 1: the joints where the pair misses (5 and 7) are the noise draw's, not the
     consistent fit's choices: least squares + friction on the same runs, each joint weighed by
     its noise, misses them by as much (over 200 noise draws on these motions it misses some
-    joint on 69 % of them, the pair at or below the best single run in the median on every
+    joint on 67 % of them, the pair at or below the best single run in the median on every
     joint: docs/identification.md, 'Several runs against the best single run')."""
     out = _across("panda")
     ratio, peer = np.array(out["ratio"]), np.array(out["least_squares_ratio"])
