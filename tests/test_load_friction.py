@@ -4,8 +4,9 @@ A log of the Lynxmotion carrying a load on its last body, with friction mu |L_j|
 eps) on joints 2 and 3 (L the loaded rigid body's torque): the loop names the load and the
 friction within a few per cent, the model it writes reads back the same torque, and its
 CasADi form is its numeric one. Without the candidate the same data name an effect they do
-not have (a viscous term, 2.6 % on the mass: on the UR5's wrist 79 %, docs/closeloop.md). The 6-joint case (the UR5 with its wrist's friction) is the
-bench's payload case, checked in its slow test.
+not have (a viscous term, 2.6 % on the mass: on the UR5's wrist 79 %, docs/closeloop.md).
+The 6-joint case (the UR5 with its wrist's friction) is the bench's payload case and the
+study payload's, smoke-tested in tests/test_studies.py.
 """
 
 from __future__ import annotations
