@@ -261,9 +261,9 @@ def test_a_robot_given_by_its_file_gets_the_same_sections(tmp_path):
     report = json.loads((out / "report.json").read_text())
     assert list(report["sections"]) == ["identification", "closeloop"] and report["ok"]
     assert "paper" not in report["sections"]["identification"]["results"]  # no extras
-    assert sorted(p.name for p in (out / "plants").iterdir()) == [
+    assert sorted(p.name for p in (out / "plants").iterdir()) == [  # a 6-joint arm's load too
         "lynxmotion_control.xml", "lynxmotion_coupled.xml", "lynxmotion_effects.xml",
-        "lynxmotion_payload.xml"]
+        "lynxmotion_payload.xml", "ur5_payload.xml"]
 
 
 def test_clearance_is_a_target_where_no_path_was_designed():

@@ -179,7 +179,7 @@ def run(ctx: Context) -> SectionResult:
                             results["plants"]["effects"]["error_after"], strict=True)))]
     results["payload_cases"] = []
     for case_arm, mu in payload_arms(arm):
-        payload = payload_case(case_arm, plant_dir / f"{case_arm.label}_{mu:g}", mu)
+        payload = payload_case(case_arm, plant_dir, mu)  # one plant file an arm
         results["payload_cases"].append(payload)
         md += ["", payload_markdown(payload)]
         checks += payload_checks(payload)
