@@ -52,22 +52,22 @@ def with_payload(project, target: np.ndarray, declared: np.ndarray, states, payl
     declared torque declared (n, dof) plus that payload's, their shapes on the residual it
     leaves (CANDIDATE_PASSES passes from the payload fitted alone). payload_fit(beside
     (n, dof, k) or None) -> (unit column, parameters per kg, parameters) or None."""
-    payload = payload_fit(None)
-    for k in range(CANDIDATE_PASSES + 1):
+    def under(payload) -> tuple[list, list]:
         carried = 0.0 if payload is None else payload[0] * payload[2][0]
-        terms, cols = load_candidates(project, target - carried, declared + carried, states)
-        if payload is None or k == CANDIDATE_PASSES:
-            return terms, cols, payload
-        payload = payload_fit(np.stack(cols, axis=2))
-    raise AssertionError("unreachable")
+        return load_candidates(project, target - carried, declared + carried, states)
+
+    payload = payload_fit(None)
+    for _ in range(0 if payload is None else CANDIDATE_PASSES):
+        payload = payload_fit(np.stack(under(payload)[1], axis=2))
+    return *under(payload), payload
 
 
 def refit_under_load(fit: Callable, model_load: Callable, terms: list[EffectTerm],
                      cols: np.ndarray, chosen: list[int], states) -> tuple:
     """The joint fit with the named load friction's columns recomputed under the load of the
     model fitted (alternation, REFITS passes): fit(cols) -> (coef_base, coef, extra...) in
-    chosen order, model_load(coef, extra) -> (n, dof) the closed model's torque without its
-    load friction. Returns fit's last output and the columns it was made on."""
+    chosen order, model_load(that output) -> (n, dof) the closed model's torque without
+    its load friction. Returns fit's last output and the columns it was made on."""
     out = fit(cols)
     named = [i for i in chosen if terms[i].effect == EFFECT]
     if not named:
