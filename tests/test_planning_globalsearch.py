@@ -247,3 +247,22 @@ def test_a_failed_search_in_the_other_process_is_reported(tmp_path, monkeypatch,
     assert failures >= 1
     notes = [line for line in capsys.readouterr().err.splitlines() if "global search" in line]
     assert len(notes) == 1 and f"{failures} global search" in notes[0]
+
+
+def test_the_clearance_that_launches_a_search_is_numpys(baseline, config):
+    """The clearance a search's launch reads (compiled) equals planning.formulation's numpy
+    predicted_clearance on the search's own plans of a random crossing, from a later
+    re-plan's time on (a forecast of the samples left)."""
+    from planning.formulation.clearance import predicted_clearance
+    from planning.replanning import forecast_at
+
+    numbers = Planner(baseline, config)
+    case, forecast = random_crossing(numbers, seed=3)
+    _, plans = MultiStart(baseline, config).search(Segment.of(case, forecast))
+    planner = GlobalSearchPlanner(AnytimePlanner(baseline, config), baseline, config)
+    later = forecast_at(case.obstacle, 0.5)
+    for plan in plans:
+        motion = plan.trajectory.restrict(0.5, case.duration - 0.5)
+        for seen in (forecast, later):
+            assert planner.clearance(motion, seen) == pytest.approx(
+                predicted_clearance(config.geometry, motion, seen), abs=1e-9)
