@@ -120,3 +120,33 @@ def test_plan_json_names_the_unread_geometry(tmp_path, capsys):
                  "--torque-limit", "none", "--out", str(out)]) == 0
     unread = json.loads(out.read_text())["unread_geometry"]
     assert [(u["link"], u["file"]) for u in unread] == [("l2", "meshes/missing.dae")]
+
+
+def test_package_meshes_resolve_as_ros_resolves_them(tmp_path, monkeypatch, capsys):
+    """`package://NAME/...` found under ROS_PACKAGE_PATH's folders, and an example-robot-data
+    URDF copied out of the wheel still finds its meshes (the UR10 copied as a new user does
+    lost all six links' geometry, read from the wheel when not copied)."""
+    import shutil
+
+    from harness.robots.registry import erd_robots_dir
+
+    _cube_obj(tmp_path / "cube.obj", 0.04)
+    package = tmp_path / "ros" / "my_arm" / "meshes"
+    package.mkdir(parents=True)
+    shutil.copy(tmp_path / "cube.obj", package / "link.obj")
+    folder = tmp_path / "elsewhere"
+    folder.mkdir()
+    mesh = "package://my_arm/meshes/link.obj"
+    monkeypatch.setenv("ROS_PACKAGE_PATH", str(tmp_path / "nowhere") + ":" + str(tmp_path / "ros"))
+    arm = _arm(folder, mesh, mesh)
+    assert arm.capsules().radii[0] > 0.03 and not arm.unread_geometry
+    monkeypatch.delenv("ROS_PACKAGE_PATH")
+    (tmp_path / "again").mkdir()
+    assert [u.link for u in _arm(tmp_path / "again", mesh, mesh).unread_geometry] == \
+        ["l1", "l2"]  # the same URDF with nowhere to look
+    capsys.readouterr()
+    copied = tmp_path / "ur10.urdf"
+    shutil.copy(erd_robots_dir() / "ur_description" / "urdf" / "ur10_robot.urdf", copied)
+    ur10 = Arm.of(copied)
+    assert not ur10.unread_geometry and min(ur10.capsules().radii) > 0
+    assert "warning" not in capsys.readouterr().err

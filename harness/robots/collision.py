@@ -11,8 +11,10 @@ warns of them once (Arm.unread_geometry).
 
 from __future__ import annotations
 
+import os
 import re
 import xml.etree.ElementTree as ET
+from importlib import metadata
 from pathlib import Path
 from typing import NamedTuple
 
@@ -172,9 +174,7 @@ def urdf_geometry(entry, model: pin.Model
     URDF carry any, which geometry ("collision", else "visual") and its points (body_points);
     and the geometry that could not be read where it counts: of the kind a joint's points
     are of, or of either kind on a joint left without points."""
-    from harness.robots.registry import erd_robots_dir
-
-    packages = (erd_robots_dir().parent.parent,) if entry.source == "example-robot-data" else ()
+    packages = package_roots()
     urdf = Path(entry.urdf)
     collision, missed = body_points(urdf, model, packages, "collision")
     rest = set(range(1, model.njoints)) - set(collision)
@@ -186,6 +186,24 @@ def urdf_geometry(entry, model: pin.Model
                         missed_visual.get(j, []) if j in visual else
                         missed.get(j, []) + missed_visual.get(j, []))]
     return found, tuple(unread)
+
+
+def package_roots() -> tuple[Path, ...]:
+    """Where `package://NAME/...` is looked for, as ROS looks: each folder of
+    ROS_PACKAGE_PATH, each prefix's share/ of AMENT_PREFIX_PATH, and the share/ folder of the
+    example-robot-data wheel (a URDF copied out of it still finds its meshes); the URDF's own
+    folders are tried after these (_resolve)."""
+    from harness.errors import UserError
+    from harness.robots.registry import erd_robots_dir
+
+    roots = [Path(p) for p in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if p]
+    roots += [Path(p) / "share" for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep)
+              if p]
+    try:
+        roots.append(erd_robots_dir().parent.parent)
+    except (UserError, metadata.PackageNotFoundError):
+        pass
+    return tuple(roots)
 
 
 def urdf_body_points(entry, model: pin.Model) -> dict[int, tuple[str, np.ndarray]]:
