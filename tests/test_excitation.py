@@ -263,3 +263,29 @@ def test_the_designed_excitation_is_scored_on_draws_no_setting_was_chosen_on():
     fresh = set(FRESH_DRAWS) | {FRESH_JUDGE}
     assert set(QUICK_FRESH_DRAWS) <= set(FRESH_DRAWS) and len(FRESH_DRAWS) >= 10
     assert not fresh & used, sorted(fresh & used)
+
+
+def test_a_long_design_says_how_far_it_is_and_the_same_design_comes_out(tmp_path, capsys,
+                                                                       monkeypatch):
+    """The design's progress reaches its caller at every optimizer iteration, up to the
+    iterations the design reports, without changing the design; `excite` turns it into a line
+    on stderr at most every Progress.EVERY_S seconds (a UR10 at 20 s designed ten minutes in
+    silence)."""
+    from harness.commands import excite
+
+    seen = []
+    arm = Arm.of("lynxmotion")
+    with_progress = design_for(arm, 6.0, 50.0, seed=0, iterations=20,
+                               progress=lambda i, n: seen.append((i, n)))
+    without = design_for(arm, 6.0, 50.0, seed=0, iterations=20)
+    np.testing.assert_array_equal(with_progress.trajectory.q, without.trajectory.q)
+    counts = [i for i, _ in seen]
+    assert counts == sorted(counts) and counts[0] == 1 and {n for _, n in seen} == {20}
+    assert max(counts) == with_progress.design.iterations >= 2
+    monkeypatch.setattr(excite.Progress, "EVERY_S", 0.0)
+    capsys.readouterr()
+    assert main(["excite", "--robot", "lynxmotion", "--duration", "6", "--rate", "50",
+                 "--iterations", "5", "--out", str(tmp_path / "t.csv")]) == 0
+    lines = [line for line in capsys.readouterr().err.splitlines()
+             if line.startswith("excite: designing")]
+    assert lines and "of at most 5" in lines[-1]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import time
 from pathlib import Path
 
 from harness.data.excitation_file import write_trajectory
@@ -53,7 +54,8 @@ def run(args) -> int:
               f"{args.floor:g} m that the excitation will keep every moving link above: give "
               "--floor HEIGHT (or --floor none) if the robot does not stand on it", file=sys.stderr)
     designed = design_for(arm, args.duration, args.rate, args.accel_limit, args.seed,
-                          args.iterations, args.harmonics, args.criterion, args.floor)
+                          args.iterations, args.harmonics, args.criterion, args.floor,
+                          Progress())
     write_trajectory(args.out, designed.trajectory)
     design = designed.design
     if design.stuck and args.iterations > 0:
@@ -65,6 +67,23 @@ def run(args) -> int:
           f"both ends; {CONDITION_WORDS} {designed.condition:.3g} (generate's default "
           f"excitation's {designed.default_condition:.3g}; {CONDITION_MEANING})")
     return 0
+
+
+class Progress:
+    """One line on stderr at most every EVERY_S seconds of the design: a long design (a
+    6-joint arm at 20 s took ten minutes on a 2-core machine) is not silent."""
+
+    EVERY_S = 30.0
+
+    def __init__(self):
+        self.began = self.said = time.perf_counter()
+
+    def __call__(self, iteration: int, iterations: int) -> None:
+        now = time.perf_counter()
+        if now - self.said >= self.EVERY_S:
+            self.said = now
+            print(f"excite: designing, optimizer iteration {iteration} of at most {iterations}, "
+                  f"{now - self.began:.0f} s so far", file=sys.stderr, flush=True)
 
 
 def _height(text: str) -> float | None:

@@ -101,12 +101,13 @@ def excitation_limits(arm: Arm, acceleration: float) -> ExcitationLimits:
 def design_for(arm: Arm, duration: float, rate: float, acceleration: float = DEFAULT_ACCELERATION,
                seed: int = 0, iterations: int = ITERATIONS,
                harmonics: int | None = None, criterion: str = "information",
-               floor: float | None = 0.0) -> DesignedExcitation:
+               floor: float | None = 0.0, progress=None) -> DesignedExcitation:
     """The arm's designed excitation sampled at rate (Hz) over [0, duration] s, ends
     included (both at rest), with `harmonics` (default default_harmonics(duration)), optimal
     for `criterion` (identification.excitation.criteria.CRITERIA), every moving link above
-    the floor at height floor (m; None: no floor); UserError on bad input or if it cannot be
-    made collision-free."""
+    the floor at height floor (m; None: no floor); progress(iteration, iterations) after each
+    of the optimizer's iterations; UserError on bad input or if it cannot be made
+    collision-free."""
     for name, value in (("--duration", duration), ("--rate", rate), ("--accel-limit", acceleration)):
         if not np.isfinite(value) or value <= 0:
             raise UserError(f"{name} must be a finite number > 0, got {value:g}")
@@ -123,7 +124,7 @@ def design_for(arm: Arm, duration: float, rate: float, acceleration: float = DEF
     try:
         design = optimize_excitation(limits, duration, regressor, clearance, seed,
                                      harmonics=harmonics, iterations=iterations,
-                                     criterion=criterion,
+                                     criterion=criterion, progress=progress,
                                      # checked at the samples written (a design pressed to its
                                      # limits may pass 1000 points and miss between them)
                                      check_points=max(1000, int(round(duration * rate))))

@@ -181,12 +181,14 @@ def optimize_excitation(
     limit_points: int | None = None,
     check_points: int = 1000,
     criterion: str = "condition",
+    progress: Callable[[int, int], None] | None = None,
 ) -> ExcitationDesign:
     """The designed excitation (see the module docstring), `duration` s long; clearance(q)
     -> (n,) is the robot's smallest distance (m) to itself or the floor at joint states
     (n, dof), <= 0 where they touch: a constraint on the design grid (gradient by finite
     differences), checked on a dense grid. criterion: what is minimized, "condition" (the
-    log condition number of the normalized regressor) or "information" (log_information).
+    log condition number of the normalized regressor) or "information" (log_information);
+    progress(iteration, iterations), if given, is called after each optimizer iteration.
     A candidate that collides has its swing shrunk about its centre pose; ValueError if
     none is collision-free even so."""
     measure = CRITERIA[criterion]
@@ -234,7 +236,7 @@ def optimize_excitation(
     # one BLAS thread: SLSQP's path turns on rounding, and the design must be the same
     # whatever threads the caller's BLAS runs
     with threadpool_limits(limits=1, user_api="blas"):
-        best, used, last = _descend(objective, start, constraints, iterations, safe)
+        best, used, last = _descend(objective, start, constraints, iterations, safe, progress)
 
     def condition(x) -> float:
         X = x.reshape(dof, k)
@@ -246,7 +248,7 @@ def optimize_excitation(
 
 
 def _descend(objective, start: np.ndarray, constraints: list[dict], budget: int,
-             safe) -> tuple[np.ndarray, int, object]:
+             safe, progress=None) -> tuple[np.ndarray, int, object]:
     """SLSQP on objective from start, again from where it stopped (its linearization may
     fail) while it improves, within budget iterations. Each run's best safe point among its
     iterates and its end point (walked back towards the last safe one if unsafe: SLSQP's
@@ -265,9 +267,12 @@ def _descend(objective, start: np.ndarray, constraints: list[dict], budget: int,
 
     best, value, used, result = start, objective(start)[0], 0, None
     while used < budget:
-        found = {"x": best, "value": value}
+        found = {"x": best, "value": value, "iterations": used}
 
         def keep(x, found=found):  # SLSQP's callback: the best safe iterate so far
+            found["iterations"] += 1
+            if progress is not None:
+                progress(min(found["iterations"], budget), budget)
             v = objective(x)[0]
             if v < found["value"] - 1e-6 and safe(x):
                 found.update(x=x.copy(), value=v)
@@ -275,6 +280,7 @@ def _descend(objective, start: np.ndarray, constraints: list[dict], budget: int,
         result = minimize(objective, best, jac=True, method="SLSQP", constraints=constraints,
                           callback=keep, options={"maxiter": budget - used, "ftol": 1e-6})
         used += max(int(result.nit), 1)
+        found["iterations"] -= 1  # the end point is no iteration of its own
         keep(result.x if safe(result.x) else _walk_back(best, result.x, safe))
         if found["value"] >= value - 1e-6:
             break
