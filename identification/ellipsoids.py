@@ -73,7 +73,7 @@ def enclosing(points: np.ndarray, thickness: float = 0.01) -> Ellipsoid:
     a, b = cp.Variable((3, 3), PSD=True), cp.Variable(3)
     problem = cp.Problem(cp.Maximize(cp.log_det(a)), [cp.norm(unit @ a + b[None, :], axis=1) <= 1])
     with warnings.catch_warnings():  # an inaccurate optimum is still an ellipsoid: held below
-        warnings.filterwarnings("ignore", "Solution may be inaccurate")
+        warnings.filterwarnings("ignore", "the bounding ellipsoid: Clarabel stopped short")
         solve_conic(problem, "the bounding ellipsoid", stacklevel=4)
     if a.value is None:
         raise ValueError(f"no enclosing ellipsoid ({problem.status})")
