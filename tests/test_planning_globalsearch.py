@@ -264,5 +264,5 @@ def test_the_clearance_that_launches_a_search_is_numpys(baseline, config):
     for plan in plans:
         motion = plan.trajectory.restrict(0.5, case.duration - 0.5)
         for seen in (forecast, later):
-            assert planner.clearance(motion, seen) == pytest.approx(
+            assert planner.check.clearance(motion, seen.times, seen.centres) == pytest.approx(
                 predicted_clearance(config.geometry, motion, seen), abs=1e-9)

@@ -269,18 +269,20 @@ def _descend(objective, start: np.ndarray, constraints: list[dict], budget: int,
     while used < budget:
         found = {"x": best, "value": value, "iterations": used}
 
-        def keep(x, found=found):  # SLSQP's callback: the best safe iterate so far
-            found["iterations"] += 1
-            if progress is not None:
-                progress(min(found["iterations"], budget), budget)
+        def keep(x, found=found):  # the best safe iterate so far
             v = objective(x)[0]
             if v < found["value"] - 1e-6 and safe(x):
                 found.update(x=x.copy(), value=v)
 
+        def iterated(x, found=found):  # SLSQP's callback, once an iteration
+            found["iterations"] += 1
+            if progress is not None:
+                progress(min(found["iterations"], budget), budget)
+            keep(x)
+
         result = minimize(objective, best, jac=True, method="SLSQP", constraints=constraints,
-                          callback=keep, options={"maxiter": budget - used, "ftol": 1e-6})
+                          callback=iterated, options={"maxiter": budget - used, "ftol": 1e-6})
         used += max(int(result.nit), 1)
-        found["iterations"] -= 1  # the end point is no iteration of its own
         keep(result.x if safe(result.x) else _walk_back(best, result.x, safe))
         if found["value"] >= value - 1e-6:
             break

@@ -82,6 +82,13 @@ class SafetyCheck:
         bound = self.against(times, centres, trajectory.t_begin, trajectory.duration)
         return bound(trajectory.coefficients)
 
+    def clearance(self, trajectory: PolynomialTrajectory, times: np.ndarray,
+                  centres: np.ndarray) -> float:
+        """The smallest clearance (m) of `trajectory`'s links to obstacle centres (k, 3) at
+        absolute times (k,): planning.formulation.clearance.predicted_clearance, compiled."""
+        bound = self.against(times, centres, trajectory.t_begin, trajectory.duration)
+        return float(bound.links(trajectory.coefficients).min())
+
     def against(self, times: np.ndarray, centres: np.ndarray, t_begin: float,
                 duration: float):
         """The check of motions on [t_begin, t_begin + duration] against one forecast, its
