@@ -99,9 +99,7 @@ def _candidate(rng: np.random.Generator, limits: ExcitationLimits, bases, harmon
                centre: np.ndarray) -> np.ndarray:
     """Random 1/l-spectrum coefficients at rest at t = 0, scaled per joint to the largest swing
     about the centre pose (rad) the limits allow on the grid."""
-    dof = len(limits.lower)
-    lo, hi = limits.inner
-    Bq, Bqd, Bqdd = bases
+    dof, (lo, hi), (Bq, Bqd, Bqdd) = len(limits.lower), limits.inner, bases
     rows = _rest_projection(harmonics)
     decay = np.concatenate([[0.0], 1 / np.arange(1, harmonics + 1), 1 / np.arange(1, harmonics + 1)])
     X = rng.normal(size=(dof, 1 + 2 * harmonics)) * decay
