@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import multiprocessing
 import time
 
 import numpy as np
@@ -181,17 +182,21 @@ def test_each_better_plan_enters_when_the_search_work_up_to_it_is_done(baseline,
 
 
 def test_the_other_process_sends_each_better_plan_as_found(baseline, config):
-    """Under CPU clocks the search runs in a forked worker and sends back each plan better
-    than those before: once it is done the worker has sent as many plans as the same search
-    in this process finds better, and the plan on offer, taken once, is that search's best.
-    A search of a motion forgotten (a new one begins) offers nothing."""
+    """Under CPU clocks the search runs in a worker forked when the Background is made, and
+    sends back each plan better than those before: once it is done the worker has sent as many
+    plans as the same search in this process finds better, and the plan on offer, taken once,
+    is that search's best. A search of a motion forgotten (a new one begins) offers nothing."""
     live = config.with_anytime(iteration_ms=None)
     numbers = Planner(baseline, live)
     case, forecast = random_crossing(numbers, seed=3)
     segment = Segment.of(case, forecast)
     better = []
     here, _ = MultiStart(baseline, live).search(segment, found=lambda plan, b: better.append(b))
+    before = {child.pid for child in multiprocessing.active_children()}
     worker = background.Background(baseline, live)
+    # forked when made, not at the first search (the pages the planning process wrote after
+    # that fork were copied in its first re-plan: docs/realtime.md, 'The first re-plan')
+    assert len({child.pid for child in multiprocessing.active_children()} - before) == 1
 
     def finished():
         for _ in range(6000):

@@ -1,7 +1,8 @@
 """The global search in another process (plan --realtime): searches submitted to one
-worker, forked from the planning process (it inherits the torque model and configuration
-and loads the compiled code from the cache), each plan it finds better than those before
-it sent back as it is found and taken when ready."""
+worker, forked from the planning process when the Background is made (it inherits the torque
+model and configuration, and at its first search builds its planner, loading the compiled code
+from the cache), each plan it finds better than those before it sent back as it is found and
+taken when ready."""
 
 from __future__ import annotations
 
@@ -15,7 +16,8 @@ from planning.config import PlannerConfig
 from planning.globalsearch.multistart import MultiStart, bank_search
 from planning.types import Segment, SegmentPlan
 
-_SEARCH = None  # the worker's MultiStart
+_PLANNER = None  # the worker's torque model and configuration
+_SEARCH = None  # the worker's MultiStart, built from them
 _FOUND = None  # the worker's end of the queue of (search number, plan)
 _EVERY = False  # the worker sends every plan found, not only the better ones
 
@@ -49,6 +51,10 @@ class Background:
         self.received = 0  # plans of the current search received
         self.failures = 0  # searches that raised, or a worker that died
         self._broken = False
+        try:  # the worker forked now: forked at the first search, the pages the planning
+            self._pool.submit(int).result()  # process then wrote were copied in a re-plan
+        except BrokenProcessPool:
+            self._broken, self.failures = True, 1
 
     def submit(self, segment: Segment, warm: SegmentPlan | None) -> bool:
         """Start a search unless one is running or a plan is still on offer; whether it
@@ -120,13 +126,16 @@ class Background:
 
 
 def _start(model, config: PlannerConfig, found, every: bool = False) -> None:
-    global _SEARCH, _FOUND, _EVERY
-    _SEARCH, _FOUND, _EVERY = MultiStart(model, config), found, every
+    global _PLANNER, _FOUND, _EVERY
+    _PLANNER, _FOUND, _EVERY = (model, config), found, every
     found.cancel_join_thread()  # the worker exits whatever the planning process left unread
 
 
 def _search(number: int, segment: Segment, warm: SegmentPlan | None) -> int:
     """The search; how many plans it sent."""
+    global _SEARCH
+    if _SEARCH is None:  # built at the first search: the planning process has compiled its
+        _SEARCH = MultiStart(*_PLANNER)  # code by then, and the worker loads it from the cache
     sent = [0]
 
     def found(plan: SegmentPlan, better: bool) -> None:
