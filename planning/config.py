@@ -124,6 +124,10 @@ class BankOptions:
     # the global search's iterations per start before its finalists (it hands every plan to
     # the bank as it goes: a shallower screen hands the classes over sooner)
     screen_iterations: int = 10
+    # the other classes' re-plans from a plan that keeps the threshold held in their class by
+    # linear guidance (planning.formulation.guidance; the plan followed is re-planned free):
+    # off by default, as measured on the development scenarios (docs/realtime.md, 'Guidance')
+    guided: bool = False
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -77,6 +77,8 @@ class Segment:
     deadline_ms: float | None = None  # ms after which a re-plan is abandoned (status DEADLINE)
     # a re-plan of Algorithm 2, which may follow an iterate short of convergence (ITERATE)
     realtime: bool = False
+    # a re-plan held in the class of the plan it starts from (planning.formulation.guidance)
+    guided: bool = False
 
     @classmethod
     def from_rest(cls, start, duration: float, goal,

@@ -55,8 +55,9 @@ def _elastic_problem(planner, case, forecast):
     near = np.flatnonzero(clearance < config.threshold + 0.1)
     near = near[np.round(np.linspace(0, len(near) - 1, config.obstacle_slots)).astype(int)]
     subset = ObstacleForecast(forecast.times[near], forecast.centres[near])
-    p = planner.parameters(case.start, case.start_velocity, case.duration, goal, subset, 0.0,
-                           reference, config.anytime.elastic_weight)
+    p = np.concatenate([planner.parameters(case.start, case.start_velocity, case.duration, goal,
+                                           subset, 0.0, reference, config.anytime.elastic_weight),
+                        np.zeros(nlp.guide.numel())])  # unguided (planning.formulation.guidance)
     lbg, ubg = planner.bounds(goal, nlp)
     start = np.concatenate([x0[: local_model.layout_of(nlp).nc], np.zeros(nlp.x.numel()
                                                                     - local_model.layout_of(nlp).nc)])

@@ -158,6 +158,10 @@ def register(sub) -> None:
                         "budget, the cheapest followed; the global search's plans join it. "
                         "PLAN.json's bank has each re-plan's classes and the switches "
                         f"(default {TRUE_ENERGY['bank'].size}; 1: one plan, re-planned)")
+    p.add_argument("--bank-guidance", action="store_true",
+                   help="anytime bank: hold each other class's re-plan in its class by linear "
+                        "guidance (each near link's clearance row measured along the side it "
+                        "passed on: de Groot et al.'s T-MPC); the plan followed stays free")
     p.add_argument("--global-search", action=argparse.BooleanOptionalAction,
                    default=None,
                    help="anytime: a global search beside the re-plans, solving the forecast "

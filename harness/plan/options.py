@@ -62,7 +62,8 @@ def config_from_options(args, arm: Arm) -> PlannerConfig:
     search = {} if args.global_search is None else {"enabled": args.global_search}
     if args.bank is not None and args.bank < 1:
         raise UserError(f"--bank must be a whole number >= 1, got {args.bank}")
-    bank = {} if args.bank is None else {"size": args.bank}
+    bank = ({} if args.bank is None else {"size": args.bank}) | \
+        ({"guided": True} if args.bank_guidance else {})
     config = dataclasses.replace(
         base, **fields, geometry=link_geometry(args, arm, base.geometry),
         torque_limit=torque_limit(args, arm, dof), **rate_limits(args, arm, dof),

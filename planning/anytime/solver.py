@@ -28,7 +28,7 @@ from planning.anytime.budget import Clock, RoundCosts
 from planning.anytime.candidates import TORQUE_TOLERANCE, Candidate, choose
 from planning.anytime.safety import SafetyCheck
 from planning.config import PlannerConfig
-from planning.formulation import compiled
+from planning.formulation import compiled, guidance
 from planning.formulation.limits import LIMIT_TOLERANCE
 from planning.formulation.nlp import PlanningNLP
 from planning.formulation.problem import ProblemNumbers
@@ -145,9 +145,10 @@ class Anytime(ProblemNumbers):
             links = check.links(reference.coefficients)  # what the screening needs
             slots = near_samples(links.min(axis=1), config.threshold,
                                  config.obstacle_slots)
-            p = self.parameters(q0, qd0, duration, goal,
-                                   ObstacleForecast(times[slots], centres[slots]), t_begin,
-                                   reference, config.anytime.elastic_weight)
+            p = np.concatenate([self.parameters(
+                q0, qd0, duration, goal, ObstacleForecast(times[slots], centres[slots]),
+                t_begin, reference, config.anytime.elastic_weight), self._guide(
+                problem, warm if segment.guided else None, times[slots], centres[slots])])
             lbg, ubg = self._bounds(problem, goal, links[slots])
             start, lam_g, lam_x = self._start(problem, reference, times[slots], last)
             points: list[sqp.Point] = []
@@ -214,6 +215,13 @@ class Anytime(ProblemNumbers):
                                starts):
             plans.append(self.solve(dataclasses.replace(segment, x0=x0))[0])
         return min(plans, key=self.rank)
+
+    def _guide(self, problem: _Problem, warm: SegmentPlan | None, times, centres):
+        """The NLP's guidance normals, from warm's motion (planning.formulation.guidance)."""
+        if warm is None:
+            return np.zeros(problem.nlp.guide.numel())
+        return guidance.normals(self.config.geometry, warm.trajectory, times, centres,
+                                self.config.obstacle_slots, self.config.threshold + MARGIN)
 
     def _bounds(self, problem: _Problem, goal, near: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The planner's bounds; the clearance rows of empty slots and of links the reference

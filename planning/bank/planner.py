@@ -70,11 +70,10 @@ class BankPlanner:
         clock = "nominal" if self.config.anytime.iteration_ms is not None else "cpu"
         mode = (f"{clock}: every class's re-plan at a sample in this thread, sharing the "
                 f"re-plan's budget with the bank's checks of its plans, the plan followed "
-                f"first; the global search's plans "
-                f"handed over when its work up to them is done" +
-                ("" if clock == "nominal" else " (another process where there are cores)"))
+                f"first; the global search's plans handed over when its work up to them is done"
+                + ("" if clock == "nominal" else " (another process where there are cores)"))
         self._checks(None)
-        return {**self.record.to_json(self.options.size, mode),
+        return {**self.record.to_json(self.options.size, mode), "guided": self.options.guided,
                 "work": described(clock == "nominal")}
 
     def prepare(self, goal) -> None:
@@ -145,7 +144,8 @@ class BankPlanner:
                 left = self._left(total, work)
                 if member not in self.members or left < self.anytime.round_ms():
                     continue
-                again = self._replan(problem, member.plan, left, work)
+                again = self._replan(problem, member.plan, left, work, guided=self.options.guided
+                                     and self._score(member.plan, problem)[0] == 0)  # if safe
                 member.replanned = t
                 if again.success and self._placed(member, again, problem) is member:
                     candidates.append((member, again))
@@ -192,9 +192,9 @@ class BankPlanner:
         return promising + rest[:1]
 
     def _replan(self, problem: Segment, warm: SegmentPlan, budget: float, work: Work,
-                planner: SegmentPlanner | None = None) -> SegmentPlan:
-        return work.solve((planner or self.inner).plan,
-                          dataclasses.replace(problem, budget_ms=max(budget, 0.0)), warm)
+                planner: SegmentPlanner | None = None, guided: bool = False) -> SegmentPlan:
+        return work.solve((planner or self.inner).plan, dataclasses.replace(
+            problem, budget_ms=max(budget, 0.0), guided=guided), warm)
 
     def _left(self, total: float, work: Work) -> float:
         """The budget left to a solve: the checks after it (its plan's, the members' not

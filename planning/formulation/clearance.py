@@ -57,6 +57,29 @@ def symbolic_link_clearances(geometry: ArmGeometry, q, obstacle) -> list:
                                               strict=True)]
 
 
+def guided_link_clearances(geometry: ArmGeometry, q, obstacle, normals) -> list:
+    """symbolic_link_clearances, each link's distance replaced by its offset from the centre
+    along its guidance normal where it has one (normals: 3 per link, unit or zero): n'(p - c)
+    minus the radius, p the link's nearest point. n'(p - c) <= |p - c|, so a guided row that
+    holds keeps the link clear, on n's side of the obstacle: the linear guidance that holds a
+    plan in its class (planning.formulation.guidance)."""
+    rows = []
+    for link, ((a, b), length, radius) in enumerate(zip(
+            geometry.symbolic_link_ends(q), geometry.link_lengths, geometry.link_radii,
+            strict=True)):
+        if length == 0:  # from the link's nearest point to the centre, as symbolic_segment_distance
+            toward = obstacle - a
+        else:
+            ab = b - a
+            t = ca.fmin(ca.fmax(ca.dot(obstacle - a, ab) / length**2, 0.0), 1.0)
+            toward = obstacle - a - t * ab
+        normal = normals[3 * link: 3 * link + 3]
+        along = ca.if_else(ca.dot(normal, normal) > 0.5, -ca.dot(normal, toward),
+                           ca.norm_2(toward))
+        rows.append(along - radius if radius else along)
+    return rows
+
+
 def predicted_clearance(geometry: ArmGeometry, trajectory, forecast) -> float:
     """Smallest clearance (m) of a motion's links to an obstacle forecast
     (planning.types.ObstacleForecast) at its sample times."""

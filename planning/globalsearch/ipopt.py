@@ -74,9 +74,9 @@ class IpoptElastic(ProblemNumbers):
         for _ in range(ROUNDS):
             links = check.links(reference.coefficients)
             slots = near_samples(links.min(axis=1), config.threshold, config.obstacle_slots)
-            p = self.parameters(q0, qd0, duration, goal,
-                                ObstacleForecast(times[slots], centres[slots]), t_begin,
-                                reference, config.anytime.elastic_weight)
+            p = np.concatenate([self.parameters(
+                q0, qd0, duration, goal, ObstacleForecast(times[slots], centres[slots]),
+                t_begin, reference, config.anytime.elastic_weight), np.zeros(nlp.guide.numel())])
             lbg, ubg = self.bounds(goal, nlp)
             used = np.zeros((config.obstacle_slots, nlp.links), bool)
             used[: len(slots)] = True
