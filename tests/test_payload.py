@@ -10,6 +10,7 @@ centre of mass, none on the plant without it, predict reproducing the reported e
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -169,3 +170,66 @@ def test_two_loaded_runs_report_the_mass_of_each(tmp_path, capsys):
     assert np.allclose(payload["per_run_mass"], mass, rtol=0.03)
     assert np.all(np.linalg.norm(np.array(payload["per_run_com"]) - com, axis=1) < 0.01)
     assert "com_agrees" in payload and "mass per run" in capsys.readouterr().out
+
+
+def _so101():
+    """example-robot-data's SO-101: five arm joints and a revolute gripper jaw, the last."""
+    from harness.robots.registry import erd_robots_dir
+
+    return Arm.of(str(erd_robots_dir() / "so_arm_description" / "urdf" / "so101.urdf"))
+
+
+def test_a_payload_rides_on_the_body_the_jaw_turns_on_or_the_link_named():
+    """On an arm whose last joint is a gripper's jaw the payload's body is the one before
+    (what the gripper holds), its regressor Pinocchio's columns of that joint; a link named
+    is taken whatever the last joint is (a fixed one on its joint's body), and a link the arm
+    lacks is one error naming the arm's links."""
+    from harness.errors import UserError
+
+    arm = _so101()
+    body = last_body(arm)
+    assert body.name == "gripper_link" and body.joint == arm.dof - 1
+    model, q, qd, qdd = arm.pinocchio, *_states(arm.dof, 4, seed=2)
+    data = model.createData()
+    ours = body(q, qd, qdd)
+    columns = slice(10 * (arm.dof - 2), 10 * (arm.dof - 1))
+    for k in range(len(q)):
+        theirs = pin.computeJointTorqueRegressor(model, data, q[k], qd[k], qdd[k])[:, columns]
+        assert np.allclose(ours[k], theirs, atol=1e-10)
+    assert last_body(arm, "gripper_frame_link").joint == arm.dof - 1
+    assert last_body(arm, "moving_jaw_so101_v1_link").joint == 0  # the last joint's
+    ur5 = Arm.of("ur5")
+    assert last_body(ur5, "forearm_link").joint == 3
+    with pytest.raises(UserError, match="wrist_3_link"):
+        last_body(ur5, "no_such_link")
+
+
+@pytest.mark.slow
+def test_a_part_held_by_a_jaw_gripper_is_named_on_the_gripper(tmp_path):
+    """A 0.15 kg part fixed to the SO-101's gripper body (its jaw, the last joint, free): the
+    loop names it there, within 3 % of its mass and 5 mm of its centre of mass, and predict on
+    the loop's model.json (the payload's body read back) reproduces the error it reports."""
+    from harness.cli import main
+    from identification.metrics import rel_error
+
+    arm = _so101()
+    part = ('<link name="held_part"><inertial><origin xyz="0 0 0"/><mass value="0.15"/>'
+            '<inertia ixx="2e-5" ixy="0" ixz="0" iyy="2e-5" iyz="0" izz="2e-5"/></inertial>'
+            '</link><joint name="held_part_joint" type="fixed"><parent link="gripper_link"/>'
+            '<child link="held_part"/><origin xyz="0.01 0 -0.09"/></joint></robot>')
+    loaded = tmp_path / "so101_loaded.urdf"
+    loaded.write_text(Path(arm.reference).read_text().replace("</robot>", part))
+    data = str(tmp_path / "loaded.npz")
+    assert main(["generate", "--robot", str(loaded), "--samples", "3000", "--noise", "0.05",
+                 "--seed", "4", "--mode", "inverse", "--bias", "0", "--out", data]) == 0
+    result = _closeloop(arm.reference, [data], tmp_path / "cl")
+    (payload,) = [e for e in result["effects"] if e["effect"] == "payload"]
+    assert payload["body"] == "gripper_link" and payload["joint"] == arm.dof - 1
+    assert payload["mass"] == pytest.approx(0.15, rel=0.03)
+    assert np.linalg.norm(np.array(payload["com"]) - [0.01, 0.0, -0.09]) < 0.005
+    pred = tmp_path / "pred.npz"
+    assert main(["predict", "--model", str(tmp_path / "cl" / "model.json"), "--data", data,
+                 "--out", str(pred)]) == 0
+    tau, measured = np.load(pred)["tau"], np.load(data)["tau"]
+    held = slice(int(round(len(tau) * 0.75)), None)
+    assert np.allclose(rel_error(tau[held], measured[held]), result["error_after"], atol=1e-3)

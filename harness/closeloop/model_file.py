@@ -81,4 +81,6 @@ def closeloop_model(payload: dict, arm: Arm, path: Path):
         raise IdentificationError(f"offsets and effect joints must fit the robot's {dof}")
     if inertial is None and any(t.effect == "inertial" for t in terms):
         raise IdentificationError("an 'inertial' effect needs the 'inertial' correction")
-    return closed_model(declared, [float(o) for o in offsets], terms, inertial, last_body(arm))
+    carrier = next((t.body for t in terms if t.effect == "payload" and t.body), None)
+    return closed_model(declared, [float(o) for o in offsets], terms, inertial,
+                        last_body(arm, carrier))

@@ -9,8 +9,12 @@ joint frame, c the end-effector position in the last link's joint frame).
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pinocchio as pin
+
+from harness.errors import UserError
 
 EE_FRAME = "end_effector"
 
@@ -59,13 +63,32 @@ class PayloadTorque:
         return symbolic_rnea(self.model, q, qd, qdd)
 
 
-def last_body(arm):
-    """The arm's last body (identification.closeloop.payload.LastBody): its chain and the name
-    of the link its last joint moves (the first body frame of that joint)."""
+# a revolute joint so named is a gripper's jaw (an arm joint here: harness.robots.urdf), and
+# what the gripper holds rides on the body the jaw turns on, not on the jaw
+JAW = re.compile(r"gripper|finger|jaw|claw", re.IGNORECASE)
+
+
+def last_body(arm, link: str | None = None):
+    """The body a payload rides on (identification.closeloop.payload.LastBody): the link
+    named (any link of the arm, a fixed one on the body it is fixed to), else the link the
+    last joint moves (the first body frame of that joint), or the one before when the last
+    joint is a gripper's jaw (JAW: SO-100/101, TALOS's arm, the Z1). UserError for a link
+    the arm lacks or one no joint moves."""
     from identification.closeloop.payload import LastBody
 
     model = arm.pinocchio
-    joint = model.njoints - 1
-    names = [f.name for f in model.frames
-             if f.type == pin.FrameType.BODY and f.parentJoint == joint]
-    return LastBody(arm.chain, names[0] if names else model.names[joint])
+    bodies = [f for f in model.frames if f.type == pin.FrameType.BODY]
+    if link is None:
+        joint = model.njoints - 1
+        joint -= bool(joint > 1 and JAW.search(model.names[joint]))
+    else:
+        named = [f for f in bodies if f.name == link]
+        if not named:
+            raise UserError(f"no link of {arm.label} is named {link!r} (the payload's body; "
+                            f"its links: {', '.join(f.name for f in bodies)})")
+        joint = int(named[0].parentJoint)
+        if joint == 0:
+            raise UserError(f"the payload's body {link!r}: no joint moves it (fixed to the base)")
+    names = [f.name for f in bodies if f.parentJoint == joint]
+    return LastBody(arm.chain, link or (names[0] if names else model.names[joint]),
+                    0 if joint == model.njoints - 1 else joint)

@@ -129,11 +129,11 @@ class RunsRun:
 
 
 def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs | None = None,
-             holdout: float = 0.25, reach: float = REACH) -> RunsRun:
+             holdout: float = 0.25, reach: float = REACH, body: str | None = None) -> RunsRun:
     """Close the loop on the runs data (read_runs) of arm, scored on the validate runs or the
-    last holdout of every run; a payload on the last body is a candidate, its centre of mass
-    within reach m of the last joint."""
-    runs, dof = _split(data), arm.dof
+    last holdout of every run; a payload on the last body (payload.last_body; the link `body`
+    when given) is a candidate, its centre of mass within reach m of its joint."""
+    runs, dof, carrier = _split(data), arm.dof, last_body(arm, body)
     if runs[0][0].shape[1] != dof:
         raise UserError(f"data have {runs[0][0].shape[1]} joints, robot {arm.label} has {dof}")
     if validate is not None:
@@ -156,7 +156,7 @@ def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs |
                             f"{dof}")
     try:
         inertial = inertial_correction(arm, train) if declared == "pinocchio" else None
-        loop = close_loop_runs(model, train, inertial, body=last_body(arm), reach=reach)
+        loop = close_loop_runs(model, train, inertial, body=carrier, reach=reach)
     except IdentificationError as exc:
         raise UserError(f"{','.join(data.files)}: {exc}") from None
     before, after = scored_error(model, scored), scored_error(loop.model, scored)

@@ -47,6 +47,9 @@ def register(sub) -> None:
     p.add_argument("--payload-reach", type=float, default=0.4, metavar="M",
                    help="with --data: a payload's centre of mass lies within M m of the last "
                    "joint (default 0.4)")
+    p.add_argument("--payload-body", metavar="LINK",
+                   help="with --data: the link a payload rides on (default: the last joint's, "
+                        "or the one before when the last joint is a gripper's jaw)")
     p.set_defaults(func=run)
 
 
@@ -100,7 +103,8 @@ def _named(named) -> str:
     if t.effect != "payload" or "com" not in entry:
         return f"joint {t.joint} {t.effect} {t.coefficient:.4g} {entry['unit']}"
     xyz = ", ".join(f"{c:.3f}" for c in entry["com"])
-    text = f"payload {entry['mass']:.3g} kg, centre of mass ({xyz}) m in the last link's frame"
+    frame = entry.get("body") or "the last link"
+    text = f"payload {entry['mass']:.3g} kg, centre of mass ({xyz}) m in {frame}'s frame"
     if "per_run_mass" in entry:
         text += " (mass per run " + " / ".join(f"{m:.3g}" for m in entry["per_run_mass"]) + " kg"
         if not entry["com_agrees"]:
@@ -149,7 +153,8 @@ def _run_data(args) -> int:
         return 0
     if not args.payload_reach > 0:
         raise UserError(f"--payload-reach must be positive, got {args.payload_reach}")
-    r = run_runs(train, arm, args.declared, held, args.holdout, args.payload_reach)
+    r = run_runs(train, arm, args.declared, held, args.holdout, args.payload_reach,
+                 args.payload_body)
     out = Path(args.out)
     write_json(out / "model.json", r.model_json)
     write_json(out / "closeloop.json", r.to_json())

@@ -117,8 +117,8 @@ class EffectTerm:
             mass, com, inertia = describe(self.params)
             out.update(body=self.body, mass=mass, com=com.tolist(), inertia=inertia.tolist(),
                        inertia_definition="Ixx, Ixy, Iyy, Ixz, Iyz, Izz (kg m^2) about the "
-                                          "centre of mass, axes of the last link's frame",
-                       frame="the last link's (its joint's) frame, m")
+                                          "centre of mass, axes of the body's frame",
+                       frame="the body's (its joint's) frame, m")
         if self.effect in ("coulomb", "load_friction"):
             out.update(lead=self.lead, eps=self.eps)
         if self.effect == "sigmoid":

@@ -1,4 +1,5 @@
-"""A payload rigidly attached to the last body: its 10 inertial parameters, fitted physically
+"""A payload rigidly attached to the last body (or the body a gripper's jaw turns on,
+harness.closeloop.payload.last_body): its 10 inertial parameters, fitted physically
 consistent and plausible, as one candidate of the close-the-loop dictionary.
 
 The torque of a chain is linear in the last body's standard parameters
@@ -39,17 +40,21 @@ MIN_MASS = 1e-6  # kg: a fitted payload lighter than that is no candidate
 
 @dataclass(frozen=True)
 class LastBody:
-    """The last body of a chain: the torque regressor of its 10 standard parameters."""
+    """The body a payload rides on, the chain's last by default: the torque regressor of its
+    10 standard parameters (in its joint's frame)."""
 
     chain: KinematicChain
-    name: str  # the last link's name (the body a payload is reported on)
+    name: str  # the link's name (the body a payload is reported on)
+    joint: int = 0  # the joint (1..dof) that moves the body; 0: the last
 
     @cached_property
     def function(self) -> ca.Function:
         dof = self.chain.dof
+        at = self.joint or dof
         q, qd, qdd = (ca.SX.sym(s, dof) for s in ("q", "qd", "qdd"))
         p = ca.SX.sym("p", 10)
-        tau = rnea(self.chain, q, qd, qdd, ca.vertcat(ca.SX.zeros(10 * (dof - 1)), p))
+        tau = rnea(self.chain, q, qd, qdd, ca.vertcat(ca.SX.zeros(10 * (at - 1)), p,
+                                                      ca.SX.zeros(10 * (dof - at))))
         return ca.Function("last_body", [q, qd, qdd], [ca.jacobian(tau, p)])
 
     def __call__(self, q, qd, qdd) -> np.ndarray:

@@ -200,7 +200,8 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
         terms.append(EffectTerm("inertial", dof, 1.0))
         cols.append(inertial.torque(*states))
     if payload is not None:
-        terms.append(EffectTerm("payload", dof, 1.0, params=tuple(payload[1]), body=body.name))
+        terms.append(EffectTerm("payload", body.joint or dof, 1.0, params=tuple(payload[1]),
+                                body=body.name))
         cols.append(payload[0])
     cols = np.stack(cols, axis=2)
     several = len(runs) > 1
