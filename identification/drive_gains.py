@@ -89,22 +89,23 @@ def _check(runs, mass: float) -> int:
 
 
 def identify_drive_gains(unloaded, loaded, mass: float, instrumental: bool = True,
-                         rtol: float = 1e-8) -> DriveGainFit:
+                         rtol: float = 1e-8, body: int = 0) -> DriveGainFit:
     """The drive gains of every joint from two runs, each (Y, qd, qdd, current): Y (n, dof, p)
-    the joint-torque regressor whose last 10 columns are the last body's, qd, qdd (n, dof),
-    current (n, dof) in A; mass: the load's (kg) on the loaded run's last body; instrumental
-    False: weighted least squares only (biased by the currents' noise, kept to measure it).
-    IdentificationError when a gain is not identified by these runs."""
+    the joint-torque regressor, 10 columns per body, qd, qdd (n, dof), current (n, dof) in A;
+    mass: the load's (kg) on the loaded run's body moved by joint `body` (1..dof; 0: the
+    last); instrumental False: weighted least squares only (biased by the currents' noise,
+    kept to measure it). IdentificationError when a gain is not identified by these runs."""
     dof = _check((unloaded, loaded), float(mass))
     p = unloaded[0].shape[2]
+    end = p - 10 * (dof - body if body else 0)  # just past the load's body's columns
     blocks, rhs = [], []
     for run, (Y, qd, qdd, _) in enumerate((unloaded, loaded)):
         n = len(qd)
         per_run = np.zeros((n, dof, 2 * 3 * dof))
         per_run[:, :, run * 3 * dof:(run + 1) * 3 * dof] = _friction(qd)
-        load = Y[:, :, p - 9:] if run == 1 else np.zeros((n, dof, 9))
+        load = Y[:, :, end - 9:end] if run == 1 else np.zeros((n, dof, 9))
         blocks.append(np.concatenate([Y, _diag(qdd), per_run, load], axis=2))
-        rhs.append(-mass * Y[:, :, p - 10] if run == 1 else np.zeros((n, dof)))
+        rhs.append(-mass * Y[:, :, end - 10] if run == 1 else np.zeros((n, dof)))
     known, target = np.concatenate(blocks), np.concatenate(rhs)  # (N, dof, k), (N, dof)
     current = np.concatenate([unloaded[3], loaded[3]])
     scale = current.std(axis=0)

@@ -14,6 +14,7 @@ import numpy as np
 
 from harness.data.dataset import STATE_KEYS, load_arrays
 from harness.data.ingest import CURRENT_KEY
+from harness.closeloop.payload import last_body
 from harness.data.runs import Runs
 from harness.errors import UserError
 from harness.robots.arm import Arm
@@ -66,12 +67,14 @@ def gain_runs(data: list[str], loaded: str | None, mass: float | None, robot: st
         raise UserError(f"{data[0]} has {u['q'].shape[1]} joints, robot {arm.label} {arm.dof}")
     runs = [(arm.nominal.regressor(a["q"], a["qd"], a["qdd"]), a["qd"], a["qdd"], a[CURRENT_KEY])
             for a in (u, v)]
-    fit = identify_drive_gains(runs[0], runs[1], mass)
+    carrier = last_body(arm)  # the last body, or the one a gripper's jaw turns on
+    fit = identify_drive_gains(runs[0], runs[1], mass, body=carrier.joint)
     report = {"units": UNITS, "gains": fit.gains.tolist(), "standard_error": fit.gain_std.tolist(),
               "unloaded": data[0], "loaded": loaded, "load_mass_kg": mass,
               "load": {"mass_kg": mass, "first_moment_kg_m": fit.load[1:4].tolist(),
                        "inertia_kg_m2": fit.load[4:].tolist(),
-                       "frame": "the last joint's, inertia about its origin (Ixx, Ixy, Iyy, "
+                       "body": carrier.name,
+                       "frame": "the body's joint's, inertia about its origin (Ixx, Ixy, Iyy, "
                                 "Ixz, Iyz, Izz); only the identifiable part (base columns), "
                                 "zeros elsewhere"},
               "residual_std_Nm": fit.sigma.tolist(), "method": METHOD,
