@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from harness.closeloop.payload import last_body
 from harness.data.dataset import STATE_KEYS, load_arrays
 from harness.data.ingest import CURRENT_KEY
-from harness.closeloop.payload import last_body
 from harness.data.runs import Runs
 from harness.errors import UserError
 from harness.robots.arm import Arm
