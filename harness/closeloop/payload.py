@@ -84,11 +84,11 @@ def last_body(arm, link: str | None = None):
     else:
         named = [f for f in bodies if f.name == link]
         if not named:
-            raise UserError(f"no link of {arm.label} is named {link!r} (the payload's body; "
+            raise UserError(f"no link of {arm.label} is named {link!r} (the load's body; "
                             f"its links: {', '.join(f.name for f in bodies)})")
         joint = int(named[0].parentJoint)
         if joint == 0:
-            raise UserError(f"the payload's body {link!r}: no joint moves it (fixed to the base)")
+            raise UserError(f"the load's body {link!r}: no joint moves it (fixed to the base)")
     names = [f.name for f in bodies if f.parentJoint == joint]
     return LastBody(arm.chain, link or (names[0] if names else model.names[joint]),
                     0 if joint == model.njoints - 1 else joint)

@@ -74,6 +74,9 @@ def register(sub) -> None:
                    "used: the model is fitted on --data's gain x current (needs --load-mass)")
     p.add_argument("--load-mass", type=float, default=None, metavar="KG",
                    help="with --loaded: the load's mass (kg), which fixes the gains' scale")
+    p.add_argument("--load-body", default=None, metavar="LINK",
+                   help="with --loaded: the link the load is fixed to (default: the last "
+                        "joint's, or the one before when the last joint is a gripper's jaw)")
     p.set_defaults(func=run)
 
 
@@ -83,7 +86,7 @@ def run(args) -> int:
     gains = None  # logs of currents: their drive gains, identified with a loaded run
     if args.loaded is not None or args.load_mass is not None:
         runs, _, gains = gain_runs(split_files(args.data, "--data"), args.loaded,
-                                   args.load_mass, args.robot)
+                                   args.load_mass, args.robot, args.load_body)
     else:
         runs = load_runs(split_files(args.data, "--data"))
     held = {"kind": "last_fraction", "fraction": args.holdout, "of": list(runs.files)}

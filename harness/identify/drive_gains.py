@@ -46,10 +46,11 @@ def _check_mass(mass) -> float:
     return float(mass)
 
 
-def gain_runs(data: list[str], loaded: str | None, mass: float | None, robot: str | None
-              ) -> tuple[Runs, Arm, dict]:
+def gain_runs(data: list[str], loaded: str | None, mass: float | None, robot: str | None,
+              body: str | None = None) -> tuple[Runs, Arm, dict]:
     """The unloaded run as torque with the gains identified from it and the loaded run, the
-    arm, and the gains' report (MODEL.json's drive_gains). UserError, one line, on bad input,
+    arm, and the gains' report (MODEL.json's drive_gains); the load on the link `body` (default:
+    closeloop.payload.last_body's). UserError, one line, on bad input,
     before anything is written."""
     if loaded is None or mass is None:
         raise UserError("--loaded L.npz and --load-mass KG go together: the loaded run and its "
@@ -67,7 +68,7 @@ def gain_runs(data: list[str], loaded: str | None, mass: float | None, robot: st
         raise UserError(f"{data[0]} has {u['q'].shape[1]} joints, robot {arm.label} {arm.dof}")
     runs = [(arm.nominal.regressor(a["q"], a["qd"], a["qdd"]), a["qd"], a["qdd"], a[CURRENT_KEY])
             for a in (u, v)]
-    carrier = last_body(arm)  # the last body, or the one a gripper's jaw turns on
+    carrier = last_body(arm, body)  # default: the last body, or the one a gripper's jaw turns on
     fit = identify_drive_gains(runs[0], runs[1], mass, body=carrier.joint)
     report = {"units": UNITS, "gains": fit.gains.tolist(), "standard_error": fit.gain_std.tolist(),
               "unloaded": data[0], "loaded": loaded, "load_mass_kg": mass,
