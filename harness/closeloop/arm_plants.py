@@ -4,8 +4,9 @@ The arm's MuJoCo model (Arm.mujoco: the URDF's arm joints, no meshes, or its MJC
 edited as a MuJoCo spec (mujoco.MjSpec): joint damping, frictionloss, armature and
 stiffness added on chosen joints, a spring on a fixed tendon q2 + q3 (an effect outside
 the close-the-loop dictionary, as the Lynxmotion's coupled plant), and a point payload
-fixed at the flange (the first of registry.FLANGES the model has, else the last joint's
-body), then written as MJCF. The
+fixed at the flange (the first of registry.FLANGES the model has, else the body
+harness.closeloop.payload.last_body names: the last joint's, or the one a gripper's jaw turns
+on), then written as MJCF. The
 payload point is the one harness.closeloop.payload puts its unit mass at
 (the Pinocchio frame of the same link), so the dictionary's payload column is exact.
 """
@@ -18,6 +19,7 @@ from pathlib import Path
 
 import mujoco
 
+from harness.closeloop.payload import last_body
 from harness.closeloop.plants import Variant
 from harness.errors import UserError
 from harness.io import write_text
@@ -68,7 +70,8 @@ def arm_variant_xml(arm: Arm, variant: Variant) -> str:
         if site is not None:  # an MJCF's flange is a site on the last body
             body, pos = site.parent, list(site.pos)
         offset = getattr(variant, "payload_offset", (0.0, 0.0, 0.0))
-        (body or hinges[-1].parent).add_body(
+        carrier = last_body(arm).joint or len(hinges)  # no flange: where closeloop looks
+        (body or hinges[carrier - 1].parent).add_body(
             name="payload", pos=[p + o for p, o in zip(pos, offset, strict=True)])
     # a massless frame body (a flange, a tool frame) gets an explicit zero inertial, which
     # Pinocchio's MJCF reader needs on every body; MjSpec.to_xml drops an inertial it did not

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.closeloop.arm_plants import LoadedVariant, write_arm_variant
+from harness.closeloop.payload import last_body
 from harness.closeloop.runs import run_runs
 from harness.data.generate import generate
 from harness.data.runs import Runs
@@ -73,8 +74,9 @@ def payload_case(arm: Arm, directory: Path, load_friction: float = 0.0,
     arrays = {"q": data.q, "qd": data.qd, "qdd": data.qdd, "tau": data.tau + added,
               "tau_clean": data.tau_clean + added}
     loop = run_runs(Runs(arrays, (data.meta,), ("payload plant",), (len(data.q),)), arm)
-    extra = (plant.pinocchio.inertias[-1].toDynamicParameters()
-             - model.inertias[-1].toDynamicParameters())
+    carrier = last_body(arm).joint or -1  # the body the loop puts a payload on
+    extra = (plant.pinocchio.inertias[carrier].toDynamicParameters()
+             - model.inertias[carrier].toDynamicParameters())
     true_mass, true_com, _ = describe(extra)
     effects = loop.to_json()["effects"]
     named = [e for e in effects if e["effect"] == "payload"]
