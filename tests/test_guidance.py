@@ -92,16 +92,19 @@ def test_normals_point_from_the_obstacle_to_the_near_links_only():
 
 
 def test_a_guided_replan_gives_its_rows_the_normals_of_the_plan_it_starts_from(monkeypatch):
-    """The anytime SQP's re-plan of a segment marked guided (the bank's other classes) puts
-    into its NLP the normals read off the plan it re-plans from, at the obstacle samples its
-    rows hold, near links only; unguided, none."""
+    """The anytime SQP's re-plan of a segment marked guided (a guided bank's other classes)
+    puts into its NLP the normals read off the plan it re-plans from, at the obstacle samples
+    its rows hold, near links only; unguided, none. Without guidance the NLP has no normals
+    (its distance rows as before guidance, whose evaluations cost less)."""
     from planning.anytime.solver import Anytime
     from planning.formulation.screening import MARGIN
     from planning.replanning import forecast_at
     from planning.types import ObstacleForecast, Segment
     from tests.helpers import lynx_default_config, lynx_scenario
 
-    config, case = lynx_default_config(), lynx_scenario()
+    plain, case = lynx_default_config(), lynx_scenario()
+    config = dataclasses.replace(plain, bank=dataclasses.replace(plain.bank, guided=True))
+    assert not Anytime(Arm.of("lynxmotion").nominal, plain).problem(case.goal, False).nlp.guide.numel()
     anytime = Anytime(Arm.of("lynxmotion").nominal, config)
     times = case.obstacle.sample_times
     first, _, _ = anytime.solve(Segment.of(case, ObstacleForecast(

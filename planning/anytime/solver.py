@@ -218,7 +218,7 @@ class Anytime(ProblemNumbers):
 
     def _guide(self, problem: _Problem, warm: SegmentPlan | None, times, centres):
         """The NLP's guidance normals, from warm's motion (planning.formulation.guidance)."""
-        if warm is None:
+        if warm is None or not problem.nlp.guide.numel():  # unguided, or a bank without it
             return np.zeros(problem.nlp.guide.numel())
         return guidance.normals(self.config.geometry, warm.trajectory, times, centres,
                                 self.config.obstacle_slots, self.config.threshold + MARGIN)

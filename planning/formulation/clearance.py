@@ -80,6 +80,18 @@ def guided_link_clearances(geometry: ArmGeometry, q, obstacle, normals) -> list:
     return rows
 
 
+def clearance_site(geometry: ArmGeometry, dof: int, guided: bool) -> tuple[tuple, ca.SX]:
+    """The symbols and expression of one pose's clearance rows (the elastic NLP's distances
+    site): (q, centre) -> symbolic_link_clearances, or with guidance (q, centre, normals) ->
+    guided_link_clearances (built only for a guided bank: its evaluations cost more)."""
+    q, centre = ca.SX.sym("q", dof), ca.SX.sym("centre", 3)
+    if not guided:
+        return (q, centre), ca.vertcat(*symbolic_link_clearances(geometry, q, centre))
+    normals = ca.SX.sym("normals", 3 * len(geometry.links))
+    return (q, centre, normals), ca.vertcat(*guided_link_clearances(geometry, q, centre,
+                                                                    normals))
+
+
 def predicted_clearance(geometry: ArmGeometry, trajectory, forecast) -> float:
     """Smallest clearance (m) of a motion's links to an obstacle forecast
     (planning.types.ObstacleForecast) at its sample times."""

@@ -25,7 +25,7 @@ import numpy as np
 
 from identification.torque_model import TorqueModel
 from planning.config import RATE_MARGIN, PlannerConfig
-from planning.formulation.clearance import guided_link_clearances, symbolic_link_clearances
+from planning.formulation.clearance import clearance_site, symbolic_link_clearances
 from planning.formulation.limits import quotient
 from planning.formulation.quadrature import energy_nodes
 from planning.formulation.trajectory import power_basis
@@ -90,8 +90,8 @@ class PlanningNLP:
         v_turn = ca.SX.sym("v_turn", dof, self.quotient_slots)
         v_newton = ca.SX.sym("v_newton", dof, self.quotient_slots)
         alpha = ca.SX.sym("alpha")  # penalty weight: a parameter, raised by the solver loop
-        # the elastic rows' guidance normals, 3 per link and slot (slot-major; 0: unguided)
-        self.guide = ca.SX.sym("guide", 3 * k * self.links if elastic else 0)
+        # a guided bank's elastic rows' normals, 3 per link and slot (slot-major; 0: unguided)
+        self.guide = ca.SX.sym("guide", 3 * k * self.links if elastic and config.bank.guided else 0)
         self.p = ca.vertcat(q0, qd0, self.sigma, goal, ca.vec(obstacle), s_obs, weight,
                             ca.vec(extremum), ca.vec(newton), sign, ca.vec(v_turn),
                             ca.vec(v_newton), alpha, self.breaks, self.guide)
@@ -206,16 +206,14 @@ class PlanningNLP:
 
     def _clearance_rows(self, obstacle, s_obs) -> slice:
         """D_link(q(s_k), c_k) + v_link,k >= lambda for every slot k and link (slot-major),
-        D along the link's guidance normal where it has one (guided_link_clearances);
+        guided: D along the link's guidance normal where it has one (clearance_site);
         a slot without a sample gets lbg = -inf per solve (Planner.bounds)."""
-        q, centre = ca.SX.sym("q", self.dof), ca.SX.sym("centre", 3)
-        normals, width = ca.SX.sym("normals", 3 * self.links), 3 * self.links
-        distances = ca.vertcat(*guided_link_clearances(self.config.geometry, q, centre, normals))
-        function = ca.Function("distances", [q, centre, normals], [distances],
+        inputs, distances = clearance_site(self.config.geometry, self.dof, self.guide.numel() > 0)
+        function = ca.Function("distances", list(inputs), [distances],
                                {"never_inline": not self.inline})
-        rows = [self._site("distances", function, (q, centre, normals), distances,
-                           self.state(s_obs[j])[0], obstacle[:, j],
-                           self.guide[width * j: width * (j + 1)])
+        width = 3 * self.links if len(inputs) > 2 else 0
+        rows = [self._site("distances", function, inputs, distances, self.state(s_obs[j])[0],
+                           obstacle[:, j], *([self.guide[width * j: width * (j + 1)]] * bool(width)))
                 for j in range(self.config.obstacle_slots)]
         return self._add(ca.vertcat(*rows) + self.elastic, self.config.threshold, np.inf)
 
