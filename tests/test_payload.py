@@ -132,11 +132,22 @@ def _closeloop(robot, files, out) -> dict:
     return json.loads((out / "closeloop.json").read_text())
 
 
+def _predict_reproduces(tmp_path, data: str, result: dict) -> None:
+    """predict on the loop's model.json gives the held-out errors the loop reports."""
+    from harness.cli import main
+    from identification.metrics import rel_error
+
+    pred = tmp_path / "pred.npz"
+    assert main(["predict", "--model", str(tmp_path / "cl" / "model.json"), "--data", data,
+                 "--out", str(pred)]) == 0
+    tau, measured = np.load(pred)["tau"], np.load(data)["tau"]
+    held = slice(int(round(len(tau) * 0.75)), None)
+    assert np.allclose(rel_error(tau[held], measured[held]), result["error_after"], atol=1e-3)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("robot", ["ur5", "panda"])
 def test_a_loaded_plant_names_its_payload_and_predict_reproduces_it(tmp_path, robot):
-    from harness.cli import main
-    from identification.metrics import rel_error
 
     arm, loaded, control = _plants(robot, tmp_path)
     mass, com = _truth(arm, loaded)
@@ -148,12 +159,7 @@ def test_a_loaded_plant_names_its_payload_and_predict_reproduces_it(tmp_path, ro
     assert np.linalg.norm(np.array(payload["com"]) - com) < 0.01
     assert payload["coefficient"] == payload["mass"] and payload["joint"] == arm.dof
     assert np.all(np.array(result["error_after"]) < np.array(result["error_before"]))
-    pred = tmp_path / "pred.npz"
-    assert main(["predict", "--model", str(tmp_path / "cl" / "model.json"), "--data", data,
-                 "--out", str(pred)]) == 0
-    tau, measured = np.load(pred)["tau"], np.load(data)["tau"]
-    held = slice(int(round(len(tau) * 0.75)), None)
-    assert np.allclose(rel_error(tau[held], measured[held]), result["error_after"], atol=1e-3)
+    _predict_reproduces(tmp_path, data, result)
     clean = _generate(control, 1, tmp_path / "control.npz")
     control_result = _closeloop(robot, [clean], tmp_path / "cl_control")
     assert not [e for e in control_result["effects"] if e["effect"] in ("payload", "inertial")]
@@ -210,7 +216,6 @@ def test_a_part_held_by_a_jaw_gripper_is_named_on_the_gripper(tmp_path):
     loop names it there, within 3 % of its mass and 5 mm of its centre of mass, and predict on
     the loop's model.json (the payload's body read back) reproduces the error it reports."""
     from harness.cli import main
-    from identification.metrics import rel_error
 
     arm = _so101()
     part = ('<link name="held_part"><inertial><origin xyz="0 0 0"/><mass value="0.15"/>'
@@ -227,9 +232,4 @@ def test_a_part_held_by_a_jaw_gripper_is_named_on_the_gripper(tmp_path):
     assert payload["body"] == "gripper_link" and payload["joint"] == arm.dof - 1
     assert payload["mass"] == pytest.approx(0.15, rel=0.03)
     assert np.linalg.norm(np.array(payload["com"]) - [0.01, 0.0, -0.09]) < 0.005
-    pred = tmp_path / "pred.npz"
-    assert main(["predict", "--model", str(tmp_path / "cl" / "model.json"), "--data", data,
-                 "--out", str(pred)]) == 0
-    tau, measured = np.load(pred)["tau"], np.load(data)["tau"]
-    held = slice(int(round(len(tau) * 0.75)), None)
-    assert np.allclose(rel_error(tau[held], measured[held]), result["error_after"], atol=1e-3)
+    _predict_reproduces(tmp_path, data, result)
