@@ -21,6 +21,7 @@ import casadi as ca
 import numpy as np
 
 from planning.formulation import compiled
+from planning.formulation.clearance import link_offsets
 from planning.formulation.kinematics import ArmGeometry
 
 SIDES = (("beyond", "before"), ("left", "right"), ("above", "below"))
@@ -34,13 +35,7 @@ def sides(geometry: ArmGeometry, q: np.ndarray, centres: np.ndarray, threshold: 
     q, centres = np.atleast_2d(q), np.reshape(centres, (-1, 3))
     if not len(q):
         return ()
-    a, b = geometry.link_ends(q)  # (n, links, 3)
-    c = centres[:, None, :]
-    ab, ac = b - a, c - a
-    s = np.clip(np.einsum("nli,nli->nl", ac, ab) /
-                np.maximum(np.einsum("nli,nli->nl", ab, ab), 1e-300), 0.0, 1.0)
-    nearest = a + s[..., None] * ab  # (n, links, 3)
-    offset = nearest - c
+    offset = link_offsets(geometry, q, centres)  # (n, links, 3)
     distance = np.linalg.norm(offset, axis=-1)
     if geometry.radii:
         distance = distance - geometry.link_radii

@@ -28,14 +28,31 @@ def segment_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndar
     return np.linalg.norm(ap - np.clip(t, 0.0, 1.0)[..., None] * ab, axis=-1)
 
 
+def symbolic_segment_toward(point, a, b, length: float):
+    """CasADi vector from the nearest point of segment a-b of known constant length (m; 0:
+    the point a) to point."""
+    if length == 0:
+        return point - a
+    ab = b - a
+    t = ca.fmin(ca.fmax(ca.dot(point - a, ab) / length**2, 0.0), 1.0)
+    return point - a - t * ab
+
+
 def symbolic_segment_distance(point, a, b, length: float):
     """CasADi distance from point to segment a-b of known constant length (m; 0: the point
     a)."""
-    if length == 0:
-        return ca.norm_2(point - a)
+    return ca.norm_2(symbolic_segment_toward(point, a, b, length))
+
+
+def link_offsets(geometry: ArmGeometry, q: np.ndarray, centres: np.ndarray) -> np.ndarray:
+    """(n, links, 3) from obstacle centres (n, 3) to each link's nearest point on its capsule
+    axis at joint angles q (n, dof) (m)."""
+    a, b = geometry.link_ends(q)
+    c = np.reshape(centres, (-1, 1, 3))
     ab = b - a
-    t = ca.fmin(ca.fmax(ca.dot(point - a, ab) / length**2, 0.0), 1.0)
-    return ca.norm_2(point - a - t * ab)
+    s = np.clip(np.einsum("nli,nli->nl", c - a, ab) /
+                np.maximum(np.einsum("nli,nli->nl", ab, ab), 1e-300), 0.0, 1.0)
+    return a + s[..., None] * ab - c
 
 
 def link_clearances(geometry: ArmGeometry, q: np.ndarray, obstacle: np.ndarray) -> np.ndarray:
@@ -67,12 +84,7 @@ def guided_link_clearances(geometry: ArmGeometry, q, obstacle, normals) -> list:
     for link, ((a, b), length, radius) in enumerate(zip(
             geometry.symbolic_link_ends(q), geometry.link_lengths, geometry.link_radii,
             strict=True)):
-        if length == 0:  # from the link's nearest point to the centre, as symbolic_segment_distance
-            toward = obstacle - a
-        else:
-            ab = b - a
-            t = ca.fmin(ca.fmax(ca.dot(obstacle - a, ab) / length**2, 0.0), 1.0)
-            toward = obstacle - a - t * ab
+        toward = symbolic_segment_toward(obstacle, a, b, length)
         normal = normals[3 * link: 3 * link + 3]
         along = ca.if_else(ca.dot(normal, normal) > 0.5, -ca.dot(normal, toward),
                            ca.norm_2(toward))

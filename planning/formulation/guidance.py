@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from planning.formulation.clearance import link_offsets
 from planning.formulation.kinematics import ArmGeometry
 
 
@@ -22,15 +23,10 @@ def normals(geometry: ArmGeometry, trajectory, times: np.ndarray, centres: np.nd
     order) with `centres` (m), read off `trajectory` (the plan re-planned from): the unit
     direction from each centre to each link's nearest point where the link comes within
     `near` of the obstacle (m, its clearance), zero elsewhere (the row unguided)."""
-    links = len(geometry.links)
-    guide = np.zeros((slots, links, 3))
+    guide = np.zeros((slots, len(geometry.links), 3))
     if len(times):
-        a, b = geometry.link_ends(trajectory.position(np.asarray(times, float)))
-        c = np.asarray(centres, float)[:, None, :]
-        ab = b - a
-        s = np.clip(np.einsum("nli,nli->nl", c - a, ab) /
-                    np.maximum(np.einsum("nli,nli->nl", ab, ab), 1e-300), 0.0, 1.0)
-        offset = a + s[..., None] * ab - c
+        offset = link_offsets(geometry, trajectory.position(np.asarray(times, float)),
+                              np.asarray(centres, float))
         distance = np.linalg.norm(offset, axis=-1)
         clearance = distance - geometry.link_radii if geometry.radii else distance
         guided = (clearance < near) & (distance > 1e-9)

@@ -211,10 +211,13 @@ class PlanningNLP:
         inputs, distances = clearance_site(self.config.geometry, self.dof, self.guide.numel() > 0)
         function = ca.Function("distances", list(inputs), [distances],
                                {"never_inline": not self.inline})
-        width = 3 * self.links if len(inputs) > 2 else 0
+        width = 3 * self.links  # slot j's normals, where the site takes them
+
+        def normals(j: int) -> tuple:
+            return (self.guide[width * j: width * (j + 1)],) if len(inputs) > 2 else ()
+
         rows = [self._site("distances", function, inputs, distances, self.state(s_obs[j])[0],
-                           obstacle[:, j], *([self.guide[width * j: width * (j + 1)]] * bool(width)))
-                for j in range(self.config.obstacle_slots)]
+                           obstacle[:, j], *normals(j)) for j in range(self.config.obstacle_slots)]
         return self._add(ca.vertcat(*rows) + self.elastic, self.config.threshold, np.inf)
 
     def _joint_limits(self, extremum, newton) -> None:
