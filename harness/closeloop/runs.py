@@ -25,6 +25,13 @@ from harness.data.runs import KEYS, Runs, load_runs, split_files
 from harness.errors import UserError
 from harness.robots.arm import Arm
 from harness.robots.torque_models import load_torque_model, read_model
+from identification.closeloop.events import (
+    Events,
+    events_json,
+    events_line,
+    run_events,
+    without_events,
+)
 from identification.closeloop.leftover import LEFT, Leftover, leftover
 from identification.closeloop.offsets import ScoredRun, run_tail, scored_error, scored_offsets, whole_run
 from identification.closeloop.payload import REACH
@@ -81,6 +88,12 @@ class RunsRun:
     model_json: dict
     heldout_offsets: np.ndarray  # (held runs, dof) N m, each under the closed model
     scored: list[ScoredRun]  # what each held-out run is scored on, its offset from where
+    event_files: list[str]  # the runs events were looked for on: training, then validation
+    found: tuple[Events, ...]  # each one's external torques (identification.closeloop.events)
+
+    @property
+    def events_line(self) -> str:
+        return events_line(self.event_files, list(self.found))
 
     def to_json(self) -> dict:
         r, left = self.loop, self.left
@@ -121,39 +134,62 @@ class RunsRun:
                                    "has none (0 N m). heldout_runs says which, run by run; "
                                    "`predict --offset-from-rest` on a --validate log "
                                    "reproduces its figures",
-               "model": "model.json"}
+               "model": "model.json", **events_json(self.event_files, list(self.found))}
         if self.validate_files:
             out["heldout"] = {"files": self.validate_files, "before": out["error_before"],
                               "after": out["error_after"]}
         return out
 
 
+def _times(runs: Runs) -> tuple[np.ndarray, ...]:
+    """Each run's time stamps; those of a set built in code without them: its samples at the
+    rate its meta records (harness.data.runs.run_times)."""
+    if runs.times:
+        return runs.times
+    return tuple(np.arange(n) / float(m.get("rate", 200.0))
+                 for n, m in zip(runs.lengths, runs.metas, strict=True))
+
+
+def _declared(declared: str, arm: Arm, dof: int):
+    """(the declared torque model, what model.json records of it)."""
+    if declared == "pinocchio":
+        return arm.nominal, "pinocchio"
+    model, spec = load_torque_model(declared, arm), read_model(declared).payload
+    if model.dof != dof:
+        raise UserError(f"--declared {declared} has {model.dof} joints, robot {arm.label} {dof}")
+    return model, spec
+
+
 def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs | None = None,
              holdout: float = 0.25, reach: float = REACH, body: str | None = None) -> RunsRun:
     """Close the loop on the runs data (read_runs) of arm, scored on the validate runs or the
     last holdout of every run; a payload on the last body (payload.last_body; the link `body`
-    when given) is a candidate, its centre of mass within reach m of its joint."""
+    when given) is a candidate, its centre of mass within reach m of its joint. External
+    torques (identification.closeloop.events) are found on every run with the declared model
+    and their samples left out of every fit and score."""
     runs, dof, carrier = _split(data), arm.dof, last_body(arm, body)
     if runs[0][0].shape[1] != dof:
         raise UserError(f"data have {runs[0][0].shape[1]} joints, robot {arm.label} has {dof}")
+    model, spec = _declared(declared, arm, dof)
+    found = run_events(model, runs, _times(data), carrier)
+    files = list(data.files)
     if validate is not None:
         held = _split(validate)
         if held[0][0].shape[1] != dof:
             raise UserError(f"--validate logs have {held[0][0].shape[1]} joints, robot "
                             f"{arm.label} has {dof}")
-        train, scored = runs, [whole_run(r) for r in held]
+        held_found = run_events(model, held, _times(validate), carrier)
+        train = [without_events(r, ev) for r, ev in zip(runs, found, strict=True)]
+        found, files = found + held_found, files + list(validate.files)
+        scored = [whole_run(without_events(r, ev)) for r, ev in zip(held, held_found,
+                                                                    strict=True)]
     else:
         cut = [int(round(len(r[0]) * (1.0 - holdout))) for r in runs]
-        train = [tuple(a[:c] for a in r) for r, c in zip(runs, cut, strict=True)]
-        held = [tuple(a[c:] for a in r) for r, c in zip(runs, cut, strict=True)]
-        scored = [run_tail(t, h) for t, h in zip(train, held, strict=True)]
-    if declared == "pinocchio":
-        spec, model = "pinocchio", arm.nominal
-    else:
-        model, spec = load_torque_model(declared, arm), read_model(declared).payload
-        if model.dof != dof:
-            raise UserError(f"--declared {declared} has {model.dof} joints, robot {arm.label} "
-                            f"{dof}")
+        parts = [(tuple(a[:c] for a in r), tuple(a[c:] for a in r), ev.kept[:c], ev.kept[c:])
+                 for r, c, ev in zip(runs, cut, found, strict=True)]
+        train = [tuple(a[k] for a in t) for t, _, k, _ in parts]
+        scored = [run_tail(tuple(a[k] for a in t), tuple(a[kh] for a in h))
+                  for t, h, k, kh in parts]
     try:
         inertial = inertial_correction(arm, train) if declared == "pinocchio" else None
         loop = close_loop_runs(model, train, inertial, body=carrier, reach=reach)
@@ -166,4 +202,4 @@ def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs |
     return RunsRun(arm.reference, name, list(data.files),
                    [] if validate is None else list(validate.files), holdout, loop, before,
                    after, leftover(loop.model, [s.scored for s in scored]), payload,
-                   heldout_offsets, scored)
+                   heldout_offsets, scored, files, tuple(found))

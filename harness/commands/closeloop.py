@@ -164,6 +164,7 @@ def _run_data(args) -> int:
     print(f"    error (relative) before [{fmt(f'{e:.3f}' for e in r.error_before)}] "
           f"after [{fmt(f'{e:.3f}' for e in r.error_after)}]")
     print(f"    unexplained joints: {list(r.left.unexplained_joints) or 'none'}")
+    print(f"    {r.events_line}")
     if not r.left.unexplained_joints:
         scored = held if held is not None else train
         line = runs_line(r.error_after, scored.metas, _per_run(scored),

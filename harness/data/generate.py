@@ -110,12 +110,14 @@ def generate(
     sensors: SensorConfig | None = None,
     excitation: Trajectory | None = None,
     robot: Arm | None = None,
+    pushes=(),
 ) -> Dataset:
     """One dataset of arm (the plant) of `samples` points at SAMPLE_RATE Hz; noise is a
     fraction of torque std. With an excitation: along its first `samples` states, at its rate
     (measured: tracked from its state at t = 0, its samples linearly interpolated between).
     robot: the registered robot arm is a variant of, whose entry's declared library the
-    excitation and the report use (default: arm's own entry)."""
+    excitation and the report use (default: arm's own entry); pushes: external forces on the
+    plant's links in measured mode (harness.data.pushes), recorded in meta."""
     _validate(samples, noise, bias)
     robot = robot or arm
     rate = SAMPLE_RATE
@@ -130,14 +132,19 @@ def generate(
     meta = dict(plant=arm.reference, robot_hash=arm.record["hash"], mode=mode, noise=noise,
                 bias=bias, seed=seed, dof=arm.dof, samples=samples, rate=rate,
                 excitation_condition=cond)
+    if pushes and mode != "measured":
+        raise UserError("pushes act on a simulated plant: --mode measured")
     if mode == "inverse":
         q, qd, qdd = exc.evaluate(t)
         tau_clean = inverse_torques(arm.mujoco, q, qd, qdd)
         truth: dict = {}
     elif mode == "measured":
         q, qd, qdd, tau_clean, truth, stats = simulate_measured(arm, exc, t, rate,
-                                                                sensors or SensorConfig(), rng)
+                                                                sensors or SensorConfig(), rng,
+                                                                pushes)
         meta.update(stats)
+        if pushes:
+            meta["pushes"] = [p.to_json() for p in pushes]
     else:
         raise UserError(f"--mode must be 'inverse' or 'measured', got '{mode}'")
     meta.update(library_report(robot, q, qd, qdd, arm.pinocchio))

@@ -30,6 +30,7 @@ class Runs:
     metas: tuple[dict, ...]
     files: tuple[str, ...]
     lengths: tuple[int, ...]
+    times: tuple[np.ndarray, ...] = ()  # each run's time stamps (s), its own clock
 
     @property
     def samples(self) -> int:
@@ -57,7 +58,7 @@ def split_files(spec: str, option: str) -> list[str]:
 def load_runs(files: list[str]) -> Runs:
     """The runs at files, concatenated; UserError if their joints differ (their robot is
     checked by the caller's resolve_arm, on Runs.records)."""
-    loaded = [load_arrays(f, KEYS, optional=("tau_clean",)) for f in files]
+    loaded = [load_arrays(f, KEYS, optional=("tau_clean", "t")) for f in files]
     dofs = {a["q"].shape[1] for a, _ in loaded}
     if len(dofs) > 1:
         raise UserError(f"the logs {', '.join(files)} have different joint counts "
@@ -65,7 +66,22 @@ def load_runs(files: list[str]) -> Runs:
     keys = KEYS + (("tau_clean",) if all("tau_clean" in a for a, _ in loaded) else ())
     arrays = {k: np.concatenate([a[k] for a, _ in loaded]) for k in keys}
     return Runs(arrays, tuple(m for _, m in loaded), tuple(str(Path(f)) for f in files),
-                tuple(len(a["q"]) for a, _ in loaded))
+                tuple(len(a["q"]) for a, _ in loaded),
+                tuple(run_times(f, a, m) for f, (a, m) in zip(files, loaded, strict=True)))
+
+
+def run_times(file, arrays: dict, meta: dict) -> np.ndarray:
+    """A run's time stamps (s): its `t`, else its samples at the rate its meta records
+    (default 200 Hz); UserError unless they are one per sample and increasing."""
+    n = len(arrays["q"])
+    if "t" not in arrays:
+        return np.arange(n) / float(meta.get("rate", 200.0))
+    t = np.asarray(arrays["t"], float).ravel()
+    if len(t) != n:
+        raise UserError(f"{file}: 't' has {len(t)} samples, 'q' {n}")
+    if n > 1 and np.any(np.diff(t) <= 0):
+        raise UserError(f"{file}: 't' must increase")
+    return t
 
 
 def join(train: Runs, validate: Runs) -> Runs:
@@ -76,4 +92,4 @@ def join(train: Runs, validate: Runs) -> Runs:
     keys = [k for k in train.arrays if k in validate.arrays]
     return Runs({k: np.concatenate([train.arrays[k], validate.arrays[k]]) for k in keys},
                 train.metas + validate.metas, train.files + validate.files,
-                train.lengths + validate.lengths)
+                train.lengths + validate.lengths, train.times + validate.times)

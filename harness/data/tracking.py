@@ -16,6 +16,7 @@ from dataclasses import replace
 import mujoco
 import numpy as np
 
+from harness.data.pushes import apply_pushes
 from harness.data.sensors import SensorConfig, encoder, estimate_derivatives
 from harness.errors import UserError
 from harness.robots.arm import Arm
@@ -55,9 +56,10 @@ def _actuation(model: mujoco.MjModel) -> np.ndarray | None:
 
 
 def simulate_measured(arm: Arm, exc: FourierExcitation, t_out: np.ndarray, rate: float,
-                      cfg: SensorConfig, rng: np.random.Generator):
+                      cfg: SensorConfig, rng: np.random.Generator, pushes=()):
     """Simulate arm, sense, estimate; returns q, qd, qdd, tau_clean at t_out (sampled at rate
-    Hz), truth, stats."""
+    Hz), truth, stats. pushes: external forces on its links (harness.data.pushes.Push); their
+    joint torque is in truth['tau_external']."""
     model = copy.copy(arm.mujoco)  # its time step is refined below: the arm's is shared
     period = 1.0 / rate
     if abs(period / model.opt.timestep - round(period / model.opt.timestep)) > 1e-9:
@@ -78,6 +80,7 @@ def simulate_measured(arm: Arm, exc: FourierExcitation, t_out: np.ndarray, rate:
     data.qpos[:], data.qvel[:] = q_ref[0], qd_ref[0]
     q_read, tau_read = np.empty((n_sense, model.nv)), np.empty((n_sense, model.nv))
     q_true, qd_true, qdd_true = (np.empty((n_sense, model.nv)) for _ in range(3))
+    external = np.zeros((n_sense, model.nv))
     for k in range(n_sense):
         ref_data.qpos[:], ref_data.qvel[:], ref_data.qacc[:] = q_ref[k], qd_ref[k], qdd_ref[k]
         mujoco.mj_inverse(model, ref_data)
@@ -89,6 +92,9 @@ def simulate_measured(arm: Arm, exc: FourierExcitation, t_out: np.ndarray, rate:
         else:
             data.ctrl[:] = to_ctrl @ tau
         mujoco.mj_forward(model, data)  # sensors and qacc at this instant
+        if pushes:
+            external[k] = apply_pushes(model, data, pushes, t_sense[k])
+            mujoco.mj_forward(model, data)
         q_true[k], qd_true[k], qdd_true[k] = data.qpos, data.qvel, data.qacc
         if sensors is not None:
             q_read[k], tau_read[k] = data.sensordata[sensors[0]], data.sensordata[sensors[1]]
@@ -102,6 +108,8 @@ def simulate_measured(arm: Arm, exc: FourierExcitation, t_out: np.ndarray, rate:
     q_est, qd_est, qdd_est = estimate_derivatives(encoder(q_read, cfg, rng), cfg)
     idx = np.round(t_out * cfg.sensing_rate).astype(int)
     truth = {"q": q_true[idx], "qd": qd_true[idx], "qdd": qdd_true[idx]}
+    if pushes:
+        truth["tau_external"] = external[idx]
     stats = state_errors(arm, (q_est[idx], qd_est[idx], qdd_est[idx]),
                          (truth["q"], truth["qd"], truth["qdd"]))
     stats["tracking_rms"] = float(np.sqrt(np.mean((q_true - q_ref) ** 2)))

@@ -1,0 +1,270 @@
+"""The world in a log: intervals where an external torque acts (a push, a bump, a part caught),
+found with the declared model and left out of every fit and score of the loop.
+
+A generalized-momentum observer (De Luca & Mattone, ICRA 2005; Haddadin, De Luca &
+Albu-Schaeffer, T-RO 2017) needs no acceleration: with p = M(q) qd the robot obeys
+dp/dt = tau + tau_ext - beta(q, qd), beta = n(q, qd) - dM/dt qd, n the torque at zero
+acceleration, so r = K (p - p(0) - int (tau - beta + r)) follows tau_ext through a first-order
+lag of time constant 1 / K. Every quantity comes from the declared torque model alone:
+M(q) v = torque(q, 0, v) - torque(q, 0, 0), n = torque(q, qd, 0), and dM/dt qd by a central
+difference of M(q) qd along qd. Discretely, between samples k-1 and k,
+
+    e_k = (p_k - p_{k-1}) / dt_k - ((tau - beta)_k + (tau - beta)_{k-1}) / 2,
+    r_k = a r_{k-1} + (1 - a) e_k,   a = exp(-K dt),
+
+the exact first-order low-pass of e, stable for every sample time.
+
+On a real log r also carries what the model lacks (friction, a payload, a scale error of
+the drive gains): persistent effects, functions of the robot's state. Those are removed
+before detection by a robust fit (Tukey's bisquare, iteratively reweighted) of r on the
+same low-pass of state columns (per joint: an offset, viscous and dry friction, the
+declared torque's scale; the load's body's ten parameters), so an event is what no
+function of the state explains. The threshold is the robust scale of what is left (1.4826
+x its median absolute deviation per joint): an event starts where a joint exceeds ON
+scales and lasts while any joint exceeds OFF (hysteresis), at least MIN_DURATION long. Its
+samples and MARGIN on each side are left out, the persistent fit is made again without
+them, and detection repeats until the events stop changing.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import lfilter
+
+GAIN = 50.0  # 1/s: the observer follows an external torque with a 20 ms time constant
+ON = 8.0  # robust scales of the residual: an event starts where a joint exceeds it
+OFF = 3.0  # ... and lasts while a joint exceeds this (hysteresis)
+MIN_DURATION = 0.15  # s: shorter excursions are the robot's own (see module docstring)
+MARGIN = 0.1  # s left out on each side of an event (the observer's lag is 1 / GAIN = 20 ms)
+ROUNDS = 4  # persistent fit and detection, again without the events, at most
+BISQUARE = 4.685  # Tukey's constant (95 % efficiency at Gaussian residuals)
+FRICTION_WIDTH = 0.02  # rad/s, the dry-friction column's tanh width
+STEP = 1e-4  # rad per (rad/s): the central difference of M(q) qd along qd
+
+
+@dataclass(frozen=True)
+class Event:
+    """An interval (s, in the dataset's own time) of external torque; peak: the observer's
+    estimate per joint (N m) where it is largest; joints: those (1-based) above ON."""
+
+    start: float
+    end: float
+    peak: tuple[float, ...]
+    joints: tuple[int, ...]
+
+    def to_json(self) -> dict:
+        return {"start": self.start, "end": self.end, "peak": list(self.peak),
+                "joints": list(self.joints)}
+
+
+@dataclass(frozen=True)
+class Events:
+    """The events of a log and how they were found; kept (n,) bool: the samples outside every
+    event and its margin (what the loop fits and scores on)."""
+
+    events: tuple[Event, ...]
+    threshold: np.ndarray  # (dof,) N m: ON x scale
+    scale: np.ndarray  # (dof,) N m: the robust scale of the observer's residual
+    kept: np.ndarray
+    rounds: int
+
+    def to_json(self) -> dict:
+        return {"events": [e.to_json() for e in self.events],
+                "threshold": self.threshold.tolist(), "scale": self.scale.tolist(),
+                "observer_gain": GAIN, "samples_left_out": int(np.sum(~self.kept)),
+                "rule": (f"generalized-momentum observer on the declared model (gain {GAIN:g} "
+                         "1/s); persistent effects (offset, viscous and dry friction, the "
+                         "declared torque's scale, the load's body) removed by a bisquare fit; "
+                         f"an event starts above {ON:g} robust scales (1.4826 x the median "
+                         f"absolute deviation per joint) and lasts while above {OFF:g}, at least "
+                         f"{MIN_DURATION * 1e3:.0f} ms; its samples and {MARGIN:g} s each side "
+                         "are left out of every fit and score")}
+
+    def line(self) -> str:
+        """One line for the command's output."""
+        if not self.events:
+            return "external torque: no event (threshold " + ", ".join(
+                f"{v:.3g}" for v in self.threshold) + " N m)"
+        spans = ", ".join(f"{e.start:.1f}-{e.end:.1f} s" for e in self.events[:6])
+        spans += ", ..." if len(self.events) > 6 else ""
+        peaks = np.array([np.abs(e.peak) for e in self.events])
+        k, j = np.unravel_index(np.argmax(peaks), peaks.shape)
+        return (f"external torque: {len(self.events)} event{'s' * (len(self.events) > 1)} "
+                f"({spans}; peak {peaks[k, j]:.3g} N m on joint {j + 1}), left out of the "
+                "effects")
+
+
+def _momentum_terms(model, q, qd) -> tuple[np.ndarray, np.ndarray]:
+    """p = M(q) qd and beta = n(q, qd) - dM/dt qd, (n, dof) each, from the torque model."""
+    zero = np.zeros_like(q)
+
+    def mass_times(at, v):
+        return model.torque(at, zero, v) - model.torque(at, zero, zero)
+
+    p = mass_times(q, qd)
+    h = STEP
+    m_dot_qd = (mass_times(q + h * qd, qd) - mass_times(q - h * qd, qd)) / (2 * h)
+    return p, model.torque(q, qd, zero) - m_dot_qd
+
+
+def _lag(dt: float) -> float:
+    return float(np.exp(-GAIN * dt))
+
+
+def low_pass(x: np.ndarray, dt: float) -> np.ndarray:
+    """The observer's filter on a signal of the state (n, ...): its trapezoid average between
+    samples through a r_k = a r_{k-1} + (1 - a) x_k lag, from rest at the first sample."""
+    x = np.asarray(x, float)
+    mid = np.concatenate([np.zeros_like(x[:1]), (x[1:] + x[:-1]) / 2])
+    a = _lag(dt)
+    return lfilter([1.0 - a], [1.0, -a], mid, axis=0)
+
+
+def observer(model, t, q, qd, tau) -> np.ndarray:
+    """The momentum observer's external-torque estimate r (n, dof) in N m."""
+    p, beta = _momentum_terms(model, q, qd)
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        raise ValueError("time stamps must increase")
+    drive = tau - beta
+    e = np.zeros_like(p)
+    e[1:] = np.diff(p, axis=0) / dt[:, None] - (drive[1:] + drive[:-1]) / 2
+    a = np.exp(-GAIN * dt)
+    if np.ptp(dt) <= 1e-6 * np.mean(dt):  # evenly sampled: one filter call
+        return lfilter([1.0 - a[0]], [1.0, -a[0]], e, axis=0)
+    r = np.zeros_like(e)
+    for k in range(1, len(e)):
+        r[k] = a[k - 1] * r[k - 1] + (1 - a[k - 1]) * e[k]
+    return r
+
+
+def state_columns(model, q, qd, qdd, body=None) -> np.ndarray:
+    """(n, dof, k) torques of the persistent effects the detection removes: per joint an
+    offset, viscous and dry friction and the declared torque's scale; body (a callable
+    (q, qd, qdd) -> (n, dof, 10), the load's body's regressor) its ten parameters."""
+    n, dof = q.shape
+    declared = model.torque(q, qd, qdd)
+    per_joint = [np.ones_like(q), qd, np.tanh(qd / FRICTION_WIDTH), declared]
+    cols = np.zeros((n, dof, len(per_joint) * dof))
+    for i, signal in enumerate(per_joint):
+        for j in range(dof):
+            cols[:, j, i * dof + j] = signal[:, j]
+    if body is not None:
+        cols = np.concatenate([cols, np.asarray(body(q, qd, qdd), float)], axis=2)
+    return cols
+
+
+def _robust_scale(x: np.ndarray) -> np.ndarray:
+    med = np.median(x, axis=0)
+    return np.maximum(1.4826 * np.median(np.abs(x - med), axis=0), 1e-12)
+
+
+def persistent_residual(r: np.ndarray, cols: np.ndarray, use: np.ndarray,
+                        iterations: int = 8) -> tuple[np.ndarray, np.ndarray]:
+    """r minus its bisquare fit on cols (both low-passed alike), fitted on the samples use;
+    returns that residual (n, dof) and its robust scale (dof,) on those samples."""
+    n, dof, k = cols.shape
+    col_scale = np.maximum(np.sqrt(np.mean(cols[use] ** 2, axis=0)), 1e-12)  # (dof, k)
+    norm = np.max(col_scale, axis=0)
+    X = cols / norm
+    weight = np.ones((n, dof))
+    res = r.copy()
+    for _ in range(iterations):
+        scale = _robust_scale(res[use])
+        w = np.sqrt(weight[use]) / scale
+        A = (X[use] * w[:, :, None]).reshape(-1, k)
+        coef = np.linalg.lstsq(A, (r[use] * w).ravel(), rcond=None)[0]
+        res = r - X @ coef
+        u = res / (BISQUARE * _robust_scale(res[use]))
+        weight = np.where(np.abs(u) < 1, (1 - u**2) ** 2, 0.0)
+    return res, _robust_scale(res[use])
+
+
+def _intervals(z: np.ndarray, t: np.ndarray) -> list[tuple[int, int]]:
+    """[start, end) sample ranges where max-over-joints z exceeds ON, widened while it exceeds
+    OFF, at least MIN_DURATION long."""
+    top = np.max(z, axis=1)
+    above = top > OFF
+    out: list[tuple[int, int]] = []
+    k = 0
+    n = len(top)
+    while k < n:
+        if not above[k]:
+            k += 1
+            continue
+        end = k
+        while end < n and above[end]:
+            end += 1
+        if np.any(top[k:end] > ON) and t[end - 1] - t[k] >= MIN_DURATION:
+            out.append((k, end))
+        k = end
+    return out
+
+
+def find_events(model, t, q, qd, qdd, tau, body=None) -> Events:
+    """External-torque events of a log (t (n,) s; q, qd, qdd, tau (n, dof)) against the
+    declared torque model; body: the load's body's regressor (state_columns), or None."""
+    t = np.asarray(t, float)
+    r = observer(model, t, q, qd, tau)
+    dt = float(np.median(np.diff(t)))
+    cols = low_pass(state_columns(model, q, qd, qdd, body), dt)
+    kept = np.ones(len(t), bool)
+    kept[: int(np.ceil(3.0 / (GAIN * dt)))] = False  # the observer's start-up transient
+    settle = kept.copy()
+    found: list[tuple[int, int]] = []
+    rounds = 0
+    for rounds in range(1, ROUNDS + 1):
+        res, scale = persistent_residual(r, cols, kept)
+        z = np.abs(res - np.median(res[kept], axis=0)) / scale
+        z[~settle] = 0.0
+        spans = _intervals(z, t)
+        new = settle.copy()
+        for a, b in spans:
+            new &= ~((t >= t[a] - MARGIN) & (t <= t[b - 1] + MARGIN))
+        if spans == found:
+            break
+        found, kept = spans, new
+    events = []
+    for a, b in found:
+        seg = res[a:b] - np.median(res[kept], axis=0)
+        peak = seg[np.argmax(np.abs(seg), axis=0), np.arange(seg.shape[1])]
+        joints = tuple(int(j) + 1 for j in np.flatnonzero(np.max(z[a:b], axis=0) > ON))
+        events.append(Event(float(t[a]), float(t[b - 1]), tuple(map(float, peak)), joints))
+    kept_out = np.ones(len(t), bool)
+    for a, b in found:
+        kept_out &= ~((t >= t[a] - MARGIN) & (t <= t[b - 1] + MARGIN))
+    return Events(tuple(events), ON * scale, scale, kept_out, rounds)
+
+
+def run_events(model, runs, times, body=None) -> list[Events]:
+    """find_events on each run (q, qd, qdd, tau, ...) with its times (n,) s."""
+    return [find_events(model, t, *run[:4], body) for run, t in zip(runs, times, strict=True)]
+
+
+def without_events(run: tuple, events: Events) -> tuple:
+    """The run's arrays (each (n, ...)) on the samples outside its events and their margins."""
+    return tuple(a[events.kept] for a in run)
+
+
+def events_json(files, found: list[Events]) -> dict:
+    """closeloop.json's `events` (each with the file of its run) and `event_detection`."""
+    events = [{**e.to_json(), "file": str(f)} for f, ev in zip(files, found, strict=True)
+              for e in ev.events]
+    runs = [{"file": str(f), **{k: v for k, v in ev.to_json().items()
+                                if k not in ("events", "rule", "observer_gain")}}
+            for f, ev in zip(files, found, strict=True)]
+    rule = found[0].to_json()["rule"] if found else ""
+    return {"events": events, "event_detection": {"observer_gain": GAIN, "rule": rule,
+                                                  "runs": runs}}
+
+
+def events_line(files, found: list[Events]) -> str:
+    """One line for all the runs (a run's file named where there are several)."""
+    if len(found) == 1:
+        return found[0].line()
+    with_events = [(f, ev) for f, ev in zip(files, found, strict=True) if ev.events]
+    if not with_events:
+        return f"external torque: no event in {len(found)} runs"
+    return "; ".join(f"{f}: {ev.line()}" for f, ev in with_events)
