@@ -215,7 +215,8 @@ def find_events(model, t, q, qd, qdd, tau, body=None) -> Events:
     settle = kept.copy()
     found: list[tuple[int, int]] = []
     rounds = 0
-    for rounds in range(1, ROUNDS + 1):
+    while rounds < ROUNDS:
+        rounds += 1
         res, scale = persistent_residual(r, cols, kept)
         z = np.abs(res - np.median(res[kept], axis=0)) / scale
         z[~settle] = 0.0
