@@ -1,7 +1,8 @@
 """Closing the loop on a given dataset (`closeloop --data FILE.npz --robot R`): a measured
 log (`ingest`) or any dataset of the contract, on an arm's rigid-body base atoms.
 
-The loop is identification.closeloop.measured's; here the robot's rigid-body library is
+The loop is identification.closeloop.measured's, on the samples outside the external
+torques found with the robot's nominal model (identification.closeloop.events); here the robot's rigid-body library is
 built from its kinematics and the outcome written as closeloop.json. Errors are against the
 measured torque `tau` (and, where the file has one, also against `tau_clean`).
 """
@@ -12,9 +13,12 @@ from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 
+from harness.closeloop.payload import last_body
 from harness.data.dataset import load_arrays
+from harness.data.runs import run_times
 from harness.errors import UserError
 from harness.robots.arm import Arm
+from identification.closeloop.events import Events, events_json, find_events, without_events
 from identification.closeloop.measured import (
     EXPLAINED,
     MIN_GAIN,
@@ -43,7 +47,8 @@ class MeasuredRun:
     arrays: dict
     meta: dict
     holdout: float
-    loop: MeasuredLoop
+    loop: MeasuredLoop  # on the samples outside the events
+    events: Events  # external torques found with the robot's nominal model
 
     def clean_errors(self) -> tuple[list[float], list[float]] | None:
         """Held-out errors before/after against tau_clean, if the dataset has it."""
@@ -83,6 +88,7 @@ class MeasuredRun:
                "robot": self.robot, "data": {"file": self.source, **{
                    k: self.meta[k] for k in ("mode", "source", "samples", "derivatives")
                    if k in self.meta}}}
+        out.update(events_json([self.source], [self.events]))
         clean = self.clean_errors()
         if clean is not None:
             out["error_before_clean"], out["error_after_clean"] = clean
@@ -92,14 +98,20 @@ class MeasuredRun:
 def run_measured(data: str | Path, arm: Arm, holdout: float = 0.25) -> MeasuredRun:
     """Close the loop on the dataset at data of arm (resolved by the caller from the data's
     meta: harness.robots.arm.resolve_arm)."""
-    arrays, meta = load_arrays(data, ("q", "qd", "qdd", "tau"), optional=("tau_clean",))
+    arrays, meta = load_arrays(data, ("q", "qd", "qdd", "tau"), optional=("tau_clean", "t"))
     library = rigid_library(arm)
     dof = arrays["q"].shape[1]
     if dof != library.dof:
         raise UserError(f"data have {dof} joints, robot {arm.label} has {library.dof}")
+    keys = [k for k in ("q", "qd", "qdd", "tau", "tau_clean") if k in arrays]
+    found = find_events(arm.nominal, run_times(data, arrays, meta),
+                        *(arrays[k] for k in ("q", "qd", "qdd", "tau")), last_body(arm))
+    arrays = {**arrays, **dict(zip(keys, without_events(tuple(arrays[k] for k in keys), found),
+                                   strict=True))}
+    arrays.pop("t", None)
     try:
         loop = close_loop_measured(library, arrays["q"], arrays["qd"], arrays["qdd"],
                                    arrays["tau"], holdout)
     except IdentificationError as exc:
         raise UserError(f"{data}: {exc}") from None
-    return MeasuredRun(arm.reference, str(data), arrays, meta, holdout, loop)
+    return MeasuredRun(arm.reference, str(data), arrays, meta, holdout, loop, found)

@@ -38,7 +38,7 @@ import mujoco
 import numpy as np
 
 from harness.closeloop.arm_plants import arm_variant_xml
-from harness.closeloop.payload import PayloadTorque
+from harness.closeloop.payload import PayloadTorque, last_body
 from harness.closeloop.plants import Variant, true_effects
 from harness.data.dataset import Dataset
 from harness.data.generate import generate
@@ -47,6 +47,7 @@ from harness.robots.arm import Arm
 from harness.robots.registry import flange_frame
 from harness.robots.torque_models import load_torque_model
 from identification.closeloop.effects import Effect, EffectTerm
+from identification.closeloop.events import Events, events_json, find_events
 from identification.closeloop.identified import close_loop_identified
 from identification.closeloop.loop import (
     CloseLoopResult,
@@ -76,6 +77,7 @@ class CloseLoopRun:
     truth_error_measured: np.ndarray | None  # (dof,) same vs the measured torque (the bar)
     absorbed: tuple[str, ...] = ()  # labels of true effects the declared model's terms span
     others: tuple[CloseLoopRun, ...] = ()  # the same data with the other declared models
+    events: Events | None = None  # external torques found on the data (left out of `data`)
 
     @property
     def expected(self) -> tuple[EffectTerm, ...]:
@@ -114,6 +116,7 @@ class CloseLoopRun:
             "diagnostics": {"before": [d.to_json() for d in r.diagnostics_before],
                             "after": [d.to_json() for d in r.diagnostics_after]},
             "data": {k: self.data.meta[k] for k in ("samples", "noise", "bias", "seed", "mode")},
+            **(events_json([self.plant], [self.events]) if self.events is not None else {}),
         }
 
 
@@ -173,18 +176,37 @@ def _loop(spec: str, data: Dataset, split: int, payload: PayloadTorque, truth, o
                         s.noise_floor, s.truth_error, s.truth_error_measured, s.absorbed)
 
 
+def leave_out_events(data: Dataset, arm: Arm, declared: str) -> tuple[Dataset, Events]:
+    """The data without the external torques found on them (identification.closeloop.events)
+    with the declared model (the arm's nominal one when the declared is identified), and
+    those events."""
+    model = arm.nominal if declared in DECLARED_MODELS else load_torque_model(declared, arm)
+    found = find_events(model, data.t, data.q, data.qd, data.qdd, data.tau, last_body(arm))
+    k = found.kept
+    if np.all(k):
+        return data, found
+    return replace(data, t=data.t[k], q=data.q[k], qd=data.qd[k], qdd=data.qdd[k],
+                   tau=data.tau[k], tau_clean=data.tau_clean[k],
+                   truth={n: v[k] for n, v in data.truth.items()}), found
+
+
 def run_closeloop(plant: Arm, arm: Arm, samples: int = 4000, noise: float = 0.05,
                   seed: int = 0, bias: float = 0.0, holdout: float = 0.25,
-                  declared: str = "pinocchio", compare: bool = False) -> CloseLoopRun:
-    """Generate measured data on plant (a variant of arm: check_plant), close the loop on
-    arm's declared model, score it; compare: also close it with the arm's other built-in
-    declared models (CloseLoopRun.others)."""
+                  declared: str = "pinocchio", compare: bool = False,
+                  pushes=()) -> CloseLoopRun:
+    """Generate measured data on plant (a variant of arm: check_plant; pushes: external
+    forces on its links, harness.data.pushes), leave out the external torques found on them,
+    close the loop on arm's declared model, score it; compare: also close it with the arm's
+    other built-in declared models (CloseLoopRun.others)."""
     check_plant(plant, arm)
-    data = generate(plant, samples, noise, seed, "measured", bias, robot=arm)
+    data = generate(plant, samples, noise, seed, "measured", bias, robot=arm, pushes=pushes)
+    data, found = leave_out_events(data, arm, declared)
+    samples = len(data.q)
     split = int(round(samples * (1.0 - holdout)))
     payload = PayloadTorque(arm.pinocchio, flange_frame(arm.pinocchio) or "")
     truth, outside = true_effects(plant.mujoco, effects_reference(arm))
-    run = _loop(declared, data, split, payload, truth, outside, holdout, arm)
+    run = replace(_loop(declared, data, split, payload, truth, outside, holdout, arm),
+                  events=found)
     if not compare:
         return run
     specs = DECLARED_MODELS if "prior" in arm.entry.libraries else ("pinocchio",)

@@ -50,6 +50,10 @@ def register(sub) -> None:
     p.add_argument("--payload-body", metavar="LINK",
                    help="with --data: the link a payload rides on (default: the last joint's, "
                         "or the one before when the last joint is a gripper's jaw)")
+    p.add_argument("--push", action="append", default=[], metavar="BODY:START:DURATION:FX,FY,FZ",
+                   help="with --plant: the world pushes the plant, a force (N, world frame) on "
+                   "the body's centre of mass from START s for DURATION s; repeatable. The "
+                   "loop must report it as an event and leave it out")
     p.set_defaults(func=run)
 
 
@@ -73,6 +77,8 @@ def _print(run) -> None:
                                          for c in r.candidates))
     if r.fallback:
         print(f"    joints {list(r.fallback)} fall back to the declared model")
+    if run.events is not None:
+        print(f"    {run.events.line()}")
 
 
 def _print_measured(run) -> None:
@@ -82,6 +88,7 @@ def _print_measured(run) -> None:
     print(f"    held-out error vs measured torque: before [{fmt(f'{e:.3f}' for e in r.error_before)}]"
           f" after [{fmt(f'{e:.3f}' for e in r.error_after)}]")
     print(f"    unexplained joints: {list(r.unexplained_joints) or 'none'}")
+    print(f"    {run.events.line()}")
     if not r.unexplained_joints:
         a, held = run.arrays, slice(r.split, None)
         line = runs_line(r.error_after, [run.meta], [a.get("tau_clean", a["tau"])],
@@ -94,6 +101,29 @@ def _per_run(runs) -> list[np.ndarray]:
     """Each run's torque (clean where known), as its meta's noise fraction is of."""
     tau = runs.arrays.get("tau_clean", runs.arrays["tau"])
     return np.split(tau, np.cumsum(runs.lengths)[:-1])
+
+
+def parse_push(text: str, plant: Arm):
+    """A --push BODY:START:DURATION:FX,FY,FZ of the plant (harness.data.pushes.Push)."""
+    from harness.data.pushes import Push
+
+    parts = text.split(":")
+    try:
+        if len(parts) != 4:
+            raise ValueError
+        start, duration = float(parts[1]), float(parts[2])
+        force = tuple(float(f) for f in parts[3].split(","))
+        if len(force) != 3 or not (start >= 0 and duration > 0) or not all(
+                np.isfinite([start, duration, *force])):
+            raise ValueError
+    except ValueError:
+        raise UserError(f"--push {text!r}: expected BODY:START:DURATION:FX,FY,FZ (s, s, N), "
+                        "START >= 0, DURATION > 0") from None
+    names = [plant.mujoco.body(i).name for i in range(1, plant.mujoco.nbody)]
+    if parts[0] not in names:
+        raise UserError(f"--push: the plant has no body {parts[0]!r} (its bodies: "
+                        f"{', '.join(names)})")
+    return Push(parts[0], start, duration, force)
 
 
 def _named(named) -> str:
@@ -182,12 +212,15 @@ def run(args) -> int:
         raise UserError("give exactly one of --plant MJCF (simulated measurement) and "
                         "--data FILE.npz (given data)")
     if args.data is not None:
+        if args.push:
+            raise UserError("--push applies to --plant (a simulated plant)")
         return _run_data(args)
     if args.validate:
         raise UserError("--validate applies to --data")
     plant, arm = _plant_arms(args)
     loop = run_closeloop(plant, arm, args.samples, args.noise, args.seed, args.bias,
-                         args.holdout, args.declared, compare=True)
+                         args.holdout, args.declared, compare=True,
+                         pushes=tuple(parse_push(p, plant) for p in args.push))
     out = Path(args.out) / "closeloop.json"
     write_json(out, loop.to_json())
     for run_ in (loop, *loop.others):
