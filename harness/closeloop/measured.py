@@ -2,8 +2,9 @@
 log (`ingest`) or any dataset of the contract, on an arm's rigid-body base atoms.
 
 The loop is identification.closeloop.measured's, on the samples outside the external
-torques found with the robot's nominal model (identification.closeloop.events); here the robot's rigid-body library is
-built from its kinematics and the outcome written as closeloop.json. Errors are against the
+torques found with the robot's nominal model (identification.closeloop.events); here the
+robot's rigid-body library is built from its kinematics and the outcome written as
+closeloop.json. Errors are against the
 measured torque `tau` (and, where the file has one, also against `tau_clean`).
 """
 
