@@ -35,8 +35,9 @@ from identification.closeloop.events import (
 from identification.closeloop.leftover import LEFT, Leftover, leftover
 from identification.closeloop.offsets import ScoredRun, run_tail, scored_error, scored_offsets, whole_run
 from identification.closeloop.payload import REACH
+from identification.closeloop.ranges import Scales
 from identification.closeloop.runs import RunsLoop, close_loop_runs
-from identification.closeloop.verdicts import AGREE, MIN_GAIN, STRONG_GAIN
+from identification.closeloop.verdicts import AGREE, MIN_GAIN
 from identification.errors import IdentificationError
 from identification.identify import identify
 from identification.kinematic_model import KinematicModel
@@ -90,6 +91,7 @@ class RunsRun:
     scored: list[ScoredRun]  # what each held-out run is scored on, its offset from where
     event_files: list[str]  # the runs events were looked for on: training, then validation
     found: tuple[Events, ...]  # each one's external torques (identification.closeloop.events)
+    ranges: dict  # per effect, the range its coefficient was held to (per joint)
 
     @property
     def events_line(self) -> str:
@@ -114,13 +116,13 @@ class RunsRun:
                                             "reason": why} for j, e, g, why in r.not_named],
                              "rule": f"forward selection validated leaving one {r.folds[:-1]} "
                                      f"out: named if it cuts its joint's validation error "
-                                     f"power by >= {MIN_GAIN:.0%} ({STRONG_GAIN:.0%} without "
-                                     "a physical reading: a spring, an armature far above a "
-                                     "motor's), on no held-out run makes it worse, is not "
-                                     f"negative and agrees between runs within {AGREE:g} "
-                                     "standard errors; a joint is unexplained when its "
-                                     f"held-out residual is > {LEFT:g} noise sigma RMS above "
-                                     "the noise"},
+                                     f"power by >= {MIN_GAIN:.0%}, on no held-out run makes "
+                                     "a joint it acts on worse, lies in its physical range "
+                                     "(physical_ranges) and agrees between runs within "
+                                     f"{AGREE:g} standard errors; a joint is unexplained when "
+                                     f"its held-out residual is > {LEFT:g} noise sigma RMS "
+                                     "above the noise"},
+               "physical_ranges": self.ranges,
                "error_definition": "relative error ||tau_hat - tau|| / ||tau|| per joint "
                                    "against the measured torque, on " + (
                                        "the --validate runs" if self.validate_files else
@@ -139,6 +141,29 @@ class RunsRun:
             out["heldout"] = {"files": self.validate_files, "before": out["error_before"],
                               "after": out["error_after"]}
         return out
+
+
+def robot_scales(arm: Arm, runs: list[tuple]) -> Scales:
+    """The scales that bound arm's named coefficients (identification.closeloop.ranges): its
+    torque and speed limits, joint spans and mass, the runs' torques and speeds where it
+    declares none."""
+    tau, qd = (np.concatenate([r[i] for r in runs]) for i in (3, 1))
+    mass = float(sum(body.mass for body in arm.pinocchio.inertias))
+    return Scales.of(arm.torque_limit, arm.speed_bounds, *arm.position_limits, mass, tau, qd)
+
+
+def ranges_json(scales: Scales) -> dict:
+    """Per effect, its range per joint ([low, high]), as closeloop.json states it."""
+    from identification.closeloop.effects import EffectTerm
+
+    dof = len(scales.torque)
+    out = {e: [list(scales.bounds(EffectTerm(e, j, 0.0))) for j in range(1, dof + 1)]
+           for e in ("viscous", "coulomb", "sigmoid", "armature", "spring", "load_friction")}
+    out["payload_mass"] = list(scales.bounds(EffectTerm("payload", dof, 0.0)))
+    out["inertial_scale"] = [0.0, 1.0]
+    out["rule"] = ("identification.closeloop.ranges: from the robot's torque and speed limits "
+                   "(the data's where it declares none), joint spans and mass")
+    return out
 
 
 def _times(runs: Runs) -> tuple[np.ndarray, ...]:
@@ -190,9 +215,10 @@ def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs |
         train = [tuple(a[k] for a in t) for t, _, k, _ in parts]
         scored = [run_tail(tuple(a[k] for a in t), tuple(a[kh] for a in h))
                   for t, h, k, kh in parts]
+    scales = robot_scales(arm, train)
     try:
         inertial = inertial_correction(arm, train) if declared == "pinocchio" else None
-        loop = close_loop_runs(model, train, inertial, body=carrier, reach=reach)
+        loop = close_loop_runs(model, train, inertial, body=carrier, reach=reach, scales=scales)
     except IdentificationError as exc:
         raise UserError(f"{','.join(data.files)}: {exc}") from None
     before, after = scored_error(model, scored), scored_error(loop.model, scored)
@@ -202,4 +228,4 @@ def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs |
     return RunsRun(arm.reference, name, list(data.files),
                    [] if validate is None else list(validate.files), holdout, loop, before,
                    after, leftover(loop.model, [s.scored for s in scored]), payload,
-                   heldout_offsets, scored, files, tuple(found))
+                   heldout_offsets, scored, files, tuple(found), ranges_json(scales))

@@ -18,15 +18,15 @@ MODEL.json) and the training runs:
    coefficient a scale (1 = the consistent fit's correction).
 3. Forward selection, validated run by run (leave one run out; one run alone: contiguous
    blocks of it). A candidate is named when it cuts its joint's validation error power by
-   >= MIN_GAIN in total and on no held-out run makes it worse (one run alone: in total
-   only, its blocks are too short to each decide), its coefficient is not
-   negative, its coefficient fitted on each run alone agrees with every other run's within
-   AGREE combined standard errors (a run's error from the spread over RUN_BLOCKS blocks of
-   it: coloured residuals make the white-noise formula far too small), and, if it has no
-   physical reading (a spring: an arm's joints have none; an armature above
-   ARMATURE_PLAUSIBLE), it cuts the error power by >= STRONG_GAIN.
+   >= MIN_GAIN in total and on no held-out run makes any joint it acts on worse (one run
+   alone: in total only, its blocks are too short to each decide), its coefficient lies in
+   its physical range (identification.closeloop.ranges), and its coefficient fitted on
+   each run alone agrees with every other run's within AGREE combined standard errors (a
+   run's error from the spread over RUN_BLOCKS blocks of it: coloured residuals make the
+   white-noise formula far too small).
 4. The model: D + the named effects, refitted jointly with the offsets on all training runs
-   (named load friction: alternated with the load of the model fitted).
+   (named load friction: alternated with the load of the model fitted); an effect whose
+   refitted coefficient leaves its range is dropped and the rest refitted.
    The offsets stay out of it: a sensor offset is a property of a run, not of the robot, so
    a new run is scored with its own offset refitted (identification.closeloop.leftover).
 """
@@ -55,13 +55,13 @@ from identification.closeloop.payload import (
     named_payload,
     payload_column,
 )
+from identification.closeloop.ranges import Scales, unbounded
 from identification.closeloop.verdicts import (
     AGREE,
     MIN_GAIN,
     RUN_BLOCKS,
     not_named,
     per_run,
-    physical_reading,
     rows_of,
     verdict,
 )
@@ -162,12 +162,15 @@ class RunsLoop:
 def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
                     inertial: TorqueModel | None = None,
                     effects=RUNS_EFFECTS, body: LastBody | None = None,
-                    reach: float = REACH) -> RunsLoop:
+                    reach: float = REACH, scales: Scales | None = None) -> RunsLoop:
     """Name the effects the declared model lacks on training runs [(q, qd, qdd, tau)] of one
     robot ((n_r, dof) each, rad, rad/s, rad/s^2, N m); inertial: the rigid-body correction
     candidate (a TorqueModel of the torque to add to declared), or None; body: the last body,
-    whose payload (centre of mass within reach m of its joint) is a candidate, or None."""
+    whose payload (centre of mass within reach m of its joint) is a candidate, or None;
+    scales: the robot's, which bound every named coefficient (identification.closeloop.ranges;
+    None: the signs only)."""
     dof = declared.dof
+    scales = scales or unbounded(dof)
     if not runs or any(len(r[0]) < MIN_RUN for r in runs):
         raise IdentificationError(f"every run needs at least {MIN_RUN} samples")
     q, qd, qdd, tau = (np.concatenate([r[i] for r in runs]) for i in range(4))
@@ -218,9 +221,8 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
             if i not in chosen:
                 new = cv.sse_folds(chosen + [i])
                 rows = rows_of(t, dof)
-                before = np.maximum(np.sum(sse[:, rows], axis=1), 1e-300)
-                fold_gains = 1.0 - np.sum(new[:, rows], axis=1) / before
-                gain = 1.0 - np.sum(new[:, rows]) / max(np.sum(before), 1e-300)
+                fold_gains = 1.0 - new[:, rows] / np.maximum(sse[:, rows], 1e-300)
+                gain = 1.0 - np.sum(new[:, rows]) / max(np.sum(sse[:, rows]), 1e-300)
                 trials.append((float(np.sum(new)), float(gain), i, new, fold_gains))
         step = None
         for total, gain, i, new, fold_gains in sorted(trials, key=lambda tr: tr[0] * (
@@ -231,7 +233,7 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
             coef = weighted_fit(base, target, cols[:, :, subset], w)[1][-1]
             coefs, stds = (per_run(base, target, cols[:, :, subset], w, run_rows)
                            if several else (np.array([coef]), np.array([0.0])))
-            why = verdict(terms[i], gain, fold_gains, coef, coefs, stds, several)
+            why = verdict(terms[i], fold_gains, coef, coefs, stds, several, scales)
             if why:
                 rejected[i] = (gain, why)
                 continue
@@ -260,8 +262,18 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
             for i, c in zip(chosen, out[1], strict=True) if terms[i].effect != EFFECT]
         return closed_model(declared, np.zeros(dof), tuple(rest), inertial, body).torque(*states)
 
-    (coef_base, coef, params, detail), cols = refit_under_load(fit, model_load, terms, cols,
-                                                               chosen, states)
+    columns = cols
+    while True:  # a named coefficient refitted with the others must stay in its range
+        (coef_base, coef, params, detail), cols = refit_under_load(fit, model_load, terms,
+                                                                   columns, chosen, states)
+        out = [(n, scales.why_not(replace(terms[i], coefficient=float(c))))
+               for n, (i, c) in enumerate(zip(chosen, coef, strict=True))]
+        out = [(n, why) for n, why in out if why]
+        if not out:
+            break
+        for n, why in reversed(out):
+            rejected[chosen[n]] = (found[n][0], why + ", refitted with the others")
+            del chosen[n], found[n]
     if params is not None:
         terms[k] = replace(terms[k], params=tuple(map(float, params)))
         detail = spread_with_and_without(detail, lambda e: com_spread(
@@ -269,7 +281,7 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
             [i for i in chosen if i != k], terms, AGREE)
     named = tuple(
         Named(replace(terms[i], coefficient=float(c)), tuple(map(float, pr)),
-              tuple(map(float, ps)), g, physical_reading(replace(terms[i], coefficient=float(c))),
+              tuple(map(float, ps)), g, scales.holds(replace(terms[i], coefficient=float(c))),
               tuple(detail.items()) if i == k else ())
         for i, c, (g, pr, ps) in zip(chosen, coef, found, strict=True))
     model = closed_model(declared, np.zeros(dof), tuple(x.term for x in named), inertial, body)

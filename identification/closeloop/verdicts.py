@@ -1,6 +1,6 @@
 """The measured loop's rules for naming an effect (identification.closeloop.runs): the gains
-it needs, the agreement between runs, the physical reading, and what is said of a candidate
-left out."""
+it needs, on every joint of every held-out run, the agreement between runs, its physical
+range (identification.closeloop.ranges), and what is said of a candidate left out."""
 
 from __future__ import annotations
 
@@ -10,21 +10,11 @@ import numpy as np
 
 from identification.closeloop.crossval import weighted_fit
 from identification.closeloop.effects import EffectTerm
+from identification.closeloop.ranges import Scales
 
 MIN_GAIN = 0.02  # an effect must cut its joint's validation error power by >= 2 %
-STRONG_GAIN = 0.2  # ... by >= 20 % when its coefficient has no physical reading
 AGREE = 3.0  # combined standard errors within which two runs' coefficients agree
 RUN_BLOCKS = 4  # blocks of a run whose coefficients' spread gives the run's uncertainty
-ARMATURE_PLAUSIBLE = 1.0  # kg m^2: a reflected rotor inertia above it has no physical reading
-
-
-def physical_reading(term: EffectTerm) -> bool:
-    """Whether a coefficient reads as a physical property of an arm's joint."""
-    if term.effect == "spring":
-        return False
-    if term.effect == "armature":
-        return term.coefficient <= ARMATURE_PLAUSIBLE
-    return True
 
 
 def rows_of(term: EffectTerm, dof: int) -> list[int]:
@@ -48,16 +38,17 @@ def agree(coef: np.ndarray, std: np.ndarray) -> bool:
     return bool(np.all(diff <= AGREE * np.hypot(std[:, None], std[None, :]) + 1e-12))
 
 
-def verdict(term, gain, fold_gains, coef, per_run, per_run_std, several) -> str:
-    """Why a candidate that improves validation is not named ('' if it is)."""
+def verdict(term, fold_gains, coef, per_run, per_run_std, several, scales: Scales) -> str:
+    """Why a candidate that improves validation is not named ('' if it is): fold_gains
+    (folds, joints it acts on), the fraction of each held-out run's error power on each of
+    its joints it removes."""
     if several and np.min(fold_gains) < 0:
-        worse = int(np.argmin(fold_gains)) + 1
-        return f"makes held-out {'run' if several else 'block'} {worse} worse"
-    if coef < 0:
-        return "its coefficient would be negative (non-physical)"
-    if not physical_reading(replace(term, coefficient=coef)) and gain < STRONG_GAIN:
-        return (f"no physical reading ({coef:.3g}): needs >= {STRONG_GAIN:.0%} of the "
-                f"validation error power, cuts {gain:.1%}")
+        run, joint = np.unravel_index(int(np.argmin(fold_gains)), np.shape(fold_gains))
+        joints = rows_of(term, len(scales.torque))
+        return f"makes joint {joints[joint] + 1} of held-out run {run + 1} worse"
+    why = scales.why_not(replace(term, coefficient=float(coef)))
+    if why:
+        return why
     if several and not agree(per_run, per_run_std):
         return ("coefficients differ between runs beyond their uncertainty: "
                 + ", ".join(f"{c:.3g} +- {s:.2g}" for c, s in zip(per_run, per_run_std,
