@@ -15,6 +15,7 @@ from functools import cache
 from pathlib import Path
 
 from harness.closeloop.payload import last_body
+from harness.closeloop.runs import robot_scales
 from harness.data.dataset import load_arrays
 from harness.data.runs import run_times
 from harness.errors import UserError
@@ -111,8 +112,10 @@ def run_measured(data: str | Path, arm: Arm, holdout: float = 0.25) -> MeasuredR
                                    strict=True))}
     arrays.pop("t", None)
     try:
-        loop = close_loop_measured(library, arrays["q"], arrays["qd"], arrays["qdd"],
-                                   arrays["tau"], holdout)
+        run = tuple(arrays[k] for k in ("q", "qd", "qdd", "tau"))
+        split = int(round(len(run[0]) * (1.0 - holdout)))
+        loop = close_loop_measured(library, *run, holdout,
+                                   scales=robot_scales(arm, [tuple(a[:split] for a in run)]))
     except IdentificationError as exc:
         raise UserError(f"{data}: {exc}") from None
     return MeasuredRun(arm.reference, str(data), arrays, meta, holdout, loop, found)

@@ -40,6 +40,7 @@ import numpy as np
 from harness.closeloop.arm_plants import arm_variant_xml
 from harness.closeloop.payload import PayloadTorque, last_body
 from harness.closeloop.plants import Variant, true_effects
+from harness.closeloop.runs import robot_scales
 from harness.data.dataset import Dataset
 from harness.data.generate import generate
 from harness.errors import UserError
@@ -160,12 +161,14 @@ def _loop(spec: str, data: Dataset, split: int, payload: PayloadTorque, truth, o
         raise UserError(f"declared model {spec} has {declared.dof} joints, the plant "
                         f"{data.q.shape[1]}")
     args = (data.q, data.qd, data.qdd, data.tau, data.tau_clean, holdout, payload, payload.symbolic)
+    scales = robot_scales(arm, [(data.q[:split], data.qd[:split], data.qdd[:split],
+                                 data.tau[:split])])
     identified = isinstance(declared, Library)
     if identified:
-        result = close_loop_identified(declared, *args)
+        result = close_loop_identified(declared, *args, scales=scales)
         model = result.model.declared  # the terms of the last re-identification
     else:
-        result = close_loop(declared, *args)
+        result = close_loop(declared, *args, scales=scales)
         model = declared
     if outside:
         return CloseLoopRun(str(data.meta["plant"]), spec, data, result, truth, outside,

@@ -14,12 +14,12 @@ difference of M(q) qd along qd. Discretely, between samples k-1 and k,
 
 the exact first-order low-pass of e, stable for every sample time.
 
-On a real log r also carries what the model lacks (friction, a payload, a scale error of
-the drive gains): persistent effects, functions of the robot's state. Those are removed
-before detection by a robust fit (Tukey's bisquare, iteratively reweighted) of r on the
-same low-pass of state columns (per joint: an offset, viscous and dry friction, the
-declared torque's scale; the load's body's ten parameters), so an event is what no
-function of the state explains. The threshold is the robust scale of what is left (1.4826
+On a real log r also carries what the model lacks (friction, a payload, a spring or tendon,
+a scale error of the drive gains): persistent effects, functions of the robot's state. Those
+are removed before detection by a robust fit per joint (Tukey's bisquare, iteratively
+reweighted) of r on the same low-pass of state columns (an offset, viscous and dry friction,
+the declared torque's scale, every joint's q, sin q and cos q, the load's body's ten
+parameters), so an event is what no smooth function of the state explains. The threshold is the robust scale of what is left (1.4826
 x its median absolute deviation per joint): an event starts where a joint exceeds ON
 scales and lasts while any joint exceeds OFF (hysteresis), at least MIN_DURATION long. Its
 samples and MARGIN on each side are left out, the persistent fit is made again without
@@ -140,20 +140,22 @@ def observer(model, t, q, qd, tau) -> np.ndarray:
     return r
 
 
-def state_columns(model, q, qd, qdd, body=None) -> np.ndarray:
-    """(n, dof, k) torques of the persistent effects the detection removes: per joint an
-    offset, viscous and dry friction and the declared torque's scale; body (a callable
-    (q, qd, qdd) -> (n, dof, 10), the load's body's regressor) its ten parameters."""
-    n, dof = q.shape
+def state_columns(model, q, qd, qdd, body=None) -> list[np.ndarray]:
+    """Per joint j, the (n, k) torques of the persistent effects the detection removes: an
+    offset, viscous and dry friction, the declared torque's scale, a smooth function of the
+    arm's pose (every joint's q, sin q and cos q: a spring, a tendon, a gravity error), and,
+    with body (a callable (q, qd, qdd) -> (n, dof, 10), the load's body's regressor), its ten
+    parameters' torque on j."""
     declared = model.torque(q, qd, qdd)
-    per_joint = [np.ones_like(q), qd, np.tanh(qd / FRICTION_WIDTH), declared]
-    cols = np.zeros((n, dof, len(per_joint) * dof))
-    for i, signal in enumerate(per_joint):
-        for j in range(dof):
-            cols[:, j, i * dof + j] = signal[:, j]
-    if body is not None:
-        cols = np.concatenate([cols, np.asarray(body(q, qd, qdd), float)], axis=2)
-    return cols
+    pose = np.concatenate([q, np.sin(q), np.cos(q)], axis=1)
+    load = None if body is None else np.asarray(body(q, qd, qdd), float)
+    out = []
+    for j in range(q.shape[1]):
+        own = np.stack([np.ones(len(q)), qd[:, j], np.tanh(qd[:, j] / FRICTION_WIDTH),
+                        declared[:, j]], axis=1)
+        parts = [own, pose] + ([] if load is None else [load[:, j, :]])
+        out.append(np.concatenate(parts, axis=1))
+    return out
 
 
 def _robust_scale(x: np.ndarray) -> np.ndarray:
@@ -161,24 +163,23 @@ def _robust_scale(x: np.ndarray) -> np.ndarray:
     return np.maximum(1.4826 * np.median(np.abs(x - med), axis=0), 1e-12)
 
 
-def persistent_residual(r: np.ndarray, cols: np.ndarray, use: np.ndarray,
+def persistent_residual(r: np.ndarray, cols: list[np.ndarray], use: np.ndarray,
                         iterations: int = 8) -> tuple[np.ndarray, np.ndarray]:
-    """r minus its bisquare fit on cols (both low-passed alike), fitted on the samples use;
-    returns that residual (n, dof) and its robust scale (dof,) on those samples."""
-    n, dof, k = cols.shape
-    col_scale = np.maximum(np.sqrt(np.mean(cols[use] ** 2, axis=0)), 1e-12)  # (dof, k)
-    norm = np.max(col_scale, axis=0)
-    X = cols / norm
-    weight = np.ones((n, dof))
-    res = r.copy()
-    for _ in range(iterations):
-        scale = _robust_scale(res[use])
-        w = np.sqrt(weight[use]) / scale
-        A = (X[use] * w[:, :, None]).reshape(-1, k)
-        coef = np.linalg.lstsq(A, (r[use] * w).ravel(), rcond=None)[0]
-        res = r - X @ coef
-        u = res / (BISQUARE * _robust_scale(res[use]))
-        weight = np.where(np.abs(u) < 1, (1 - u**2) ** 2, 0.0)
+    """r minus, per joint, its bisquare fit on that joint's columns (both low-passed alike),
+    fitted on the samples use; returns that residual (n, dof) and its robust scale (dof,) on
+    those samples."""
+    res = np.empty_like(r)
+    for j, X in enumerate(cols):
+        X = X / np.maximum(np.sqrt(np.mean(X[use] ** 2, axis=0)), 1e-12)
+        y, weight = r[:, j], np.ones(len(r))
+        out = y.copy()
+        for _ in range(iterations):
+            w = np.sqrt(weight[use])
+            coef = np.linalg.lstsq(X[use] * w[:, None], y[use] * w, rcond=None)[0]
+            out = y - X @ coef
+            u = out / (BISQUARE * _robust_scale(out[use]))
+            weight = np.where(np.abs(u) < 1, (1 - u**2) ** 2, 0.0)
+        res[:, j] = out
     return res, _robust_scale(res[use])
 
 
@@ -209,7 +210,7 @@ def find_events(model, t, q, qd, qdd, tau, body=None) -> Events:
     t = np.asarray(t, float)
     r = observer(model, t, q, qd, tau)
     dt = float(np.median(np.diff(t)))
-    cols = low_pass(state_columns(model, q, qd, qdd, body), dt)
+    cols = [low_pass(c, dt) for c in state_columns(model, q, qd, qdd, body)]
     kept = np.ones(len(t), bool)
     kept[: int(np.ceil(3.0 / (GAIN * dt)))] = False  # the observer's start-up transient
     settle = kept.copy()

@@ -141,7 +141,8 @@ def _joint_effects(terms: tuple[EffectTerm, ...]) -> tuple[EffectTerm, ...]:
 
 def close_loop_identified(library: Library, q, qd, qdd, tau, tau_clean,
                           holdout: float = 0.25, payload: PayloadTorque | None = None,
-                          symbolic_payload=None, rounds: int = 3) -> CloseLoopResult:
+                          symbolic_payload=None, rounds: int = 3,
+                          scales=None) -> CloseLoopResult:
     """Identify the declared model with library on the training part, then trace effects
     jointly with its kept terms; error before is the identified model's, error after that of
     its refit plus the named effects (result.model.original is the identified model).
@@ -173,7 +174,7 @@ def close_loop_identified(library: Library, q, qd, qdd, tau, tau_clean,
     span = KeptSpan.of(model, *states)
     selection, screening = screened_trace(tau[tr], term_columns(model, *states),
                                           span.project(tau[tr]), noise_sigma(residual), states,
-                                          payload, span.project)
+                                          payload, span.project, scales=scales)
     if _labels(screening.named) != labels:
         # the model was re-identified without effects that screening then rejected
         joint = _joint_effects(screening.named)
@@ -183,7 +184,7 @@ def close_loop_identified(library: Library, q, qd, qdd, tau, tau_clean,
         residual = span.project(tau[tr])
         selection, screening = screened_trace(tau[tr], term_columns(model, *states), residual,
                                               noise_sigma(residual), states, payload,
-                                              span.project)
+                                              span.project, scales=scales)
         seen = {(c.term.effect, c.term.joint) for c in screening.candidates} | _labels(
             screening.named)
         screening = replace(screening, candidates=screening.candidates + tuple(

@@ -146,7 +146,7 @@ def trace(residual, sigma, q, qd, qdd, payload, project=None,
 
 
 def screened_trace(target, base, residual, sigma, states, payload, project=None,
-                   rounds: int = 3) -> tuple[Selection, Screening]:
+                   rounds: int = 3, scales=None) -> tuple[Selection, Screening]:
     """Trace, screen, and trace again without the rejected effects (a rejected stand-in may
     have hidden a robust effect, e.g. a Coulomb column taking a viscous one's place next to
     a tendon), until screening rejects nothing new; every rejection is kept as a candidate.
@@ -157,7 +157,7 @@ def screened_trace(target, base, residual, sigma, states, payload, project=None,
     rejected: dict[str, Candidate] = {}
     for _ in range(rounds):
         selection, terms = trace(residual, sigma, *states, payload, project, excluded)
-        screening = screen(target, base, terms, sigma, *states, payload)
+        screening = screen(target, base, terms, sigma, *states, payload, scales)
         new = {Effect(c.term.effect, c.term.joint).label: c for c in screening.candidates}
         for label, c in new.items():
             rejected.setdefault(label, c)
@@ -165,7 +165,7 @@ def screened_trace(target, base, residual, sigma, states, payload, project=None,
             break
         excluded = excluded | frozenset(new)
     screening = _drop_confounded(screening, target, base, residual, sigma, states, payload,
-                                 project)
+                                 project, scales)
     named = {Effect(t.effect, t.joint).label for t in screening.named}
     extra = tuple(c for c in screening.candidates if c.reason.startswith(CONFOUNDED))
     return selection, replace(screening, candidates=tuple(
@@ -173,7 +173,7 @@ def screened_trace(target, base, residual, sigma, states, payload, project=None,
 
 
 def _drop_confounded(screening: Screening, target, base, residual, sigma, states, payload,
-                     project) -> Screening:
+                     project, scales=None) -> Screening:
     """Screening without the named effects that act on a joint whose residual keeps
     structure no candidate explains: their coefficients absorb part of that structure (a
     viscous term beside a tendon came out at 0.03 for 0.05 N m s/rad) - say unexplained
@@ -189,7 +189,7 @@ def _drop_confounded(screening: Screening, target, base, residual, sigma, states
     if not drop:
         return screening
     again = screen(target, base, tuple(t for t in named if t not in drop), sigma, *states,
-                   payload)
+                   payload, scales)
     joints = ", ".join(str(j + 1) for j in sorted(bad))
     return replace(again, candidates=again.candidates + tuple(
         Candidate(t, f"{CONFOUNDED}: joint(s) {joints} keep structure no candidate explains")
@@ -226,14 +226,17 @@ def outcome(before: TorqueModel, model: ExtendedModel, selection: Selection, scr
 
 
 def close_loop(declared: TorqueModel, q, qd, qdd, tau, tau_clean, holdout: float = 0.25,
-               payload: PayloadTorque | None = None, symbolic_payload=None) -> CloseLoopResult:
-    """Trace the declared model's residual on measured data to named effects and add them."""
+               payload: PayloadTorque | None = None, symbolic_payload=None,
+               scales=None) -> CloseLoopResult:
+    """Trace the declared model's residual on measured data to named effects and add them;
+    scales: the robot's, which bound every named coefficient (identification.closeloop.ranges)."""
     q, qd, qdd, tau, tau_clean, split = check_data(q, qd, qdd, tau, tau_clean, declared.dof,
                                                    holdout)
     train = slice(0, split)
     residual = tau[train] - declared.torque(q[train], qd[train], qdd[train])
     sigma = noise_sigma(residual)
     states = (q[train], qd[train], qdd[train])
-    selection, screening = screened_trace(residual, [], residual, sigma, states, payload)
+    selection, screening = screened_trace(residual, [], residual, sigma, states, payload,
+                                          scales=scales)
     model = ExtendedModel(declared, screening.named, payload, symbolic_payload, screening.fallback)
     return outcome(declared, model, selection, screening, q, qd, qdd, tau, tau_clean, split)

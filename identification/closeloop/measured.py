@@ -17,7 +17,7 @@ validation blocks of the training part (the held-out part only scores):
 3. Forward selection by block cross-validation (identification.closeloop.crossval): the
    candidate that lowers the validation error most is added while it lowers its own
    joint's validation error sum of squares by at least MIN_GAIN and its coefficient in
-   the joint fit is physical (non-negative: all are passive).
+   the joint fit lies in its physical range (identification.closeloop.ranges).
 4. Adding: the rigid-body atoms the declared model kept, the offsets and the named effects
    refitted jointly by weighted least squares on the training part.
 5. A joint is `unexplained` when its declared residual carries structure - validation
@@ -37,7 +37,7 @@ so every joint's residual counts alike whatever its torque scale.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import minimize
@@ -51,6 +51,7 @@ from identification.closeloop.effects import (
 )
 from identification.closeloop.extended import ExtendedModel
 from identification.closeloop.loop import check_data
+from identification.closeloop.ranges import Scales, unbounded
 from identification.closeloop.residual import noise_sigma
 from identification.closeloop.selection import EPS_RANGE, LEAD_RANGE
 from identification.closeloop.verdicts import best_left
@@ -190,11 +191,15 @@ def candidates(project: _Projector, target: np.ndarray, states, dof: int,
     return out
 
 
-def _physical(base, target, cols, w, subset) -> bool:
-    return bool(np.all(weighted_fit(base, target, cols[:, :, subset], w)[1] >= 0))
+def _physical(base, target, cols, w, subset, terms, scales: Scales) -> bool:
+    """Whether every coefficient of the subset's joint fit lies in its range."""
+    coef = weighted_fit(base, target, cols[:, :, subset], w)[1]
+    return all(scales.holds(replace(terms[i], coefficient=float(c)))
+               for i, c in zip(subset, coef, strict=True))
 
 
-def forward_by_validation(cv: BlockValidation, base, target, cols, w, terms) -> tuple:
+def forward_by_validation(cv: BlockValidation, base, target, cols, w, terms,
+                          scales: Scales) -> tuple:
     """Effects added while one cuts its joint's validation error power by >= MIN_GAIN."""
     chosen: list[int] = []
     sse = cv.sse([])
@@ -211,7 +216,7 @@ def forward_by_validation(cv: BlockValidation, base, target, cols, w, terms) -> 
         unphysical = set()
         step = None
         for tr in usable:
-            if _physical(base, target, cols, w, chosen + [tr[2]]):
+            if _physical(base, target, cols, w, chosen + [tr[2]], terms, scales):
                 step = tr
                 break
             unphysical.add(tr[2])
@@ -228,16 +233,18 @@ def _reasons(trials, terms, unphysical: set[int]) -> tuple[tuple[int, str, float
     not named."""
     out = []
     for j, i, gain in best_left(terms, ((t[1], t[2]) for t in trials)):
-        why = ("its coefficient would be negative (non-physical)" if i in unphysical else
+        why = ("its coefficient would leave its physical range" if i in unphysical else
                f"cuts the validation error power by {gain:.1%} < {MIN_GAIN:.0%}")
         out.append((j, f"{terms[i].effect}", float(gain), why))
     return tuple(out)
 
 
 def close_loop_measured(library: KinematicLibrary, q, qd, qdd, tau, holdout: float = 0.25,
-                        effects=MEASURED_EFFECTS) -> MeasuredLoop:
+                        effects=MEASURED_EFFECTS, scales: Scales | None = None) -> MeasuredLoop:
     """Identify the rigid body (library: its atoms, no joint atoms) on the first 1 - holdout
-    of the samples, trace its residual to named effects, add them, score on the rest."""
+    of the samples, trace its residual to named effects, add them, score on the rest;
+    scales: the robot's, which bound every named coefficient (identification.closeloop.ranges;
+    None: the signs only)."""
     dof = library.dof
     q, qd, qdd, tau, _, split = check_data(q, qd, qdd, tau, tau, dof, holdout)
     tr, held = slice(0, split), slice(split, None)
@@ -253,7 +260,8 @@ def close_loop_measured(library: KinematicLibrary, q, qd, qdd, tau, holdout: flo
     terms = candidates(project, project(tau[tr]), states, dof, effects)
     cols = np.stack([effect_torque((t,), *states) for t in terms], axis=2)
     cv = BlockValidation.build(base, tau[tr], cols, w, VALIDATION_BLOCKS)
-    chosen, path, sse_after, not_named = forward_by_validation(cv, base, tau[tr], cols, w, terms)
+    chosen, path, sse_after, not_named = forward_by_validation(cv, base, tau[tr], cols, w, terms,
+                                                               scales or unbounded(dof))
     sse_before = cv.sse([])
     coef_base, coef = weighted_fit(base, tau[tr], cols[:, :, chosen], w)
     refit = np.zeros(len(library))

@@ -7,7 +7,7 @@ are fitted on). A selected effect is therefore only *named* if
 
 1. stable: its coefficients fitted on the first and the second half of the training part
    agree, |c1 - c2| <= STABILITY |c| + Z_NOISE se(c1 - c2) (se from the white-noise level),
-2. physical: a passive effect (all but `offset`) has a non-negative coefficient,
+2. physical: its coefficient lies in its physical range (identification.closeloop.ranges),
 3. useful: leaving it out raises the block cross-validated error (VALIDATION_BLOCKS
    contiguous blocks of the training part, each predicted from the others) on the joints
    it acts on.
@@ -24,11 +24,12 @@ jointly; none for a fixed declared model) plus the effects' torque columns.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from identification.closeloop.effects import EffectTerm, PayloadTorque, effect_torque
+from identification.closeloop.ranges import Scales, unbounded
 
 STABILITY = 0.10  # relative disagreement of the two halves' coefficients tolerated
 Z_NOISE = 4.0  # ... plus this many standard errors of the difference from sensor noise
@@ -124,12 +125,14 @@ def _columns(terms, q, qd, qdd, payload) -> np.ndarray:
     return np.stack(cols, axis=2) if cols else np.zeros((*q.shape, 0))
 
 
-def _next_rejection(problem: StackedProblem, kept: list[int], terms) -> tuple[int, str] | None:
+def _next_rejection(problem: StackedProblem, kept: list[int], terms,
+                    scales: Scales) -> tuple[int, str] | None:
     """The effect to drop next and why, or None if every kept effect is robust."""
     coef, _ = problem.fit(np.ones(len(problem.Y), bool), kept)
     for i, c in zip(kept, coef[problem.n_base:], strict=True):
-        if terms[i].effect != "offset" and c < 0:
-            return i, f"non-physical: a passive effect with coefficient {c:.3g} < 0"
+        why = scales.why_not(replace(terms[i], coefficient=float(c)))
+        if why:
+            return i, why
     ratio = problem.instability(kept)
     if np.max(ratio) > 1.0:
         k = int(np.argmax(ratio))
@@ -151,12 +154,16 @@ def _rel(sse: np.ndarray, problem: StackedProblem) -> np.ndarray:
 
 
 def screen(target: np.ndarray, base: list[np.ndarray], terms: tuple[EffectTerm, ...],
-           sigma: np.ndarray, q, qd, qdd, payload: PayloadTorque | None = None) -> Screening:
-    """Keep the robust terms among `terms` (selected on target (n, dof), N m), refitted."""
+           sigma: np.ndarray, q, qd, qdd, payload: PayloadTorque | None = None,
+           scales: Scales | None = None) -> Screening:
+    """Keep the robust terms among `terms` (selected on target (n, dof), N m), refitted;
+    scales: the robot's, which bound every coefficient (identification.closeloop.ranges; None:
+    the signs only)."""
+    scales = scales or unbounded(q.shape[1])
     problem = StackedProblem(target, base, _columns(terms, q, qd, qdd, payload), sigma)
     kept, rejected = list(range(len(terms))), []
     while kept:
-        nxt = _next_rejection(problem, kept, terms)
+        nxt = _next_rejection(problem, kept, terms, scales)
         if nxt is None:
             break
         kept.remove(nxt[0])
