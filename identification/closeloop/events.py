@@ -19,9 +19,11 @@ a scale error of the drive gains): persistent effects, functions of the robot's 
 are removed before detection by a robust fit per joint (Tukey's bisquare, iteratively
 reweighted) of r on the same low-pass of state columns (an offset, viscous and dry friction,
 the declared torque's scale, every joint's q, sin q and cos q, the load's body's ten
-parameters), so an event is what no smooth function of the state explains. The threshold is the robust scale of what is left (1.4826
-x its median absolute deviation per joint): an event starts where a joint exceeds ON
-scales and lasts while any joint exceeds OFF (hysteresis), at least MIN_DURATION long. Its
+parameters), so an event is what no smooth function of the state explains. The threshold is
+the robust scale of what is left (1.4826 x its median absolute deviation per joint): an
+event starts where a joint exceeds ON scales, reaches back while that joint exceeds OFF
+(hysteresis) and lasts while a joint that exceeded ON in it exceeds OFF, at least
+MIN_DURATION long. Its
 samples and MARGIN on each side are left out, the persistent fit is made again without
 them, and detection repeats until the events stop changing.
 """
@@ -184,23 +186,28 @@ def persistent_residual(r: np.ndarray, cols: list[np.ndarray], use: np.ndarray,
 
 
 def _intervals(z: np.ndarray, t: np.ndarray) -> list[tuple[int, int]]:
-    """[start, end) sample ranges where max-over-joints z exceeds ON, widened while it exceeds
-    OFF, at least MIN_DURATION long."""
-    top = np.max(z, axis=1)
-    above = top > OFF
+    """[start, end) sample ranges of events in z (n, dof), robust scales: from where a joint
+    first exceeds ON, back while that joint exceeds OFF and on while any joint that exceeded
+    ON in it exceeds OFF; at least MIN_DURATION long."""
+    n = len(z)
     out: list[tuple[int, int]] = []
     k = 0
-    n = len(top)
     while k < n:
-        if not above[k]:
+        if np.max(z[k]) <= ON:
             k += 1
             continue
-        end = k
-        while end < n and above[end]:
-            end += 1
-        if np.any(top[k:end] > ON) and t[end - 1] - t[k] >= MIN_DURATION:
-            out.append((k, end))
-        k = end
+        first = int(np.argmax(z[k]))
+        a = k
+        while a > 0 and z[a - 1, first] > OFF:
+            a -= 1
+        active = z[k] > ON
+        b = k
+        while b < n and np.any(z[b, active] > OFF):
+            active |= z[b] > ON
+            b += 1
+        if t[b - 1] - t[a] >= MIN_DURATION:
+            out.append((a, b))
+        k = b
     return out
 
 
