@@ -166,6 +166,14 @@ def ranges_json(scales: Scales) -> dict:
     return out
 
 
+def _events(detect: bool, model, runs: list[tuple], times, carrier) -> list[Events]:
+    """Each run's external torques (none looked for without detect)."""
+    if detect:
+        return run_events(model, runs, times, carrier)
+    return [Events((), np.zeros(model.dof), np.zeros(model.dof), np.ones(len(r[0]), bool), 0)
+            for r in runs]
+
+
 def _times(runs: Runs) -> tuple[np.ndarray, ...]:
     """Each run's time stamps; those of a set built in code without them: its samples at the
     rate its meta records (harness.data.runs.run_times)."""
@@ -186,24 +194,26 @@ def _declared(declared: str, arm: Arm, dof: int):
 
 
 def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs | None = None,
-             holdout: float = 0.25, reach: float = REACH, body: str | None = None) -> RunsRun:
+             holdout: float = 0.25, reach: float = REACH, body: str | None = None,
+             detect: bool = True) -> RunsRun:
     """Close the loop on the runs data (read_runs) of arm, scored on the validate runs or the
     last holdout of every run; a payload on the last body (payload.last_body; the link `body`
     when given) is a candidate, its centre of mass within reach m of its joint. External
     torques (identification.closeloop.events) are found on every run with the declared model
-    and their samples left out of every fit and score."""
+    and their samples left out of every fit and score (detect=False: none looked for, as
+    before events were: the study of pushes measures what that costs)."""
     runs, dof, carrier = _split(data), arm.dof, last_body(arm, body)
     if runs[0][0].shape[1] != dof:
         raise UserError(f"data have {runs[0][0].shape[1]} joints, robot {arm.label} has {dof}")
     model, spec = _declared(declared, arm, dof)
-    found = run_events(model, runs, _times(data), carrier)
+    found = _events(detect, model, runs, _times(data), carrier)
     files = list(data.files)
     if validate is not None:
         held = _split(validate)
         if held[0][0].shape[1] != dof:
             raise UserError(f"--validate logs have {held[0][0].shape[1]} joints, robot "
                             f"{arm.label} has {dof}")
-        held_found = run_events(model, held, _times(validate), carrier)
+        held_found = _events(detect, model, held, _times(validate), carrier)
         train = [without_events(r, ev) for r, ev in zip(runs, found, strict=True)]
         found, files = found + held_found, files + list(validate.files)
         scored = [whole_run(without_events(r, ev)) for r, ev in zip(held, held_found,
