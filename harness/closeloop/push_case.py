@@ -141,3 +141,99 @@ def push_case(arm: Arm, seed: int, directory: Path, samples: int = SAMPLES) -> d
             "false_events_without_pushes": sum(len(ev.events) for ev in quiet.found),
             "minutes": RUNS * samples / 200.0 / 60.0}
     return out
+
+
+def summary(cases: list[dict]) -> dict:
+    """Detection rate, false events per minute, onset delays, and the load and friction named
+    with the pushes against without (with and without looking for events), over cases."""
+    runs = [r for c in cases for p in c["plants"].values() for r in p["runs"]]
+    found = [f for r in runs for f in r["found"]]
+    visible = [f for r in runs for f, b in zip(r["found"], r["below_threshold"], strict=True)
+               if not b]
+    delays = [d for r in runs for d in r["delay"] if d is not None]
+    minutes = sum(p["minutes"] for c in cases for p in c["plants"].values())
+    false = sum(r["false_events"] for r in runs)
+    quiet_false = sum(p["false_events_without_pushes"] for c in cases for p in c["plants"].values())
+
+    def drift(key: str, which: str) -> list[float | None]:
+        out = []
+        for c in cases:
+            p = c["plants"]["loaded"]
+            a, b = p[which][key], p["without_pushes"][key]
+            out.append(None if a is None or b is None else abs(a - b) / abs(b))
+        return out
+
+    worse = [(c["robot"], c["seed"], name, j + 1)
+             for c in cases for name, p in c["plants"].items()
+             for j, (a, b) in enumerate(zip(p["pushed"]["error_after"],
+                                            p["pushed"]["error_before"], strict=True)) if a > b]
+    return {"pushes": len(found), "found": sum(found), "above_threshold": len(visible),
+            "found_above_threshold": sum(visible),
+            "false_events": false, "false_per_minute": false / minutes if minutes else 0.0,
+            "false_events_without_pushes": quiet_false,
+            "false_per_minute_without_pushes": quiet_false / minutes if minutes else 0.0,
+            "false_per_minute_all": (false + quiet_false) / (2 * minutes) if minutes else 0.0,
+            "delay_median": float(np.median(delays)) if delays else None,
+            "delay_max_abs": float(np.max(np.abs(delays))) if delays else None,
+            "mass_drift": drift("mass", "pushed"), "viscous_drift": drift("viscous_2", "pushed"),
+            "mass_drift_without_events": drift("mass", "pushed_without_events"),
+            "viscous_drift_without_events": drift("viscous_2", "pushed_without_events"),
+            "worse_joints": worse}
+
+
+def _worst(values) -> float | None:
+    """The largest drift, None (missed) when any effect went unnamed."""
+    return None if not values or any(v is None for v in values) else 100 * max(values)
+
+
+def push_targets(s: dict, where: str) -> list:
+    """The issue's aims on the summary s of cases named by where."""
+    from harness.report.results import Target
+
+    return [Target(f"pushes found ({where})", s["found"], s["pushes"], "pushes",
+                   lower_is_better=False),
+            Target(f"false events per minute, pushed and calm runs ({where})",
+                   s["false_per_minute_all"], 0.0, "/min"),
+            Target(f"largest onset error of a found push ({where})",
+                   None if s["delay_max_abs"] is None else 1e3 * s["delay_max_abs"],
+                   1e3 * ONSET, "ms"),
+            Target(f"load's mass named with the pushes against without, worst draw ({where})",
+                   _worst(s["mass_drift"]), 100 * AGREE, "%"),
+            Target(f"joint 2's viscous friction named with the pushes against without, worst "
+                   f"draw ({where})", _worst(s["viscous_drift"]), 100 * AGREE, "%")]
+
+
+def push_markdown(cases: list[dict], s: dict) -> str:
+    """The cases in a table and the summary in a paragraph."""
+    def fig(v, scale=100, unit="%"):
+        return "not named" if v is None else f"{scale * v:.2f} {unit}"
+
+    md = ["| arm | seed | plant | pushes found | onset errors (ms) | false events | named with "
+          "pushes | without pushes | pushed, no events looked for |", "|---|---|---|---|---|---|"
+          "---|---|---|"]
+    for c in cases:
+        for name, p in c["plants"].items():
+            found = sum(sum(r["found"]) for r in p["runs"])
+            total = sum(len(r["found"]) for r in p["runs"])
+            delays = ", ".join(f"{1e3 * d:+.0f}" for r in p["runs"] for d in r["delay"]
+                               if d is not None)
+            false = sum(r["false_events"] for r in p["runs"])
+            md.append(f"| {c['robot']} | {c['seed']} | {name} | {found} of {total} | {delays} | "
+                      f"{false} (calm runs: {p['false_events_without_pushes']}) | "
+                      + " | ".join(", ".join(p[k]["effects"]) or "none"
+                                   for k in ("pushed", "without_pushes", "pushed_without_events"))
+                      + " |")
+    md += ["", f"Over {len(cases)} draws: {s['found']} of {s['pushes']} pushes found "
+           f"({s['found_above_threshold']} of the {s['above_threshold']} whose joint torque "
+           f"reached the threshold); {s['false_events']} false events on pushed runs and "
+           f"{s['false_events_without_pushes']} on the same runs unpushed; onset error median "
+           f"{fig(s['delay_median'], 1e3, 'ms')}, largest {fig(s['delay_max_abs'], 1e3, 'ms')}; "
+           "the load's mass with the pushes against without: "
+           + ", ".join(fig(v) for v in s["mass_drift"]) + " (without looking for events: "
+           + ", ".join(fig(v) for v in s["mass_drift_without_events"]) + "); joint 2's viscous "
+           "friction: " + ", ".join(fig(v) for v in s["viscous_drift"]) + " (without: "
+           + ", ".join(fig(v) for v in s["viscous_drift_without_events"]) + "). Joints whose "
+           "held-out error after the loop is above before: "
+           + (", ".join(f"{r} seed {sd} {n} joint {j}" for r, sd, n, j in s["worse_joints"])
+              or "none") + "."]
+    return "\n".join(md)

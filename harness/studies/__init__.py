@@ -41,6 +41,10 @@ STUDIES = {
     "payload": "the load a robot carries named by closeloop --data: UR5 and Panda plants with a "
                "load on the flange, with and without friction that grows with the load, and "
                "without a load (mass 3 %, centre of mass 1 cm; issue #54)",
+    "pushes": "the world pushing a robot (issue #66): Lynxmotion, UR5 and Panda plants pushed "
+              "three times a run on fresh draws, alone and beside a load and viscous friction: "
+              "pushes found, false events per minute, onset errors, the load and the friction "
+              "named with the pushes against without",
     "closeloop_plants": "closing the loop on the Lynxmotion's hand-written plants, with both "
                         "declared models (Pinocchio and the identified one)",
 }
