@@ -13,6 +13,8 @@ effects traced and named, held-out errors against the clean torque before and af
 Scored against the plant's true effects (read from its MJCF, never used by the estimation).
 Checks: the loop never leaves a plant worse than its declared model, and says "unexplained"
 on the coupled plant; targets: every true effect named within 10 %, nothing spurious.
+Then the push case (harness.closeloop.push_case) on two draws: pushes found, false events,
+onset errors, the load and friction named with the pushes against without.
 Beside each coefficient, its standard error under the noise and the same fit on the clean
 torque (coefficient_spread).
 """
@@ -34,6 +36,7 @@ from harness.closeloop.payload_case import (
     payload_targets,
 )
 from harness.closeloop.plants import Variant
+from harness.closeloop.push_case import push_case, push_markdown, push_targets, summary
 from harness.closeloop.run import run_closeloop
 from harness.report.results import Context, Row, SectionResult, Target, check
 from harness.robots.arm import Arm
@@ -46,6 +49,10 @@ COEFFICIENT_TOL = 0.10  # relative
 REFERENCE_MASS = 18.0  # kg: the arm EFFECTS are sized for (a UR5 or a Panda)
 EFFECTS = (("viscous", 2, 0.8), ("coulomb", 3, 1.5), ("armature", 1, 0.1), ("spring", 4, 3.0))
 PAYLOAD, COUPLING = 1.0, 3.0  # kg at the flange; N m/rad on the tendon q2 + q3
+# the push case's draws, drawn once on 2026-12-07 (numpy.random.default_rng().integers(10_000))
+# after the events stage's settings were fixed; the pushes study draws its own
+PUSH_SEEDS = (5590, 4256)
+QUICK_PUSH_SAMPLES = 2000
 
 
 def plants(arm: Arm) -> tuple[Variant, ...]:
@@ -88,6 +95,16 @@ def coefficient_spread(run, arm: Arm) -> list[dict]:
     return [{"effect": t.effect, "joint": t.joint, "refit_measured": float(noisy[i]),
              "stderr": float(stderr[i]), "refit_clean": float(clean[i])}
             for i, t in enumerate(run.truth)]
+
+
+def push_cases(arm: Arm, directory: Path, quick: bool = False) -> dict:
+    """The push case on the bench's arm over PUSH_SEEDS (the first only, on fewer samples,
+    in quick mode) and its summary."""
+    seeds = PUSH_SEEDS[:1] if quick else PUSH_SEEDS
+    options = {"samples": QUICK_PUSH_SAMPLES} if quick else {}
+    cases = [push_case(arm, seed, Path(directory) / f"pushes_{seed}", **options)
+             for seed in seeds]
+    return {"cases": cases, "summary": summary(cases)}
 
 
 def _score(run) -> dict:
@@ -185,4 +202,12 @@ def run(ctx: Context) -> SectionResult:
         checks += payload_checks(payload)
         targets += payload_targets(payload)
     results["payload"] = results["payload_cases"][0]
+    pushes = push_cases(arm, plant_dir, ctx.quick)
+    results["pushes"] = pushes
+    md += ["", f"Pushes on `{robot}` (harness.closeloop.push_case; seeds "
+           f"{', '.join(str(c['seed']) for c in pushes['cases'])}, drawn once):", "",
+           push_markdown(pushes["cases"], pushes["summary"])]
+    checks.append(check("pushes.never_worse_after", not pushes["summary"]["worse_joints"],
+                        "held-out error after <= before on every joint of every pushed loop"))
+    targets += push_targets(pushes["summary"], f"{robot}, bench draws")
     return SectionResult("\n".join(md), results, checks, targets, headline)
