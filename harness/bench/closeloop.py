@@ -97,12 +97,14 @@ def coefficient_spread(run, arm: Arm) -> list[dict]:
             for i, t in enumerate(run.truth)]
 
 
-def push_cases(arm: Arm, directory: Path, quick: bool = False) -> dict:
+def push_cases(arm: Arm, directory: Path, quick: bool = False, figure: Path | None = None
+               ) -> dict:
     """The push case on the bench's arm over PUSH_SEEDS (the first only, on fewer samples,
-    in quick mode) and its summary."""
+    in quick mode) and its summary; figure: the first draw's events drawn there."""
     seeds = PUSH_SEEDS[:1] if quick else PUSH_SEEDS
     options = {"samples": QUICK_PUSH_SAMPLES} if quick else {}
-    cases = [push_case(arm, seed, Path(directory) / f"pushes_{seed}", **options)
+    cases = [push_case(arm, seed, Path(directory) / f"pushes_{seed}",
+                       figure=figure if seed == seeds[0] else None, **options)
              for seed in seeds]
     return {"cases": cases, "summary": summary(cases)}
 
@@ -202,7 +204,7 @@ def run(ctx: Context) -> SectionResult:
         checks += payload_checks(payload)
         targets += payload_targets(payload)
     results["payload"] = results["payload_cases"][0]
-    pushes = push_cases(arm, plant_dir, ctx.quick)
+    pushes = push_cases(arm, plant_dir, ctx.quick, ctx.figures_dir / "closeloop_pushes.png")
     results["pushes"] = pushes
     md += ["", f"Pushes on `{robot}` (harness.closeloop.push_case; seeds "
            f"{', '.join(str(c['seed']) for c in pushes['cases'])}, drawn once):", "",
@@ -210,4 +212,5 @@ def run(ctx: Context) -> SectionResult:
     checks.append(check("pushes.never_worse_after", not pushes["summary"]["worse_joints"],
                         "held-out error after <= before on every joint of every pushed loop"))
     targets += push_targets(pushes["summary"], f"{robot}, bench draws")
-    return SectionResult("\n".join(md), results, checks, targets, headline)
+    figures = [Path(c["figure"]) for c in pushes["cases"] if "figure" in c]
+    return SectionResult("\n".join(md), results, checks, targets, headline, figures)

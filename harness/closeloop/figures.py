@@ -83,3 +83,31 @@ def error_figure(runs: dict[str, CloseLoopRun], path: Path) -> Path:
         ax.legend(fontsize=6)
     save_figure(fig, path, dpi=110)
     return path
+
+
+def events_figure(found, path: Path, pushes=(), title: str = "") -> Path | None:
+    """The observer's external-torque estimate (persistent effects removed) per joint over a
+    run, its thresholds, the events found (shaded: left out of the loop) and, in simulation,
+    the pushes (dashed)."""
+    if found.residual is None:
+        return None
+    t, r = found.t, found.residual
+    dof = r.shape[1]
+    fig, axes = plt.subplots(dof, 1, figsize=(8.0, 1.3 * dof + 0.6), sharex=True,
+                             squeeze=False)
+    for j, ax in enumerate(axes[:, 0]):
+        ax.plot(t, r[:, j], lw=0.6, color="C0")
+        ax.axhline(found.threshold[j], color="k", lw=0.5, ls=":")
+        ax.axhline(-found.threshold[j], color="k", lw=0.5, ls=":")
+        for e in found.events:
+            ax.axvspan(e.start, e.end, color="C3", alpha=0.2, lw=0)
+        for p in pushes:
+            ax.axvline(p.start, color="C2", lw=0.8, ls="--")
+            ax.axvline(p.start + p.duration, color="C2", lw=0.8, ls="--")
+        ax.set_ylabel(f"j{j + 1} (N m)", fontsize=7)
+        ax.tick_params(labelsize=7)
+    axes[-1, 0].set_xlabel("t (s, the run's own)")
+    axes[0, 0].set_title(title or "external torque estimate: events shaded (left out), "
+                         "thresholds dotted, true pushes dashed", fontsize=8)
+    save_figure(fig, path, dpi=110)
+    return path

@@ -106,9 +106,10 @@ def _runs(datasets, name: str) -> Runs:
                 tuple(len(d.q) for d in datasets), tuple(d.t for d in datasets))
 
 
-def push_case(arm: Arm, seed: int, directory: Path, samples: int = SAMPLES) -> dict:
+def push_case(arm: Arm, seed: int, directory: Path, samples: int = SAMPLES,
+              figure: Path | None = None) -> dict:
     """One draw on arm: the declared and the loaded plants, pushed and not, closed and scored
-    (module docstring)."""
+    (module docstring); figure: where to draw the loaded plant's first run's events."""
     rng = np.random.default_rng(seed)
     scale = arm_mass(arm) / REFERENCE_MASS
     load = loaded_variant(arm, "pushed_load")
@@ -135,6 +136,13 @@ def push_case(arm: Arm, seed: int, directory: Path, samples: int = SAMPLES) -> d
                   for (d, p), ev in zip(pushed, loop.found, strict=True)]
         quiet = run_runs(_runs(calm[:-1], "calm"), arm, validate=_runs(calm[-1:], "calm"))
         blind = run_runs(train, arm, validate=held, detect=False)
+        if figure is not None and name == "loaded":
+            from harness.closeloop.figures import events_figure
+
+            out["figure"] = str(events_figure(
+                loop.found[0], Path(figure), pushed[0][1],
+                f"{arm.label}, seed {seed}, loaded plant, run 1: the observer's estimate less "
+                "the persistent effects; events shaded, pushes dashed, thresholds dotted"))
         out["plants"][name] = {
             "runs": scores, "pushed": _named(loop), "without_pushes": _named(quiet),
             "pushed_without_events": _named(blind),

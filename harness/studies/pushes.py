@@ -33,6 +33,8 @@ def run(ctx: Context) -> SectionResult:
         for name in robots:
             for seed in seeds:
                 options = {} if samples is None else {"samples": samples}
+                if seed == seeds[0]:
+                    options["figure"] = ctx.figures_dir / f"pushes_{name}.png"
                 cases.append(push_case(Arm.of(name), seed, Path(tmp) / f"{name}_{seed}",
                                        **options))
     s = summary(cases)
@@ -41,6 +43,7 @@ def run(ctx: Context) -> SectionResult:
           push_markdown(cases, s)]
     checks = [check("pushes.never_worse_after", not s["worse_joints"],
                     "held-out error after <= before on every joint of every pushed loop")]
+    figures = [Path(c["figure"]) for c in cases if "figure" in c]
     return SectionResult("\n".join(md), {"cases": cases, "summary": s}, checks,
                          push_targets(s, f"{', '.join(robots)}; seeds "
-                                         f"{', '.join(map(str, seeds))}"))
+                                         f"{', '.join(map(str, seeds))}"), figures=figures)

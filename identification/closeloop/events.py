@@ -73,6 +73,9 @@ class Events:
     scale: np.ndarray  # (dof,) N m: the robust scale of the observer's residual
     kept: np.ndarray
     rounds: int
+    t: np.ndarray | None = None  # (n,) s: the run's times
+    residual: np.ndarray | None = None  # (n, dof) N m: the observer's estimate less the
+    # persistent effects, about its median (what the threshold is compared with)
 
     def to_json(self) -> dict:
         return {"events": [e.to_json() for e in self.events],
@@ -262,7 +265,8 @@ def find_events(model, t, q, qd, qdd, tau, body=None) -> Events:
     kept_out = np.ones(len(t), bool)
     for a, b in found:
         kept_out &= ~((t >= t[a] - MARGIN) & (t <= t[b - 1] + MARGIN))
-    return Events(tuple(events), ON * scale, scale, kept_out, rounds)
+    return Events(tuple(events), ON * scale, scale, kept_out, rounds, t,
+                  res - np.median(res[kept], axis=0))
 
 
 def run_events(model, runs, times, body=None) -> list[Events]:
