@@ -17,7 +17,8 @@ from harness.closeloop.payload import last_body
 from harness.data.generate import generate
 from harness.data.pushes import Push
 from harness.robots.arm import Arm
-from identification.closeloop.events import GAIN, _momentum_terms, find_events, observer
+from identification.closeloop.events.detect import find_events
+from identification.closeloop.events.observer import GAIN, momentum_terms, observer
 from tests.helpers import lynxmotion_motion
 
 LYNX = Arm.of("lynxmotion")
@@ -26,7 +27,7 @@ LYNX = Arm.of("lynxmotion")
 def test_momentum_and_beta_are_pinocchios():
     m = lynxmotion_motion(50, seed=3)
     model, data = LYNX.pinocchio, LYNX.pinocchio.createData()
-    p, beta = _momentum_terms(LYNX.nominal, m.q, m.qd)
+    p, beta = momentum_terms(LYNX.nominal, m.q, m.qd)
     for k in range(0, 50, 7):
         q, qd = m.q[k], m.qd[k]
         mass = pin.crba(model, data, q)

@@ -20,7 +20,8 @@ from harness.data.dataset import load_arrays
 from harness.data.runs import run_times
 from harness.errors import UserError
 from harness.robots.arm import Arm
-from identification.closeloop.events import Events, events_json, find_events, without_events
+from identification.closeloop.events.detect import Events, find_events
+from identification.closeloop.events.runs import events_json, without_events
 from identification.closeloop.measured import (
     EXPLAINED,
     MIN_GAIN,

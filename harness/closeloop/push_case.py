@@ -8,8 +8,11 @@ direction and a magnitude in FORCE x the arm's weight. Each run is made twice wi
 seed, pushed and not (the same motion, sensor noise and estimates but for the pushes), on two
 plants: the arm as declared and the arm carrying the payload case's load
 (harness.closeloop.payload_case) with viscous friction on joint 2 (the bench's, sized by the
-arm's mass). Measured data: MuJoCo forward simulation tracking generate's excitation, NOISE
-torque noise, states estimated from the encoder. Two runs train, the third is held out.
+arm's mass). A third plant is the arm as declared held still at the middle of its joint ranges, pushed
+(the issue's real arm was so). Measured data: MuJoCo forward simulation tracking generate's
+excitation (or the held pose), NOISE torque noise (a fraction of each joint's torque spread;
+at the held pose, where the torque hardly moves, the moving arm's same-seed noise in N m),
+states estimated from the encoder. Two runs train, the third is held out.
 
 Scored: a push is found when an event overlaps it; its delay is the event's start minus the
 push's; an event overlapping no push is false; a push whose joint torque never reaches the
@@ -21,6 +24,7 @@ loop did before events) beside it.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +32,7 @@ import numpy as np
 from harness.closeloop.arm_plants import LoadedVariant, write_arm_variant
 from harness.closeloop.payload_case import loaded_variant
 from harness.closeloop.runs import run_runs
+from harness.data.excitation_file import Trajectory
 from harness.data.generate import generate
 from harness.data.pushes import Push
 from harness.data.runs import Runs
@@ -98,6 +103,22 @@ def _named(loop) -> dict:
             "error_before": loop.error_before.tolist(), "error_after": loop.error_after.tolist()}
 
 
+def held_pose(arm: Arm, samples: int) -> Trajectory:
+    """The arm held still at the middle of its joint ranges (the issue's pushed arm was held
+    in a static pose), samples at 200 Hz."""
+    lo, hi = arm.position_limits
+    pose = np.where(np.isfinite(lo) & np.isfinite(hi), (lo + hi) / 2, 0.0)
+    t = np.arange(samples) / 200.0
+    still = np.zeros((samples, arm.dof))
+    return Trajectory(t, still + pose, still, still)
+
+
+def _sensed(data, sigma: np.ndarray, seed: int):
+    """data with Gaussian torque noise of std sigma (dof,) N m (the moving arm's sensor)."""
+    noise = np.random.default_rng(seed + 7).normal(size=data.tau.shape) * sigma
+    return replace(data, tau=data.tau_clean + noise, meta={**data.meta, "noise_nm": sigma.tolist()})
+
+
 def _runs(datasets, name: str) -> Runs:
     arrays = {k: np.concatenate([getattr(d, k) for d in datasets])
               for k in ("q", "qd", "qdd", "tau", "tau_clean")}
@@ -116,19 +137,30 @@ def push_case(arm: Arm, seed: int, directory: Path, samples: int = SAMPLES,
     loaded = LoadedVariant((("viscous", 2, VISCOUS * scale),), payload=load.payload,
                            payload_offset=load.payload_offset,
                            payload_inertia=load.payload_inertia, name="pushed_load")
-    plants = {"declared": Arm.of(write_arm_variant(arm, LoadedVariant(name="pushed"),
-                                                   Path(directory))),
-              "loaded": Arm.of(write_arm_variant(arm, loaded, Path(directory)))}
+    declared = Arm.of(write_arm_variant(arm, LoadedVariant(name="pushed"), Path(directory)))
+    plants = {"declared": declared, "loaded": Arm.of(write_arm_variant(arm, loaded,
+                                                                       Path(directory))),
+              "held": declared}
     out: dict = {"robot": arm.label, "seed": seed, "samples": samples, "noise": NOISE,
                  "true_mass": load.payload, "true_viscous_2": VISCOUS * scale, "plants": {}}
+    sigmas: dict[int, np.ndarray] = {}  # the moving declared arm's sensor noise, per run
     for name, plant in plants.items():
         pushed, calm = [], []
         for i in range(RUNS):
             pushes = draw_pushes(plant, rng, samples / 200.0)
             run_seed = seed * 10 + i
-            pushed.append((generate(plant, samples, NOISE, run_seed, "measured", 0.0, robot=arm,
-                                    pushes=pushes), pushes))
-            calm.append(generate(plant, samples, NOISE, run_seed, "measured", 0.0, robot=arm))
+            if name == "held":  # the moving arm's sensor noise, in N m
+                motion, noise = held_pose(arm, samples), 0.0
+            else:
+                motion, noise = None, NOISE
+            pair = [generate(plant, samples, noise, run_seed, "measured", 0.0, robot=arm,
+                             pushes=p, excitation=motion) for p in (pushes, ())]
+            if name == "held":
+                pair = [_sensed(d, sigmas[i], run_seed) for d in pair]
+            elif name == "declared":
+                sigmas[i] = NOISE * pair[1].tau_clean.std(axis=0)
+            pushed.append((pair[0], pushes))
+            calm.append(pair[1])
         train = _runs([d for d, _ in pushed[:-1]], "pushed")
         held = _runs([pushed[-1][0]], "pushed")
         loop = run_runs(train, arm, validate=held)

@@ -48,7 +48,8 @@ from harness.robots.arm import Arm
 from harness.robots.registry import flange_frame
 from harness.robots.torque_models import load_torque_model
 from identification.closeloop.effects import Effect, EffectTerm
-from identification.closeloop.events import Events, events_json, find_events
+from identification.closeloop.events.detect import Events, find_events
+from identification.closeloop.events.runs import events_json
 from identification.closeloop.identified import close_loop_identified
 from identification.closeloop.loop import (
     CloseLoopResult,

@@ -25,8 +25,8 @@ from harness.data.runs import KEYS, Runs, load_runs, split_files
 from harness.errors import UserError
 from harness.robots.arm import Arm
 from harness.robots.torque_models import load_torque_model, read_model
-from identification.closeloop.events import (
-    Events,
+from identification.closeloop.events.detect import Events
+from identification.closeloop.events.runs import (
     events_json,
     events_line,
     run_events,

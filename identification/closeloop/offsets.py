@@ -68,9 +68,9 @@ def _cut(run: tuple, start: int, stop: int | None = None) -> tuple:
 
 def whole_run(run: tuple) -> ScoredRun:
     """A run scored whole (a --validate log): its offset from its first rest, which is not
-    scored; none known without one."""
+    scored; none known without one (nor for a run that never moves: its rest is all of it)."""
     rest = first_rest(run[1])
-    if rest:
+    if rest and len(run[1]) - rest >= MIN_REST:
         return ScoredRun(_cut(run, rest), _cut(run, 0, rest),
                          f"its first rest ({rest} samples before the motion, not scored)")
     return ScoredRun(run, None, "none known (no rest before the motion): 0 N m")
