@@ -107,8 +107,9 @@ def run_measured(data: str | Path, arm: Arm, holdout: float = 0.25) -> MeasuredR
     if dof != library.dof:
         raise UserError(f"data have {dof} joints, robot {arm.label} has {library.dof}")
     keys = [k for k in ("q", "qd", "qdd", "tau", "tau_clean") if k in arrays]
-    found = find_events(arm.nominal, run_times(data, arrays, meta),
-                        *(arrays[k] for k in ("q", "qd", "qdd", "tau")), last_body(arm))
+    run = tuple(arrays[k] for k in ("q", "qd", "qdd", "tau"))
+    found = find_events(arm.nominal, run_times(data, arrays, meta), *run, last_body(arm),
+                        robot_scales(arm, [run]))
     arrays = {**arrays, **dict(zip(keys, without_events(tuple(arrays[k] for k in keys), found),
                                    strict=True))}
     arrays.pop("t", None)

@@ -185,7 +185,8 @@ def leave_out_events(data: Dataset, arm: Arm, declared: str) -> tuple[Dataset, E
     with the declared model (the arm's nominal one when the declared is identified), and
     those events."""
     model = arm.nominal if declared in DECLARED_MODELS else load_torque_model(declared, arm)
-    found = find_events(model, data.t, data.q, data.qd, data.qdd, data.tau, last_body(arm))
+    found = find_events(model, data.t, data.q, data.qd, data.qdd, data.tau, last_body(arm),
+                        robot_scales(arm, [(data.q, data.qd, data.qdd, data.tau)]))
     k = found.kept
     if np.all(k):
         return data, found

@@ -166,10 +166,10 @@ def ranges_json(scales: Scales) -> dict:
     return out
 
 
-def _events(detect: bool, model, runs: list[tuple], times, carrier) -> list[Events]:
+def _events(detect: bool, model, runs: list[tuple], times, carrier, scales) -> list[Events]:
     """Each run's external torques (none looked for without detect)."""
     if detect:
-        return run_events(model, runs, times, carrier)
+        return run_events(model, runs, times, carrier, scales)
     return [Events((), np.zeros(model.dof), np.zeros(model.dof), np.ones(len(r[0]), bool), 0)
             for r in runs]
 
@@ -206,14 +206,15 @@ def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs |
     if runs[0][0].shape[1] != dof:
         raise UserError(f"data have {runs[0][0].shape[1]} joints, robot {arm.label} has {dof}")
     model, spec = _declared(declared, arm, dof)
-    found = _events(detect, model, runs, _times(data), carrier)
+    bounds = robot_scales(arm, runs)  # what a persistent effect may be, in the events stage
+    found = _events(detect, model, runs, _times(data), carrier, bounds)
     files = list(data.files)
     if validate is not None:
         held = _split(validate)
         if held[0][0].shape[1] != dof:
             raise UserError(f"--validate logs have {held[0][0].shape[1]} joints, robot "
                             f"{arm.label} has {dof}")
-        held_found = _events(detect, model, held, _times(validate), carrier)
+        held_found = _events(detect, model, held, _times(validate), carrier, bounds)
         train = [without_events(r, ev) for r, ev in zip(runs, found, strict=True)]
         found, files = found + held_found, files + list(validate.files)
         scored = [whole_run(without_events(r, ev)) for r, ev in zip(held, held_found,

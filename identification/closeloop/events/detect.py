@@ -36,7 +36,7 @@ OFF = 3.0  # ... and lasts while a joint exceeds this (hysteresis)
 MIN_DURATION = 0.15  # s: shorter excursions are the robot's own (module docstring, 3.)
 MARGIN = 0.1  # s left out on each side of an event (the observer's lag is 1 / GAIN = 20 ms)
 ROUNDS = 4  # persistent fit and detection, again without the events, at most
-RISE = 0.05  # s after an event crosses ON over which its rise is measured (onset)
+RISE = 0.1  # s after an event crosses ON over which its rise is measured (onset)
 RISE_SHARE = 0.25  # the share of that rise which marks the onset
 
 
@@ -127,8 +127,10 @@ def onset(z: np.ndarray, t: np.ndarray, a: int, b: int) -> float:
     less the observer's own lag to that share of a step (-ln(1 - RISE_SHARE) / GAIN). A
     threshold crossing comes early or late with the push's size and the states' smoothing (a
     Savitzky-Golay derivative spreads a push's start both ways, 20-30 ms early on development
-    draws); a share of the rise does not depend on the size. Chosen on development draws
-    (seeds 101-103 on the three arms of the pushes study), never on the study's."""
+    draws; 60-75 ms early on an arm held still, whose noise is small); a share of the rise over
+    RISE does not depend on the size. RISE and RISE_SHARE were chosen on development draws
+    (seeds 101-103 and 1-2 on the three arms of the pushes study, moving and held), never on
+    the study's or the bench's."""
     k = a + int(np.argmax(np.max(z[a:b], axis=1) > ON))
     j = int(np.argmax(z[k]))
     stop = min(b, int(np.searchsorted(t, t[k] + RISE)) + 1)
@@ -137,14 +139,18 @@ def onset(z: np.ndarray, t: np.ndarray, a: int, b: int) -> float:
     return float(max(t[a], t[first] + np.log(1.0 - RISE_SHARE) / GAIN))
 
 
-def find_events(model, t, q, qd, qdd, tau, body=None) -> Events:
+def find_events(model, t, q, qd, qdd, tau, body=None, scales=None) -> Events:
     """External-torque events of a log (t (n,) s; q, qd, qdd, tau (n, dof)) against the
-    declared torque model; body: the load's body's regressor (state_columns), or None."""
+    declared torque model; body: the load's body's regressor (state_columns), or None; scales:
+    the robot's (identification.closeloop.ranges), which bound the persistent effects (None:
+    unbounded)."""
     t = np.asarray(t, float)
     r = observer(model, t, q, qd, tau)
     dt = float(np.median(np.diff(t)))
-    plain = [low_pass(c, dt) for c in state_columns(model, q, qd, qdd, body, pose=False)]
-    full = [low_pass(c, dt) for c in state_columns(model, q, qd, qdd, body)]
+    plain = [(low_pass(c, dt), b) for c, b in state_columns(model, q, qd, qdd, body, False,
+                                                            scales)]
+    full = [(low_pass(c, dt), b) for c, b in state_columns(model, q, qd, qdd, body, True,
+                                                           scales)]
     kept = np.ones(len(t), bool)
     kept[: int(np.ceil(3.0 / (GAIN * dt)))] = False  # the observer's start-up transient
     settle = kept.copy()

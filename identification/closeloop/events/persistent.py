@@ -7,27 +7,44 @@ state columns, so that what is left is what no function of the state explains.
 from __future__ import annotations
 
 import numpy as np
+from scipy.optimize import lsq_linear
 
 BISQUARE = 4.685  # Tukey's constant (95 % efficiency at Gaussian residuals)
 FRICTION_WIDTH = 0.02  # rad/s, the dry-friction column's tanh width
-SUPPORT = 0.1  # a column's spread where the fit is made, of its spread over the run
+REACH = 1.0  # m: a load's centre of mass within it, for its bounds
 
 
-def state_columns(model, q, qd, qdd, body=None, pose: bool = True) -> list[np.ndarray]:
-    """Per joint j, the (n, k) torques of the persistent effects the detection removes: an
-    offset, viscous and dry friction, the declared torque's scale, a smooth function of the
-    arm's pose (every joint's q, sin q and cos q: a spring, a tendon, a gravity error), and,
-    with body (a callable (q, qd, qdd) -> (n, dof, 10), the load's body's regressor), its ten
-    parameters' torque on j; pose=False: without the function of the pose."""
+def state_columns(model, q, qd, qdd, body=None, pose: bool = True, scales=None,
+                  ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Per joint j, the (n, k) torques of the persistent effects the detection removes and the
+    (k,) bound on each one's coefficient (scales: the robot's, identification.closeloop.ranges;
+    None: unbounded): an offset (+- tau_max), viscous (+- tau_max / v_max) and dry friction
+    (+- tau_max), the declared torque's scale (+- 1), a spring or tendon from every joint's
+    pose (+- tau_max / that joint's span), and, with body (a callable (q, qd, qdd) ->
+    (n, dof, 10), the load's body's regressor), its ten parameters (a mass of at most the
+    robot's, within a metre); pose=False: without the springs. Either sign: the declared model
+    may have too much of an effect as well as too little. Bounded, a persistent effect cannot
+    take a push's place: under a stiff position loop a push deflects the arm by milliradians,
+    which only a spring thousands of times stiffer than any joint's could turn into the
+    push's torque."""
+    n, dof = q.shape
     declared = model.torque(q, qd, qdd)
-    shape = np.concatenate([q, np.sin(q), np.cos(q)], axis=1)
     load = None if body is None else np.asarray(body(q, qd, qdd), float)
+    if scales is None:
+        tau, speed, span, mass = (np.full(dof, np.inf), np.ones(dof), np.ones(dof), np.inf)
+    else:
+        tau, speed, span, mass = scales.torque, scales.speed, scales.span, scales.mass
     out = []
-    for j in range(q.shape[1]):
-        own = np.stack([np.ones(len(q)), qd[:, j], np.tanh(qd[:, j] / FRICTION_WIDTH),
-                        declared[:, j]], axis=1)
-        parts = [own] + ([shape] if pose else []) + ([] if load is None else [load[:, j, :]])
-        out.append(np.concatenate(parts, axis=1))
+    for j in range(dof):
+        cols = [np.ones(n), qd[:, j], np.tanh(qd[:, j] / FRICTION_WIDTH), declared[:, j]]
+        bound = [tau[j], tau[j] / speed[j], tau[j], 1.0]
+        if pose:
+            cols += list(q.T)
+            bound += list(tau[j] / span)
+        if load is not None:
+            cols += list(load[:, j, :].T)
+            bound += [mass] * 4 + [mass * REACH**2] * 6
+        out.append((np.stack(cols, axis=1), np.asarray(bound, float)))
     return out
 
 
@@ -36,23 +53,20 @@ def robust_scale(x: np.ndarray) -> np.ndarray:
     return np.maximum(1.4826 * np.median(np.abs(x - med), axis=0), 1e-12)
 
 
-def persistent_residual(r: np.ndarray, cols: list[np.ndarray], use: np.ndarray,
-                        iterations: int = 8) -> tuple[np.ndarray, np.ndarray]:
+def persistent_residual(r: np.ndarray, cols: list[tuple[np.ndarray, np.ndarray]],
+                        use: np.ndarray, iterations: int = 8) -> tuple[np.ndarray, np.ndarray]:
     """r minus, per joint, its bisquare fit on that joint's columns (both low-passed alike),
-    fitted on the samples use; returns that residual (n, dof) and its robust scale (dof,) on
-    those samples. A column whose spread over the samples use is below SUPPORT of its spread
-    over the whole run is left out: a function fitted where the state hardly moves (an arm
-    held still) is not extrapolated to where it does (the same arm deflected by a push)."""
+    each coefficient within its bound (state_columns), fitted on the samples use; returns that
+    residual (n, dof) and its robust scale (dof,) on those samples."""
     res = np.empty_like(r)
-    for j, X in enumerate(cols):
-        spread = np.std(X, axis=0)
-        X = X[:, (np.std(X[use], axis=0) >= SUPPORT * spread) | (spread == 0)]
-        X = X / np.maximum(np.sqrt(np.mean(X[use] ** 2, axis=0)), 1e-12)
+    for j, (X, bound) in enumerate(cols):
+        size = np.maximum(np.sqrt(np.mean(X[use] ** 2, axis=0)), 1e-12)
+        X, bound = X / size, np.maximum(bound * size, 1e-300)
         y, weight = r[:, j], np.ones(len(r))
         out = y.copy()
         for _ in range(iterations):
             w = np.sqrt(weight[use])
-            coef = np.linalg.lstsq(X[use] * w[:, None], y[use] * w, rcond=None)[0]
+            coef = lsq_linear(X[use] * w[:, None], y[use] * w, bounds=(-bound, bound)).x
             out = y - X @ coef
             u = out / (BISQUARE * robust_scale(out[use]))
             weight = np.where(np.abs(u) < 1, (1 - u**2) ** 2, 0.0)

@@ -7,9 +7,10 @@ from identification.closeloop.events.detect import Events, find_events
 from identification.closeloop.events.observer import GAIN
 
 
-def run_events(model, runs, times, body=None) -> list[Events]:
+def run_events(model, runs, times, body=None, scales=None) -> list[Events]:
     """find_events on each run (q, qd, qdd, tau, ...) with its times (n,) s."""
-    return [find_events(model, t, *run[:4], body) for run, t in zip(runs, times, strict=True)]
+    return [find_events(model, t, *run[:4], body, scales)
+            for run, t in zip(runs, times, strict=True)]
 
 
 def without_events(run: tuple, events: Events) -> tuple:
