@@ -29,14 +29,13 @@ from identification.closeloop.events.detect import Events
 from identification.closeloop.events.runs import (
     events_json,
     events_line,
-    run_events,
-    without_events,
 )
-from identification.closeloop.leftover import LEFT, Leftover, leftover
-from identification.closeloop.offsets import ScoredRun, run_tail, scored_error, scored_offsets, whole_run
+from identification.closeloop.leftover import LEFT, Leftover
+from identification.closeloop.offsets import ScoredRun
 from identification.closeloop.payload import REACH
+from identification.closeloop.pipeline import close_the_loop
 from identification.closeloop.ranges import Scales
-from identification.closeloop.runs import RunsLoop, close_loop_runs
+from identification.closeloop.runs import RunsLoop
 from identification.closeloop.verdicts import AGREE, MIN_GAIN
 from identification.errors import IdentificationError
 from identification.identify import identify
@@ -166,14 +165,6 @@ def ranges_json(scales: Scales) -> dict:
     return out
 
 
-def _events(detect: bool, model, runs: list[tuple], times, carrier, scales) -> list[Events]:
-    """Each run's external torques (none looked for without detect)."""
-    if detect:
-        return run_events(model, runs, times, carrier, scales)
-    return [Events((), np.zeros(model.dof), np.zeros(model.dof), np.ones(len(r[0]), bool), 0)
-            for r in runs]
-
-
 def _times(runs: Runs) -> tuple[np.ndarray, ...]:
     """Each run's time stamps; those of a set built in code without them: its samples at the
     rate its meta records (harness.data.runs.run_times)."""
@@ -196,47 +187,33 @@ def _declared(declared: str, arm: Arm, dof: int):
 def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs | None = None,
              holdout: float = 0.25, reach: float = REACH, body: str | None = None,
              detect: bool = True) -> RunsRun:
-    """Close the loop on the runs data (read_runs) of arm, scored on the validate runs or the
-    last holdout of every run; a payload on the last body (payload.last_body; the link `body`
-    when given) is a candidate, its centre of mass within reach m of its joint. External
-    torques (identification.closeloop.events) are found on every run with the declared model
-    and their samples left out of every fit and score (detect=False: none looked for, as
-    before events were: the study of pushes measures what that costs)."""
+    """Close the loop (identification.closeloop.pipeline) on the runs data (read_runs) of arm,
+    scored on the validate runs or the last holdout of every run; a payload on the last body
+    (payload.last_body; the link `body` when given) is a candidate, its centre of mass within
+    reach m of its joint; detect=False: no external torque looked for (as before events were:
+    the study of pushes measures what that costs)."""
     runs, dof, carrier = _split(data), arm.dof, last_body(arm, body)
     if runs[0][0].shape[1] != dof:
         raise UserError(f"data have {runs[0][0].shape[1]} joints, robot {arm.label} has {dof}")
     model, spec = _declared(declared, arm, dof)
-    bounds = robot_scales(arm, runs)  # what a persistent effect may be, in the events stage
-    found = _events(detect, model, runs, _times(data), carrier, bounds)
-    files = list(data.files)
-    if validate is not None:
-        held = _split(validate)
-        if held[0][0].shape[1] != dof:
-            raise UserError(f"--validate logs have {held[0][0].shape[1]} joints, robot "
-                            f"{arm.label} has {dof}")
-        held_found = _events(detect, model, held, _times(validate), carrier, bounds)
-        train = [without_events(r, ev) for r, ev in zip(runs, found, strict=True)]
-        found, files = found + held_found, files + list(validate.files)
-        scored = [whole_run(without_events(r, ev)) for r, ev in zip(held, held_found,
-                                                                    strict=True)]
-    else:
-        cut = [int(round(len(r[0]) * (1.0 - holdout))) for r in runs]
-        parts = [(tuple(a[:c] for a in r), tuple(a[c:] for a in r), ev.kept[:c], ev.kept[c:])
-                 for r, c, ev in zip(runs, cut, found, strict=True)]
-        train = [tuple(a[k] for a in t) for t, _, k, _ in parts]
-        scored = [run_tail(tuple(a[k] for a in t), tuple(a[kh] for a in h))
-                  for t, h, k, kh in parts]
-    scales = robot_scales(arm, train)
+    held = None if validate is None else _split(validate)
+    if held is not None and held[0][0].shape[1] != dof:
+        raise UserError(f"--validate logs have {held[0][0].shape[1]} joints, robot "
+                        f"{arm.label} has {dof}")
     try:
-        inertial = inertial_correction(arm, train) if declared == "pinocchio" else None
-        loop = close_loop_runs(model, train, inertial, body=carrier, reach=reach, scales=scales)
+        out = close_the_loop(
+            model, runs, _times(data), held, None if validate is None else _times(validate),
+            holdout, carrier, lambda r: robot_scales(arm, r),
+            (lambda train: inertial_correction(arm, train)) if declared == "pinocchio" else None,
+            reach, detect)
     except IdentificationError as exc:
         raise UserError(f"{','.join(data.files)}: {exc}") from None
-    before, after = scored_error(model, scored), scored_error(loop.model, scored)
-    heldout_offsets = scored_offsets(loop.model, scored)
-    payload = model_payload(arm, spec, inertial, loop.terms, loop.run_offsets, heldout_offsets)
+    loop = out.loop
+    payload = model_payload(arm, spec, out.inertial, loop.terms, loop.run_offsets,
+                            out.heldout_offsets)
     name = "the robot's nominal model (URDF/MJCF)" if declared == "pinocchio" else declared
+    files = list(data.files) + ([] if validate is None else list(validate.files))
     return RunsRun(arm.reference, name, list(data.files),
-                   [] if validate is None else list(validate.files), holdout, loop, before,
-                   after, leftover(loop.model, [s.scored for s in scored]), payload,
-                   heldout_offsets, scored, files, tuple(found), ranges_json(scales))
+                   [] if validate is None else list(validate.files), holdout, loop,
+                   out.error_before, out.error_after, out.left, payload, out.heldout_offsets,
+                   out.scored, files, out.found, ranges_json(robot_scales(arm, out.train)))
