@@ -63,6 +63,26 @@ class PayloadTorque:
         return symbolic_rnea(self.model, q, qd, qdd)
 
 
+CANDIDATES = 3  # the bodies the last joints move: where a load is looked for
+
+
+def candidate_bodies(arm, count: int = CANDIDATES) -> tuple:
+    """The bodies (identification.closeloop.payload.LastBody) the last `count` joints move,
+    the last first: where the measured loop looks for a load when no link is named; the data
+    choose among them (identification.closeloop.load_body)."""
+    from identification.closeloop.payload import LastBody
+
+    model = arm.pinocchio
+    last = model.njoints - 1
+    out = []
+    for joint in range(last, max(last - count, 0), -1):
+        names = [f.name for f in model.frames
+                 if f.type == pin.FrameType.BODY and f.parentJoint == joint]
+        out.append(LastBody(arm.chain, names[0] if names else model.names[joint],
+                            0 if joint == last else joint))
+    return tuple(out)
+
+
 # a revolute joint so named is a gripper's jaw (an arm joint here: harness.robots.urdf), and
 # what the gripper holds rides on the body the jaw turns on, not on the jaw
 JAW = re.compile(r"gripper|finger|jaw|claw", re.IGNORECASE)

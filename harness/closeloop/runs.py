@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from harness.closeloop.model_file import model_payload
-from harness.closeloop.payload import last_body
+from harness.closeloop.payload import candidate_bodies, last_body
 from harness.data.runs import KEYS, Runs, load_runs, split_files
 from harness.errors import UserError
 from harness.robots.arm import Arm
@@ -91,6 +91,7 @@ class RunsRun:
     event_files: list[str]  # the runs events were looked for on: training, then validation
     found: tuple[Events, ...]  # each one's external torques (identification.closeloop.events)
     ranges: dict  # per effect, the range its coefficient was held to (per joint)
+    body: str = ""  # the link --payload-body named ('' : the data chose, loop.body_choice)
 
     @property
     def events_line(self) -> str:
@@ -135,7 +136,9 @@ class RunsRun:
                                    "has none (0 N m). heldout_runs says which, run by run; "
                                    "`predict --offset-from-rest` on a --validate log "
                                    "reproduces its figures",
-               "model": "model.json", **events_json(self.event_files, list(self.found))}
+               "model": "model.json", **events_json(self.event_files, list(self.found)),
+               "payload_body": r.body_choice or {"chosen": self.body,
+                                                 "rule": "--payload-body"}}
         if self.validate_files:
             out["heldout"] = {"files": self.validate_files, "before": out["error_before"],
                               "after": out["error_after"]}
@@ -192,7 +195,8 @@ def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs |
     (payload.last_body; the link `body` when given) is a candidate, its centre of mass within
     reach m of its joint; detect=False: no external torque looked for (as before events were:
     the study of pushes measures what that costs)."""
-    runs, dof, carrier = _split(data), arm.dof, last_body(arm, body)
+    runs, dof = _split(data), arm.dof
+    carrier = (last_body(arm, body),) if body else candidate_bodies(arm)
     if runs[0][0].shape[1] != dof:
         raise UserError(f"data have {runs[0][0].shape[1]} joints, robot {arm.label} has {dof}")
     model, spec = _declared(declared, arm, dof)
@@ -203,7 +207,8 @@ def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs |
     try:
         out = close_the_loop(
             model, runs, _times(data), held, None if validate is None else _times(validate),
-            holdout, carrier, lambda r: robot_scales(arm, r),
+            holdout, carrier if len(carrier) > 1 else carrier[0],
+            lambda r: robot_scales(arm, r),
             (lambda train: inertial_correction(arm, train)) if declared == "pinocchio" else None,
             reach, detect)
     except IdentificationError as exc:
@@ -216,4 +221,5 @@ def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs |
     return RunsRun(arm.reference, name, list(data.files),
                    [] if validate is None else list(validate.files), holdout, loop,
                    out.error_before, out.error_after, out.left, payload, out.heldout_offsets,
-                   out.scored, files, out.found, ranges_json(robot_scales(arm, out.train)))
+                   out.scored, files, out.found, ranges_json(robot_scales(arm, out.train)),
+                   body or "")

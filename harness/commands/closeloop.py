@@ -48,8 +48,9 @@ def register(sub) -> None:
                    help="with --data: a payload's centre of mass lies within M m of the last "
                    "joint (default 0.4)")
     p.add_argument("--payload-body", metavar="LINK",
-                   help="with --data: the link a payload rides on (default: the last joint's, "
-                        "or the one before when the last joint is a gripper's jaw)")
+                   help="with --data: the link a payload rides on (default: chosen by the "
+                        "data among the bodies the last three joints move, by held-out "
+                        "validation; closeloop.json payload_body)")
     p.add_argument("--push", action="append", default=[], metavar="BODY:START:DURATION:FX,FY,FZ",
                    help="with --plant: the world pushes the plant, a force (N, world frame) on "
                    "the body's centre of mass from START s for DURATION s; repeatable. The "
@@ -195,6 +196,10 @@ def _run_data(args) -> int:
           f"after [{fmt(f'{e:.3f}' for e in r.error_after)}]")
     print(f"    unexplained joints: {list(r.left.unexplained_joints) or 'none'}")
     print(f"    {r.events_line}")
+    choice = r.loop.body_choice
+    if choice.get("next") and any(n.term.effect == "payload" for n in r.loop.named):
+        print(f"    the load's body, chosen by validation: {choice['chosen']} (next "
+              f"{choice['next']}: {choice['margin']:+.1%} validation error power)")
     if not r.left.unexplained_joints:
         scored = held if held is not None else train
         line = runs_line(r.error_after, scored.metas, _per_run(scored),

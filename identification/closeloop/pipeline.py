@@ -58,20 +58,23 @@ def no_events(runs: list[tuple], dof: int) -> list[Events]:
 
 
 def close_the_loop(declared, runs: list[tuple], times, held: list[tuple] | None = None,
-                   held_times=None, holdout: float = 0.25, body: LastBody | None = None,
+                   held_times=None, holdout: float = 0.25,
+                   body: LastBody | tuple[LastBody, ...] | None = None,
                    scales: Callable[[list[tuple]], Scales] | None = None,
                    inertial: Callable[[list[tuple]], object] | None = None,
                    reach: float = REACH, detect: bool = True) -> LoopOutcome:
     """The loop on runs [(q, qd, qdd, tau)] with their times [(n,)] s against the declared
     torque model; held: the scored runs (None: the last holdout of every run); body: the
-    load's body; scales(runs) -> the robot's scales on those samples; inertial(train) -> the
-    rigid-body correction candidate or None; detect=False: no event looked for."""
+    load's body, or candidates the data choose among; scales(runs) -> the robot's scales on
+    those samples; inertial(train) -> the rigid-body correction candidate or None;
+    detect=False: no event looked for."""
     dof = declared.dof
 
     def events(of, at):
         if not detect:
             return no_events(of, dof)
-        return run_events(declared, of, at, body, None if scales is None else scales(runs))
+        carrier = body[0] if isinstance(body, tuple) else body  # the last body's, for events
+        return run_events(declared, of, at, carrier, None if scales is None else scales(runs))
 
     found = events(runs, times)
     if held is not None:

@@ -33,13 +33,14 @@ MODEL.json) and the training runs:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from identification.closeloop.crossval import BlockValidation, weighted_fit
 from identification.closeloop.effects import EffectTerm, effect_torque
 from identification.closeloop.extended import ExtendedModel
+from identification.closeloop.load_body import choose_body
 from identification.closeloop.load_friction import (
     EFFECT,
     refit_under_load,
@@ -153,6 +154,7 @@ class RunsLoop:
     folds: str  # "runs" (leave one run out) or "blocks" (one run: contiguous blocks)
     path: tuple[tuple[str, float], ...]  # (label added, weighted validation power after)
     not_named: tuple[tuple[int, str, float, str], ...]  # per joint: best left, gain, why
+    body_choice: dict = field(default_factory=dict)  # the load's body chosen by the data
 
     @property
     def terms(self) -> tuple[EffectTerm, ...]:
@@ -161,12 +163,13 @@ class RunsLoop:
 
 def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
                     inertial: TorqueModel | None = None,
-                    effects=RUNS_EFFECTS, body: LastBody | None = None,
+                    effects=RUNS_EFFECTS, body: LastBody | tuple[LastBody, ...] | None = None,
                     reach: float = REACH, scales: Scales | None = None) -> RunsLoop:
     """Name the effects the declared model lacks on training runs [(q, qd, qdd, tau)] of one
     robot ((n_r, dof) each, rad, rad/s, rad/s^2, N m); inertial: the rigid-body correction
-    candidate (a TorqueModel of the torque to add to declared), or None; body: the last body,
-    whose payload (centre of mass within reach m of its joint) is a candidate, or None;
+    candidate (a TorqueModel of the torque to add to declared), or None; body: the body whose
+    payload (centre of mass within reach m of its joint) is a candidate, a tuple of candidate
+    bodies the data choose among (identification.closeloop.load_body), or None;
     scales: the robot's, which bound every named coefficient (identification.closeloop.ranges;
     None: the signs only)."""
     dof = declared.dof
@@ -187,6 +190,11 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
     project = _Projector(base, w)
     terms = candidates(project, project(target), states, dof, [e for e in effects if e != EFFECT])
     cols = [effect_torque((t,), *states) for t in terms]
+    several = len(runs) > 1
+    folds = run_rows if several else VALIDATION_BLOCKS
+    choice: dict = {}
+    if isinstance(body, tuple):  # candidate bodies: the data choose
+        body, choice = choose_body(body, base, target, states, w, reach, folds, several)
     regressor = None if body is None else body(*states)
 
     def payload_fit(beside):
@@ -207,9 +215,7 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
                                 body=body.name))
         cols.append(payload[0])
     cols = np.stack(cols, axis=2)
-    several = len(runs) > 1
-    cv = BlockValidation.build(base, target, cols, w, run_rows if several else VALIDATION_BLOCKS,
-                               refit_offset=several)
+    cv = BlockValidation.build(base, target, cols, w, folds, refit_offset=several)
     chosen: list[int] = []
     sse = cv.sse_folds([])
     path = [("", float(np.sum(sse)))]
@@ -288,4 +294,4 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
     run_offsets = coef_base.reshape(len(runs), dof)
     mean = np.average(run_offsets, axis=0, weights=np.diff(lengths))
     return RunsLoop(model, named, mean, run_offsets, "runs" if several else "blocks",
-                    tuple(path), not_named(terms, chosen, rejected, trials))
+                    tuple(path), not_named(terms, chosen, rejected, trials), choice)
