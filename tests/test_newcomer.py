@@ -182,7 +182,8 @@ def test_closeloop_says_when_its_leftover_is_the_sensor_noise(tmp_path, capsys):
     capsys.readouterr()
     assert main(["closeloop", "--data", str(data), "--out", str(tmp_path / "cl")]) == 0
     out = capsys.readouterr().out
-    assert "named [none]" in out and "unexplained joints: none" in out
+    assert "nothing named: the model is the declared one" in out
+    assert "unexplained joints: none" in out
     line = next(x for x in out.splitlines() if "the leftover is at the sensor noise's level" in x)
     after = re.search(r"after \[([^]]*)\]", out).group(1)
     assert f"error after [{after}] against [" in line

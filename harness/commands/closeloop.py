@@ -190,8 +190,9 @@ def _run_data(args) -> int:
     write_json(out / "model.json", r.model_json)
     write_json(out / "closeloop.json", r.to_json())
     fmt = ", ".join
-    named = fmt(_named(n) for n in r.loop.named) or "none"
-    print(f"  robot {r.robot}, declared {r.declared}; named [{named}]")
+    named = fmt(_named(n) for n in r.loop.named)
+    print(f"  robot {r.robot}, declared {r.declared}; " + (
+        f"named [{named}]" if named else "nothing named: the model is the declared one"))
     print(f"    error (relative) before [{fmt(f'{e:.3f}' for e in r.error_before)}] "
           f"after [{fmt(f'{e:.3f}' for e in r.error_after)}]")
     print(f"    unexplained joints: {list(r.left.unexplained_joints) or 'none'}")
