@@ -21,7 +21,7 @@ import numpy as np
 
 from harness.closeloop.model_file import model_payload
 from harness.closeloop.payload import candidate_bodies, last_body
-from harness.data.runs import KEYS, Runs, load_runs, split_files
+from harness.data.runs import KEYS, Runs, load_runs, run_times, split_files
 from harness.errors import UserError
 from harness.robots.arm import Arm
 from harness.robots.torque_models import load_torque_model, read_model
@@ -169,12 +169,11 @@ def ranges_json(scales: Scales) -> dict:
 
 
 def _times(runs: Runs) -> tuple[np.ndarray, ...]:
-    """Each run's time stamps; those of a set built in code without them: its samples at the
-    rate its meta records (harness.data.runs.run_times)."""
-    if runs.times:
-        return runs.times
-    return tuple(np.arange(n) / float(m.get("rate", 200.0))
-                 for n, m in zip(runs.lengths, runs.metas, strict=True))
+    """Each run's time stamps, checked (harness.data.runs.run_times): its `t`, else its
+    samples at the rate its meta records."""
+    times = runs.times or (None,) * len(runs.lengths)
+    return tuple(run_times(f, {"q": np.empty((n, 0)), "t": t}, m) for f, n, t, m in zip(
+        runs.files, runs.lengths, times, runs.metas, strict=True))
 
 
 def _declared(declared: str, arm: Arm, dof: int):

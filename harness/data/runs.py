@@ -30,7 +30,7 @@ class Runs:
     metas: tuple[dict, ...]
     files: tuple[str, ...]
     lengths: tuple[int, ...]
-    times: tuple[np.ndarray, ...] = ()  # each run's time stamps (s), its own clock
+    times: tuple = ()  # each run's `t` as read (None where absent): run_times checks it
 
     @property
     def samples(self) -> int:
@@ -66,15 +66,14 @@ def load_runs(files: list[str]) -> Runs:
     keys = KEYS + (("tau_clean",) if all("tau_clean" in a for a, _ in loaded) else ())
     arrays = {k: np.concatenate([a[k] for a, _ in loaded]) for k in keys}
     return Runs(arrays, tuple(m for _, m in loaded), tuple(str(Path(f)) for f in files),
-                tuple(len(a["q"]) for a, _ in loaded),
-                tuple(run_times(f, a, m) for f, (a, m) in zip(files, loaded, strict=True)))
+                tuple(len(a["q"]) for a, _ in loaded), tuple(a.get("t") for a, _ in loaded))
 
 
 def run_times(file, arrays: dict, meta: dict) -> np.ndarray:
     """A run's time stamps (s): its `t`, else its samples at the rate its meta records
     (default 200 Hz); UserError unless they are one per sample and increasing."""
     n = len(arrays["q"])
-    if "t" not in arrays:
+    if arrays.get("t") is None:
         return np.arange(n) / float(meta.get("rate", 200.0))
     t = np.asarray(arrays["t"], float).ravel()
     if len(t) != n:
