@@ -18,8 +18,8 @@ from harness.closeloop.payload import last_body
 from harness.robots.arm import Arm
 from harness.robots.resolve import resolve_arm
 from identification.closeloop.effects import UNITS, EffectTerm
+from identification.closeloop.extended import closed_model
 from identification.closeloop.payload import standard
-from identification.closeloop.runs import closed_model
 from identification.errors import IdentificationError
 from identification.kinematic_model import KinematicModel
 from identification.model import model_from_dict, model_to_dict

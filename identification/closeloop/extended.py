@@ -1,4 +1,9 @@
-"""The declared torque model extended with named effects: itself a TorqueModel."""
+"""The declared torque model composed with named terms: itself a TorqueModel.
+
+ExtendedModel adds joint effects to a declared model; closed_model composes what the measured
+loop names (the declared model, a rigid-body correction's scale, a payload's body, the joint
+effects and constant offsets) into one, what model.json holds.
+"""
 
 from __future__ import annotations
 
@@ -7,6 +12,8 @@ from collections.abc import Callable
 import numpy as np
 
 from identification.closeloop.effects import EffectTerm, PayloadTorque, effect_torque
+from identification.closeloop.payload import BodyTorque, LastBody
+from identification.errors import IdentificationError
 from identification.torque_model import TorqueModel, as_states
 
 
@@ -76,3 +83,51 @@ class ExtendedModel:
             tau = ca.vertcat(*[plain[j] if j + 1 in self.fallback else tau[j]
                                for j in range(self.dof)])
         return tau
+
+
+class Summed:
+    """Sum of torque models plus a constant torque per joint (offsets, N m)."""
+
+    def __init__(self, models: tuple[TorqueModel, ...], offsets: np.ndarray):
+        self.models, self.offsets, self.dof = models, np.asarray(offsets, float), models[0].dof
+
+    def torque(self, q, qd, qdd) -> np.ndarray:
+        q, qd, qdd = as_states(q, qd, qdd, self.dof)
+        return sum(m.torque(q, qd, qdd) for m in self.models) + self.offsets
+
+    def symbolic_torque(self, q, qd, qdd):
+        return sum(m.symbolic_torque(q, qd, qdd) for m in self.models) + self.offsets
+
+
+class Scaled:
+    """A torque model times a constant (the named inertial correction's scale)."""
+
+    def __init__(self, model: TorqueModel, scale: float):
+        self.model, self.scale, self.dof = model, float(scale), model.dof
+
+    def torque(self, q, qd, qdd) -> np.ndarray:
+        return self.scale * self.model.torque(q, qd, qdd)
+
+    def symbolic_torque(self, q, qd, qdd):
+        return self.scale * self.model.symbolic_torque(q, qd, qdd)
+
+
+def closed_model(declared: TorqueModel, offsets, terms: tuple[EffectTerm, ...],
+                 inertial: TorqueModel | None = None, body: LastBody | None = None,
+                 ) -> ExtendedModel:
+    """The declared model with the named terms (an `inertial` term scales inertial; a
+    payload with parameters sits on body) and the offsets: what model.json holds."""
+    parts = [declared]
+    for t in terms:
+        if t.effect == "inertial":
+            parts.append(Scaled(inertial, t.coefficient))
+        if _body_level(t):
+            if body is None:
+                raise IdentificationError("a payload with parameters needs the last body")
+            parts.append(BodyTorque(body, t.params))
+    return ExtendedModel(Summed(tuple(parts), offsets),
+                         tuple(t for t in terms if t.effect != "inertial" and not _body_level(t)))
+
+
+def _body_level(term: EffectTerm) -> bool:
+    return term.effect == "payload" and bool(term.params)

@@ -39,7 +39,7 @@ import numpy as np
 
 from identification.closeloop.crossval import BlockValidation, weighted_fit
 from identification.closeloop.effects import EffectTerm, effect_torque
-from identification.closeloop.extended import ExtendedModel
+from identification.closeloop.extended import ExtendedModel, closed_model
 from identification.closeloop.load_body import choose_body
 from identification.closeloop.load_friction import (
     EFFECT,
@@ -50,7 +50,6 @@ from identification.closeloop.load_friction import (
 from identification.closeloop.measured import VALIDATION_BLOCKS, _Projector, candidates
 from identification.closeloop.payload import (
     REACH,
-    BodyTorque,
     LastBody,
     com_spread,
     named_payload,
@@ -75,54 +74,6 @@ RUNS_EFFECTS = ("viscous", "coulomb", "armature", "spring", EFFECT)  # the contr
 FEWER = 0.05  # the rigid-body correction (10 parameters a body) is taken before the payload
 # (10 in all) only if it predicts the validation runs 5 % better: a load is the likelier
 MIN_RUN = 40  # samples: a run shorter than that cannot be validated on
-
-
-class Summed:
-    """Sum of torque models plus a constant torque per joint (offsets, N m)."""
-
-    def __init__(self, models: tuple[TorqueModel, ...], offsets: np.ndarray):
-        self.models, self.offsets, self.dof = models, np.asarray(offsets, float), models[0].dof
-
-    def torque(self, q, qd, qdd) -> np.ndarray:
-        q, qd, qdd = as_states(q, qd, qdd, self.dof)
-        return sum(m.torque(q, qd, qdd) for m in self.models) + self.offsets
-
-    def symbolic_torque(self, q, qd, qdd):
-        return sum(m.symbolic_torque(q, qd, qdd) for m in self.models) + self.offsets
-
-
-class Scaled:
-    """A torque model times a constant (the named inertial correction's scale)."""
-
-    def __init__(self, model: TorqueModel, scale: float):
-        self.model, self.scale, self.dof = model, float(scale), model.dof
-
-    def torque(self, q, qd, qdd) -> np.ndarray:
-        return self.scale * self.model.torque(q, qd, qdd)
-
-    def symbolic_torque(self, q, qd, qdd):
-        return self.scale * self.model.symbolic_torque(q, qd, qdd)
-
-
-def closed_model(declared: TorqueModel, offsets, terms: tuple[EffectTerm, ...],
-                 inertial: TorqueModel | None = None, body: LastBody | None = None,
-                 ) -> ExtendedModel:
-    """The declared model with the named terms (an `inertial` term scales inertial; a
-    payload with parameters sits on body) and the offsets: what model.json holds."""
-    parts = [declared]
-    for t in terms:
-        if t.effect == "inertial":
-            parts.append(Scaled(inertial, t.coefficient))
-        if _body_level(t):
-            if body is None:
-                raise IdentificationError("a payload with parameters needs the last body")
-            parts.append(BodyTorque(body, t.params))
-    return ExtendedModel(Summed(tuple(parts), offsets),
-                         tuple(t for t in terms if t.effect != "inertial" and not _body_level(t)))
-
-
-def _body_level(term: EffectTerm) -> bool:
-    return term.effect == "payload" and bool(term.params)
 
 
 @dataclass(frozen=True)
