@@ -128,14 +128,18 @@ def parse_push(text: str, plant: Arm):
 
 
 def _named(named) -> str:
-    """One named effect with its units; a payload with its mass and centre of mass (per run
-    too where the runs' disagree)."""
+    """One named effect with its units and 95 % interval; a payload with its mass and centre of
+    mass (per run too where the runs' disagree)."""
     t, entry = named.term, named.to_json()
+    pm = f" +- {entry['interval_95']:.2g}" if np.isfinite(entry["interval_95"]) else ""
     if t.effect != "payload" or "com" not in entry:
-        return f"joint {t.joint} {t.effect} {t.coefficient:.4g} {entry['unit']}"
+        return f"joint {t.joint} {t.effect} {t.coefficient:.4g}{pm} {entry['unit']}"
     xyz = ", ".join(f"{c:.3f}" for c in entry["com"])
     frame = entry.get("body") or "the last link"
-    text = f"payload {entry['mass']:.3g} kg, centre of mass ({xyz}) m in {frame}'s frame"
+    text = f"payload {entry['mass']:.3g}{pm} kg, centre of mass ({xyz}) m"
+    if "com_interval_95" in entry:
+        text += " +- (" + ", ".join(f"{c:.3f}" for c in entry["com_interval_95"]) + ")"
+    text += f" in {frame}'s frame"
     if "per_run_mass" in entry:
         text += " (mass per run " + " / ".join(f"{m:.3g}" for m in entry["per_run_mass"]) + " kg"
         if not entry["com_agrees"]:
@@ -193,6 +197,8 @@ def _run_data(args) -> int:
     named = fmt(_named(n) for n in r.loop.named)
     print(f"  robot {r.robot}, declared {r.declared}; " + (
         f"named [{named}]" if named else "nothing named: the model is the declared one"))
+    if r.loop.named:
+        print("    (+- : 95 % intervals, a delete-one-block jackknife over time blocks of every run)")
     print(f"    error (relative) before [{fmt(f'{e:.3f}' for e in r.error_before)}] "
           f"after [{fmt(f'{e:.3f}' for e in r.error_after)}]")
     print(f"    unexplained joints: {list(r.left.unexplained_joints) or 'none'}")

@@ -40,6 +40,7 @@ import numpy as np
 from identification.closeloop.crossval import BlockValidation, weighted_fit
 from identification.closeloop.effects import EffectTerm, effect_torque
 from identification.closeloop.extended import ExtendedModel, closed_model
+from identification.closeloop.intervals import RULE, jackknife
 from identification.closeloop.load_body import choose_body
 from identification.closeloop.load_friction import (
     EFFECT,
@@ -52,6 +53,7 @@ from identification.closeloop.payload import (
     REACH,
     LastBody,
     com_spread,
+    consistent_fit,
     named_payload,
     payload_column,
 )
@@ -86,9 +88,11 @@ class Named:
     gain: float  # fraction of its joint's validation error power it removes
     physical: bool  # has a physical reading (see module docstring)
     detail: tuple = ()  # a payload's per-run figures (identification.closeloop.payload)
+    interval: float = float("nan")  # the coefficient's 95 % half-width (intervals.jackknife)
 
     def to_json(self) -> dict:
-        return {**self.term.to_json(), "per_run": list(self.per_run),
+        return {**self.term.to_json(), "interval_95": self.interval, "interval_rule": RULE,
+                "per_run": list(self.per_run),
                 "per_run_std": list(self.per_run_std), "validation_gain": self.gain,
                 "physical_reading": self.physical, **dict(self.detail),
                 **({"joints": "all"} if self.term.effect in ("inertial", "payload") else {})}
@@ -231,7 +235,21 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
         for n, why in reversed(out):
             rejected[chosen[n]] = (found[n][0], why + ", refitted with the others")
             del chosen[n], found[n]
+    others = [i for i in chosen if i != k]
+
+    def coefficients(rows: np.ndarray) -> np.ndarray:
+        """The chosen's coefficients fitted on rows (a payload's: its mass, then its centre of
+        mass last), the load friction's columns as last fitted."""
+        if k not in chosen:
+            return weighted_fit(base[rows], target[rows], cols[rows][:, :, chosen], w)[1]
+        _, c, p = consistent_fit(base[rows], target[rows], cols[rows][:, :, others],
+                                 regressor[rows], w, reach)
+        values = {**dict(zip(others, c, strict=True)), k: p[0]}
+        return np.concatenate([[values[i] for i in chosen], p[1:4] / max(p[0], 1e-12)])
+
+    half = jackknife(coefficients, run_rows)[1] if chosen else np.zeros(0)
     if params is not None:
+        detail = {**detail, "com_interval_95": half[len(chosen):].tolist()}
         terms[k] = replace(terms[k], params=tuple(map(float, params)))
         detail = spread_with_and_without(detail, lambda e: com_spread(
             base, target, cols[:, :, e], regressor, w, run_rows, RUN_BLOCKS, reach),
@@ -239,8 +257,8 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
     named = tuple(
         Named(replace(terms[i], coefficient=float(c)), tuple(map(float, pr)),
               tuple(map(float, ps)), g, scales.holds(replace(terms[i], coefficient=float(c))),
-              tuple(detail.items()) if i == k else ())
-        for i, c, (g, pr, ps) in zip(chosen, coef, found, strict=True))
+              tuple(detail.items()) if i == k else (), float(h))
+        for i, c, (g, pr, ps), h in zip(chosen, coef, found, half[:len(chosen)], strict=True))
     model = closed_model(declared, np.zeros(dof), tuple(x.term for x in named), inertial, body)
     run_offsets = coef_base.reshape(len(runs), dof)
     mean = np.average(run_offsets, axis=0, weights=np.diff(lengths))

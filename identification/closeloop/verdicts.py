@@ -10,6 +10,7 @@ import numpy as np
 
 from identification.closeloop.crossval import weighted_fit
 from identification.closeloop.effects import EffectTerm
+from identification.closeloop.intervals import jackknife
 from identification.closeloop.ranges import Scales
 
 MIN_GAIN = 0.02  # an effect must cut its joint's validation error power by >= 2 %
@@ -23,13 +24,16 @@ def rows_of(term: EffectTerm, dof: int) -> list[int]:
 
 def per_run(base, target, cols, w, runs: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """Each run's coefficients of the last column (joint fit on the run alone) and their
-    standard errors from the spread over RUN_BLOCKS blocks of the run."""
+    standard errors: a delete-one-block jackknife over the run's time blocks
+    (identification.closeloop.intervals; fits of short blocks alone were noisy enough to
+    call one load's two runs apart one time in three on coloured residuals)."""
     coef, std = [], []
     for rows in runs:
         coef.append(weighted_fit(base[rows], target[rows], cols[rows], w)[1][-1])
-        blocks = [weighted_fit(base[b], target[b], cols[b], w)[1][-1]
-                  for b in np.array_split(rows, RUN_BLOCKS)]
-        std.append(np.std(blocks, ddof=1) / np.sqrt(RUN_BLOCKS))
+        thetas, _ = jackknife(lambda r: weighted_fit(base[r], target[r], cols[r], w)[1][-1:],
+                              [rows])
+        b = len(thetas)
+        std.append(float(np.sqrt((b - 1) / b * np.sum((thetas - thetas.mean()) ** 2))))
     return np.array(coef), np.array(std)
 
 
