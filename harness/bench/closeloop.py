@@ -21,6 +21,7 @@ torque (coefficient_spread).
 
 from __future__ import annotations
 
+import tempfile
 from dataclasses import replace
 from pathlib import Path
 
@@ -100,12 +101,14 @@ def coefficient_spread(run, arm: Arm) -> list[dict]:
 def push_cases(arm: Arm, directory: Path, quick: bool = False, figure: Path | None = None
                ) -> dict:
     """The push case on the bench's arm over PUSH_SEEDS (the first only, on fewer samples,
-    in quick mode) and its summary; figure: the first draw's events drawn there."""
+    in quick mode) and its summary; figure: the first draw's events drawn there; its plant
+    files are written in a temporary folder under directory."""
     seeds = PUSH_SEEDS[:1] if quick else PUSH_SEEDS
     options = {"samples": QUICK_PUSH_SAMPLES} if quick else {}
-    cases = [push_case(arm, seed, Path(directory) / f"pushes_{seed}",
-                       figure=figure if seed == seeds[0] else None, **options)
-             for seed in seeds]
+    with tempfile.TemporaryDirectory(dir=directory) as tmp:  # its plants: the arm's, unloaded
+        cases = [push_case(arm, seed, Path(tmp) / f"pushes_{seed}",
+                           figure=figure if seed == seeds[0] else None, **options)
+                 for seed in seeds]
     return {"cases": cases, "summary": summary(cases)}
 
 
