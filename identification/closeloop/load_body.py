@@ -23,7 +23,10 @@ def choose_body(bodies: tuple[LastBody, ...], base, target, states, w, reach: fl
         base, target, np.zeros((*target.shape, 1)), w, folds, refit_offset=several).sse([])))
     scores = []
     for body in bodies:
-        candidate = payload_column(base, target, body(*states), w, reach)
+        try:
+            candidate = payload_column(base, target, body(*states), w, reach)
+        except ValueError:  # the conic fit failed on this body: it carries no candidate
+            candidate = None
         if candidate is None:
             scores.append(without)
             continue
