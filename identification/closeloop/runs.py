@@ -153,7 +153,12 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
     regressor = None if body is None else body(*states)
 
     def payload_fit(beside):
-        return None if body is None else payload_column(base, target, regressor, w, reach, beside)
+        if body is None:
+            return None
+        try:
+            return payload_column(base, target, regressor, w, reach, beside)
+        except ValueError:  # the conic fit failed (a held arm's calm runs): no candidate
+            return None
 
     if EFFECT in effects:  # the load friction and the payload candidates, each knowing the other
         extra, more, payload = with_payload(project, target, declared.torque(*states), states,
