@@ -30,6 +30,9 @@ def jackknife(fit: Callable[[np.ndarray], np.ndarray], runs: list[np.ndarray],
     every = np.concatenate(runs)
     folds = [block for rows in runs for block in np.array_split(rows, blocks) if len(block)]
     thetas = np.array([fit(np.setdiff1d(every, block, assume_unique=True)) for block in folds])
+    thetas = thetas[np.all(np.isfinite(thetas), axis=1)]  # a fold whose fit failed
     b = len(thetas)
+    if b < 3:
+        return thetas, np.full(thetas.shape[1], np.nan)
     spread = np.sqrt((b - 1) / b * np.sum((thetas - thetas.mean(axis=0)) ** 2, axis=0))
     return thetas, student.ppf(0.5 + LEVEL / 2, b - 1) * spread

@@ -247,8 +247,11 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
         mass last), the load friction's columns as last fitted."""
         if k not in chosen:
             return weighted_fit(base[rows], target[rows], cols[rows][:, :, chosen], w)[1]
-        _, c, p = consistent_fit(base[rows], target[rows], cols[rows][:, :, others],
-                                 regressor[rows], w, reach)
+        try:
+            _, c, p = consistent_fit(base[rows], target[rows], cols[rows][:, :, others],
+                                     regressor[rows], w, reach)
+        except ValueError:  # this fold's conic fit failed: left out of the jackknife
+            return np.full(len(chosen) + 3, np.nan)
         values = {**dict(zip(others, c, strict=True)), k: p[0]}
         return np.concatenate([[values[i] for i in chosen], p[1:4] / max(p[0], 1e-12)])
 
