@@ -36,9 +36,10 @@ def _scales(motions) -> Scales:
 
 
 def test_the_ranges_are_the_closed_forms_on_the_arms_limits():
-    s = _scales(_motions())
+    motions = _motions()
+    s = _scales(motions)
     tau, v = 10.0, 10.0  # the Lynxmotion's motors
-    span = np.pi  # each joint's position span
+    span = np.ptp(np.concatenate([m.q for m in motions])[:, 2])  # joint 3's, as the data cover it
     assert s.bounds(EffectTerm("viscous", 2, 0.0)) == pytest.approx((0.0, tau / v))
     assert s.bounds(EffectTerm("armature", 1, 0.0)) == pytest.approx((0.0, tau * ACCEL_TIME / v))
     assert s.bounds(EffectTerm("spring", 3, 0.0)) == pytest.approx((0.0, tau / span))
@@ -63,11 +64,12 @@ def _logs(term: EffectTerm, motions, body=None, params=None):
 
 
 # (effect beyond its range, the same inside it): Lynxmotion's bounds are viscous 1, armature
-# 0.5, spring 10 / pi, Coulomb 10 N m, load friction 0.5, a payload's mass 1 kg
+# 0.5, spring 10 / the data's span (about 4 N m/rad), Coulomb 10 N m, load friction 0.5, a
+# payload's mass 1 kg
 CASES = {"viscous": (EffectTerm("viscous", 2, 1.5), EffectTerm("viscous", 2, 0.05)),
          "negative viscous": (EffectTerm("viscous", 2, -0.05), EffectTerm("viscous", 2, 0.05)),
          "armature": (EffectTerm("armature", 1, 0.8), EffectTerm("armature", 1, 0.01)),
-         "spring": (EffectTerm("spring", 3, 4.0), EffectTerm("spring", 3, 0.05)),
+         "spring": (EffectTerm("spring", 3, 6.0), EffectTerm("spring", 3, 0.05)),
          "coulomb": (EffectTerm("coulomb", 2, 12.0, lead=0.0, eps=0.01),
                      EffectTerm("coulomb", 2, 0.05, lead=0.0, eps=0.01)),
          "load_friction": (EffectTerm("load_friction", 2, 0.7, lead=0.0, eps=0.01),

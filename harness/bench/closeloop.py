@@ -215,5 +215,5 @@ def run(ctx: Context) -> SectionResult:
     checks.append(check("pushes.never_worse_after", not pushes["summary"]["worse_joints"],
                         "held-out error after <= before on every joint of every pushed loop"))
     targets += push_targets(pushes["summary"], f"{robot}, bench draws")
-    figures = [Path(c["figure"]) for c in pushes["cases"] if "figure" in c]
+    figures = [ctx.figures_dir / c["figure"] for c in pushes["cases"] if "figure" in c]
     return SectionResult("\n".join(md), results, checks, targets, headline, figures)

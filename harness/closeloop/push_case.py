@@ -172,10 +172,11 @@ def push_case(arm: Arm, seed: int, directory: Path, samples: int = SAMPLES,
         if figure is not None and name == "loaded":
             from harness.closeloop.figures import events_figure
 
-            out["figure"] = str(events_figure(
+            drawn = events_figure(
                 loop.found[0], Path(figure), pushed[0][1],
                 f"{arm.label}, seed {seed}, loaded plant, run 1: the observer's estimate less "
-                "the persistent effects; events shaded, pushes dashed, thresholds dotted"))
+                "the persistent effects; events shaded, pushes dashed, thresholds dotted")
+            out["figure"] = Path(drawn).name  # its name: the same results wherever written
         out["plants"][name] = {
             "runs": scores, "pushed": _named(loop), "without_pushes": _named(quiet),
             "pushed_without_events": _named(blind),

@@ -149,9 +149,9 @@ def robot_scales(arm: Arm, runs: list[tuple]) -> Scales:
     """The scales that bound arm's named coefficients (identification.closeloop.ranges): its
     torque and speed limits, joint spans and mass, the runs' torques and speeds where it
     declares none."""
-    tau, qd = (np.concatenate([r[i] for r in runs]) for i in (3, 1))
+    tau, qd, q = (np.concatenate([r[i] for r in runs]) for i in (3, 1, 0))
     mass = float(sum(body.mass for body in arm.pinocchio.inertias))
-    return Scales.of(arm.torque_limit, arm.speed_bounds, *arm.position_limits, mass, tau, qd)
+    return Scales.of(arm.torque_limit, arm.speed_bounds, *arm.position_limits, mass, tau, qd, q)
 
 
 def ranges_json(scales: Scales) -> dict:

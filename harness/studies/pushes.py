@@ -43,7 +43,7 @@ def run(ctx: Context) -> SectionResult:
           push_markdown(cases, s)]
     checks = [check("pushes.never_worse_after", not s["worse_joints"],
                     "held-out error after <= before on every joint of every pushed loop")]
-    figures = [Path(c["figure"]) for c in cases if "figure" in c]
+    figures = [ctx.figures_dir / c["figure"] for c in cases if "figure" in c]
     return SectionResult("\n".join(md), {"cases": cases, "summary": s}, checks,
                          push_targets(s, f"{', '.join(robots)}; seeds "
                                          f"{', '.join(map(str, seeds))}"), figures=figures)

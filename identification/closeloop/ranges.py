@@ -5,13 +5,15 @@ whatever it does to the error: a push fitted as friction comes out negative or a
 
 Per joint j, with tau_max its torque bound (the motors' or the URDF's effort limit, else
 twice the largest torque the data show), v_max its speed bound (the URDF's, else the larger
-of twice the data's fastest speed and 1 rad/s) and s its position span:
+of twice the data's fastest speed and 1 rad/s) and s its position span (below):
 
 - viscous  b in [0, tau_max / v_max]: at full speed it needs no more than the joint's torque;
 - coulomb, sigmoid  f in [0, tau_max];
 - armature  a in [0, tau_max ACCEL_TIME / v_max]: the rotor alone lets the joint reach full
   speed in ACCEL_TIME under full torque;
-- spring  k in [0, tau_max / s]: across the joint's span it needs no more than its torque;
+- spring  k in [0, tau_max / s]: across the span the data cover (at least MIN_SPAN, at most
+  the joint's own: a UR5's wrist turns +-2 pi, which no run covers) it needs no more than the
+  joint's torque;
 - offset  |c| <= tau_max (a sensor's offset, either sign);
 - load_friction  mu in [0, LOAD_FRICTION_MAX) N m per N m (Hamon, Gautier & Garrec's gears
   lose a fraction of the load they carry);
@@ -31,6 +33,7 @@ from identification.closeloop.effects import EffectTerm
 ACCEL_TIME = 0.5  # s
 LOAD_FRICTION_MAX = 0.5  # N m per N m
 MIN_SPEED = 1.0  # rad/s: the speed bound of a robot that declares none, at least
+MIN_SPAN = 0.5  # rad: a spring is judged over the data's span, at least this
 
 
 @dataclass(frozen=True)
@@ -45,9 +48,10 @@ class Scales:
 
     @classmethod
     def of(cls, torque_limit, speed_limit, lower, upper, mass: float, tau: np.ndarray,
-           qd: np.ndarray) -> Scales:
+           qd: np.ndarray, q: np.ndarray | None = None) -> Scales:
         """From what the robot declares (None or non-finite where it declares nothing), the
-        data's torque tau and speed qd (n, dof) filling the gaps."""
+        data's torque tau and speed qd (n, dof) filling the gaps; q (n, dof): the span a
+        spring is judged over is the data's (at least MIN_SPAN), within the joint's own."""
         dof = tau.shape[1]
         peak_tau = 2.0 * np.max(np.abs(tau), axis=0)
         peak_qd = np.maximum(2.0 * np.max(np.abs(qd), axis=0), MIN_SPEED)
@@ -55,6 +59,8 @@ class Scales:
         speed = _declared(speed_limit, peak_qd, dof)
         span = np.asarray(upper, float) - np.asarray(lower, float)
         span = np.where(np.isfinite(span) & (span > 0), span, 2 * np.pi)
+        if q is not None:
+            span = np.clip(np.ptp(q, axis=0), np.minimum(MIN_SPAN, span), span)
         return cls(torque, speed, span, float(mass) if mass > 0 else np.inf)
 
     def bounds(self, term: EffectTerm) -> tuple[float, float]:
