@@ -42,7 +42,7 @@ def test_the_ranges_are_the_closed_forms_on_the_arms_limits():
     span = np.ptp(np.concatenate([m.q for m in motions])[:, 2])  # joint 3's, as the data cover it
     assert s.bounds(EffectTerm("viscous", 2, 0.0)) == pytest.approx((0.0, tau / v))
     assert s.bounds(EffectTerm("armature", 1, 0.0)) == pytest.approx((0.0, tau * ACCEL_TIME / v))
-    assert s.bounds(EffectTerm("spring", 3, 0.0)) == pytest.approx((0.0, tau / span))
+    assert s.bounds(EffectTerm("spring", 3, 0.0)) == pytest.approx((0.0, 2 * tau / span))
     assert s.bounds(EffectTerm("coulomb", 3, 0.0)) == pytest.approx((0.0, tau))
     assert s.bounds(EffectTerm("payload", 3, 0.0)) == pytest.approx((0.0, 1.0))
     assert not s.holds(EffectTerm("payload", 3, 0.0))  # a payload has a mass
@@ -64,12 +64,12 @@ def _logs(term: EffectTerm, motions, body=None, params=None):
 
 
 # (effect beyond its range, the same inside it): Lynxmotion's bounds are viscous 1, armature
-# 0.5, spring 10 / the data's span (about 4 N m/rad), Coulomb 10 N m, load friction 0.5, a
+# 0.5, spring 2 x 10 / the data's span (about 8 N m/rad), Coulomb 10 N m, load friction 0.5, a
 # payload's mass 1 kg
 CASES = {"viscous": (EffectTerm("viscous", 2, 1.5), EffectTerm("viscous", 2, 0.05)),
          "negative viscous": (EffectTerm("viscous", 2, -0.05), EffectTerm("viscous", 2, 0.05)),
          "armature": (EffectTerm("armature", 1, 0.8), EffectTerm("armature", 1, 0.01)),
-         "spring": (EffectTerm("spring", 3, 6.0), EffectTerm("spring", 3, 0.05)),
+         "spring": (EffectTerm("spring", 3, 12.0), EffectTerm("spring", 3, 0.05)),
          "coulomb": (EffectTerm("coulomb", 2, 12.0, lead=0.0, eps=0.01),
                      EffectTerm("coulomb", 2, 0.05, lead=0.0, eps=0.01)),
          "load_friction": (EffectTerm("load_friction", 2, 0.7, lead=0.0, eps=0.01),

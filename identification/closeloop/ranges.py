@@ -11,9 +11,9 @@ of twice the data's fastest speed and 1 rad/s) and s its position span (below):
 - coulomb, sigmoid  f in [0, tau_max];
 - armature  a in [0, tau_max ACCEL_TIME / v_max]: the rotor alone lets the joint reach full
   speed in ACCEL_TIME under full torque;
-- spring  k in [0, tau_max / s]: across the span the data cover (at least MIN_SPAN, at most
-  the joint's own: a UR5's wrist turns +-2 pi, which no run covers) it needs no more than the
-  joint's torque;
+- spring  k in [0, 2 tau_max / s]: half across the span s the data cover (its rest inside it;
+  s at least MIN_SPAN, at most the joint's own: a UR5's wrist turns +-2 pi, which no run
+  covers) it needs no more than the joint's torque;
 - offset  |c| <= tau_max (a sensor's offset, either sign);
 - load_friction  mu in [0, LOAD_FRICTION_MAX) N m per N m (Hamon, Gautier & Garrec's gears
   lose a fraction of the load they carry);
@@ -68,7 +68,8 @@ class Scales:
         j = term.joint - 1
         tau, v = float(self.torque[j]), float(self.speed[j])
         return {"viscous": (0.0, tau / v), "coulomb": (0.0, tau), "sigmoid": (0.0, tau),
-                "armature": (0.0, tau * ACCEL_TIME / v), "spring": (0.0, tau / self.span[j]),
+                "armature": (0.0, tau * ACCEL_TIME / v),
+                "spring": (0.0, 2.0 * tau / self.span[j]),
                 "offset": (-tau, tau), "load_friction": (0.0, LOAD_FRICTION_MAX),
                 "payload": (0.0, self.mass), "inertial": (0.0, 1.0)}[term.effect]
 
