@@ -91,7 +91,8 @@ class MeasuredRun:
                "robot": self.robot, "data": {"file": self.source, **{
                    k: self.meta[k] for k in ("mode", "source", "samples", "derivatives")
                    if k in self.meta}}}
-        out.update(events_json([self.source], [self.events]))
+        out.update(events_json([Path(self.source).name], [self.events]))  # its name: the
+        # same report wherever the log was written
         clean = self.clean_errors()
         if clean is not None:
             out["error_before_clean"], out["error_after_clean"] = clean
