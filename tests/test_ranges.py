@@ -104,21 +104,21 @@ def test_a_payload_heavier_than_the_arm_is_not_named():
         assert all(scales.holds(t) for t in loop.terms)
 
 
-def test_the_plant_loop_names_an_effect_only_in_its_range():
-    (m,) = _motions((13,), 3000)
+LOOPS = {  # the plant's loop (a fixed declared model) and the one-log loop (its own fit)
+    "plant": (13, lambda q, qd, qdd, tau, scales: close_loop(
+        LYNX.nominal, q, qd, qdd, tau, tau, scales=scales)),
+    "measured": (14, lambda q, qd, qdd, tau, scales: close_loop_measured(
+        rigid_library(LYNX), q, qd, qdd, tau, scales=scales)),
+}
+
+
+@pytest.mark.parametrize("path", sorted(LOOPS))
+def test_the_other_loops_name_an_effect_only_in_its_range(path):
+    seed, loop_of = LOOPS[path]
+    (m,) = _motions((seed,), 3000)
     scales = _scales([m])
     for term, expect in ((CASES["viscous"][0], False), (CASES["viscous"][1], True)):
         (q, qd, qdd, tau), = _logs(term, [m])
-        loop = close_loop(LYNX.nominal, q, qd, qdd, tau, tau, scales=scales)
-        assert (("viscous", 2) in _named(loop)) is expect, (term, loop.terms)
-        assert all(scales.holds(t) for t in loop.terms)
-
-
-def test_the_measured_loop_names_an_effect_only_in_its_range():
-    (m,) = _motions((14,), 3000)
-    scales = _scales([m])
-    for term, expect in ((CASES["viscous"][0], False), (CASES["viscous"][1], True)):
-        (q, qd, qdd, tau), = _logs(term, [m])
-        loop = close_loop_measured(rigid_library(LYNX), q, qd, qdd, tau, scales=scales)
-        assert (("viscous", 2) in _named(loop)) is expect, (term, loop.terms)
+        loop = loop_of(q, qd, qdd, tau, scales)
+        assert (("viscous", 2) in _named(loop)) is expect, (path, term, loop.terms)
         assert all(scales.holds(t) for t in loop.terms)
