@@ -1,4 +1,4 @@
-"""Joint drive gains identified with the dynamics, from an unloaded and a loaded run.
+"""Joint drive gains identified with the dynamics, from unloaded and loaded runs.
 
 A log of motor currents i (A) measures the torque up to each joint's drive gain K_j
 (N m/A): tau_j = K_j i_j. The rigid-body torque is linear in the inertial parameters, so
@@ -26,6 +26,13 @@ at 5 % noise (UR5, Panda). Two weighted least-squares passes are therefore follo
 instrumental-variable passes, the instruments the currents the previous pass predicts
 (correlated with the currents, not with their noise): within ~1 % (docs/data.md, 'Motor
 currents').
+
+Several unloaded and loaded runs enter one system (each run its friction and offset, the
+load's parameters shared by the loaded runs). The white-noise standard errors understate a
+real log's spread (its residual is coloured by what the model lacks: issue #67), so each
+gain's 95 % interval comes from a delete-one-block jackknife over every run
+(identification.intervals); the deleted blocks' currents, predicted by the fits without them,
+give a held-out error that chooses the body the load rides on (harness.identify.drive_gains).
 """
 
 from __future__ import annotations
@@ -35,6 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from identification.errors import IdentificationError
+from identification.intervals import BLOCKS, half_width, time_blocks
 from identification.library.kinematic import COULOMB_WIDTH
 from identification.regression.oracle import base_columns
 
@@ -42,18 +50,26 @@ ITERATIONS = 3  # weighted passes (the weights from the previous pass's residual
 BASE_ROWS = 300  # instants of each run the base columns are found on
 UNIDENTIFIED = 0.2  # a gain whose standard error exceeds this fraction of it is not identified
 
+Run = tuple  # (Y (n, dof, p), qd (n, dof), qdd (n, dof), current (n, dof))
+
 
 @dataclass(frozen=True)
 class DriveGainFit:
-    """Gains (dof,) N m/A with their standard errors, the load's 10 parameters (mass first,
-    in the last joint's frame; zero where not identifiable), each joint's residual std (N m)
-    and the number of unknowns solved for (base columns and gains)."""
+    """Gains (dof,) N m/A with their white-noise standard errors and their 95 % intervals
+    (half-widths, identification.intervals: a delete-one-block jackknife over every run;
+    NaN when not computed), the load's 10 parameters (mass first, in its body's joint frame;
+    zero where not identifiable), each joint's residual std (N m), the number of unknowns
+    solved for (base columns and gains) and the held-out error: the power of the deleted
+    blocks' currents as the fits without them predict them, each joint in units of its
+    current's std (inf when a fold's fit failed; NaN when not computed)."""
 
     gains: np.ndarray
     gain_std: np.ndarray
     load: np.ndarray
     sigma: np.ndarray
     columns: int
+    interval: np.ndarray
+    heldout: float
 
 
 def _friction(qd: np.ndarray) -> np.ndarray:
@@ -75,70 +91,138 @@ def _diag(x: np.ndarray) -> np.ndarray:
     return out
 
 
-def _check(runs, mass: float) -> int:
+def _as_runs(runs) -> list:
+    """One run (a tuple of 4 arrays) or a list of runs, as a list of runs."""
+    return [runs] if isinstance(runs[0], np.ndarray) else list(runs)
+
+
+def _check(unloaded: list, loaded: list, mass: float) -> int:
     if not np.isfinite(mass) or mass <= 0:
         raise IdentificationError(f"the load's mass must be a positive number of kg, got {mass:g}")
+    if not unloaded or not loaded:
+        raise IdentificationError("the drive gains need an unloaded and a loaded run")
+    runs = unloaded + loaded
     dof = runs[0][1].shape[1]
     shapes = [(r[0].shape[1], *(x.shape[1] for x in r[1:])) for r in runs]
     if any(d != dof for shape in shapes for d in shape):
         raise IdentificationError("the unloaded and loaded runs differ in their joints: "
-                                  f"{shapes[0][0]} and {shapes[1][0]}")
-    if runs[0][0].shape[2] != runs[1][0].shape[2] or runs[0][0].shape[2] < 10:
+                                  + ", ".join(str(s[0]) for s in shapes))
+    params = {r[0].shape[2] for r in runs}
+    if len(params) != 1 or min(params) < 10:
         raise IdentificationError("the runs' regressors differ in their parameters")
     return dof
 
 
+class _System:
+    """known x - diag(current) K = target over every run's samples: the base columns of
+    [Y, armature, each run's friction and offset, the load's 9 parameters on the loaded runs],
+    the target -M Y_mass on the loaded runs; runs: each run's sample indices."""
+
+    def __init__(self, unloaded: list, loaded: list, mass: float, body: int, rtol: float):
+        dof = _check(unloaded, loaded, mass)
+        every = unloaded + loaded
+        p = every[0][0].shape[2]
+        end = p - 10 * (dof - body if body else 0)  # just past the load's body's columns
+        friction = 3 * dof * len(every)
+        blocks, rhs, runs, at = [], [], [], 0
+        for r, (Y, qd, qdd, _) in enumerate(every):
+            n = len(qd)
+            per_run = np.zeros((n, dof, friction))
+            per_run[:, :, 3 * dof * r:3 * dof * (r + 1)] = _friction(qd)
+            is_loaded = r >= len(unloaded)
+            load = Y[:, :, end - 9:end] if is_loaded else np.zeros((n, dof, 9))
+            blocks.append(np.concatenate([Y, _diag(qdd), per_run, load], axis=2))
+            rhs.append(-mass * Y[:, :, end - 10] if is_loaded else np.zeros((n, dof)))
+            runs.append(np.arange(at, at + n))
+            at += n
+        known = np.concatenate(blocks)  # (N, dof, k)
+        self.target = np.concatenate(rhs)  # (N, dof)
+        self.current = np.concatenate([r[3] for r in every])
+        self.scale = self.current.std(axis=0)
+        if np.any(self.scale == 0):
+            raise IdentificationError(f"joint {int(np.argmin(self.scale)) + 1}'s current never "
+                                      "changes: its gain cannot be identified")
+        # the base columns are structural: found on a few hundred instants of each run
+        rows = np.concatenate([r[np.linspace(0, len(r) - 1, BASE_ROWS).astype(int)]
+                               for r in runs])
+        self.base = base_columns(known[rows], rtol)
+        self.known = known[:, :, self.base]
+        self.runs, self.dof, self.mass = runs, dof, mass
+        self.load_at = p + dof + friction  # the load's first column before the base selection
+
+    def solve(self, rows: np.ndarray, instrumental: bool, gram: np.ndarray | None = None,
+              covariance: bool = True) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+        """(solution: base coefficients then gains, its covariance, each joint's residual
+        std) on the samples rows (gram: their per-joint known' known, when at hand): two
+        weighted least-squares passes, then instrumental-variable passes; the covariance (of
+        the last pass) when asked for. IdentificationError when a gain comes out
+        non-positive."""
+        normal = _Normal(self.known[rows], self.current[rows], self.target[rows], gram)
+        scale = self.current[rows].std(axis=0)
+        sigma, sol = scale, None
+        for step in range(2 + ITERATIONS):
+            # IV: the instruments are the currents the last pass predicts (correlated with
+            # the currents, not with their noise)
+            instrument = (normal.current if step < 2 or not instrumental
+                          else normal.predicted(sol))
+            last = step == 1 + ITERATIONS
+            sol, cov = normal.solve(instrument, 1.0 / sigma, covariance and last)
+            sigma = np.maximum(normal.residual_std(sol), 1e-12 * scale)
+            _positive(sol[-self.dof:])
+        return sol, cov, sigma
+
+    def predicted(self, sol: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """(len(rows), dof) the currents sol predicts at the samples rows."""
+        kb = self.known.shape[2]
+        return (self.known[rows] @ sol[:kb] - self.target[rows]) / sol[kb:]
+
+    def load(self, sol: np.ndarray) -> np.ndarray:
+        """The load's 10 parameters: the known mass, then the identifiable part of the 9."""
+        load = np.zeros(10)
+        load[0] = self.mass
+        for i, c in enumerate(self.base):
+            if self.load_at <= c < self.load_at + 9:
+                load[1 + c - self.load_at] = sol[i]
+        return load
+
+
 def identify_drive_gains(unloaded, loaded, mass: float, instrumental: bool = True,
-                         rtol: float = 1e-8, body: int = 0) -> DriveGainFit:
-    """The drive gains of every joint from two runs, each (Y, qd, qdd, current): Y (n, dof, p)
-    the joint-torque regressor, 10 columns per body, qd, qdd (n, dof), current (n, dof) in A;
-    mass: the load's (kg) on the loaded run's body moved by joint `body` (1..dof; 0: the
-    last); instrumental False: weighted least squares only (biased by the currents' noise,
-    kept to measure it). IdentificationError when a gain is not identified by these runs."""
-    dof = _check((unloaded, loaded), float(mass))
-    p = unloaded[0].shape[2]
-    end = p - 10 * (dof - body if body else 0)  # just past the load's body's columns
-    blocks, rhs = [], []
-    for run, (Y, qd, qdd, _) in enumerate((unloaded, loaded)):
-        n = len(qd)
-        per_run = np.zeros((n, dof, 2 * 3 * dof))
-        per_run[:, :, run * 3 * dof:(run + 1) * 3 * dof] = _friction(qd)
-        load = Y[:, :, end - 9:end] if run == 1 else np.zeros((n, dof, 9))
-        blocks.append(np.concatenate([Y, _diag(qdd), per_run, load], axis=2))
-        rhs.append(-mass * Y[:, :, end - 10] if run == 1 else np.zeros((n, dof)))
-    known, target = np.concatenate(blocks), np.concatenate(rhs)  # (N, dof, k), (N, dof)
-    current = np.concatenate([unloaded[3], loaded[3]])
-    scale = current.std(axis=0)
-    if np.any(scale == 0):
-        raise IdentificationError(f"joint {int(np.argmin(scale)) + 1}'s current never changes: "
-                                  "its gain cannot be identified")
-    # the base columns are structural: found on a few hundred instants of each run
-    rows = np.concatenate([np.linspace(0, len(unloaded[1]) - 1, BASE_ROWS).astype(int),
-                           len(unloaded[1]) + np.linspace(0, len(loaded[1]) - 1, BASE_ROWS).astype(int)])
-    base = base_columns(known[rows], rtol)
-    normal = _Normal(known[:, :, base], current, target)
-    sigma, sol = scale, None
-    for step in range(2 + ITERATIONS):  # two weighted least-squares passes, then IV passes
-        # IV: the instruments are the currents the last pass predicts (correlated with the
-        # currents, not with their noise)
-        instrument = current if step < 2 or not instrumental else normal.predicted(sol)
-        sol, cov = normal.solve(instrument, 1.0 / sigma)
-        sigma = np.maximum(normal.residual_std(sol), 1e-12 * scale)
-        _positive(sol[-dof:])
+                         rtol: float = 1e-8, body: int = 0, blocks: int = BLOCKS) -> DriveGainFit:
+    """The drive gains of every joint from unloaded and loaded runs, each (Y, qd, qdd,
+    current) or a list of such runs: Y (n, dof, p) the joint-torque regressor, 10 columns per
+    body, qd, qdd (n, dof), current (n, dof) in A; mass: the load's (kg), the same on every
+    loaded run, on the body moved by joint `body` (1..dof; 0: the last); instrumental False:
+    weighted least squares only (biased by the currents' noise, kept to measure it); blocks:
+    the jackknife's contiguous blocks per run (0: no interval, no held-out error).
+    IdentificationError when a gain is not identified by these runs."""
+    system = _System(_as_runs(unloaded), _as_runs(loaded), float(mass), body, rtol)
+    every, whole = np.arange(len(system.current)), _gram(system.known)
+    sol, cov, sigma = system.solve(every, instrumental, whole)
+    dof = system.dof
     gains, std = sol[-dof:], np.sqrt(np.diag(cov)[-dof:])
-    load_at = p + dof + 6 * dof
-    load = np.zeros(10)
-    load[0] = mass
-    for i, c in enumerate(base):
-        if load_at <= c < load_at + 9:
-            load[1 + c - load_at] = sol[i]
     lost = np.flatnonzero(std > UNIDENTIFIED * gains)
     if len(lost):
         raise IdentificationError(
             "the drive gains of joint(s) " + ", ".join(str(j + 1) for j in lost) + " are not "
             f"identified by these runs (standard error over {UNIDENTIFIED:.0%} of the gain): the "
             "load must change every joint's torque (excite more, or put it off the last axis)")
-    return DriveGainFit(gains, std, load, sigma, len(base) + dof)
+    interval, heldout = np.full(dof, np.nan), float("nan")
+    if blocks:
+        thetas, heldout = [], 0.0
+        for block in time_blocks(system.runs, blocks):
+            try:
+                fold = system.solve(np.setdiff1d(every, block, assume_unique=True), instrumental,
+                                    whole - _gram(system.known[block]), covariance=False)[0]
+            except (IdentificationError, np.linalg.LinAlgError):
+                thetas.append(np.full(dof, np.nan))
+                heldout = float("inf")
+                continue
+            thetas.append(fold[-dof:])
+            miss = (system.predicted(fold, block) - system.current[block]) / system.scale
+            heldout += float(np.sum(miss**2))
+        interval = half_width(np.array(thetas))
+    return DriveGainFit(gains, std, system.load(sol), sigma, len(system.base) + dof,
+                        interval, heldout)
 
 
 def _positive(gains: np.ndarray) -> None:
@@ -149,19 +233,29 @@ def _positive(gains: np.ndarray) -> None:
                                   "or the runs do not excite that joint")
 
 
+def _gram(known: np.ndarray) -> np.ndarray:
+    """(dof, k, k) each joint's known' known."""
+    return np.einsum("njk,njl->jkl", known, known, optimize=True)
+
+
+def _cross(known: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """(dof, k) each joint's known' x."""
+    return np.einsum("njk,nj->jk", known, x)
+
+
 class _Normal:
     """The normal equations of known x - diag(current) K = target, kept per joint: joint j's
     rows are weighted alike and its gain's column is non-zero on its rows only, so each pass
-    (new weights, new instruments) costs O(N k) instead of O(N k^2)."""
+    (new weights, new instruments) costs O(N k) instead of O(N k^2); gram: the per-joint
+    known' known when already at hand (a jackknife fold's: the whole's less its block's)."""
 
-    def __init__(self, known: np.ndarray, current: np.ndarray, target: np.ndarray):
+    def __init__(self, known: np.ndarray, current: np.ndarray, target: np.ndarray,
+                 gram: np.ndarray | None = None):
         self.known, self.current, self.target = known, current, target
         self.dof, self.kb = current.shape[1], known.shape[2]
-        cols = [np.ascontiguousarray(known[:, j, :]) for j in range(self.dof)]
-        self.cols = cols
-        self.gram = np.stack([c.T @ c for c in cols])  # (dof, kb, kb)
-        self.cross_t = np.stack([c.T @ target[:, j] for j, c in enumerate(cols)])
-        self.cross_i = np.stack([c.T @ current[:, j] for j, c in enumerate(cols)])
+        self.gram = _gram(known) if gram is None else gram  # (dof, kb, kb)
+        self.cross_t = _cross(known, target)  # (dof, kb)
+        self.cross_i = _cross(known, current)
 
     def predicted(self, sol: np.ndarray) -> np.ndarray:
         """(N, dof) the currents sol predicts: (known x - target) / K."""
@@ -172,28 +266,34 @@ class _Normal:
         resid = self.target - self.known @ sol[:self.kb] + self.current * sol[self.kb:]
         return resid.std(axis=0)
 
-    def _blocks(self, left: np.ndarray, right: np.ndarray, w2: np.ndarray) -> np.ndarray:
-        """sum_j w_j^2 L_j' R_j with L_j = [known_j, -left_j e_j'] (R_j alike with right)."""
-        kb, dof = self.kb, self.dof
-        out = np.zeros((kb + dof, kb + dof))
+    def _matrix(self, left: np.ndarray, right: np.ndarray, product: np.ndarray,
+                w2: np.ndarray) -> np.ndarray:
+        """sum_j w_j^2 L_j' R_j with L_j = [known_j, -l_j e_j'] (R_j alike with r): left and
+        right the per-joint known_j' l_j and known_j' r_j (dof, kb), product l_j' r_j."""
+        kb = self.kb
+        out = np.zeros((kb + self.dof, kb + self.dof))
         out[:kb, :kb] = np.tensordot(w2, self.gram, axes=1)
-        for j, c in enumerate(self.cols):
-            out[:kb, kb + j] = -w2[j] * (self.cross_i[j] if right is self.current else c.T @ right[:, j])
-            out[kb + j, :kb] = -w2[j] * (self.cross_i[j] if left is self.current else c.T @ left[:, j])
-            out[kb + j, kb + j] = w2[j] * left[:, j] @ right[:, j]
+        out[:kb, kb:] = -(w2[:, None] * right).T
+        out[kb:, :kb] = -w2[:, None] * left
+        out[kb:, kb:] = np.diag(w2 * product)
         return out
 
-    def solve(self, instrument: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def solve(self, instrument: np.ndarray, w: np.ndarray, covariance: bool = True
+              ) -> tuple[np.ndarray, np.ndarray | None]:
         """The instrumental-variable solution (instrument = current: weighted least squares),
-        rows of joint j weighted by w_j, and its covariance."""
+        rows of joint j weighted by w_j, and its covariance (None when not asked for)."""
         w2 = w**2
-        za = self._blocks(instrument, self.current, w2)
-        zz = self._blocks(instrument, instrument, w2)
+        ci = self.cross_i if instrument is self.current else _cross(self.known, instrument)
+        za = self._matrix(ci, self.cross_i, np.einsum("nj,nj->j", instrument, self.current), w2)
         zb = np.concatenate([np.tensordot(w2, self.cross_t, axes=1),
                              -w2 * np.einsum("nj,nj->j", instrument, self.target)])
-        d = 1.0 / np.sqrt(np.maximum(np.diag(self._blocks(self.current, self.current, w2)),
-                                     1e-300))
+        d = 1.0 / np.sqrt(np.maximum(np.concatenate([
+            np.tensordot(w2, np.diagonal(self.gram, axis1=1, axis2=2), axes=1),
+            w2 * np.einsum("nj,nj->j", self.current, self.current)]), 1e-300))
         x = d * np.linalg.lstsq(za * np.outer(d, d), d * zb, rcond=None)[0]
+        if not covariance:
+            return x, None
+        zz = self._matrix(ci, ci, np.einsum("nj,nj->j", instrument, instrument), w2)
         resid = (self.target - self.known @ x[:self.kb] + self.current * x[self.kb:]) * w
         dof_left = max(resid.size - len(x), 1)
         inv = np.linalg.pinv(za * np.outer(d, d))

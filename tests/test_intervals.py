@@ -1,4 +1,4 @@
-"""The named coefficients' 95 % intervals (identification.closeloop.intervals) cover the truth on
+"""The named coefficients' 95 % intervals (identification.intervals) cover the truth on
 coloured residuals: 20 draws of two Lynxmotion runs carrying a load and viscous friction, with
 a cogging torque no candidate spans (sin 12 q3, a model term left out) and white noise; the
 printed interval of the load's mass and of the viscous friction each covers the truth in at
@@ -13,7 +13,7 @@ from scipy.stats import t as student
 
 from harness.closeloop.payload import last_body
 from harness.robots.arm import Arm
-from identification.closeloop.intervals import jackknife
+from identification.intervals import jackknife
 from identification.closeloop.payload import BodyTorque, standard
 from identification.closeloop.runs import close_loop_runs
 from tests.helpers import lynxmotion_motion

@@ -66,17 +66,19 @@ def register(sub) -> None:
                    "the default) or entropic (the LogDet divergence of its pseudo-inertia: "
                    "what the data leave open stays a scaled copy of the nominal body, never a "
                    "degenerate one; docs/identification.md, 'Prior metric')")
-    p.add_argument("--loaded", default=None, metavar="L.npz",
+    p.add_argument("--loaded", default=None, metavar="L.npz[,L2.npz]",
                    help="for logs of motor currents with unknown drive gains (ingest "
-                   "--gains-unknown): a second run carrying a load of known mass on the last "
-                   "link; the gains are identified with the dynamics from --data (one unloaded "
-                   "run) and this one, reported per joint (MODEL.json drive_gains, N m/A) and "
-                   "used: the model is fitted on --data's gain x current (needs --load-mass)")
+                   "--gains-unknown): runs carrying a load of known mass near the chain's end; "
+                   "the gains are identified with the dynamics from --data (the unloaded runs) "
+                   "and these, reported per joint with a 95 %% interval (MODEL.json drive_gains, "
+                   "N m/A) and used: the model is fitted on --data's gain x current (needs "
+                   "--load-mass)")
     p.add_argument("--load-mass", type=float, default=None, metavar="KG",
                    help="with --loaded: the load's mass (kg), which fixes the gains' scale")
     p.add_argument("--load-body", default=None, metavar="LINK",
-                   help="with --loaded: the link the load is fixed to (default: the last "
-                        "joint's, or the one before when the last joint is a gripper's jaw)")
+                   help="with --loaded: the link the load is fixed to (default: chosen by the "
+                        "data among the bodies the last three joints move, by held-out "
+                        "validation; MODEL.json drive_gains.load.body_choice)")
     p.set_defaults(func=run)
 
 
@@ -85,7 +87,9 @@ def run(args) -> int:
         raise IdentificationError(f"--holdout must be in (0, 1), got {args.holdout}")
     gains = None  # logs of currents: their drive gains, identified with a loaded run
     if args.loaded is not None or args.load_mass is not None:
-        runs, _, gains = gain_runs(split_files(args.data, "--data"), args.loaded,
+        runs, _, gains = gain_runs(split_files(args.data, "--data"),
+                                   None if args.loaded is None
+                                   else split_files(args.loaded, "--loaded"),
                                    args.load_mass, args.robot, args.load_body)
     else:
         runs = load_runs(split_files(args.data, "--data"))

@@ -1,18 +1,22 @@
-"""`identify --data U.npz --loaded L.npz --load-mass KG`: the drive gains of logs of motor
-currents, identified with the dynamics (identification.drive_gains, Gautier & Briot 2014).
+"""`identify --data U.npz[,U2.npz] --loaded L.npz[,L2.npz] --load-mass KG`: the drive gains
+of logs of motor currents, identified with the dynamics (identification.drive_gains, Gautier &
+Briot 2014).
 
-Both runs are datasets of currents with unknown gains (`ingest --gains-unknown`: key
-`current`, A, no `tau`), of one robot (resolve_arm checks both records). The gains are
-identified from both runs, reported per joint and then used: every run's current becomes
-torque (gain x current) and `identify` fits the unloaded run as usual (the loaded run
-carries a load the model does not: it fixes the gains' scale and is not training data).
+Every run is a dataset of currents with unknown gains (`ingest --gains-unknown`: key
+`current`, A, no `tau`), of one robot (resolve_arm checks every record). The gains are
+identified from all the runs, reported per joint with a 95 % interval that holds on a coloured
+residual (a delete-one-block jackknife, identification.intervals) and then used: every
+unloaded run's current becomes torque (gain x current) and `identify` fits those runs as
+usual (the loaded runs carry a load the model does not: they fix the gains' scale and are not
+training data). The load's body is `--load-body`, else the body near the chain's end whose
+fits predict the held-out blocks' currents best: no rule on a joint's name (issue #67).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from harness.closeloop.payload import last_body
+from harness.closeloop.payload import candidate_bodies, last_body
 from harness.data.dataset import STATE_KEYS, load_arrays
 from harness.data.ingest import CURRENT_KEY
 from harness.data.runs import Runs
@@ -20,6 +24,8 @@ from harness.errors import UserError
 from harness.robots.arm import Arm
 from harness.robots.resolve import resolve_arm
 from identification.drive_gains import identify_drive_gains
+from identification.errors import IdentificationError
+from identification.intervals import RULE
 
 UNITS = "N m/A"
 METHOD = ("Gautier & Briot (2014): one linear model of both runs (Pinocchio's joint-torque "
@@ -46,42 +52,88 @@ def _check_mass(mass) -> float:
     return float(mass)
 
 
-def gain_runs(data: list[str], loaded: str | None, mass: float | None, robot: str | None,
-              body: str | None = None) -> tuple[Runs, Arm, dict]:
-    """The unloaded run as torque with the gains identified from it and the loaded run, the
-    arm, and the gains' report (MODEL.json's drive_gains); the load on the link `body` (default:
-    closeloop.payload.last_body's). UserError, one line, on bad input,
-    before anything is written."""
+def _runs(files: list[str], option: str) -> list[tuple[dict[str, np.ndarray], dict]]:
+    return [_current_run(f, option) for f in files]
+
+
+def gain_runs(data: list[str], loaded: str | list[str] | None, mass: float | None,
+              robot: str | None, body: str | None = None) -> tuple[Runs, Arm, dict]:
+    """The unloaded runs as torque with the gains identified from them and the loaded runs,
+    the arm, and the gains' report (MODEL.json's drive_gains); the load on the link `body`, else
+    on the body near the chain's end whose fit predicts the held-out blocks' currents best
+    (harness.closeloop.payload.candidate_bodies: no rule on a joint's name). UserError, one
+    line, on bad input, before anything is written."""
     if loaded is None or mass is None:
         raise UserError("--loaded L.npz and --load-mass KG go together: the loaded run and its "
                         "load's mass")
     mass = _check_mass(mass)
-    if len(data) != 1:
-        raise UserError(f"with --loaded, --data is the one unloaded run of currents, got "
-                        f"{len(data)} files")
-    (u, u_meta), (v, v_meta) = _current_run(data[0], "--data"), _current_run(loaded, "--loaded")
-    if u["q"].shape[1] != v["q"].shape[1]:
-        raise UserError(f"--loaded {loaded} has {v['q'].shape[1]} joints, --data {data[0]} "
-                        f"{u['q'].shape[1]}")
-    arm = resolve_arm(robot, data=[(data[0], u_meta), (loaded, v_meta)])
-    if arm.dof != u["q"].shape[1]:
-        raise UserError(f"{data[0]} has {u['q'].shape[1]} joints, robot {arm.label} {arm.dof}")
-    runs = [(arm.nominal.regressor(a["q"], a["qd"], a["qdd"]), a["qd"], a["qdd"], a[CURRENT_KEY])
-            for a in (u, v)]
-    carrier = last_body(arm, body)  # default: the last body, or the one a gripper's jaw turns on
-    fit = identify_drive_gains(runs[0], runs[1], mass, body=carrier.joint)
-    report = {"units": UNITS, "gains": fit.gains.tolist(), "standard_error": fit.gain_std.tolist(),
-              "unloaded": data[0], "loaded": loaded, "load_mass_kg": mass,
+    loaded = [loaded] if isinstance(loaded, str) else list(loaded)
+    plain, heavy = _runs(data, "--data"), _runs(loaded, "--loaded")
+    dof = plain[0][0]["q"].shape[1]
+    for f, (a, _) in zip([*data, *loaded], [*plain, *heavy], strict=True):
+        if a["q"].shape[1] != dof:
+            raise UserError(f"{f} has {a['q'].shape[1]} joints, --data {data[0]} {dof}")
+    arm = resolve_arm(robot, data=[(f, m) for f, (_, m) in zip([*data, *loaded], [*plain, *heavy],
+                                                                strict=True)])
+    if arm.dof != dof:
+        raise UserError(f"{data[0]} has {dof} joints, robot {arm.label} {arm.dof}")
+    runs = [[(arm.nominal.regressor(a["q"], a["qd"], a["qdd"]), a["qd"], a["qdd"], a[CURRENT_KEY])
+             for a, _ in group] for group in (plain, heavy)]
+    carrier, fit, choice = choose_carrier(arm, runs, mass, body)
+    report = {"units": UNITS, "gains": fit.gains.tolist(),
+              "interval_95": fit.interval.tolist(), "interval_rule": RULE,
+              "standard_error": fit.gain_std.tolist(),
+              "standard_error_rule": "white residuals (understates a coloured residual's spread)",
+              "unloaded": data[0] if len(data) == 1 else list(data),
+              "loaded": loaded[0] if len(loaded) == 1 else loaded, "load_mass_kg": mass,
               "load": {"mass_kg": mass, "first_moment_kg_m": fit.load[1:4].tolist(),
                        "inertia_kg_m2": fit.load[4:].tolist(),
-                       "body": carrier.name,
+                       "body": carrier.name, "body_choice": choice,
                        "frame": "the body's joint's, inertia about its origin (Ixx, Ixy, Iyy, "
                                 "Ixz, Iyz, Izz); only the identifiable part (base columns), "
                                 "zeros elsewhere"},
               "residual_std_Nm": fit.sigma.tolist(), "method": METHOD,
-              "used": "the unloaded run's torque is gain x current; the loaded run is not "
+              "used": "the unloaded runs' torque is gain x current; the loaded runs are not "
                       "training data"}
-    return as_torque([data[0]], [(u, u_meta)], fit.gains), arm, report
+    return as_torque(list(data), plain, fit.gains), arm, report
+
+
+def _finite(x: float) -> float | None:
+    return float(x) if np.isfinite(x) else None  # a fold failed: no finite held-out error
+
+
+def choose_carrier(arm: Arm, runs: list, mass: float, body: str | None = None):
+    """(the body the load rides on (LastBody), the gains' fit with the load there, how it was
+    chosen): the link `body` when named, else among the bodies near the chain's end the one
+    whose fits predict the held-out blocks' currents best; runs: [unloaded runs, loaded runs],
+    each run (Y, qd, qdd, current). IdentificationError when no body identifies the gains."""
+    carriers = (last_body(arm, body),) if body else candidate_bodies(arm)
+    fits, errors = {}, []  # by the carrier's index
+    for i, carrier in enumerate(carriers):
+        try:
+            fits[i] = identify_drive_gains(*runs, mass, body=carrier.joint)
+        except IdentificationError as e:
+            if body:
+                raise
+            errors.append(f"{carrier.name}: {e}")
+    if not fits:
+        raise IdentificationError("the drive gains are not identified with the load on any "
+                                  "body near the chain's end: " + "; ".join(errors))
+    order = sorted(fits, key=lambda i: fits[i].heldout)
+    carrier, fit = carriers[order[0]], fits[order[0]]
+    best = max(fit.heldout, 1e-300)
+    choice = {"rule": "--load-body" if body else
+              "the gains fitted with the load on each body near the chain's end; the body whose "
+              "fits predict the held-out blocks' currents best (delete-one-block, the currents "
+              "in units of each joint's std); heldout_ratio: each body's held-out error power "
+              "over the chosen one's",
+              "candidates": [{"body": carriers[i].name, "heldout_ratio": _finite(
+                  fits[i].heldout / best)} for i in fits],
+              "not_identified": errors}
+    if len(order) > 1:
+        choice["next"] = carriers[order[1]].name
+        choice["margin"] = _finite(fits[order[1]].heldout / best - 1.0)
+    return carrier, fit, choice
 
 
 def as_torque(files: list[str], loaded: list[tuple[dict, dict]], gains: np.ndarray) -> Runs:
@@ -110,8 +162,15 @@ def current_or_torque(files: list[str], gains: np.ndarray) -> Runs:
 
 
 def describe(report: dict) -> list[str]:
-    """stdout lines: the gains per joint with their standard errors."""
-    gains = ", ".join(f"K{j + 1} {k:.5g} +- {s:.2g}" for j, (k, s) in
-                      enumerate(zip(report["gains"], report["standard_error"], strict=True)))
-    return [f"drive gains ({UNITS}), identified with the dynamics from {report['unloaded']} and "
-            f"{report['loaded']} (load {report['load_mass_kg']:g} kg): {gains}"]
+    """stdout lines: the gains per joint with their 95 % intervals, and the load's body."""
+    gains = ", ".join(f"K{j + 1} {k:.5g} +- {h:.2g}" for j, (k, h) in
+                      enumerate(zip(report["gains"], report["interval_95"], strict=True)))
+    files = lambda x: x if isinstance(x, str) else ",".join(x)  # noqa: E731
+    load = report["load"]
+    choice = load.get("body_choice", {})
+    beat = (f"; {choice['next']} leaves {1 + choice['margin']:.3g}x its held-out error"
+            if choice.get("margin") is not None else "")
+    why = "--load-body" if choice.get("rule") == "--load-body" else f"chosen by the data{beat}"
+    return [f"drive gains ({UNITS}, +- 95 % interval), identified with the dynamics from "
+            f"{files(report['unloaded'])} and {files(report['loaded'])} (load "
+            f"{report['load_mass_kg']:g} kg on {load['body']}, {why}): {gains}"]

@@ -40,7 +40,7 @@ import numpy as np
 from identification.closeloop.crossval import BlockValidation, weighted_fit
 from identification.closeloop.effects import EffectTerm, effect_torque
 from identification.closeloop.extended import ExtendedModel, closed_model
-from identification.closeloop.intervals import RULE, jackknife
+from identification.intervals import RULE, jackknife
 from identification.closeloop.load_body import choose_body
 from identification.closeloop.load_friction import (
     EFFECT,

@@ -10,7 +10,7 @@ import numpy as np
 
 from identification.closeloop.crossval import weighted_fit
 from identification.closeloop.effects import EffectTerm
-from identification.closeloop.intervals import jackknife
+from identification.intervals import jackknife
 from identification.closeloop.ranges import Scales
 
 MIN_GAIN = 0.02  # an effect must cut its joint's validation error power by >= 2 %
@@ -25,7 +25,7 @@ def rows_of(term: EffectTerm, dof: int) -> list[int]:
 def per_run(base, target, cols, w, runs: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """Each run's coefficients of the last column (joint fit on the run alone) and their
     standard errors: a delete-one-block jackknife over the run's time blocks
-    (identification.closeloop.intervals; fits of short blocks alone were noisy enough to
+    (identification.intervals; fits of short blocks alone were noisy enough to
     call one load's two runs apart one time in three on coloured residuals)."""
     coef, std = [], []
     for rows in runs:
