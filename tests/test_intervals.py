@@ -13,9 +13,9 @@ from scipy.stats import t as student
 
 from harness.closeloop.payload import last_body
 from harness.robots.arm import Arm
-from identification.intervals import jackknife
 from identification.closeloop.payload import BodyTorque, standard
 from identification.closeloop.runs import close_loop_runs
+from identification.intervals import jackknife
 from tests.helpers import lynxmotion_motion
 
 LYNX = Arm.of("lynxmotion")

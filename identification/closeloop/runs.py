@@ -40,7 +40,6 @@ import numpy as np
 from identification.closeloop.crossval import BlockValidation, weighted_fit
 from identification.closeloop.effects import EffectTerm, effect_torque
 from identification.closeloop.extended import ExtendedModel, closed_model
-from identification.intervals import RULE, jackknife
 from identification.closeloop.load_body import choose_body
 from identification.closeloop.load_friction import (
     EFFECT,
@@ -68,6 +67,7 @@ from identification.closeloop.verdicts import (
     verdict,
 )
 from identification.errors import IdentificationError
+from identification.intervals import RULE, jackknife
 from identification.torque_model import TorqueModel, as_states
 
 RUNS_EFFECTS = ("viscous", "coulomb", "armature", "spring", EFFECT)  # the contract's joint

@@ -10,8 +10,8 @@ import numpy as np
 
 from identification.closeloop.crossval import weighted_fit
 from identification.closeloop.effects import EffectTerm
-from identification.intervals import jackknife
 from identification.closeloop.ranges import Scales
+from identification.intervals import jackknife
 
 MIN_GAIN = 0.02  # an effect must cut its joint's validation error power by >= 2 %
 AGREE = 3.0  # combined standard errors within which two runs' coefficients agree
