@@ -11,17 +11,32 @@ export OPENBLAS_NUM_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
 export MKL_NUM_THREADS ?= 1
 
-.PHONY: install test test-slow bench lint clean install-check
+.PHONY: install test test-slow bench lint clean install-check lock-check
 
 install: $(STAMP)
 
-# uv (from PyPI, like every other package) installs the wheels in parallel: about 25 s here
-# against about 105 s for pip; `pip install .` works as well (make install-check)
-$(STAMP): pyproject.toml
+# uv, pinned, from PyPI like every other package (its own stamp: a new version is installed)
+UV_VERSION := 0.13.9
+UV := $(VENV)/bin/uv
+UV_STAMP := $(VENV)/.uv-$(UV_VERSION)
+
+$(UV_STAMP):
 	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet uv
-	$(VENV)/bin/uv pip install --quiet --python $(PY) -e '.[dev]'
+	$(PY) -m pip install --quiet uv==$(UV_VERSION)
+	touch $(UV_STAMP)
+
+# exactly the versions in uv.lock (a package it lacks is removed; pip and uv stay), the project
+# editable with its dev extra; refused if uv.lock does not match pyproject.toml (make
+# lock-check). uv installs the wheels in parallel: about 25 s here against about 105 s for pip;
+# `pip install .` works as well, with pyproject.toml's ranges (make install-check)
+$(STAMP): pyproject.toml uv.lock $(UV_STAMP)
+	UV_PROJECT_ENVIRONMENT=$(VENV) $(UV) sync --quiet --locked --extra dev
 	touch $(STAMP)
+
+# fails when uv.lock no longer matches pyproject.toml (also in CI); `.venv/bin/uv lock`
+# updates it, keeping every locked version pyproject.toml still allows
+lock-check: $(UV_STAMP)
+	$(UV) lock --check
 
 # the fast cross-checks (a few minutes); the slow ones (whole benches, sweeps, studies, arms
 # planned end to end) are named, not skipped silently: `make test-slow` runs them, CI runs both
