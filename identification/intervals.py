@@ -20,8 +20,15 @@ from scipy.stats import t as student
 
 BLOCKS = 8  # contiguous blocks of each run
 LEVEL = 0.95
-RULE = (f"delete-one-block jackknife over {BLOCKS} contiguous time blocks of every run (the "
-        "residual's correlation within a block kept), Student's t, 95 %")
+
+
+def rule(blocks: int = BLOCKS) -> str:
+    """How the intervals were computed, for a report."""
+    return (f"delete-one-block jackknife over {blocks} contiguous time blocks of every run (the "
+            "residual's correlation within a block kept), Student's t, 95 %")
+
+
+RULE = rule()
 
 
 def time_blocks(runs: list[np.ndarray], blocks: int = BLOCKS) -> list[np.ndarray]:

@@ -23,9 +23,9 @@ from harness.data.runs import Runs
 from harness.errors import UserError
 from harness.robots.arm import Arm
 from harness.robots.resolve import resolve_arm
-from identification.drive_gains import identify_drive_gains
+from identification.drive_gains import GAIN_BLOCKS, identify_drive_gains
 from identification.errors import IdentificationError
-from identification.intervals import RULE
+from identification.intervals import rule
 
 UNITS = "N m/A"
 METHOD = ("Gautier & Briot (2014): one linear model of both runs (Pinocchio's joint-torque "
@@ -81,7 +81,7 @@ def gain_runs(data: list[str], loaded: str | list[str] | None, mass: float | Non
              for a, _ in group] for group in (plain, heavy)]
     carrier, fit, choice = choose_carrier(arm, runs, mass, body)
     report = {"units": UNITS, "gains": fit.gains.tolist(),
-              "interval_95": fit.interval.tolist(), "interval_rule": RULE,
+              "interval_95": fit.interval.tolist(), "interval_rule": rule(GAIN_BLOCKS),
               "standard_error": fit.gain_std.tolist(),
               "standard_error_rule": "white residuals (understates a coloured residual's spread)",
               "unloaded": data[0] if len(data) == 1 else list(data),
