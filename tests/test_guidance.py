@@ -128,3 +128,28 @@ def test_a_guided_replan_gives_its_rows_the_normals_of_the_plan_it_starts_from(m
     given.clear()
     anytime.solve(dataclasses.replace(later, guided=False), warm=first)
     assert given and not any(np.any(normals_) for *_, normals_ in given)
+
+
+def test_plan_bank_guidance_guides_the_re_plans_of_other_classes(monkeypatch, tmp_path):
+    """`plan --bank 4 --bank-guidance` on the Lynxmotion's scenario: a re-plan's NLP is given
+    guidance normals (non-zero, read off the plan it re-plans from) once the bank holds another
+    class, a few re-plans in; the plan is stopped there (the whole plan takes 20 s). Without
+    guidance every re-plan's normals are zero (test_a_guided_replan_gives_its_rows_...)."""
+    from harness.cli import main
+    from planning.anytime.solver import Anytime
+
+    class Guided(Exception):
+        pass
+
+    guide = Anytime._guide
+
+    def stop_when_guided(self, problem, warm, times, centres):
+        given = guide(self, problem, warm, times, centres)
+        if np.any(given):
+            raise Guided
+        return given
+
+    monkeypatch.setattr(Anytime, "_guide", stop_when_guided)
+    with pytest.raises(Guided):
+        main(["plan", "--no-compile", "--model", "pinocchio", "--bank", "4", "--bank-guidance",
+              "--out", str(tmp_path / "plan.json")])
