@@ -333,3 +333,79 @@ def test_data_of_another_robot_is_refused_in_one_line(tmp_path, capsys, declared
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "records robot 'ur5'" in err[0] and "not 'panda'" in err[0], err
     assert not (out / "closeloop.json").exists()
+
+
+# --- a scored run's offset comes from samples the score does not count ---------------------
+
+STEP = 0.05  # N m on joint 1: the sensor's offset jumps by this once the motion starts
+
+
+def _stepped(seed: int, rest: int, step_at: int, samples: int = 800):
+    """A run of the declared Lynxmotion (its RNEA, 0.005 N m noise) with `rest` samples held
+    still before the motion, offset 0.01 N m on joint 1 until sample step_at, STEP more from
+    there: (q, qd, qdd, tau), its times."""
+    m = lynxmotion_motion(samples, seed=seed)
+    still = np.zeros((rest, 3))
+    q, qd, qdd = (np.concatenate([np.repeat(m.q[:1], rest, axis=0), m.q]),
+                  np.concatenate([still, m.qd]), np.concatenate([still, m.qdd]))
+    tau = LYNX.nominal.torque(q, qd, qdd) + 0.005 * np.random.default_rng(seed).normal(
+        size=q.shape)
+    tau[:, 0] += 0.01
+    tau[step_at:, 0] += STEP
+    return (q, qd, qdd, tau), np.arange(len(q)) * (m.t[1] - m.t[0])
+
+
+def _step_floor(tau_scored: np.ndarray) -> float:
+    """The relative error on joint 1 a step of STEP leaves on these samples, less a margin
+    (the noise adds to it, the model's error too): what a score that does not absorb it
+    shows at least."""
+    return 0.9 * STEP / np.sqrt(np.mean(tau_scored[:, 0] ** 2))
+
+
+@pytest.mark.parametrize("held", ["validate", "holdout"])
+def test_a_step_in_a_scored_run_s_offset_shows_in_its_error(held):
+    """The loop's score on runs of the declared robot whose sensor offset jumps once the
+    scored part begins: --validate, a run with a rest (offset 0.01 N m) whose motion reads
+    STEP more; --holdout, a run without rest whose last quarter reads STEP more. The offset
+    comes from the rest or the trained part, which do not know the step: the error on joint 1
+    shows it (an offset fitted on the scored samples would absorb it: noise only)."""
+    from identification.closeloop.pipeline import close_the_loop
+
+    if held == "validate":
+        train, times = _stepped(30, 0, 10**6)  # no step
+        run, run_times = _stepped(31, REST, REST)
+        out = close_the_loop(LYNX.nominal, [train], [times], [run], [run_times], detect=False)
+        scored = run[3][REST:]
+    else:
+        run, run_times = _stepped(31, 0, 600)
+        out = close_the_loop(LYNX.nominal, [run], [run_times], holdout=0.25, detect=False)
+        scored = run[3][600:]
+    assert out.error_after[0] >= _step_floor(scored), (out.error_after, _step_floor(scored))
+    assert out.heldout_offsets[0, 0] == pytest.approx(0.01, abs=0.004)
+
+
+def test_predict_offset_from_rest_shows_a_step_after_the_rest(tmp_path):
+    """`predict --offset-from-rest` with the robot's own model on a log whose offset jumps by
+    STEP once the motion starts: the offset is the rest's (0.01 N m), the error on joint 1
+    shows the step."""
+    (q, qd, qdd, tau), t = _stepped(32, REST, REST)
+    data = tmp_path / "log.npz"
+    np.savez(data, t=t, q=q, qd=qd, qdd=qdd, tau=tau,
+             meta=np.array(json.dumps({"robot": "lynxmotion"})))
+    assert main(["predict", "--model", "pinocchio", "--data", str(data), "--offset-from-rest",
+                 "--out", str(tmp_path / "p.npz")]) == 0
+    predicted = np.load(tmp_path / "p.npz")
+    assert predicted["offset"][0, 0] == pytest.approx(0.01, abs=0.004)
+    assert predicted["rel_error"][0] >= _step_floor(tau[REST:])
+
+
+def test_identify_s_held_out_score_shows_a_step_in_the_held_out_offset():
+    """identify on a measured log (no clean torque) whose sensor offset jumps by STEP at the
+    held-out part's start: the held-out score uses the offset fitted on the training part,
+    and shows the step on joint 1."""
+    from identification.identify import identify
+    from identification.library.prior_knowledge import prior_knowledge_library
+
+    (q, qd, qdd, tau), _ = _stepped(33, 0, 1500, samples=2000)
+    result = identify(q, qd, qdd, tau, prior_knowledge_library(3), holdout=0.25)
+    assert result.heldout_rel_rmse[0] >= _step_floor(tau[1500:])
