@@ -270,3 +270,24 @@ def test_the_runs_centres_of_mass_agree_only_when_they_do(monkeypatch, second, a
     loop = loop_runs.close_loop_runs(arm.nominal, runs, body=last_body(arm))
     (payload,) = [n.to_json() for n in loop.named if n.term.effect == "payload"]
     assert payload["com_agrees"] is agree, (payload["per_run_com"], payload["per_run_com_std"])
+
+
+def test_a_payload_s_centre_of_mass_is_where_the_mass_was_put():
+    """A 1.5 kg point mass added in Pinocchio to the UR5's last body at (0.03, -0.02, 0.08) m
+    in its frame: the body's parameters minus the arm's read back (describe, and the payload's
+    entry in closeloop.json and model.json, as the bench's payload case reads its truth) as
+    1.5 kg at that point, with no rotational inertia about it."""
+    from identification.closeloop.effects import EffectTerm
+
+    arm, put = Arm.of("ur5"), np.array([0.03, -0.02, 0.08])
+    loaded = arm.pinocchio.copy()
+    last = loaded.njoints - 1
+    loaded.inertias[last] = loaded.inertias[last] + pin.Inertia(1.5, put, np.zeros((3, 3)))
+    extra = (loaded.inertias[last].toDynamicParameters()
+             - arm.pinocchio.inertias[last].toDynamicParameters())
+    mass, com, inertia = describe(extra)
+    assert mass == pytest.approx(1.5)
+    np.testing.assert_allclose(com, put, atol=1e-12)
+    np.testing.assert_allclose(inertia, 0.0, atol=1e-12)
+    entry = EffectTerm("payload", arm.dof, 1.5, params=tuple(extra), body="wrist_3_link").to_json()
+    np.testing.assert_allclose(entry["com"], put, atol=1e-12)
