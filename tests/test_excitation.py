@@ -265,6 +265,58 @@ def test_the_designed_excitation_is_scored_on_draws_no_setting_was_chosen_on():
     assert not fresh & used, sorted(fresh & used)
 
 
+
+def _development_seeds() -> set[int]:
+    """Seeds the excitation's or the identification's settings were chosen on, or that the
+    bench's other identification figures draw."""
+    from harness.bench.identification import FRESH_SEED, LEVELS, NEXT_RUNS
+    from harness.identify.excitation_criteria import JUDGE, SEEDS
+
+    return (set(SEEDS) | {JUDGE, FRESH_SEED} | set(NEXT_RUNS) | set(range(1, 11))
+            | set(range(601, 623)) | {s for seeds in LEVELS.values() for s in seeds})
+
+
+@pytest.mark.parametrize("quick", [True, False])
+def test_the_excitation_target_scores_the_draws_and_judge_its_report_names(monkeypatch, quick):
+    """The bench's excitation comparison (harness.identify.excitation), its design and each
+    draw's scoring recorded instead of run: the draws scored and the judge motion they are
+    scored on are the ones its targets and figures name, and none is a development seed."""
+    import re
+    from types import SimpleNamespace
+
+    from harness.identify import excitation
+
+    judges, scored = {}, []
+
+    def sines(arm, samples, seed):
+        judges[seed] = SimpleNamespace(name="sines", seed=seed)
+        return judges[seed]
+
+    def along(arm, designed, fit, name, baseline, judge, seed):
+        scored.append((seed, judge))
+        return {"seed": seed, "errors": [0.01], "default_errors": [0.02], "median_ratio": 0.5,
+                "same_sensor_errors": [0.01], "same_sensor_median_ratio": 0.5}
+
+    design = SimpleNamespace(iterations=1, status=0, message="", stuck=False)
+    monkeypatch.setattr(excitation, "design_for", lambda *a, **k: SimpleNamespace(
+        trajectory=None, condition=1.0, default_condition=2.0, design=design))
+    monkeypatch.setattr(excitation, "sines_motion", sines)
+    monkeypatch.setattr(excitation, "along_design", along)
+    targets, results = excitation.excitation_comparison(Arm.of("lynxmotion"), None, "prior",
+                                                        None, quick)
+    seeds = [seed for seed, _ in scored]
+    assert seeds and len(set(seeds)) == len(seeds)
+    assert [d["seed"] for d in results["draws"]] == seeds
+    judge = results["judge_seed"]
+    assert all(motion is judges[judge] for _, motion in scored)
+    named = [t for t in targets if "fresh draws" in t.name]
+    assert len(named) == 2
+    for target in named:
+        listed = re.search(r"seeds ([\d, ]+), judge motion seed (\d+)", target.name)
+        assert [int(s) for s in listed.group(1).split(", ")] == seeds
+        assert int(listed.group(2)) == judge
+    assert not (set(seeds) | {judge}) & _development_seeds()
+
 def test_a_long_design_says_how_far_it_is_and_the_same_design_comes_out(tmp_path, capsys,
                                                                        monkeypatch):
     """The design's progress reaches its caller at every optimizer iteration, up to the
