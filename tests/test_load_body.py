@@ -140,8 +140,19 @@ def test_identify_loaded_takes_the_load_on_load_body(tmp_path):
         files[name] = str(tmp_path / f"{name}.npz")
         np.savez(files[name], q=q, qd=qd, qdd=qdd, current=tau / gains, meta=meta)
     out = tmp_path / "MODEL.json"
-    assert main(["identify", "--data", files["unloaded"], "--loaded", files["loaded"],
-                 "--load-mass", "2.5", "--load-body", link, "--out", str(out)]) == 0
-    reported = json.loads(out.read_text())["drive_gains"]
+
+    def identify(*body):
+        assert main(["identify", "--data", files["unloaded"], "--loaded", files["loaded"],
+                     "--load-mass", "2.5", *body, "--out", str(out)]) == 0
+        return json.loads(out.read_text())["drive_gains"]
+
+    reported = identify("--load-body", link)
     assert reported["load"]["body"] == link
     np.testing.assert_allclose(reported["gains"], gains, rtol=0.01)
+    # without the option the data choose the same link; a wrong link named is obeyed all the
+    # same (the load read there, the gains off): the option decides, not the data
+    assert identify()["load"]["body"] == link
+    wrong = identify("--load-body", "wrist_1_link")
+    assert wrong["load"]["body"] == "wrist_1_link"
+    assert wrong["load"]["body_choice"]["rule"] == "--load-body"
+    assert np.max(np.abs(np.asarray(wrong["gains"]) / gains - 1)) > 0.02
