@@ -250,6 +250,34 @@ def test_a_design_stuck_at_its_random_start_is_reported(capsys, tmp_path, monkey
     assert len(notes) == 1 and "linesearch" in notes[0]
 
 
+def test_a_design_stopped_at_its_iteration_limit_is_a_miss_not_an_optimum(capsys, tmp_path,
+                                                                         monkeypatch):
+    """SLSQP stopped by its iteration limit (exit status 9, 2 iterations here) is not a
+    converged design: ExcitationDesign says so, excite says so on stderr, and the bench's
+    excitation targets report the convergence target missed and the condition as not an
+    optimum's (issue #68 item 5: the bench's design stopped at status 9 was reported as a
+    design)."""
+
+    from harness.identify import excitation
+
+    short = design_for(Arm.of("lynxmotion"), 6.0, 50.0, seed=0, iterations=2)
+    assert short.design.status == 9 and not short.design.converged
+    assert "NOT converged" in short.design.convergence()
+    assert main(["excite", "--robot", "lynxmotion", "--duration", "6", "--rate", "50",
+                 "--iterations", "2", "--out", str(tmp_path / "t.csv")]) == 0
+    assert "NOT converged" in capsys.readouterr().err
+    monkeypatch.setattr(excitation, "design_for", lambda *a, **k: short)
+    monkeypatch.setattr(excitation, "sines_motion", lambda *a: None)
+    monkeypatch.setattr(excitation, "along_design", lambda *a: {
+        "seed": a[-1], "errors": [0.01], "default_errors": [0.02], "median_ratio": 0.5,
+        "same_sensor_errors": [0.01], "same_sensor_median_ratio": 0.5})
+    targets, results = excitation.excitation_comparison(Arm.of("lynxmotion"), None, "prior",
+                                                        None, True)
+    converged = [t for t in targets if t.name == excitation.CONVERGED]
+    assert len(converged) == 1 and converged[0].met is False
+    assert targets[0].note == "not a converged optimum" and results["converged"] is False
+
+
 def test_the_designed_excitation_is_scored_on_draws_no_setting_was_chosen_on():
     """The bench scores the design on fresh draws and a fresh judge motion: none of them is a
     seed its settings (top frequency, criterion) or the identification's were chosen on, nor
@@ -297,7 +325,8 @@ def test_the_excitation_target_scores_the_draws_and_judge_its_report_names(monke
         return {"seed": seed, "errors": [0.01], "default_errors": [0.02], "median_ratio": 0.5,
                 "same_sensor_errors": [0.01], "same_sensor_median_ratio": 0.5}
 
-    design = SimpleNamespace(iterations=1, status=0, message="", stuck=False)
+    design = SimpleNamespace(iterations=1, status=0, message="", stuck=False, converged=True,
+                             convergence=lambda: "converged")
     monkeypatch.setattr(excitation, "design_for", lambda *a, **k: SimpleNamespace(
         trajectory=None, condition=1.0, default_condition=2.0, design=design))
     monkeypatch.setattr(excitation, "sines_motion", sines)

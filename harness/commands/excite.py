@@ -62,6 +62,9 @@ def run(args) -> int:
         print(f"note: the optimizer did not improve on its random start (SLSQP: "
               f"{design.message or 'no result'}): the file is that start; try another --seed",
               file=sys.stderr)
+    elif not design.converged and args.iterations > 0:
+        print(f"note: the design {design.convergence()}: more --iterations may improve it",
+              file=sys.stderr)
     n = len(designed.trajectory.t)
     print(f"wrote {args.out}: {n} samples at {args.rate:g} Hz over {args.duration:g} s, at rest at "
           f"both ends; {CONDITION_WORDS} {designed.condition:.3g} (generate's default "

@@ -43,6 +43,7 @@ ERROR = ("{name} error on the other excitation's motion, trained along the desig
 NOISES = {"median_ratio": "generate's noise (5 % of each dataset's own torque std)",
           "same_sensor_median_ratio": "one sensor's noise (the default draw's noise samples)"}
 QUICK_ITERATIONS = 20  # the design's SLSQP iterations in --quick
+CONVERGED = "excitation design: SLSQP converged to an optimum (1) rather than its iteration limit (0)"
 
 
 def along_design(arm: Arm, designed, fit, name: str, baseline, judge: Motion, seed: int) -> dict:
@@ -77,17 +78,23 @@ def excitation_comparison(arm: Arm, fit, name: str, baseline, quick: bool
                               **({"iterations": QUICK_ITERATIONS} if quick else {}))
     except UserError as exc:  # e.g. no collision-free start: the targets are unmeasured
         return [Target(CONDITION, None, 1.0, note=str(exc)),
-                *(Target(label, None, 1.0, "x") for label in errors.values())], {"error": str(exc)}
+                *(Target(label, None, 1.0, "x") for label in errors.values()),
+                Target(CONVERGED, None, 1.0, lower_is_better=False)], {"error": str(exc)}
     along = [along_design(arm, designed, fit, name, baseline, judge, seed) for seed in seeds]
     ratios = {key: float(np.median([a[key] for a in along])) for key in NOISES}
-    targets = [Target(CONDITION, designed.condition, designed.default_condition),
-               *(Target(errors[key], ratios[key], 1.0, "x") for key in NOISES)]
+    design = designed.design
+    targets = [Target(CONDITION, designed.condition, designed.default_condition,
+                      note="" if design.converged else "not a converged optimum"),
+               *(Target(errors[key], ratios[key], 1.0, "x") for key in NOISES),
+               Target(CONVERGED, float(design.converged), 1.0, lower_is_better=False,
+                      note=design.convergence())]
     results = {"condition": designed.condition, "default_condition": designed.default_condition,
                "iterations": designed.design.iterations,
                # SLSQP's last exit status and message, and whether it left its random start
                "optimizer_status": designed.design.status,
                "optimizer_message": designed.design.message,
-               "stuck_at_start": designed.design.stuck, **along[0], "draws": along,
+               "stuck_at_start": designed.design.stuck, "converged": designed.design.converged,
+               "convergence": designed.design.convergence(), **along[0], "draws": along,
                "judge_seed": FRESH_JUDGE, "median_over_draws": ratios["median_ratio"],
                "same_sensor_median_over_draws": ratios["same_sensor_median_ratio"]}
     return targets, results
@@ -101,7 +108,8 @@ def markdown(r: dict) -> list[str]:
     per_draw = "; ".join(f"seed {d['seed']}: {d['median_ratio']:.2f}x ({d['same_sensor_median_ratio']:.2f}x)"
                          for d in r.get("draws", [r]))
     return [f"Designed excitation (`torquebench excite`, D-optimal, {SAMPLES / SAMPLE_RATE:g} s, "
-            f"seed {DESIGN_SEED}): condition number {r['condition']:.3g} against the default "
+            f"seed {DESIGN_SEED}; {r.get('convergence', '')}): condition number "
+            f"{r['condition']:.3g} against the default "
             f"excitation's {r['default_condition']:.3g}. Fresh draws (seeds no setting was "
             f"chosen on), judged on a fresh motion of another family (seed {r.get('judge_seed')}). "
             f"Draw of seed {r['seed']} along it: error "

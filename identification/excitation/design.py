@@ -71,6 +71,21 @@ class ExcitationDesign:
     message: str = ""
     stuck: bool = False
 
+    @property
+    def converged(self) -> bool:
+        """SLSQP's last run ended at an optimum (exit status 0), not at its iteration limit
+        (9) or a failed step: only then is the design an optimum rather than its best safe
+        iterate so far."""
+        return self.status == 0
+
+    def convergence(self) -> str:
+        """One clause saying whether the design converged."""
+        if self.converged:
+            return f"converged (SLSQP: {self.message}, {self.iterations} iterations)"
+        return (f"NOT converged: SLSQP stopped with exit status {self.status} ({self.message}) "
+                f"after {self.iterations} iterations; the design is its best safe iterate, not "
+                "an optimum")
+
 
 def _basis(t: np.ndarray, w: float, harmonics: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(len(t), 1 + 2 L) maps of one joint's [c, a_1..a_L, b_1..b_L] to q, qd, qdd."""
