@@ -140,6 +140,10 @@ def _named(named) -> str:
     if "com_interval_95" in entry:
         text += " +- (" + ", ".join(f"{c:.3f}" for c in entry["com_interval_95"]) + ")"
     text += f" in {frame}'s frame"
+    if "mass_range_kg" in entry:
+        low, high = entry["mass_range_kg"]
+        text += (f" (the payload and the load friction trade on these data: its mass lies in "
+                 f"[{low:.3g}, {high:.3g}] kg)")
     if "per_run_mass" in entry:
         text += " (mass per run " + " / ".join(f"{m:.3g}" for m in entry["per_run_mass"]) + " kg"
         if not entry["com_agrees"]:

@@ -102,3 +102,33 @@ def spread_with_and_without(detail: dict, fit_spread: Callable, others: list[int
     return {**detail, "per_run_mass_without_load_friction": mass.tolist(),
             "per_run_com_without_load_friction": com.tolist(),
             "com_agrees_without_load_friction": agrees, "load_friction_note": note}
+
+
+VIF_LIMIT = 10.0  # variance inflation past which two terms are not told apart (the usual 10)
+
+
+def told_apart(detail: dict, mass: float, interval: float, payload: np.ndarray,
+               friction: np.ndarray, project: Callable) -> dict:
+    """A named payload's detail with whether the data tell it from the named load friction:
+    the variance inflation of the payload's column (n, dof) by the friction's columns
+    (n, dof, k), both weighted and with the runs' offsets projected out (project), 1 / (1 -
+    R^2) of the one regressed on the others. Past VIF_LIMIT a load's torque and friction
+    growing with it look alike on these data, the two trade, and the reading is the mass's
+    95 % interval as a range, not a point (issue #67: one real load read 2.38 and 2.17 kg on
+    two runs this way)."""
+    if friction.shape[2] == 0:
+        return detail
+    y, X = project(payload)[:, 0], project(friction)
+    fitted = X @ np.linalg.lstsq(X, y, rcond=None)[0]
+    share = float(fitted @ fitted / max(y @ y, 1e-300))  # R^2 (no mean: offsets projected out)
+    inflation = 1.0 / max(1.0 - share, 1e-12)
+    apart = inflation < VIF_LIMIT
+    low, high = mass - interval, mass + interval
+    note = (f"the payload is told apart from the load friction on these data (variance "
+            f"inflation {inflation:.3g} < {VIF_LIMIT:g})" if apart else
+            f"the payload and the load friction trade on these data (variance inflation "
+            f"{inflation:.3g} >= {VIF_LIMIT:g}): the mass lies in [{low:.3g}, {high:.3g}] kg, "
+            "not at a point")
+    return {**detail, "variance_inflation": inflation, "told_apart": bool(apart),
+            **({} if apart or not np.isfinite(interval) else {"mass_range_kg": [low, high]}),
+            "mass_note": note}

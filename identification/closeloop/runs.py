@@ -45,6 +45,7 @@ from identification.closeloop.load_friction import (
     EFFECT,
     refit_under_load,
     spread_with_and_without,
+    told_apart,
     with_payload,
 )
 from identification.closeloop.measured import VALIDATION_BLOCKS, _Projector, candidates
@@ -262,6 +263,9 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
         detail = spread_with_and_without(detail, lambda e: com_spread(
             base, target, cols[:, :, e], regressor, w, run_rows, RUN_BLOCKS, reach),
             [i for i in chosen if i != k], terms, AGREE)
+        friction = [i for i in others if terms[i].effect == EFFECT]
+        detail = told_apart(detail, params[0], half[chosen.index(k)], cols[:, :, k],
+                            cols[:, :, friction], project)
     named = tuple(
         Named(replace(terms[i], coefficient=float(c)), tuple(map(float, pr)),
               tuple(map(float, ps)), g, scales.holds(replace(terms[i], coefficient=float(c))),
