@@ -21,21 +21,45 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 from harness import interrupt  # noqa: E402 - after the environment set-up above
+from harness.commands import SUMMARY  # noqa: E402
 from harness.errors import UserError  # noqa: E402
 
 COMMANDS = ["generate", "ingest", "identify", "predict", "plan", "replay", "closeloop", "bench",
             "study", "sweep", "excite", "export", "robots"]
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("torquebench")
+    except PackageNotFoundError:  # run from a checkout that was never installed
+        return "unknown (not installed)"
+
+
+def _command(argv: list[str]) -> str | None:
+    """The subcommand argv names (its first word that is one), or None."""
+    return next((a for a in argv if a in COMMANDS), None)
+
+
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
+    """The command line's parser. Only the command argv names is imported (its libraries take
+    seconds); the others are listed by their one-line help (harness.commands.SUMMARY), so that
+    `--help`, `--version` and a mistyped command answer at once. argv None: every command's
+    parser (documentation, tests)."""
     parser = argparse.ArgumentParser(
         prog="torquebench",
         description="Data-driven torque identification and energy-optimal planning, benchmarked "
         "against Pinocchio and replayed in MuJoCo.",
     )
+    parser.add_argument("--version", action="version", version=f"torquebench {_version()}")
     sub = parser.add_subparsers(dest="command", required=True)
+    wanted = COMMANDS if argv is None else [_command(argv)]
     for name in COMMANDS:  # every command module exists: a missing one is a broken install
-        importlib.import_module(f"harness.commands.{name}").register(sub)
+        if name in wanted:
+            importlib.import_module(f"harness.commands.{name}").register(sub)
+        else:
+            sub.add_parser(name, help=SUMMARY[name])
     return parser
 
 
@@ -60,7 +84,12 @@ def _check_output(args) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    try:
+        args = build_parser(argv).parse_args(argv)
+    except KeyboardInterrupt:  # while the command's libraries were imported: nothing begun
+        print("torquebench: interrupted", file=sys.stderr)
+        return 130
     interrupt.install()
     try:
         _check_output(args)

@@ -296,3 +296,28 @@ def test_the_3d_path_names_the_links_and_draws_the_clearance_threshold(monkeypat
     ends = np.concatenate([np.asarray(seg) for seg in wire._segments3d])
     np.testing.assert_allclose(np.linalg.norm(ends - centre[25], axis=1), 0.08, atol=1e-12)
     figures.plt.close(fig)
+
+
+HEAVY = ("numpy", "scipy", "mujoco", "pinocchio", "casadi", "sklearn")
+
+
+@pytest.mark.parametrize("args, code", [(["--help"], 0), (["--version"], 0), (["idnetify"], 2),
+                                        ([], 2)])
+def test_help_version_and_a_mistyped_command_import_no_library(args, code):
+    """`torquebench --help`, `--version`, a mistyped command and none at all answer before any
+    of the numerical libraries is imported (they took 2-19 s of imports to answer): a fresh
+    interpreter, the modules it loaded looked at afterwards."""
+    import subprocess
+    import sys
+
+    probe = ("import sys\nfrom harness.cli import main\ntry:\n    code = main(sys.argv[1:])\n"
+             "except SystemExit as e:\n    code = e.code\n"
+             f"print('LOADED', [m for m in {HEAVY!r} if m in sys.modules], code)")
+    out = subprocess.run([sys.executable, "-c", probe, *args], capture_output=True, text=True,
+                         timeout=120, cwd=Path(__file__).parent.parent)
+    loaded = [line for line in out.stdout.splitlines() if line.startswith("LOADED")]
+    assert loaded == [f"LOADED [] {code}"], out.stdout + out.stderr
+    if args == ["--version"]:
+        from importlib.metadata import version
+
+        assert f"torquebench {version('torquebench')}" in out.stdout

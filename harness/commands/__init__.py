@@ -1,0 +1,22 @@
+"""The subcommands of `torquebench`, one module each (harness.cli imports only the one run).
+
+SUMMARY: each command's one-line help, here so that `torquebench --help` lists them
+without importing any command's libraries.
+"""
+
+SUMMARY = {
+    "bench": "run every stage on one robot and write a report",
+    "closeloop": "residual -> missing effect -> add it -> error before/after",
+    "excite": "design a rest-to-rest excitation for identification (CSV)",
+    "export": "write an identified model's bodies into the robot's file",
+    "generate": "torque data from MuJoCo (inverse dynamics or measured)",
+    "identify": "identify a sparse torque model from data",
+    "ingest": "a measured log (CSV) into a dataset .npz",
+    "plan": "energy-optimal trajectory avoiding a moving obstacle",
+    "predict": "torques of a model (MODEL.json or 'pinocchio') on data",
+    "replay": "execute a planned trajectory in MuJoCo and measure energy, clearance, tracking",
+    "robots": "list the registered robots and example-robot-data's URDFs",
+    "study": "run one long study on demand and write its report",
+    "sweep": "identification error over a grid of robots, noise levels, seeds, methods and "
+             "sample counts, on Ray",
+}

@@ -24,6 +24,7 @@ from pathlib import Path
 
 from harness import interrupt
 from harness.bench import SECTIONS, load_section
+from harness.commands import SUMMARY
 from harness.errors import UserError
 from harness.report.results import Context
 from harness.report.writer import SectionOutcome, write_report
@@ -66,7 +67,7 @@ class Progress:
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
-        "bench", help="run every stage on one robot and write a report",
+        "bench", help=SUMMARY["bench"],
         description="Identification against the oracle, planning with the closed-form and the "
         "identified model, MuJoCo replay, closing the loop, real logs; writes DIR/report.md, "
         "DIR/report.json, DIR/headline.md and DIR/figures/*.png. Exit 0 when every check "

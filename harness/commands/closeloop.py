@@ -8,6 +8,7 @@ import numpy as np
 
 from harness.closeloop.noise_level import noise_line, runs_line
 from harness.closeloop.run import run_closeloop
+from harness.commands import SUMMARY
 from harness.errors import UserError
 from harness.io import write_json
 from harness.robots.arm import Arm
@@ -16,7 +17,7 @@ from harness.robots.resolve import resolve_arm, variant_of
 
 
 def register(sub) -> None:
-    p = sub.add_parser("closeloop", help="residual -> missing effect -> add it -> error before/after")
+    p = sub.add_parser("closeloop", help=SUMMARY["closeloop"])
     p.add_argument("--plant", help="MJCF of the arm (may carry undeclared effects): measured "
                    "data are simulated on it")
     p.add_argument("--data", help="dataset .npz files instead, comma-separated runs of one "

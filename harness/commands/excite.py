@@ -8,6 +8,7 @@ import sys
 import time
 from pathlib import Path
 
+from harness.commands import SUMMARY
 from harness.data.excitation_file import write_trajectory
 from harness.data.excite import DEFAULT_ACCELERATION, ITERATIONS, design_for, floor_below_home
 from harness.data.generate import CONDITION_MEANING, CONDITION_WORDS
@@ -17,7 +18,7 @@ from identification.excitation.criteria import CRITERIA
 
 
 def register(sub) -> None:
-    p = sub.add_parser("excite", help="design a rest-to-rest excitation for identification (CSV)")
+    p = sub.add_parser("excite", help=SUMMARY["excite"])
     p.add_argument("--robot", "--plant", dest="robot", default="lynxmotion",
                    help="robot name (lynxmotion, double_pendulum, ur5, panda) or URDF/MJCF path")
     p.add_argument("--duration", type=float, required=True, help="period of the excitation (s)")

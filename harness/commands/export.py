@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from harness.commands import SUMMARY
 from harness.errors import UserError
 from harness.robots.export import FORMATS, export_model
 from harness.robots.registry import DEFAULT_ROBOT
@@ -10,7 +11,7 @@ from harness.robots.torque_models import read_model, torque_model
 
 
 def register(sub) -> None:
-    p = sub.add_parser("export", help="write an identified model's bodies into the robot's file")
+    p = sub.add_parser("export", help=SUMMARY["export"])
     p.add_argument("--model", required=True, help="MODEL.json written by `identify`")
     p.add_argument("--robot", default=None,
                    help=f"robot name or URDF/MJCF path (default: the MODEL.json's, else "

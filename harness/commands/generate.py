@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 
+from harness.commands import SUMMARY
 from harness.data.excitation_file import read_trajectory
 from harness.data.generate import CONDITION_MEANING, CONDITION_WORDS, generate
 from harness.io import write_npz
@@ -13,7 +14,7 @@ SAMPLES = 4000  # without --excitation
 
 
 def register(sub) -> None:
-    p = sub.add_parser("generate", help="torque data from MuJoCo (inverse dynamics or measured)")
+    p = sub.add_parser("generate", help=SUMMARY["generate"])
     p.add_argument("--plant", "--robot", dest="plant", default="lynxmotion",
                    help="robot name (lynxmotion, double_pendulum, ur5, panda) or URDF/MJCF path")
     p.add_argument("--samples", type=int, default=None,

@@ -6,6 +6,7 @@ import argparse
 import sys
 import warnings
 
+from harness.commands import SUMMARY
 from harness.data.runs import join, load_runs, split_files
 from harness.identify.drive_gains import current_or_torque, describe, gain_runs
 from harness.identify.fits import arm_identification
@@ -20,7 +21,7 @@ from identification.physical import PRIOR_METRICS
 
 
 def register(sub) -> None:
-    p = sub.add_parser("identify", help="identify a sparse torque model from data")
+    p = sub.add_parser("identify", help=SUMMARY["identify"])
     p.add_argument("--data", required=True,
                    help="dataset .npz with q, qd, qdd, tau [, tau_clean], or several runs of the "
                    "same robot: A.npz,B.npz (each with its own derivative estimate)")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from harness.commands import SUMMARY
 from harness.data.dataset import check_arrays
 from harness.data.ingest import ingest
 from harness.errors import UserError
@@ -10,7 +11,7 @@ from harness.robots.resolve import resolve_arm
 
 
 def register(sub) -> None:
-    p = sub.add_parser("ingest", help="a measured log (CSV) into a dataset .npz",
+    p = sub.add_parser("ingest", help=SUMMARY["ingest"],
                        description="Header 't, q1..qn, [qd1..qn], [qdd1..qn], tau1..taun' (s, rad, "
                        "rad/s, rad/s^2, N m; irregular time stamps allowed; .csv.gz read "
                        "compressed). Resampled to the median step; missing qd/qdd estimated by "

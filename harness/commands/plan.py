@@ -14,6 +14,7 @@ import logging
 import re
 import sys
 
+from harness.commands import SUMMARY
 from harness.io import write_json
 from harness.plan.anytime_options import add_anytime_options
 from harness.plan.arm_config import DURATION, default_obstacle
@@ -48,7 +49,7 @@ OBSTACLE = default_obstacle()  # the default path (the Lynxmotion paper scenario
 
 
 def register(sub) -> None:
-    p = sub.add_parser("plan", help="energy-optimal trajectory avoiding a moving obstacle")
+    p = sub.add_parser("plan", help=SUMMARY["plan"])
     p.add_argument("--model", required=True, help="MODEL.json or 'pinocchio'")
     p.add_argument("--robot", default=None,
                    help="registered robot or URDF/MJCF path: its links, joint and torque limits and its "

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from harness.commands import SUMMARY
 from harness.data.dataset import STATE_KEYS, load_arrays
 from harness.errors import UserError
 from harness.io import write_npz
@@ -16,7 +17,7 @@ from identification.model import sensor_offsets
 
 
 def register(sub) -> None:
-    p = sub.add_parser("predict", help="torques of a model (MODEL.json or 'pinocchio') on data")
+    p = sub.add_parser("predict", help=SUMMARY["predict"])
     p.add_argument("--model", required=True, help="MODEL.json or 'pinocchio'")
     p.add_argument("--data", required=True, help="dataset .npz with q, qd, qdd")
     p.add_argument("--robot", default=None,

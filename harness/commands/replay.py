@@ -7,6 +7,7 @@ import math
 from dataclasses import asdict
 from pathlib import Path
 
+from harness.commands import SUMMARY
 from harness.errors import UserError
 from harness.io import read_json, write_json
 
@@ -16,7 +17,7 @@ FEEDFORWARD = "pinocchio"  # closed-form model of the robot
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "replay",
-        help="execute a planned trajectory in MuJoCo and measure energy, clearance, tracking",
+        help=SUMMARY["replay"],
         description="Track PLAN.json on a MuJoCo plant through its actuators (Pinocchio "
         "feedforward + PD at the simulation timestep), moving the obstacle along its path.",
     )

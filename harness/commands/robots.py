@@ -8,12 +8,13 @@ serial chain of revolute joints) until a command loads it.
 
 from __future__ import annotations
 
+from harness.commands import SUMMARY
 from harness.errors import UserError
 from harness.robots.registry import DEFAULT_ROBOT, ROBOTS, erd_robots_dir, get_robot
 
 
 def register(sub) -> None:
-    p = sub.add_parser("robots", help="list the registered robots and example-robot-data's URDFs",
+    p = sub.add_parser("robots", help=SUMMARY["robots"],
                        description="The registered robots (--robot NAME) and the URDF files "
                        "example-robot-data installs, with their paths (--robot PATH).")
     p.add_argument("--registered", action="store_true",

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from harness.commands import SUMMARY
 from harness.commands.bench import Progress, command_line, machine, run_pipeline, verdict
 from harness.errors import UserError
 from harness.report.results import Context
@@ -21,7 +22,7 @@ from harness.studies import STUDIES, load_study
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
-        "study", help="run one long study on demand and write its report",
+        "study", help=SUMMARY["study"],
         description="Studies: " + "; ".join(f"{k}: {v}" for k, v in STUDIES.items()) + ".")
     p.add_argument("name", nargs="?", help="the study (see --list)")
     p.add_argument("--out", help="output directory")

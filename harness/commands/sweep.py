@@ -7,12 +7,12 @@ import sys
 import time
 from pathlib import Path
 
+from harness.commands import SUMMARY
 from harness.sweep.grid import METHODS
 
 
 def register(sub) -> None:
-    p = sub.add_parser("sweep", help="identification error over a grid of robots, noise levels, "
-                       "seeds, methods and sample counts, on Ray")
+    p = sub.add_parser("sweep", help=SUMMARY["sweep"])
     p.add_argument("--robots", required=True, help="comma-separated robot names or URDF/MJCF paths")
     p.add_argument("--noise", required=True,
                    help="comma-separated torque noise levels (fractions of each joint's torque std)")
