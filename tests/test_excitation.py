@@ -262,10 +262,10 @@ def test_a_design_stopped_at_its_iteration_limit_is_a_miss_not_an_optimum(capsys
 
     short = design_for(Arm.of("lynxmotion"), 6.0, 50.0, seed=0, iterations=2)
     assert short.design.status == 9 and not short.design.converged
-    assert "NOT converged" in short.design.convergence()
+    assert "not converged" in short.design.convergence()
     assert main(["excite", "--robot", "lynxmotion", "--duration", "6", "--rate", "50",
                  "--iterations", "2", "--out", str(tmp_path / "t.csv")]) == 0
-    assert "NOT converged" in capsys.readouterr().err
+    assert "not converged" in capsys.readouterr().err
     monkeypatch.setattr(excitation, "design_for", lambda *a, **k: short)
     monkeypatch.setattr(excitation, "sines_motion", lambda *a: None)
     monkeypatch.setattr(excitation, "along_design", lambda *a: {

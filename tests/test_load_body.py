@@ -3,8 +3,8 @@ joint's name: on example-robot-data's finger_edu (every joint named finger_...) 
 on its last link is named there within 5 % (the gripper rule put it on the middle link and read
 277 kg); on the SO-101, a part held by its jaw is named on the body the jaw turns on; a link
 given with --payload-body is obeyed. Logs are Pinocchio's RNEA of the arm with the load (its
-10 parameters on the true body) plus white noise: finger_edu's URDF does not compile in
-MuJoCo (izz = 0), so its copy here gives that link a small izz, as its user did by hand."""
+10 parameters on the true body) plus white noise. finger_edu's URDF is read as it comes: its
+izz = 0, which MuJoCo refuses, is repaired for both engines and recorded."""
 
 from __future__ import annotations
 
@@ -23,13 +23,28 @@ FINGER = "finger_edu_description/robots/finger_edu.urdf"
 def _robot(name: str, tmp_path=None) -> Arm:
     from harness.robots.registry import erd_robots_dir
 
-    path = erd_robots_dir() / name
-    if name == FINGER:  # MuJoCo refuses izz = 0 on finger_lower_link: as its user did
-        copy = tmp_path / "finger_edu.urdf"
-        copy.write_text(path.read_text().replace('iyz="0.00000" izz="0.00000"',
-                                                  'iyz="0.00000" izz="0.00001"'))
-        path = copy
-    return Arm.of(path)
+    return Arm.of(erd_robots_dir() / name)
+
+
+def test_a_link_inertia_mujoco_refuses_is_repaired_and_recorded(capsys):
+    """finger_edu's finger_lower_link has izz = 0 (Pinocchio takes it, MuJoCo refuses it):
+    the arm loads in both engines as it comes, the link's inertia raised to the smallest valid
+    one (its other moments and axes kept), said on stderr and in the robot's record; the two
+    engines' torques agree on it."""
+    arm = _robot(FINGER)
+    model = arm.mujoco  # compiles: MuJoCo accepts the repaired inertia
+    (repair,) = arm.record["repaired_inertias"]
+    assert repair["link"] == "finger_lower_link" and repair["before"][5] == 0.0
+    assert 0.0 < repair["after"][5] <= 1e-6 * 1e3  # small against ixx = iyy = 1.2e-4
+    assert repair["after"][:5] == pytest.approx(repair["before"][:5], abs=1e-15)
+    body = model.body("finger_lower_link")
+    assert np.all(body.inertia > 0)
+    rng = np.random.default_rng(0)
+    q, qd, qdd = (rng.uniform(-1, 1, (5, arm.dof)) for _ in range(3))
+    from harness.data.generate import inverse_torques
+
+    np.testing.assert_allclose(inverse_torques(model, q, qd, qdd), arm.nominal.torque(q, qd, qdd),
+                               atol=1e-8)
 
 
 def _runs(arm: Arm, body, params, seeds=(21, 22), n=1500):

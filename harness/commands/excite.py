@@ -64,7 +64,7 @@ def run(args) -> int:
               f"{design.message or 'no result'}): the file is that start; try another --seed",
               file=sys.stderr)
     elif not design.converged and args.iterations > 0:
-        print(f"note: the design {design.convergence()}: more --iterations may improve it",
+        print(f"note: the design is {design.convergence()}: more --iterations may improve it",
               file=sys.stderr)
     n = len(designed.trajectory.t)
     print(f"wrote {args.out}: {n} samples at {args.rate:g} Hz over {args.duration:g} s, at rest at "

@@ -122,6 +122,12 @@ class Arm:
         """What a MODEL.json records of its robot: name and kinematics hash, and for a robot
         given by its file that file's absolute path (so later commands find it)."""
         record = {"name": self.chain.name, "hash": self.chain.digest()}
+        from harness.robots.files import inertia_repairs
+
+        if self.entry.urdf is not None:  # a link inertia repaired for MuJoCo (harness.robots.urdf)
+            repairs = inertia_repairs(self.entry)
+            if repairs:
+                record["repaired_inertias"] = repairs
         return record if self.registered else {**record, "file": self.reference}
 
     # --- geometry and limits ---------------------------------------------------------------

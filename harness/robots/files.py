@@ -13,6 +13,7 @@ import os
 import re
 import sys
 import tempfile
+import xml.etree.ElementTree as ET
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -21,7 +22,7 @@ import pinocchio as pin
 
 from harness.errors import UserError
 from harness.robots.registry import Robot
-from harness.robots.urdf import arm_urdf, strip_geometry
+from harness.robots.urdf import arm_urdf, repair_inertias, strip_geometry
 
 # What Pinocchio's bindings raise on a description they cannot map (boost.python's
 # translation of std::invalid_argument, runtime_error, out_of_range, overflow_error).
@@ -84,6 +85,17 @@ def read_text(path: Path) -> str:
 def arm_urdf_text(entry: Robot) -> str:
     """The entry's URDF with its arm joints only (the others fixed)."""
     return arm_urdf(read_text(entry.urdf), entry.name)
+
+
+def inertia_repairs(entry: Robot) -> list[dict]:
+    """The link inertias of the entry's URDF repaired for MuJoCo (harness.robots.urdf.
+    repair_inertias): which link, before and after; none for an MJCF."""
+    if entry.urdf is None:
+        return []
+    try:
+        return repair_inertias(ET.fromstring(read_text(entry.urdf)))
+    except ET.ParseError:  # reported where the file is parsed
+        return []
 
 
 def parse_spec(entry: Robot, scene: bool = False) -> mujoco.MjSpec:

@@ -11,6 +11,10 @@ identifies and plans the arm, so:
   configuration, nq = 2 for nv = 1) is read as a revolute joint over one turn,
   [-pi, pi], keeping its effort and velocity limits: every command works with one angle
   per joint, and no conversion between configurations is needed anywhere;
+- a link inertia MuJoCo refuses (a principal moment <= 0, or one larger than the other two
+  together: finger_edu's izz = 0, which Pinocchio accepts) is repaired to the nearest one it
+  takes (repair_inertias: the smallest moments raised, the axes kept), said once on stderr
+  and recorded (Arm.record's `repaired_inertias`), in the text both engines read;
 - visual and collision geometry is dropped (inertias come from <inertial>), and ROS's
   lower = upper = 0 "no limit" removed, so MuJoCo loads the file without warnings;
 - a joint's Coulomb friction (<dynamics friction>) is dropped: MuJoCo would make
@@ -27,7 +31,10 @@ from __future__ import annotations
 
 import math
 import re
+import sys
 import xml.etree.ElementTree as ET
+
+import numpy as np
 
 from harness.errors import UserError
 
@@ -52,6 +59,52 @@ def _check_numbers(root: ET.Element, source: str) -> None:
             if not ok:
                 raise UserError(f"invalid URDF {source}: <{element.tag} {key}=\"{raw}\">: "
                                 "expected finite numbers")
+
+
+MOMENT_FLOOR = 1e-6  # a repaired principal moment: at least this fraction of the largest
+MOMENT_MIN = 1e-9  # kg m^2, and at least this
+KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+_said: set[tuple[str, str]] = set()
+
+
+def repair_inertias(root: ET.Element) -> list[dict]:
+    """Every link inertia MuJoCo would refuse, repaired in place to the nearest valid one:
+    its principal moments (eigenvalues) raised to at least MOMENT_FLOOR of the largest (and
+    MOMENT_MIN), then the smallest raised until the two smaller hold the largest (a rigid
+    body's triangle inequality), its principal axes kept. One entry per link repaired: the
+    link, the inertia before and after (ixx, ixy, ixz, iyy, iyz, izz; kg m^2)."""
+    repairs = []
+    for link in root.iter("link"):
+        inertia = link.find("inertial/inertia")
+        if inertia is None:
+            continue
+        v = [float(inertia.get(k, "0")) for k in KEYS]
+        matrix = np.array([[v[0], v[1], v[2]], [v[1], v[3], v[4]], [v[2], v[4], v[5]]])
+        moments, axes = np.linalg.eigh(matrix)
+        fixed = np.maximum(moments, max(MOMENT_FLOOR * moments[-1], MOMENT_MIN))
+        fixed[0] = max(fixed[0], fixed[2] - fixed[1])
+        if np.all(fixed == moments):
+            continue
+        new = axes @ np.diag(fixed) @ axes.T
+        after = [new[0, 0], new[0, 1], new[0, 2], new[1, 1], new[1, 2], new[2, 2]]
+        for key, value in zip(KEYS, after, strict=True):
+            inertia.set(key, repr(float(value)))
+        repairs.append({"link": link.get("name", ""), "before": v,
+                        "after": [float(x) for x in after]})
+    return repairs
+
+
+def _say(source: str, repairs: list[dict]) -> None:
+    """One note on stderr per repaired link and file, the first time it is read."""
+    for r in repairs:
+        if (source, r["link"]) in _said:
+            continue
+        _said.add((source, r["link"]))
+        changed = ", ".join(f"{k} {a:.3g} -> {b:.3g}" for k, a, b in
+                            zip(KEYS, r["before"], r["after"], strict=True) if a != b)
+        print(f"note: {source}: the inertia of link '{r['link']}' is not one MuJoCo accepts (a "
+              f"principal moment <= 0 or over the other two together); repaired to the nearest "
+              f"valid one: {changed} kg m^2", file=sys.stderr)
 
 
 def arm_urdf(text: str, source: str) -> str:
@@ -83,7 +136,9 @@ def arm_urdf(text: str, source: str) -> str:
 
     continuous = [j for j in joints if j.get("type") == "continuous"]
     coulomb = [d for j in joints for d in j.findall("dynamics") if d.get("friction") is not None]
-    if continuous or coulomb:
+    repaired = repair_inertias(root)
+    _say(source, repaired)
+    if continuous or coulomb or repaired:
         for joint in continuous:
             _one_turn(joint)
         for dynamics in coulomb:

@@ -82,7 +82,7 @@ class ExcitationDesign:
         """One clause saying whether the design converged."""
         if self.converged:
             return f"converged (SLSQP: {self.message}, {self.iterations} iterations)"
-        return (f"NOT converged: SLSQP stopped with exit status {self.status} ({self.message}) "
+        return (f"not converged: SLSQP stopped with exit status {self.status} ({self.message}) "
                 f"after {self.iterations} iterations; the design is its best safe iterate, not "
                 "an optimum")
 
