@@ -75,7 +75,10 @@ def test_cli_closeloop_data_writes_the_contract(tmp_path, capsys):
     np.savez(data, t=m.t, q=m.q, qd=m.qd, qdd=m.qdd, tau=tau,
              meta=np.array(json.dumps({"robot": "lynxmotion"})))
     out = tmp_path / "cl"
+    capsys.readouterr()
     assert main(["closeloop", "--data", str(data), "--out", str(out)]) == 0
+    first = capsys.readouterr().out.splitlines()[0]  # which model the residual is against
+    assert first.startswith("closeloop: declared model: the robot file's nominal model")
     payload = json.loads((out / "closeloop.json").read_text())
     for key in ("effects", "error_before", "error_after", "unexplained"):
         assert key in payload

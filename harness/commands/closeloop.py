@@ -184,6 +184,7 @@ def _run_data(args) -> int:
         raise UserError("--declared identified takes one --data log and no --validate")
     train, held = read_runs(args.data, args.validate)
     arm = _data_arm(args, train.records + (held.records if held is not None else []))
+    print(declared_line(args.declared))
     if args.declared == "identified":
         measured = run_measured(train.files[0], arm, args.holdout)
         out = Path(args.out) / "closeloop.json"
@@ -222,6 +223,18 @@ def _run_data(args) -> int:
     return 0
 
 
+def declared_line(declared: str) -> str:
+    """The output's first line: which model the residual is taken against."""
+    if declared == "pinocchio":
+        what = ("the robot file's nominal model (Pinocchio RNEA and the file's damping), not an "
+                "identified one: --declared MODEL.json starts from a model `identify` wrote")
+    elif declared == "identified":
+        what = "a rigid-body identification on the log's training part"
+    else:
+        what = f"{declared} (a MODEL.json)"
+    return f"closeloop: declared model: {what}"
+
+
 def run(args) -> int:
     if not 0.0 < args.holdout < 1.0:
         raise UserError(f"--holdout must be in (0, 1), got {args.holdout}")
@@ -235,6 +248,7 @@ def run(args) -> int:
     if args.validate:
         raise UserError("--validate applies to --data")
     plant, arm = _plant_arms(args)
+    print(declared_line(args.declared))
     loop = run_closeloop(plant, arm, args.samples, args.noise, args.seed, args.bias,
                          args.holdout, args.declared, compare=True,
                          pushes=tuple(parse_push(p, plant) for p in args.push))

@@ -63,6 +63,7 @@ def _check_numbers(root: ET.Element, source: str) -> None:
 
 MOMENT_FLOOR = 1e-6  # a repaired principal moment: at least this fraction of the largest
 MOMENT_MIN = 1e-9  # kg m^2, and at least this
+MUJOCO_MIN = 1e-15  # mjMINVAL: MuJoCo refuses a principal moment not above it
 KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 _said: set[tuple[str, str]] = set()
 
@@ -79,12 +80,14 @@ def repair_inertias(root: ET.Element) -> list[dict]:
         if inertia is None:
             continue
         v = [float(inertia.get(k, "0")) for k in KEYS]
+        if not any(v):  # no inertia stated (a frame): MuJoCo takes it unless the body moves
+            continue
         matrix = np.array([[v[0], v[1], v[2]], [v[1], v[3], v[4]], [v[2], v[4], v[5]]])
         moments, axes = np.linalg.eigh(matrix)
+        if moments[0] > MUJOCO_MIN and moments[0] + moments[1] >= moments[2]:
+            continue  # MuJoCo's checks: positive moments, the triangle inequality
         fixed = np.maximum(moments, max(MOMENT_FLOOR * moments[-1], MOMENT_MIN))
         fixed[0] = max(fixed[0], fixed[2] - fixed[1])
-        if np.all(fixed == moments):
-            continue
         new = axes @ np.diag(fixed) @ axes.T
         after = [new[0, 0], new[0, 1], new[0, 2], new[1, 1], new[1, 2], new[2, 2]]
         for key, value in zip(KEYS, after, strict=True):
