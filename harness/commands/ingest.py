@@ -1,8 +1,10 @@
-"""`torquebench ingest`: a measured log (CSV) into the dataset contract (.npz)."""
+"""`torquebench ingest`: a measured log (CSV, or a ROS 2 bag of JointState) into the dataset
+contract (.npz)."""
 
 from __future__ import annotations
 
 from harness.commands import SUMMARY
+from harness.data.bag import is_bag
 from harness.data.dataset import check_arrays
 from harness.data.ingest import ingest
 from harness.errors import UserError
@@ -17,7 +19,13 @@ def register(sub) -> None:
                        "compressed). Resampled to the median step; missing qd/qdd estimated by "
                        "Savitzky-Golay differentiation with a window chosen from the data "
                        "(written in meta).")
-    p.add_argument("--csv", required=True, help="the log (CSV, or gzipped CSV)")
+    p.add_argument("--csv", default=None, help="the log (CSV, or gzipped CSV)")
+    p.add_argument("--bag", default=None, metavar="DIR_OR_FILE",
+                   help="instead of --csv: a ROS 2 recording (rosbag2, MCAP or SQLite 3: its "
+                   "folder, or a storage file in it) of sensor_msgs/JointState (position, "
+                   "velocity, effort), the joints taken by the robot file's names")
+    p.add_argument("--topic", default=None,
+                   help="with --bag: the JointState topic (default: the recording's only one)")
     p.add_argument("--robot", required=True, help="registered robot or URDF/MJCF path")
     p.add_argument("--out", required=True, help="output dataset .npz")
     p.add_argument("--rate", type=float, default=None,
@@ -38,6 +46,13 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    if (args.csv is None) == (args.bag is None):
+        raise UserError("give exactly one of --csv LOG.csv and --bag ROSBAG2")
+    if args.topic is not None and args.bag is None:
+        raise UserError("--topic applies to --bag")
+    source = args.csv if args.bag is None else args.bag
+    if args.csv is not None and is_bag(args.csv):
+        raise UserError(f"--csv {args.csv} is a folder or a rosbag2 file: give it as --bag")
     arm = resolve_arm(args.robot)
     dof = arm.dof
     gains = None
@@ -47,9 +62,9 @@ def run(args) -> int:
         except ValueError:
             raise UserError(f"--current-gains must be numbers K1,...,Kn (N m/A), got "
                             f"'{args.current_gains}'") from None
-    data = ingest(args.csv, arm, args.rate, args.window, gains, args.gains_unknown)
+    data = ingest(source, arm, args.rate, args.window, gains, args.gains_unknown, args.topic)
     # what the estimated derivatives reach must pass the dataset loader (a jump in q: a spike)
-    check_arrays(f"{args.csv} (estimated derivatives)", data.arrays)
+    check_arrays(f"{source} (estimated derivatives)", data.arrays)
     write_npz(args.out, **data.npz())
     meta, d = data.meta, data.meta["derivatives"]
     how = ("qd, qdd as logged" if not d["estimated"] else

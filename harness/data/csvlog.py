@@ -131,12 +131,17 @@ def _values(path: Path, names: list[str]) -> np.ndarray:
     return values
 
 
-def _check_time(path: Path, t: np.ndarray) -> None:
+def _line(row: int) -> str:
+    """Where sample row (0-based) is in a CSV log: its line (the header is line 1)."""
+    return f"line {row + 2}"
+
+
+def _check_time(path: Path, t: np.ndarray, where=_line) -> None:
     steps = np.diff(t)
     bad = np.flatnonzero(steps <= 0)
     if len(bad):
         i = int(bad[0])
-        raise UserError(f"{path}: time stamps must strictly increase: line {i + 3} has t = "
+        raise UserError(f"{path}: time stamps must strictly increase: {where(i + 1)} has t = "
                         f"{t[i + 1]:.9g} after t = {t[i]:.9g}")
     median = float(np.median(steps))
     gap = np.flatnonzero(steps > MAX_GAP * median)
@@ -146,27 +151,35 @@ def _check_time(path: Path, t: np.ndarray) -> None:
                         f"({steps[i] / median:.0f} median steps): split the log there")
 
 
-def read_log(path: str | Path, dof: int) -> Log:
-    """The validated log of a robot with dof joints."""
-    path = Path(path)
-    if not path.is_file():
-        raise UserError(f"log file not found: {path}")
-    names = _header(path)
+def validated(path: Path, names: list[str], values: np.ndarray, dof: int, where=_line) -> Log:
+    """The log of columns names (t, q1..qn, ...) holding values (samples, columns) of a robot
+    with dof joints, checked as a CSV log is (where(row): how a sample is located in the
+    source, for the messages): enough samples, finite, within the dataset contract's bounds,
+    time strictly increasing without gaps."""
     layout = _layout(path, names, dof)
-    values = _values(path, names)
     if len(values) < MIN_SAMPLES:
         raise UserError(f"{path}: {len(values)} samples, at least {MIN_SAMPLES} are needed")
     finite = np.isfinite(values)
     if not finite.all():
         row, col = (int(x[0]) for x in np.nonzero(~finite))
-        raise UserError(f"{path}: column '{names[col]}' is NaN or infinite at line {row + 2}")
+        raise UserError(f"{path}: column '{names[col]}' is NaN or infinite at {where(row)}")
     for group, cols in layout.items():  # the dataset contract's bounds (harness.data.dataset)
         bound, unit = MAGNITUDE.get(group, (1e6, "A"))
         worst = np.abs(values[:, cols]).max()
         if worst > bound:
             row, col = np.unravel_index(np.argmax(np.abs(values[:, cols])), values[:, cols].shape)
             raise UserError(f"{path}: column '{names[cols[col]]}' reaches {worst:.3g} {unit} at "
-                            f"line {row + 2}, beyond any arm's ({bound:g} {unit})")
+                            f"{where(int(row))}, beyond any arm's ({bound:g} {unit})")
     t = values[:, layout["t"][0]]
-    _check_time(path, t)
+    _check_time(path, t, where)
     return Log(path, t, {g: values[:, cols] for g, cols in layout.items() if g != "t"})
+
+
+def read_log(path: str | Path, dof: int) -> Log:
+    """The validated log of a robot with dof joints."""
+    path = Path(path)
+    if not path.is_file():
+        raise UserError(f"log file not found: {path}")
+    names = _header(path)
+    _layout(path, names, dof)  # the header's problems before the values'
+    return validated(path, names, _values(path, names), dof)

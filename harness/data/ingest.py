@@ -1,6 +1,7 @@
 """A measured log into the dataset contract: resampled, derivatives estimated, described.
 
-1. The log is read and validated (harness.data.csvlog).
+1. The log is read and validated (harness.data.csvlog; a rosbag2 recording of
+   sensor_msgs/JointState: harness.data.bag).
 2. Resampling: every column is linearly interpolated onto a uniform grid at the median
    time step of the log (irregular stamps, dropped samples), from its first to its last
    stamp. The torque is interpolated, never smoothed: it is the regression target.
@@ -27,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from harness.data.bag import is_bag, read_bag
 from harness.data.csvlog import Log, read_log
 from harness.data.derivatives import choose_window, savgol_window_derivatives
 from harness.errors import UserError
@@ -119,14 +121,22 @@ def _currents(log: Log, gains, unknown: bool = False) -> tuple[Log, dict]:
 
 
 def ingest(path: str | Path, arm: Arm, rate: float | None = None,
-           window: int | None = None, current_gains=None, gains_unknown: bool = False) -> Ingested:
+           window: int | None = None, current_gains=None, gains_unknown: bool = False,
+           topic: str | None = None) -> Ingested:
     """The log at path of arm (its joints), as a dataset at rate Hz (default: the
-    resampling rate, the log's median step); window: the Savitzky-Golay window in samples
-    of the resampled grid (default: chosen from the data); current_gains (N m/A per joint):
-    the effort columns are motor currents, the torque gain x current; gains_unknown: they
-    are currents kept as `current` (A), the dataset has no torque."""
+    resampling rate, the log's median step): a CSV log, or a rosbag2 recording of
+    sensor_msgs/JointState (harness.data.bag; its topic `topic`, default the only one);
+    window: the Savitzky-Golay window in samples of the resampled grid (default: chosen from
+    the data); current_gains (N m/A per joint): the effort columns are motor currents, the
+    torque gain x current; gains_unknown: they are currents kept as `current` (A), the
+    dataset has no torque."""
     dof = arm.dof
-    log, effort = _currents(read_log(path, dof), current_gains, gains_unknown)
+    read = {"format": "csv"}
+    if is_bag(path):
+        raw, read = read_bag(path, list(arm.pinocchio.names[1:]), topic)
+    else:
+        raw = read_log(path, dof)
+    log, effort = _currents(raw, current_gains, gains_unknown)
     grid, grid_rate = uniform_grid(log.t)
     states, derivatives = estimate(log, grid, grid_rate, window)
     every = 1
@@ -139,7 +149,8 @@ def ingest(path: str | Path, arm: Arm, rate: float | None = None,
     efforts = ("tau",) if "tau" in states else (CURRENT_KEY,)
     arrays = {"t": grid[keep], **{k: states[k][keep] for k in ("q", "qd", "qdd", *efforts)}}
     steps = np.diff(log.t)
-    meta = {"mode": "measured log", "source": Path(path).name, "plant": arm.reference,
+    meta = {"mode": "measured log", "source": Path(path).name, "read": read,
+            "plant": arm.reference,
             "robot": arm.reference, "robot_hash": arm.record["hash"],
             "dof": dof, "samples": int(len(arrays["q"])), "logged": sorted(log.groups),
             "raw_samples": int(len(log.t)), "duration_s": float(log.t[-1] - log.t[0]),

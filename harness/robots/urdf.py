@@ -79,7 +79,10 @@ def repair_inertias(root: ET.Element) -> list[dict]:
         inertia = link.find("inertial/inertia")
         if inertia is None:
             continue
-        v = [float(inertia.get(k, "0")) for k in KEYS]
+        try:
+            v = [float(inertia.get(k, "0")) for k in KEYS]
+        except ValueError:  # not a number: the engines' reading says so
+            continue
         if not any(v):  # no inertia stated (a frame): MuJoCo takes it unless the body moves
             continue
         matrix = np.array([[v[0], v[1], v[2]], [v[1], v[3], v[4]], [v[2], v[4], v[5]]])

@@ -20,15 +20,14 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize
 from threadpoolctl import threadpool_limits
 
 from identification.excitation.criteria import CRITERIA, Regressor, log_condition
+from identification.excitation.descent import descend
 from identification.excitation.fourier import FourierExcitation
 
 CLEARANCE = 0.005  # m kept on the design grid: the closest approach may fall between its points
 TIGHTEN = 0.985  # of each bound on the limit grid: 20 points a cycle miss a peak by <= 1.2 %
-HALVINGS = 12  # bisection steps walking a colliding optimum back towards its start
 SHRINK, SHRINKS = 0.8, 10  # a colliding candidate's swing shrinks about its centre pose
 
 
@@ -249,7 +248,7 @@ def optimize_excitation(
     # one BLAS thread: SLSQP's path turns on rounding, and the design must be the same
     # whatever threads the caller's BLAS runs
     with threadpool_limits(limits=1, user_api="blas"):
-        best, used, last = _descend(objective, start, constraints, iterations, safe, progress)
+        best, used, last = descend(objective, start, constraints, iterations, safe, progress)
 
     def condition(x) -> float:
         X = x.reshape(dof, k)
@@ -258,58 +257,3 @@ def optimize_excitation(
     return ExcitationDesign(_to_excitation(best, dof, harmonics, f0), condition(best),
                             condition(start), used, None if last is None else int(last.status),
                             "" if last is None else str(last.message), best is start)
-
-
-def _descend(objective, start: np.ndarray, constraints: list[dict], budget: int,
-             safe, progress=None) -> tuple[np.ndarray, int, object]:
-    """SLSQP on objective from start, again from where it stopped (its linearization may
-    fail) while it improves, within budget iterations. Each run's best safe point among its
-    iterates and its end point (walked back towards the last safe one if unsafe: SLSQP's
-    iterates need not meet the constraints, and may touch between the design grid's points);
-    that point (start itself if none improved on it), the iterations used and SLSQP's last
-    result (None if it never ran)."""
-    # scaled to a unit gradient at the start: SLSQP's first step, along its identity Hessian,
-    # is then about 1 rad of coefficients, not a jump far outside the limits that it may
-    # never walk back from (docs/identification.md, 'identification.excitation.criteria')
-    scale = 1.0 / max(float(np.linalg.norm(objective(start)[1])), 1e-300)
-    raw = objective
-
-    def objective(x):
-        value, grad = raw(x)
-        return scale * value, scale * grad
-
-    best, value, used, result = start, objective(start)[0], 0, None
-    while used < budget:
-        found = {"x": best, "value": value, "iterations": used}
-
-        def keep(x, found=found):  # the best safe iterate so far
-            v = objective(x)[0]
-            if v < found["value"] - 1e-6 and safe(x):
-                found.update(x=x.copy(), value=v)
-
-        def iterated(x, found=found):  # SLSQP's callback, once an iteration
-            found["iterations"] += 1
-            if progress is not None:
-                progress(min(found["iterations"], budget), budget)
-            keep(x)
-
-        result = minimize(objective, best, jac=True, method="SLSQP", constraints=constraints,
-                          callback=iterated, options={"maxiter": budget - used, "ftol": 1e-6})
-        used += max(int(result.nit), 1)
-        keep(result.x if safe(result.x) else _walk_back(best, result.x, safe))
-        if found["value"] >= value - 1e-6:
-            break
-        best, value = found["x"], found["value"]
-        if result.success:
-            break
-    return best, used, result
-
-
-def _walk_back(safe_x: np.ndarray, x: np.ndarray, safe) -> np.ndarray:
-    """The farthest point from safe_x towards x found safe by bisection (the linear limits
-    hold on the whole segment; collisions need not)."""
-    good, bad = 0.0, 1.0
-    for _ in range(HALVINGS):
-        mid = 0.5 * (good + bad)
-        good, bad = (mid, bad) if safe(safe_x + mid * (x - safe_x)) else (good, mid)
-    return safe_x + good * (x - safe_x)
