@@ -34,9 +34,11 @@ from harness.robots.arm import Arm
 from identification.closeloop.offsets import run_tail, scored_error
 from identification.closeloop.payload import describe
 
-# drawn once on 2026-11-28 (numpy.random.default_rng().integers(10_000)) and written here;
-# no setting of the loop or of this case was chosen on it
-SEED = 8123
+# the case's draws: drawn once on 2026-12-07 (random.SystemRandom().randrange(10_000)) and
+# written here; no setting of the loop or of this case was chosen on them. The seed 8123 the
+# case was developed on (its load-friction candidate, its quick sample count) scores nothing.
+SEEDS = (6610, 6589, 3771)
+SEED = SEEDS[0]  # the bench's draw
 SAMPLES, NOISE = 3000, 0.05
 REFERENCE_MASS = 18.0  # kg: the arm LOAD_MASS is sized for (a UR5 or a Panda)
 LOAD_MASS = 2.7  # kg
@@ -60,13 +62,13 @@ def loaded_variant(arm: Arm, name: str) -> LoadedVariant:
 
 
 def payload_case(arm: Arm, directory: Path, load_friction: float = 0.0,
-                 samples: int = SAMPLES) -> dict:
+                 samples: int = SAMPLES, seed: int = SEED) -> dict:
     """The loaded plant of arm written under directory, its data (with load friction mu on the
     wrist when given), the loop's payload and its errors against the plant's load, and the
     loop's model against the unloaded level."""
     model = arm.pinocchio
     plant = Arm.of(write_arm_variant(arm, loaded_variant(arm, "payload"), Path(directory)))
-    data = generate(plant, samples, NOISE, SEED, "inverse", robot=arm)
+    data = generate(plant, samples, NOISE, seed, "inverse", robot=arm)
     rigid = plant.nominal.torque(data.q, data.qd, data.qdd)
     wrist = np.zeros(arm.dof)
     wrist[max(arm.dof - 3, 0):] = load_friction
@@ -82,10 +84,10 @@ def payload_case(arm: Arm, directory: Path, load_friction: float = 0.0,
     named = [e for e in effects if e["effect"] == "payload"]
     load = rigid - arm.nominal.torque(data.q, data.qd, data.qdd)
     acts = np.sqrt(np.mean(load**2, 0)) >= LOAD_SHARE * np.sqrt(np.mean(rigid**2, 0))
-    unloaded = unloaded_level(arm, NOISE * data.tau_clean.std(axis=0), samples)
+    unloaded = unloaded_level(arm, NOISE * data.tau_clean.std(axis=0), samples, seed)
     held = arrays["tau"][int(round(samples * 0.75)):]
     after = loop.error_after * np.sqrt(np.mean(held**2, axis=0))  # N m RMS
-    out = {"robot": arm.label, "seed": SEED, "samples": samples, "noise": NOISE,
+    out = {"robot": arm.label, "seed": seed, "samples": samples, "noise": NOISE,
            "load_friction": load_friction, "true_mass": float(true_mass),
            "true_com": [float(c) for c in true_com], "named": bool(named),
            "other_effects": [f"{e['effect']} j{e['joint']} {e['coefficient']:.4g}"
@@ -102,12 +104,13 @@ def payload_case(arm: Arm, directory: Path, load_friction: float = 0.0,
     return out
 
 
-def unloaded_level(arm: Arm, sigma: np.ndarray, samples: int = SAMPLES) -> np.ndarray:
+def unloaded_level(arm: Arm, sigma: np.ndarray, samples: int = SAMPLES,
+                   seed: int = SEED) -> np.ndarray:
     """(dof,) the declared model's RMS error per joint (N m) on the loaded case's motion run by
     the arm without the load, with Gaussian noise of std sigma (dof,) N m, its last quarter
     scored with the offset from the run's trained part (as the loaded run's)."""
-    data = generate(arm, samples, 0.0, SEED, "inverse", bias=0.0)
-    noise = np.random.default_rng(SEED + 1).normal(size=data.tau.shape) * sigma
+    data = generate(arm, samples, 0.0, seed, "inverse", bias=0.0)
+    noise = np.random.default_rng(seed + 1).normal(size=data.tau.shape) * sigma
     run = (data.q, data.qd, data.qdd, data.tau + noise)
     cut = int(round(samples * 0.75))
     relative = scored_error(arm.nominal, [run_tail(tuple(a[:cut] for a in run),

@@ -21,6 +21,7 @@ from pathlib import Path
 from harness.closeloop.payload_case import (
     LOAD_FRICTION,
     SAMPLES,
+    SEEDS,
     control_case,
     payload_case,
     payload_checks,
@@ -44,12 +45,14 @@ def run(ctx: Context) -> SectionResult:
         for name in robots:
             arm = Arm.of(name)
             for mu in frictions:
-                case = payload_case(arm, Path(tmp) / f"{name}_{mu:g}", mu, samples)
-                cases.append(case)
-                md += [payload_markdown(case), ""]
-                checks += payload_checks(case)
-                if not ctx.quick:
-                    targets += payload_targets(case)
+                for seed in SEEDS[:1] if ctx.quick else SEEDS:  # draws no setting chose
+                    case = payload_case(arm, Path(tmp) / f"{name}_{mu:g}_{seed}", mu, samples,
+                                        seed)
+                    cases.append(case)
+                    md += [payload_markdown(case), ""]
+                    checks += payload_checks(case)
+                    if not ctx.quick:
+                        targets += payload_targets(case)
             if not ctx.quick:
                 controls[name] = control_case(arm, Path(tmp) / f"{name}_control", samples)
                 md += [f"Control, {name} without a load (same seed): body-level effects named: "
