@@ -11,7 +11,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
 export MKL_NUM_THREADS ?= 1
 
-.PHONY: install test test-slow bench lint clean install-check lock-check
+.PHONY: install test test-slow check-figures bench lint clean install-check lock-check
 
 install: $(STAMP)
 
@@ -46,6 +46,12 @@ test: $(STAMP)
 
 test-slow: $(STAMP)
 	MUJOCO_GL=egl $(PY) -m pytest -q -n 2 -m slow
+
+# the figures the README and docs state, read from their text with their commands, each command
+# run and its figure compared to the stated digits (tests/test_figures.py: 27 plans, 4-5 min
+# serially; slow, so make test-slow runs it with the rest)
+check-figures: $(STAMP)
+	MUJOCO_GL=egl $(PY) -m pytest -q tests/test_figures.py
 
 bench: $(STAMP)
 	MUJOCO_GL=egl $(VENV)/bin/torquebench bench --out $(OUT) $(ARGS)
