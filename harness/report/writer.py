@@ -124,8 +124,9 @@ def targets_markdown(outcomes) -> list[str]:
         aim = f"{'<=' if t.lower_is_better else '>='} {_number(t.target, t.unit, target)}"
         met = {True: "yes", False: "**no**", None: "–"}[t.met]
         timing = " (timing)" if t.timing else ""
+        note = f" _({t.note})_" if t.note else ""  # where it is scored, what it is not
         gap = "" if t.met else _number(t.gap, t.unit)
-        md.append(f"| {name} | {t.name}{timing} | {_number(t.measured, t.unit, measured)} | "
+        md.append(f"| {name} | {t.name}{timing}{note} | {_number(t.measured, t.unit, measured)} | "
                   f"{aim} | {gap} | {met} |")
     return md
 
