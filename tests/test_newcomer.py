@@ -321,3 +321,16 @@ def test_help_version_and_a_mistyped_command_import_no_library(args, code):
         from importlib.metadata import version
 
         assert f"torquebench {version('torquebench')}" in out.stdout
+
+
+def test_every_option_of_every_command_says_what_it_does():
+    """`torquebench COMMAND --help` has a text for every option (closeloop's --samples and
+    --holdout, generate's --seed and --mode had none)."""
+    import argparse
+
+    from harness.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    silent = [f"{name} {a.option_strings[0]}" for name, parser in sub.choices.items()
+              for a in parser._actions if a.option_strings and a.help is None]
+    assert not silent

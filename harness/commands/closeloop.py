@@ -28,17 +28,21 @@ def register(sub) -> None:
                    "are scored on (closeloop.json 'heldout'); default: the last --holdout of "
                    "every --data run")
     p.add_argument("--out", required=True, help="output directory (closeloop.json)")
-    p.add_argument("--samples", type=int, default=4000)
+    p.add_argument("--samples", type=int, default=4000,
+                   help="with --plant: measured samples simulated on it (default 4000)")
     p.add_argument("--noise", type=float, default=0.05, help="torque noise std / torque std")
     p.add_argument("--bias", type=float, default=0.0,
                    help="torque-sensor bias in noise stds (non-zero: named as an offset)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=0,
+                   help="with --plant: the simulated measurement's seed (default 0)")
     p.add_argument("--robot", default=None,
                    help="registered robot (or URDF/MJCF path) the plant is a variant of (its "
                    "declared model; default: the registered robot of the plant's kinematics, "
                    "else the plant itself), or the data's robot (default: the one the data "
                    "record)")
-    p.add_argument("--holdout", type=float, default=0.25)
+    p.add_argument("--holdout", type=float, default=0.25,
+                   help="the last fraction of every run scored, never fitted (without "
+                   "--validate; default 0.25)")
     p.add_argument("--declared", default="pinocchio",
                    help="declared model of the contract keys: 'pinocchio', 'identified' (fitted "
                    "on the training part, refitted jointly with the effects) or MODEL.json; "

@@ -21,8 +21,12 @@ def register(sub) -> None:
                    help="samples (default 4000, or every row of --excitation)")
     p.add_argument("--noise", type=float, default=0.05, help="torque noise std / torque std")
     p.add_argument("--bias", type=float, default=0.2, help="noise mean in units of its std")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--mode", choices=["inverse", "measured"], default="inverse")
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed of the noise, the sensor bias and the default excitation (default 0)")
+    p.add_argument("--mode", choices=["inverse", "measured"], default="inverse",
+                   help="inverse: MuJoCo inverse dynamics along the excitation (the default); "
+                   "measured: MuJoCo tracks it, encoders and torque sensors read, derivatives "
+                   "estimated as from a real log")
     p.add_argument("--excitation", default=None, metavar="TRAJ.csv",
                    help="generate along this excitation (from `torquebench excite`; measured mode "
                    "tracks it from t = 0, as a robot would record it)")
