@@ -103,7 +103,8 @@ def flange_frame(model: pin.Model) -> str | None:
 def get_robot(name: str) -> Robot:
     """The registered robot called name."""
     if name not in ROBOTS:
-        raise UserError(f"unknown robot '{name}' (known: {', '.join(sorted(ROBOTS))})")
+        raise UserError(f"unknown robot '{name}' (known: {', '.join(sorted(ROBOTS))}; or a URDF/MJCF "
+                        "file's path: `torquebench robots` lists example-robot-data's)")
     return ROBOTS[name]()
 
 
