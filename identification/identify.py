@@ -4,10 +4,11 @@
 (identification.regression.torque: per joint, coupled, jointwise, on base atoms, physically
 consistent) on the first 1 - holdout of the samples and scores it on the rest, in time order;
 relative RMS error is ||tau_hat - tau_clean|| / ||tau_clean|| per joint there (tau when no
-clean torque is given). The regression target is the raw measured torque, not a denoised
-one: denoising only correlates the residuals (docs/identification.md,
-'identification.identify'). Without a regressor, identification.choice picks the library's
-default (coupled when the library has atoms).
+clean torque is given), each held-out run with its sensor offset by the rule of
+identification.closeloop.offsets (held_out_offset) on a measured log. The regression target
+is the raw measured torque, not a denoised one: denoising only correlates the residuals
+(docs/identification.md, 'identification.identify'). Without a regressor,
+identification.choice picks the library's default (coupled when the library has atoms).
 """
 
 from __future__ import annotations
@@ -20,10 +21,17 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from identification.choice import choose_regressor
+from identification.closeloop.offsets import (
+    RULE,
+    ScoredRun,
+    held_out_offset,
+    run_tail,
+    scored_torques,
+    whole_run,
+)
 from identification.errors import IdentificationError
 from identification.library.base import Conditioning
 from identification.metrics import rel_error
-from identification.model import sensor_offsets
 from identification.regression.base import validation_mask
 from identification.regression.coupled import AtomBasis
 from identification.regression.torque import TorqueRegressor
@@ -44,6 +52,8 @@ class Identification:
     method: str = "per-joint"
     basis: AtomBasis | None = field(default=None, repr=False)  # coupled: the atoms
     physical: dict = field(default_factory=dict)  # consistent: prior, weight, consistency
+    scored: tuple = field(default=(), repr=False)  # ScoredRun per held-out run (a measured log)
+    trained: tuple = field(default=(), repr=False)  # each training run's trained samples
 
     def metrics(self) -> dict:
         """JSON metrics; the held-out errors are null when nothing was held out (holdout 0)."""
@@ -58,11 +68,22 @@ class Identification:
                "seconds": self.seconds}
         if self.method == "coupled":
             out["noise_sigma"] = self.regressions[0].sigma_.tolist()
+        if self.scored:  # a measured log: each held-out run's offset and where it came from
+            out["heldout_runs"] = [r.to_json(self.model) for r in self.scored]
         if self.physical:
             # the nominal and the ellipsoids are in MODEL.json's bodies
             out["physical"] = {k: v for k, v in self.physical.items()
                                if k not in ("nominal", "ellipsoids")}
         return out
+
+    def sensor_offsets(self) -> dict:
+        """MODEL.json's sensor_offsets: the offset a run the model was not trained on is
+        scored with (held_out_offset: `predict` reads it), each training run's and each
+        held-out run's (N m per joint), and the rule."""
+        model = self.model
+        return {"new_run": held_out_offset(model, list(self.trained)).tolist(),
+                "training": [held_out_offset(model, [r]).tolist() for r in self.trained],
+                "heldout": [r.offset(model).tolist() for r in self.scored], "rule": RULE}
 
     def lagrangian(self) -> dict:
         """Coupled method: the identified Lagrangian {atoms, coefficients, base/folded atoms}."""
@@ -119,8 +140,7 @@ def check_excited(arrays: tuple[np.ndarray, ...], n_features: int) -> None:
             raise IdentificationError(f"joint {j + 1} does not move (q{j + 1} constant): not excited")
 
 
-def _score(model, q, qd, qdd, truth, offsets=0.0) -> tuple[np.ndarray, np.ndarray]:
-    pred = model.torque(q, qd, qdd) + offsets
+def _score(pred, truth) -> tuple[np.ndarray, np.ndarray]:
     return rel_error(pred, truth), np.mean((pred - truth) ** 2, axis=0)
 
 
@@ -144,9 +164,11 @@ def identify(q, qd, qdd, tau, library, holdout: float = 0.25, tau_clean=None,
         start = time.perf_counter()
         fit = regressor.fit(library, q[:n], qd[:n], qdd[:n], tau[:n], **_runs(regressor, runs, n))
         seconds = time.perf_counter() - start
-        rel, mse = heldout_errors(fit.model, q, qd, qdd, tau, tau_clean, n)
+        trained, scored = split_runs((q, qd, qdd, tau), n, runs)
+        rel, mse = heldout_errors(fit.model, q, qd, qdd, tau, tau_clean, n, scored)
     return Identification(fit.model, rel, mse, fit.conditioning, seconds, fit.regressions,
-                          fit.method, fit.basis, fit.physical)
+                          fit.method, fit.basis, fit.physical,
+                          tuple(scored) if tau_clean is None else (), tuple(trained))
 
 
 def _runs(regressor, runs, n: int) -> dict:
@@ -178,13 +200,35 @@ def split_training(q, qd, qdd, tau, dof: int, name: str, holdout: float, n_featu
     return q, qd, qdd, tau, n_train
 
 
-def heldout_errors(model, q, qd, qdd, tau, tau_clean, n_train: int):
+def split_runs(samples: tuple, n_train: int, runs=None) -> tuple[list[tuple], list[ScoredRun]]:
+    """The training runs' samples (q, qd, qdd, tau) (each run's part among the first n_train)
+    and the held-out runs, in order, each with its offset by the rule
+    (identification.closeloop.offsets): a held-out part of a run trained on from that run's
+    trained samples, a run never trained on from every training run's."""
+    labels = np.zeros(len(samples[0]), int) if runs is None else np.asarray(runs)
+    trained_part = np.arange(len(labels)) < n_train
+    trained = {k: tuple(a[trained_part & (labels == k)] for a in samples)
+               for k in dict.fromkeys(labels[:n_train].tolist())}
+    scored = []
+    for k in dict.fromkeys(labels[n_train:].tolist()):
+        held = tuple(a[~trained_part & (labels == k)] for a in samples)
+        scored.append(run_tail(trained[k], held) if k in trained
+                      else whole_run(held, list(trained.values())))
+    return list(trained.values()), scored
+
+
+def heldout_errors(model, q, qd, qdd, tau, tau_clean, n_train: int,
+                   scored: list[ScoredRun] | None = None):
     """Held-out errors against the clean torque, or, without one (a measured log), against
-    the measured torque, which carries the sensor offsets: the model's torque plus its
-    fitted offsets is then what predicts the measurement."""
-    truth = tau if tau_clean is None else as_arrays(q, qd, qdd, tau_clean)[3]
-    offsets = sensor_offsets(model) if tau_clean is None else 0.0
-    if n_train < len(q):
-        return _score(model, q[n_train:], qd[n_train:], qdd[n_train:], truth[n_train:], offsets)
-    nan = np.full(q.shape[1], np.nan)  # holdout 0 (a final fit on all data): no held-out error
-    return nan, nan
+    the measured torque, which carries the sensor offsets: the model's torque plus each
+    held-out run's offset (scored: split_runs' runs; None: the held-out part one run) is
+    then what predicts the measurement."""
+    if n_train >= len(q):
+        nan = np.full(q.shape[1], np.nan)  # holdout 0 (a final fit on all data): no held-out error
+        return nan, nan
+    if tau_clean is not None:
+        truth = as_arrays(q, qd, qdd, tau_clean)[3][n_train:]
+        return _score(model.torque(q[n_train:], qd[n_train:], qdd[n_train:]), truth)
+    if scored is None:
+        scored = split_runs((q, qd, qdd, tau), n_train)[1]
+    return _score(*scored_torques(model, scored))

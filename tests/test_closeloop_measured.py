@@ -162,9 +162,10 @@ def _run_file(path, seed: int, viscous: float = VISCOUS, samples: int = 1200, ro
 
 
 def test_runs_and_validate_write_heldout_and_a_model_predict_reads(tmp_path, capsys):
-    """The held-out run is scored with its offset from its first rest, never refitted on the
-    samples scored; `predict --offset-from-rest` with the written model reproduces the
-    scores."""
+    """The held-out run is scored with the training runs' offset (the closed model's mean
+    residual on their samples), never refitted on the samples scored nor read from its rest;
+    `predict` with the written model reproduces the scores, `--offset-from-rest` reads the
+    rest."""
     files = [tmp_path / f"r{i}.npz" for i in range(3)]
     for i, f in enumerate(files):
         _run_file(f, seed=10 + i, offset=(0.01, -0.02 * i, 0.03 * i))
@@ -175,30 +176,36 @@ def test_runs_and_validate_write_heldout_and_a_model_predict_reads(tmp_path, cap
     assert payload["heldout"]["files"] == [str(files[2])]
     assert payload["heldout"]["after"] == payload["error_after"]
     held = payload["heldout_runs"][0]
-    assert held["offset_samples"] == REST and held["scored_samples"] == 1200
-    assert "first rest" in held["offset_from"]
+    assert held["offset_samples"] == 2 * (REST + 1200) and held["scored_samples"] == REST + 1200
+    assert held["offset_rule"] == "training runs" and "training runs" in held["offset_from"]
     named = {(e["effect"], e["joint"]): e for e in payload["effects"]}
     assert set(named) == {("viscous", 2)}, named
     assert named["viscous", 2]["unit"] == "N m s/rad" and len(named["viscous", 2]["per_run"]) == 2
     assert named["viscous", 2]["coefficient"] == pytest.approx(VISCOUS, rel=0.05)
     assert all(a <= b for a, b in zip(payload["error_after"], payload["error_before"],
                                       strict=True))
+    np.testing.assert_allclose(payload["heldout_sensor_offsets"][0], [0.01, -0.01, 0.015],
+                               atol=0.003)  # the training runs' mean, not the run's own
     assert main(["predict", "--model", str(out / "model.json"), "--data", str(files[2]),
-                 "--offset-from-rest", "--out", str(tmp_path / "p.npz")]) == 0
+                 "--out", str(tmp_path / "p.npz")]) == 0
     predicted = np.load(tmp_path / "p.npz")
-    assert int(predicted["rest_samples"]) == REST
     np.testing.assert_allclose(predicted["offset"][0], payload["heldout_sensor_offsets"][0],
                                atol=1e-12)
     np.testing.assert_allclose(predicted["rel_error"], payload["heldout"]["after"], rtol=1e-9)
-    np.testing.assert_allclose(predicted["offset"][0], [0.01, -0.04, 0.06], atol=0.003)
+    assert main(["predict", "--model", str(out / "model.json"), "--data", str(files[2]),
+                 "--offset-from-rest", "--out", str(tmp_path / "rest.npz")]) == 0
+    rest = np.load(tmp_path / "rest.npz")
+    assert int(rest["rest_samples"]) == REST
+    np.testing.assert_allclose(rest["offset"][0], [0.01, -0.04, 0.06], atol=0.003)
     model = json.loads((out / "model.json").read_text())
     assert model["offsets"] == [0.0] * 3 and len(model["sensor_offsets"]["heldout"]) == 1
+    assert model["sensor_offsets"]["new_run"] == payload["heldout_sensor_offsets"][0]
 
 
-def test_a_run_scored_whole_without_a_rest_has_no_offset_and_says_so(tmp_path):
+def test_a_run_scored_whole_without_a_rest_takes_the_training_runs_offset(tmp_path):
     """No offset is fitted on the samples scored: a held-out run without a rest before its
-    motion is scored with none, and a --holdout tail takes its run's offset from the run's
-    trained part."""
+    motion is scored with the training runs' offset, and a --holdout tail takes its run's
+    offset from the run's trained part."""
     from harness.closeloop.runs import read_runs, run_runs
 
     files = [tmp_path / f"r{i}.npz" for i in range(3)]
@@ -206,9 +213,8 @@ def test_a_run_scored_whole_without_a_rest_has_no_offset_and_says_so(tmp_path):
         _run_file(f, seed=20 + i, offset=(0.05, 0.0, 0.0), rest=0)
     train, validate = read_runs(f"{files[0]},{files[1]}", str(files[2]))
     whole = run_runs(train, LYNX, validate=validate)
-    assert [r.to_json()["offset_from"] for r in whole.scored] == [
-        "none known (no rest before the motion): 0 N m"]
-    np.testing.assert_array_equal(whole.heldout_offsets, 0.0)
+    assert [r.to_json()["offset_rule"] for r in whole.scored] == ["training runs"]
+    np.testing.assert_allclose(whole.heldout_offsets[:, 0], 0.05, atol=0.005)
     tails = run_runs(train, LYNX, holdout=0.25)
     assert all("trained samples" in r.source for r in tails.scored)
     np.testing.assert_allclose(tails.heldout_offsets[:, 0], 0.05, atol=0.005)

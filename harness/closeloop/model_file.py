@@ -5,7 +5,9 @@ robot's nominal URDF/MJCF model) or the declared MODEL.json's content, "inertial
 rigid-body correction (a MODEL.json on the robot's base atoms) or null, "offsets": a
 constant torque per joint the model adds (N m; 0 as written by the loop), "effects": [{"joint",
 "effect", "coefficient", "unit", shape...}], "sensor_offsets": {"training", "heldout": per
-run, per joint (N m)}}: read by `predict` and `plan` through
+run, per joint (N m); "new_run": per joint, the offset a run the model was not trained on
+is scored with (identification.closeloop.offsets.held_out_offset: `predict` adds it on a
+measured log); "rule"}}: read by `predict` and `plan` through
 harness.robots.torque_models.torque_model. A sensor offset is a property of a run, not of
 the robot: reported under "sensor_offsets", never added to the torque a planner uses.
 """
@@ -19,6 +21,7 @@ from harness.robots.arm import Arm
 from harness.robots.resolve import resolve_arm
 from identification.closeloop.effects import UNITS, EffectTerm
 from identification.closeloop.extended import closed_model
+from identification.closeloop.offsets import RULE
 from identification.closeloop.payload import standard
 from identification.errors import IdentificationError
 from identification.kinematic_model import KinematicModel
@@ -30,14 +33,17 @@ SHAPE = ("lead", "eps", "steepness", "shift")
 
 def model_payload(arm: Arm, declared: dict | str, inertial: KinematicModel | None,
                   terms: tuple[EffectTerm, ...], training_offsets,
-                  heldout_offsets=()) -> dict:
+                  heldout_offsets=(), new_run=None) -> dict:
     """The content of model.json (declared: 'pinocchio' or a MODEL.json's content); the
-    runs' sensor offsets ((runs, dof) N m, training and held out) reported, not added."""
+    runs' sensor offsets ((runs, dof) N m, training and held out) and a new run's ((dof,),
+    none: not recorded) reported, not added."""
     return {"kind": KIND, "dof": arm.dof, "robot": arm.record,
             "declared": declared, "inertial": None if inertial is None else model_to_dict(inertial),
             "offsets": [0.0] * arm.dof, "effects": [t.to_json() for t in terms],
             "sensor_offsets": {"training": [[float(o) for o in c] for c in training_offsets],
-                               "heldout": [[float(o) for o in c] for c in heldout_offsets]}}
+                               "heldout": [[float(o) for o in c] for c in heldout_offsets],
+                               **({} if new_run is None else
+                                  {"new_run": [float(o) for o in new_run], "rule": RULE})}}
 
 
 def declared_model(spec: dict | str, arm: Arm):

@@ -9,8 +9,9 @@ of the physically consistent fit pulled toward it (identification.regression.con
 a wrong mass or centre of mass, named as such rather than absorbed by springs and friction.
 Effects are chosen by identification.closeloop.runs; scores are on the --validate runs, or
 without them on the last --holdout of every run (the rest trains), each scored run with its
-sensor offset taken from samples the score does not count (its first rest, else the run's
-trained part; identification.closeloop.offsets), before and after alike.
+sensor offset by the rule identify and predict use (identification.closeloop.offsets: the
+model's mean residual on the training runs' samples, or on its own run's trained part),
+before and after alike.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from identification.closeloop.events.runs import (
     events_line,
 )
 from identification.closeloop.leftover import LEFT, Leftover
-from identification.closeloop.offsets import ScoredRun
+from identification.closeloop.offsets import RULE, ScoredRun, held_out_offset
 from identification.closeloop.payload import REACH
 from identification.closeloop.pipeline import close_the_loop
 from identification.closeloop.ranges import Scales
@@ -109,7 +110,7 @@ class RunsRun:
                "sensor_offsets": r.offsets.tolist(),
                "training_sensor_offsets": r.run_offsets.tolist(),
                "heldout_sensor_offsets": self.heldout_offsets.tolist(),
-               "heldout_runs": [s.to_json() for s in self.scored],
+               "heldout_runs": [s.to_json(r.model) for s in self.scored],
                "data": {"files": self.train_files},
                "selection": {"folds": r.folds, "path": [list(p) for p in r.path],
                              "not_named": [{"joint": j, "effect": e, "validation_gain": g,
@@ -128,14 +129,10 @@ class RunsRun:
                                        "the --validate runs" if self.validate_files else
                                        f"the last {self.holdout:.0%} of every run") +
                                    ", before and after alike with each scored run's "
-                                   "sensor offset (a constant per joint: the model's mean "
-                                   "residual) taken from samples the score does not count: "
-                                   "the run's first rest (at most 0.01 rad/s on every joint, "
-                                   "at least 10 samples, left out of the score), else the "
-                                   "run's trained part; a run scored whole without a rest "
-                                   "has none (0 N m). heldout_runs says which, run by run; "
-                                   "`predict --offset-from-rest` on a --validate log "
-                                   "reproduces its figures",
+                                   "sensor offset (a constant per joint) by the rule identify "
+                                   "and predict use: " + RULE + ". heldout_runs says which, "
+                                   "run by run; `predict` with model.json on a --validate "
+                                   "log reproduces its figures",
                "model": "model.json", **events_json(self.event_files, list(self.found)),
                "payload_body": r.body_choice or {"chosen": self.body,
                                                  "rule": "--payload-body"}}
@@ -214,7 +211,7 @@ def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs |
         raise UserError(f"{','.join(data.files)}: {exc}") from None
     loop = out.loop
     payload = model_payload(arm, spec, out.inertial, loop.terms, loop.run_offsets,
-                            out.heldout_offsets)
+                            out.heldout_offsets, held_out_offset(loop.model, out.train))
     name = "the robot's nominal model (URDF/MJCF)" if declared == "pinocchio" else declared
     files = list(data.files) + ([] if validate is None else list(validate.files))
     return RunsRun(arm.reference, name, list(data.files),

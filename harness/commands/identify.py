@@ -123,6 +123,7 @@ def run(args) -> int:
     for line in dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught):
         print(f"torquebench identify: warning: {' '.join(line.split())}", file=sys.stderr)
     payload = model_payload(result, arm.record, held, "tau_clean" if "tau_clean" in data else "tau")
+    payload["sensor_offsets"] = result.sensor_offsets()
     if gains:
         payload["drive_gains"] = gains
         for line in describe(gains):
@@ -141,4 +142,6 @@ def run(args) -> int:
         print("physical consistency not imposed (sparse fit; --prior nominal or flat imposes it)")
     rel = ", ".join(f"{x:.3e}" for x in result.heldout_rel_rmse)
     print(f"wrote {args.out}: held-out relative RMS error per joint [{rel}]")
+    for scored in result.scored:  # a measured log: each held-out run's sensor offset
+        print(f"  a held-out run's sensor offset: from {scored.source}")
     return 0

@@ -11,7 +11,14 @@ from harness.io import write_npz
 from harness.robots.registry import DEFAULT_ROBOT
 from harness.robots.resolve import resolve_arm
 from harness.robots.torque_models import read_model, torque_model
-from identification.closeloop.offsets import MIN_REST, REST_SPEED, first_rest, residual_offset
+from identification.closeloop.offsets import (
+    MIN_REST,
+    RECORDED,
+    REST_SPEED,
+    first_rest,
+    held_out_offset,
+    residual_offset,
+)
 from identification.metrics import rel_error
 from identification.model import sensor_offsets
 
@@ -27,13 +34,16 @@ def register(sub) -> None:
     p.add_argument("--out", required=True,
                    help="output .npz: tau, the model's torque at the data's states; on a "
                    "measured log (no tau_clean: ingested or sensed), the torque its sensor would "
-                   "read, the model's fitted sensor offset included; the offset also as 'offset' "
-                   "(zeros for a model that fits none); with a torque in the data, also 'rel_error', "
-                   "its per-joint relative error ||tau_hat - tau|| / ||tau||")
+                   "read, the sensor offset a run the model was not trained on is scored with "
+                   "included (the model file's sensor_offsets.new_run, the rule identify and "
+                   "closeloop score held-out runs by; else the model's fitted offset, zeros for "
+                   "a model that fits none); the offset also as 'offset' and where it came from "
+                   "as 'offset_from'; with a torque in the data, also 'rel_error', its per-joint "
+                   "relative error ||tau_hat - tau|| / ||tau||")
     p.add_argument("--offset-from-rest", action="store_true",
                    help="the sensor offset of this log taken from its first rest (the samples "
                    "before any joint moves faster than 0.01 rad/s, at least 10: the model's "
-                   "mean residual there) instead of the model's fitted one, and rel_error "
+                   "mean residual there) instead of the model file's, and rel_error "
                    "scored on the samples after the rest, as `closeloop` scores a --validate "
                    "log; needs the data's tau")
     p.set_defaults(func=run)
@@ -47,10 +57,13 @@ def run(args) -> int:
     if states["q"].shape[1] != model.dof:
         raise UserError(f"data has {states['q'].shape[1]} joints, model has {model.dof}")
     tau = model.torque(states["q"], states["qd"], states["qdd"])
-    offset, start = sensor_offsets(model), 0
+    measured = "tau_clean" not in states or args.offset_from_rest  # a log reads the offset
     if args.offset_from_rest:
         offset, start = _offset_from_rest(args.data, states, model)
-    measured = "tau_clean" not in states or args.offset_from_rest  # a log reads the offset
+        source = f"the log's first rest ({start} samples, not scored)"
+    else:  # the rule held-out runs are scored by (identification.closeloop.offsets)
+        offset = held_out_offset(model, new_run_offset(read.payload, model))
+        start, source = 0, RECORDED
     if measured:
         tau = tau + offset
     scored = {}
@@ -58,16 +71,34 @@ def run(args) -> int:
         scored["rel_error"] = rel_error(tau[start:], states["tau"][start:])
     if args.offset_from_rest:
         scored["rest_samples"] = np.array(start)
-    write_npz(args.out, tau=tau, offset=np.broadcast_to(offset, (len(tau), model.dof)), **scored)
+    write_npz(args.out, tau=tau, offset=np.broadcast_to(offset, (len(tau), model.dof)),
+              offset_from=np.array(source if measured else "none (tau_clean: no sensor)"),
+              **scored)
     print(f"wrote {args.out}: tau {tau.shape}" + (
-        f", the sensor offset from the log's first rest ({start} samples) included"
-        if args.offset_from_rest else
-        ", the fitted sensor offset included (measured log)" if measured else ""))
+        f", the sensor offset from {source} included" if measured else ""))
     if "rel_error" in scored:
         errors = ", ".join(f"{e:.4g}" for e in scored["rel_error"])
         where = f" after its first rest (samples {start}-{len(tau) - 1})" if start else ""
         print(f"relative error against the data's tau{where}, per joint: [{errors}]")
     return 0
+
+
+def new_run_offset(payload, model) -> np.ndarray:
+    """(dof,) N m: the offset the model file records for a run it was not trained on
+    (sensor_offsets.new_run, written by identify and closeloop), else the model's fitted
+    offset (zeros for a model without: 'pinocchio')."""
+    recorded = (payload.get("sensor_offsets") or {}).get("new_run") \
+        if isinstance(payload, dict) else None
+    if recorded is None:
+        return sensor_offsets(model)
+    try:
+        offset = np.asarray(recorded, float).reshape(model.dof)
+    except (TypeError, ValueError):
+        raise UserError(f"the model's sensor_offsets.new_run must be {model.dof} numbers, got "
+                        f"{str(recorded):.60}") from None
+    if not np.all(np.isfinite(offset)):
+        raise UserError("the model's sensor_offsets.new_run must be finite")
+    return offset
 
 
 def _offset_from_rest(path: str, states: dict, model) -> tuple[np.ndarray, int]:

@@ -3,8 +3,9 @@
 1. residual and events: the declared model's external-torque estimate on every run, the
    world's transients found and left out (identification.closeloop.events);
 2. the split: training runs, and the scored runs (the --validate runs, or the last holdout of
-   every run), each scored run with its sensor offset from samples its score does not count
-   (identification.closeloop.offsets);
+   every run), each scored run with its sensor offset by the rule identify and predict use:
+   the model's mean residual on the training runs' samples, or on its own run's trained
+   part for a holdout (identification.closeloop.offsets);
 3. candidates, selection and verdicts on the training runs: joint effects, the load's body,
    load friction, the rigid-body correction, each named only in its physical range and where
    it holds run to run (identification.closeloop.runs, .verdicts, .ranges);
@@ -80,8 +81,8 @@ def close_the_loop(declared, runs: list[tuple], times, held: list[tuple] | None 
     if held is not None:
         held_found = events(held, held_times)
         train = [without_events(r, ev) for r, ev in zip(runs, found, strict=True)]
-        scored = [whole_run(without_events(r, ev)) for r, ev in zip(held, held_found,
-                                                                    strict=True)]
+        scored = [whole_run(without_events(r, ev), train) for r, ev in zip(held, held_found,
+                                                                           strict=True)]
         found = found + held_found
     else:
         cut = [int(round(len(r[0]) * (1.0 - holdout))) for r in runs]
