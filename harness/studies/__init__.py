@@ -45,6 +45,10 @@ STUDIES = {
               "three times a run on fresh draws, alone and beside a load and viscous friction: "
               "pushes found, false events per minute, onset errors, the load and the friction "
               "named with the pushes against without",
+    "offset_rule": "the sensor offset a held-out run is scored with (issue #67 item 4): "
+                   "training runs', first rest's, none, both rests, a blend and the rule the "
+                   "commands use, against the true offset on simulated UR5 and Panda runs with "
+                   "static friction at rest, and on the real Panda log cut into runs",
     "closeloop_plants": "closing the loop on the Lynxmotion's hand-written plants, with both "
                         "declared models (Pinocchio and the identified one)",
 }
