@@ -87,8 +87,11 @@ def new_run_offset(payload, model) -> np.ndarray:
     """(dof,) N m: the offset the model file records for a run it was not trained on
     (sensor_offsets.new_run, written by identify and closeloop), else the model's fitted
     offset (zeros for a model without: 'pinocchio')."""
-    recorded = (payload.get("sensor_offsets") or {}).get("new_run") \
-        if isinstance(payload, dict) else None
+    offsets = payload.get("sensor_offsets") if isinstance(payload, dict) else None
+    if offsets is not None and not isinstance(offsets, dict):
+        raise UserError(f"the model's sensor_offsets must be an object with new_run, got "
+                        f"{str(offsets):.60}")
+    recorded = None if offsets is None else offsets.get("new_run")
     if recorded is None:
         return sensor_offsets(model)
     try:
