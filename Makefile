@@ -42,7 +42,7 @@ lock-check: $(UV_STAMP)
 # planned end to end) are named, not skipped silently: `make test-slow` runs them, CI runs both
 test: $(STAMP)
 	MUJOCO_GL=egl TORQUEBENCH_HYPOTHESIS=full $(PY) -m pytest -q -n 2 -m "not slow"
-	@echo "make test: the tests marked slow were deselected (pytest's 'deselected' count above); 'make test-slow' runs them (CI runs both)"
+	@echo "make test: the tests marked slow were left out (-m 'not slow'; '.venv/bin/pytest --collect-only -q -m slow' lists them); 'make test-slow' runs them (CI runs both)"
 
 test-slow: $(STAMP)
 	MUJOCO_GL=egl $(PY) -m pytest -q -n 2 -m slow
