@@ -69,12 +69,12 @@ def gain_runs(data: list[str], loaded: str | list[str] | None, mass: float | Non
     mass = _check_mass(mass)
     loaded = [loaded] if isinstance(loaded, str) else list(loaded)
     plain, heavy = _runs(data, "--data"), _runs(loaded, "--loaded")
+    every = list(zip([*data, *loaded], [*plain, *heavy], strict=True))  # (file, (arrays, meta))
     dof = plain[0][0]["q"].shape[1]
-    for f, (a, _) in zip([*data, *loaded], [*plain, *heavy], strict=True):
+    for f, (a, _) in every:
         if a["q"].shape[1] != dof:
             raise UserError(f"{f} has {a['q'].shape[1]} joints, --data {data[0]} {dof}")
-    arm = resolve_arm(robot, data=[(f, m) for f, (_, m) in zip([*data, *loaded], [*plain, *heavy],
-                                                                strict=True)])
+    arm = resolve_arm(robot, data=[(f, m) for f, (_, m) in every])
     if arm.dof != dof:
         raise UserError(f"{data[0]} has {dof} joints, robot {arm.label} {arm.dof}")
     runs = [[(arm.nominal.regressor(a["q"], a["qd"], a["qdd"]), a["qd"], a["qdd"], a[CURRENT_KEY])
