@@ -172,3 +172,16 @@ def test_interval_matches_white_errors_on_white_noise_and_widens_on_a_drift():
     widened = drifted.interval / white.interval
     assert np.all((widened > 1.4) & (widened > drifted.gain_std / white.gain_std)), widened
     assert np.all(np.abs(drifted.gains - GAINS) <= drifted.interval)
+
+
+def test_several_unloaded_and_loaded_runs_enter_one_fit():
+    """`--data U1,U2 --loaded L1,L2`: two unloaded and two loaded runs in one fit, each run its
+    own friction and offset, give the gains exactly without noise though the second unloaded
+    run's current sits on another sensor zero (seen failing with one offset shared by all)."""
+    (u1, v1), mass = _synthetic(0.0, seed=3)
+    (u2, v2), _ = _synthetic(0.0, seed=4)
+    shifted = (*u2[:3], u2[3] + 0.05)  # another sensor zero on the second unloaded run
+    fit = identify_drive_gains([u1, shifted], [v1, v2], mass)
+    assert np.allclose(fit.gains, GAINS, rtol=1e-8)
+    one = identify_drive_gains(u1, v1, mass)
+    assert fit.columns > one.columns  # the second pair's friction and offsets are in the fit
