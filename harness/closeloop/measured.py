@@ -1,8 +1,8 @@
 """Closing the loop on a given dataset (`closeloop --data FILE.npz --robot R`): a measured
 log (`ingest`) or any dataset of the contract, on an arm's rigid-body base atoms.
 
-The loop is identification.closeloop.measured's, on the samples outside the external
-torques found with the robot's nominal model (identification.closeloop.events); here the
+The loop is identification.closeloop.pipeline.close_the_log: the external torques found with
+the robot's nominal model and left out, then identification.closeloop.measured; here the
 robot's rigid-body library is built from its kinematics and the outcome written as
 closeloop.json. Errors are against the
 measured torque `tau` (and, where the file has one, also against `tau_clean`).
@@ -20,16 +20,16 @@ from harness.data.dataset import load_arrays
 from harness.data.runs import run_times
 from harness.errors import UserError
 from harness.robots.arm import Arm
-from identification.closeloop.events.detect import Events, find_events
-from identification.closeloop.events.runs import events_json, without_events
+from identification.closeloop.events.detect import Events
+from identification.closeloop.events.runs import events_json
 from identification.closeloop.measured import (
     EXPLAINED,
     MIN_GAIN,
     STRUCTURE,
     VALIDATION_BLOCKS,
     MeasuredLoop,
-    close_loop_measured,
 )
+from identification.closeloop.pipeline import close_the_log
 from identification.errors import IdentificationError
 from identification.library.kinematic import KinematicLibrary
 from identification.metrics import rel_error
@@ -108,17 +108,11 @@ def run_measured(data: str | Path, arm: Arm, holdout: float = 0.25) -> MeasuredR
     if dof != library.dof:
         raise UserError(f"data have {dof} joints, robot {arm.label} has {library.dof}")
     keys = [k for k in ("q", "qd", "qdd", "tau", "tau_clean") if k in arrays]
-    run = tuple(arrays[k] for k in ("q", "qd", "qdd", "tau"))
-    found = find_events(arm.nominal, run_times(data, arrays, meta), *run, last_body(arm),
-                        robot_scales(arm, [run]))
-    arrays = {**arrays, **dict(zip(keys, without_events(tuple(arrays[k] for k in keys), found),
-                                   strict=True))}
-    arrays.pop("t", None)
     try:
-        run = tuple(arrays[k] for k in ("q", "qd", "qdd", "tau"))
-        split = int(round(len(run[0]) * (1.0 - holdout)))
-        loop = close_loop_measured(library, *run, holdout,
-                                   scales=robot_scales(arm, [tuple(a[:split] for a in run)]))
+        loop, kept, found = close_the_log(arm.nominal, library, tuple(arrays[k] for k in keys),
+                                          run_times(data, arrays, meta), holdout, last_body(arm),
+                                          lambda runs: robot_scales(arm, runs))
     except IdentificationError as exc:
         raise UserError(f"{data}: {exc}") from None
+    arrays = dict(zip(keys, kept, strict=True))
     return MeasuredRun(arm.reference, str(data), arrays, meta, holdout, loop, found)

@@ -47,15 +47,12 @@ from harness.errors import UserError
 from harness.robots.arm import Arm
 from harness.robots.registry import flange_frame
 from harness.robots.torque_models import load_torque_model
+from identification.closeloop import pipeline
 from identification.closeloop.effects import Effect, EffectTerm
-from identification.closeloop.events.detect import Events, find_events
+from identification.closeloop.events.detect import Events
 from identification.closeloop.events.runs import events_json
-from identification.closeloop.identified import close_loop_identified
-from identification.closeloop.loop import (
-    CloseLoopResult,
-    close_loop,
-    is_unexplained,
-)
+from identification.closeloop.loop import CloseLoopResult, is_unexplained
+from identification.closeloop.pipeline import close_the_plant
 from identification.closeloop.truth import score_truth
 from identification.library.base import Library
 from identification.library.prior_knowledge import prior_knowledge_library
@@ -161,16 +158,11 @@ def _loop(spec: str, data: Dataset, split: int, payload: PayloadTorque, truth, o
     if declared.dof != data.q.shape[1]:
         raise UserError(f"declared model {spec} has {declared.dof} joints, the plant "
                         f"{data.q.shape[1]}")
-    args = (data.q, data.qd, data.qdd, data.tau, data.tau_clean, holdout, payload, payload.symbolic)
-    scales = robot_scales(arm, [(data.q[:split], data.qd[:split], data.qdd[:split],
-                                 data.tau[:split])])
+    run = (data.q, data.qd, data.qdd, data.tau, data.tau_clean)
+    result = close_the_plant(declared, run, holdout, payload, lambda r: robot_scales(arm, r))
     identified = isinstance(declared, Library)
-    if identified:
-        result = close_loop_identified(declared, *args, scales=scales)
-        model = result.model.declared  # the terms of the last re-identification
-    else:
-        result = close_loop(declared, *args, scales=scales)
-        model = declared
+    model = result.model.declared if identified else declared  # identified: the terms of the
+    # last re-identification
     if outside:
         return CloseLoopRun(str(data.meta["plant"]), spec, data, result, truth, outside,
                             None, None, None)
@@ -181,18 +173,20 @@ def _loop(spec: str, data: Dataset, split: int, payload: PayloadTorque, truth, o
 
 
 def leave_out_events(data: Dataset, arm: Arm, declared: str) -> tuple[Dataset, Events]:
-    """The data without the external torques found on them (identification.closeloop.events)
-    with the declared model (the arm's nominal one when the declared is identified), and
-    those events."""
+    """The data without the external torques found on them (the loop's first step,
+    identification.closeloop.pipeline.leave_out_events) with the declared model (the arm's
+    nominal one when the declared is identified), and those events."""
     model = arm.nominal if declared in DECLARED_MODELS else load_torque_model(declared, arm)
-    found = find_events(model, data.t, data.q, data.qd, data.qdd, data.tau, last_body(arm),
-                        robot_scales(arm, [(data.q, data.qd, data.qdd, data.tau)]))
-    k = found.kept
-    if np.all(k):
+    names = list(data.truth)
+    run = (data.q, data.qd, data.qdd, data.tau, data.tau_clean, data.t,
+           *(data.truth[n] for n in names))
+    (kept,), (found,) = pipeline.leave_out_events(model, [run], [data.t], last_body(arm),
+                                                  robot_scales(arm, [run[:4]]))
+    if np.all(found.kept):
         return data, found
-    return replace(data, t=data.t[k], q=data.q[k], qd=data.qd[k], qdd=data.qdd[k],
-                   tau=data.tau[k], tau_clean=data.tau_clean[k],
-                   truth={n: v[k] for n, v in data.truth.items()}), found
+    q, qd, qdd, tau, tau_clean, t, *truth = kept
+    return replace(data, t=t, q=q, qd=qd, qdd=qdd, tau=tau, tau_clean=tau_clean,
+                   truth=dict(zip(names, truth, strict=True))), found
 
 
 def run_closeloop(plant: Arm, arm: Arm, samples: int = 4000, noise: float = 0.05,

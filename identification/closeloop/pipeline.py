@@ -12,6 +12,21 @@
 4. the closed model (the declared model and the named terms) scored before and after, and
    what it leaves per joint (identification.closeloop.leftover).
 
+The same front serves every path of `closeloop`, each entering at its own function:
+
+- runs of a robot against a fixed declared model (`--data`, `--validate`): `close_the_loop`,
+  the steps above;
+- one log whose declared model is its own rigid-body identification (`--data --declared
+  identified`): `close_the_log` (step 1, then identification.closeloop.measured: the
+  identification on the training part, candidates and selection on its validation blocks);
+- a simulated plant (`--plant`): `leave_out_events`, then `close_the_plant` for each declared
+  model compared (identification.closeloop.loop, or .identified for a declared model
+  identified on the same data: selection by BIC on the training part, screened by its halves
+  and validation blocks).
+
+Step 1 is `leave_out_events` on every path: no fit and no score of any path sees the samples
+of an external torque.
+
 What a robot is (its model, its load's body, its scales, the rigid-body correction's fit) is
 the caller's: this module sees arrays and torque models only.
 """
@@ -25,7 +40,10 @@ import numpy as np
 
 from identification.closeloop.events.detect import Events
 from identification.closeloop.events.runs import run_events, without_events
+from identification.closeloop.identified import close_loop_identified
 from identification.closeloop.leftover import Leftover, leftover
+from identification.closeloop.loop import CloseLoopResult, close_loop
+from identification.closeloop.measured import MeasuredLoop, close_loop_measured
 from identification.closeloop.offsets import (
     ScoredRun,
     run_tail,
@@ -36,6 +54,7 @@ from identification.closeloop.offsets import (
 from identification.closeloop.payload import REACH, LastBody
 from identification.closeloop.ranges import Scales
 from identification.closeloop.runs import RunsLoop, close_loop_runs
+from identification.library.base import Library
 
 
 @dataclass(frozen=True)
@@ -58,6 +77,50 @@ def no_events(runs: list[tuple], dof: int) -> list[Events]:
     return [Events((), np.zeros(dof), np.zeros(dof), np.ones(len(r[0]), bool), 0) for r in runs]
 
 
+def leave_out_events(declared, runs: list[tuple], times, body: LastBody | None = None,
+                     scales: Scales | None = None,
+                     detect: bool = True) -> tuple[list[tuple], list[Events]]:
+    """Step 1 of every path: the external torques on each run (q, qd, qdd, tau, ...) with its
+    times (n,) s, found with the declared torque model (identification.closeloop.events;
+    body: the load's body, scales: the robot's), and each run's arrays (all of them, (n, ...))
+    without their samples; detect=False: every sample kept, no event looked for."""
+    found = (run_events(declared, runs, times, body, scales) if detect
+             else no_events(runs, declared.dof))
+    return [without_events(r, ev) for r, ev in zip(runs, found, strict=True)], found
+
+
+def close_the_log(nominal, library, run: tuple, times, holdout: float = 0.25,
+                  body: LastBody | None = None,
+                  scales: Callable[[list[tuple]], Scales] | None = None
+                  ) -> tuple[MeasuredLoop, tuple, Events]:
+    """One log (q, qd, qdd, tau[, tau_clean]) against its own rigid-body identification
+    (library: the robot's rigid-body atoms) on its first 1 - holdout: the events found with the
+    nominal model and left out, then identification.closeloop.measured on what is kept.
+    Returns the loop, the kept arrays and the events."""
+    (kept,), (found,) = leave_out_events(nominal, [run], [times], body,
+                                         None if scales is None else scales([run[:4]]))
+    split = int(round(len(kept[0]) * (1.0 - holdout)))
+    loop = close_loop_measured(library, *kept[:4], holdout,
+                               scales=None if scales is None else scales(
+                                   [tuple(a[:split] for a in kept[:4])]))
+    return loop, kept, found
+
+
+def close_the_plant(declared, run: tuple, holdout: float = 0.25, payload=None,
+                    scales: Callable[[list[tuple]], Scales] | None = None) -> CloseLoopResult:
+    """A simulated plant's run (q, qd, qdd, tau, tau_clean) without its events (step 1,
+    leave_out_events, is the caller's: once for every declared model it compares) against a
+    fixed declared torque model, or a library (identification.library.base.Library) the
+    declared model is identified with on the training part: the plant loop
+    (identification.closeloop.loop / .identified); payload: the unit payload torque at the
+    flange (its `symbolic` form for the planner); scales(runs) -> the robot's scales."""
+    split = int(round(len(run[0]) * (1.0 - holdout)))
+    train_scales = None if scales is None else scales([tuple(a[:split] for a in run[:4])])
+    loop = close_loop_identified if isinstance(declared, Library) else close_loop
+    return loop(declared, *run[:5], holdout, payload,
+                None if payload is None else payload.symbolic, scales=train_scales)
+
+
 def close_the_loop(declared, runs: list[tuple], times, held: list[tuple] | None = None,
                    held_times=None, holdout: float = 0.25,
                    body: LastBody | tuple[LastBody, ...] | None = None,
@@ -69,20 +132,14 @@ def close_the_loop(declared, runs: list[tuple], times, held: list[tuple] | None 
     load's body, or candidates the data choose among; scales(runs) -> the robot's scales on
     those samples; inertial(train) -> the rigid-body correction candidate or None;
     detect=False: no event looked for."""
-    dof = declared.dof
-
-    def events(of, at):
-        if not detect:
-            return no_events(of, dof)
-        carrier = body[0] if isinstance(body, tuple) else body  # the last body's, for events
-        return run_events(declared, of, at, carrier, None if scales is None else scales(runs))
-
-    found = events(runs, times)
+    carrier = body[0] if isinstance(body, tuple) else body  # the last body's, for events
+    robot = None if scales is None else scales(runs)
+    kept, found = leave_out_events(declared, runs, times, carrier, robot, detect)
     if held is not None:
-        held_found = events(held, held_times)
-        train = [without_events(r, ev) for r, ev in zip(runs, found, strict=True)]
-        scored = [whole_run(without_events(r, ev), train) for r, ev in zip(held, held_found,
-                                                                           strict=True)]
+        held_kept, held_found = leave_out_events(declared, held, held_times, carrier, robot,
+                                                 detect)
+        train = kept
+        scored = [whole_run(r, train) for r in held_kept]
         found = found + held_found
     else:
         cut = [int(round(len(r[0]) * (1.0 - holdout))) for r in runs]
