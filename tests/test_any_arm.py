@@ -159,8 +159,8 @@ def test_a_plant_written_without_effects_carries_none(tmp_path, robot):
     """The plants are written by MjSpec.to_xml, which keeps 6 significant digits: masses
     rounded alike must not read as a payload (the Panda's control plant did: 6e-6 kg)."""
     from harness.closeloop.arm_plants import write_arm_variant
+    from harness.closeloop.plant import effects_reference
     from harness.closeloop.plants import Variant, true_effects
-    from harness.closeloop.run import effects_reference
 
     arm = Arm.of(robot)
     plant = Arm.of(write_arm_variant(arm, Variant(name="control"), tmp_path))

@@ -10,8 +10,8 @@ import pytest
 
 from harness.cli import main
 from harness.closeloop.acceptance import absorbed_joints, checks, coefficient_errors, meets_noise_bar
+from harness.closeloop.plant import run_closeloop
 from harness.closeloop.plants import DECLARED_MJCF, Variant, write_variant
-from harness.closeloop.run import run_closeloop
 from harness.robots.arm import Arm
 from identification.closeloop.effects import Effect
 from identification.closeloop.extended import ExtendedModel

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.closeloop.measured import rigid_library
+from harness.closeloop.one_log import rigid_library
 from harness.robots.arm import Arm
 from identification.closeloop.measured import close_loop_measured
 from identification.friction import sigmoid_friction

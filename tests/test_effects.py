@@ -8,11 +8,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from harness.closeloop.payload import PayloadTorque
 from harness.closeloop.plants import Variant, variant_text
 from harness.data.generate import inverse_torques
 from harness.robots.arm import Arm
 from harness.robots.baseline import PinocchioModel
+from harness.robots.bodies import PayloadTorque
 from identification.closeloop.effects import EffectTerm, build_dictionary, effect_torque
 from identification.closeloop.extended import ExtendedModel
 from identification.closeloop.residual import ljung_box, noise_sigma

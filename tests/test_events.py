@@ -13,10 +13,10 @@ import pinocchio as pin
 import pytest
 
 from harness.cli import main
-from harness.closeloop.payload import last_body
 from harness.data.generate import generate
 from harness.data.pushes import Push
 from harness.robots.arm import Arm
+from harness.robots.bodies import last_body
 from identification.closeloop.events.detect import find_events
 from identification.closeloop.events.observer import GAIN, momentum_terms, observer
 from tests.helpers import lynxmotion_motion

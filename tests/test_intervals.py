@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from scipy.stats import t as student
 
-from harness.closeloop.payload import last_body
 from harness.robots.arm import Arm
+from harness.robots.bodies import last_body
 from identification.closeloop.payload import BodyTorque, standard
 from identification.closeloop.runs import close_loop_runs
 from identification.intervals import jackknife

@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.closeloop.payload import candidate_bodies, last_body
 from harness.robots.arm import Arm
+from harness.robots.bodies import candidate_bodies, last_body
 from identification.closeloop.payload import BodyTorque, describe, standard
 from identification.closeloop.runs import close_loop_runs
 from identification.signals import multisine

@@ -18,9 +18,9 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from harness.closeloop.model_file import closeloop_model, model_payload
-from harness.closeloop.payload import last_body
 from harness.robots.arm import Arm
+from harness.robots.bodies import last_body
+from harness.robots.closed_model import closeloop_model, model_payload
 from identification.closeloop.effects import EffectTerm
 from identification.closeloop.load_friction import EFFECT
 from identification.closeloop.payload import BodyTorque, describe, standard

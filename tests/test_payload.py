@@ -16,8 +16,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from harness.closeloop.payload import last_body
 from harness.robots.arm import Arm
+from harness.robots.bodies import last_body
 from identification.closeloop.payload import (
     consistent_fit,
     describe,
@@ -85,7 +85,7 @@ def test_the_fit_stays_consistent_and_within_reach():
 
 
 def test_a_payload_entry_of_model_json_reads_back():
-    from harness.closeloop.model_file import _term
+    from harness.robots.closed_model import _term
     from identification.closeloop.effects import EffectTerm
 
     params = standard(2.7, [0.03, 0.16, 0.02], [0.01, 0.001, 0.012, -0.002, 0.0005, 0.008])

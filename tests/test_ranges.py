@@ -11,10 +11,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.closeloop.measured import rigid_library
-from harness.closeloop.payload import last_body
-from harness.closeloop.runs import robot_scales
+from harness.closeloop.one_log import rigid_library
 from harness.robots.arm import Arm
+from harness.robots.bodies import last_body
+from harness.robots.scales import robot_scales
 from identification.closeloop.effects import EffectTerm, effect_torque
 from identification.closeloop.loop import close_loop
 from identification.closeloop.measured import close_loop_measured

@@ -8,7 +8,7 @@ by the arm's mass); the arm with a spring on a tendon q2 + q3 (coupled: an effec
 the dictionary, to be said "unexplained"); and the arm as declared (control: nothing to
 name). Measured data (`generate(plant, 4000, 0.05, PLANTS_SEED, "measured")`: MuJoCo forward
 simulation tracking an excitation, encoder and torque-sensor noise, states estimated from
-the encoder) go through the loop (harness.closeloop.run): residual of the declared model,
+the encoder) go through the loop (harness.closeloop.plant): residual of the declared model,
 effects traced and named, held-out errors against the clean torque before and after.
 Scored against the plant's true effects (read from its MJCF, never used by the estimation).
 Checks: the loop never leaves a plant worse than its declared model, and says "unexplained"
@@ -28,7 +28,6 @@ from pathlib import Path
 import numpy as np
 
 from harness.closeloop.arm_plants import flange_frame, write_arm_variant
-from harness.closeloop.payload import PayloadTorque
 from harness.closeloop.payload_case import (
     payload_arms,
     payload_case,
@@ -36,11 +35,12 @@ from harness.closeloop.payload_case import (
     payload_markdown,
     payload_targets,
 )
+from harness.closeloop.plant import run_closeloop
 from harness.closeloop.plants import Variant
 from harness.closeloop.push_case import push_case, push_markdown, push_targets, summary
-from harness.closeloop.run import run_closeloop
 from harness.report.results import Context, Row, SectionResult, Target, check
 from harness.robots.arm import Arm
+from harness.robots.bodies import PayloadTorque
 from identification.closeloop.effects import effect_torque
 
 SAMPLES = 4000  # measured samples per plant

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.closeloop.run import CloseLoopRun
+from harness.closeloop.plant import CloseLoopRun
 
 COEFFICIENT_TOLERANCE = 0.10
 IMPROVEMENT = 5.0

@@ -5,9 +5,9 @@ edited as a MuJoCo spec (mujoco.MjSpec): joint damping, frictionloss, armature a
 stiffness added on chosen joints, a spring on a fixed tendon q2 + q3 (an effect outside
 the close-the-loop dictionary, as the Lynxmotion's coupled plant), and a point payload
 fixed at the flange (the first of registry.FLANGES the model has, else the body
-harness.closeloop.payload.last_body names: the last joint's, or the one a gripper's jaw turns
+harness.robots.bodies.last_body names: the last joint's, or the one a gripper's jaw turns
 on), then written as MJCF. The
-payload point is the one harness.closeloop.payload puts its unit mass at
+payload point is the one harness.robots.bodies puts its unit mass at
 (the Pinocchio frame of the same link), so the dictionary's payload column is exact.
 """
 
@@ -19,11 +19,11 @@ from pathlib import Path
 
 import mujoco
 
-from harness.closeloop.payload import last_body
 from harness.closeloop.plants import Variant
 from harness.errors import UserError
 from harness.io import write_text
 from harness.robots.arm import Arm
+from harness.robots.bodies import last_body
 from harness.robots.registry import flange_frame
 from harness.robots.scene import robot_spec
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.closeloop.run import CloseLoopRun
+from harness.closeloop.plant import CloseLoopRun
 from harness.report.figures import plt, save_figure
 from identification.closeloop.effects import UNITS, effect_torque
 

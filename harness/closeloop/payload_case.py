@@ -26,11 +26,11 @@ from pathlib import Path
 import numpy as np
 
 from harness.closeloop.arm_plants import LoadedVariant, write_arm_variant
-from harness.closeloop.payload import last_body
 from harness.closeloop.runs import run_runs
 from harness.data.generate import generate
 from harness.data.runs import Runs
 from harness.robots.arm import Arm
+from harness.robots.bodies import last_body
 from identification.closeloop.offsets import run_tail, scored_error
 from identification.closeloop.payload import describe
 

@@ -20,45 +20,27 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.closeloop.model_file import model_payload
-from harness.closeloop.payload import candidate_bodies, last_body
 from harness.data.runs import KEYS, Runs, load_runs, run_times, split_files
 from harness.errors import UserError
 from harness.robots.arm import Arm
+from harness.robots.bodies import candidate_bodies, last_body
+from harness.robots.closed_model import model_payload
+from harness.robots.scales import robot_scales
 from harness.robots.torque_models import load_torque_model, read_model
 from identification.closeloop.events.detect import Events
 from identification.closeloop.events.runs import (
     events_json,
     events_line,
 )
+from identification.closeloop.inertial import inertial_correction
 from identification.closeloop.leftover import LEFT, Leftover
 from identification.closeloop.offsets import RULE, ScoredRun, held_out_offset
 from identification.closeloop.payload import REACH
 from identification.closeloop.pipeline import close_the_loop
-from identification.closeloop.ranges import Scales
+from identification.closeloop.ranges import ranges_json
 from identification.closeloop.runs import RunsLoop
 from identification.closeloop.verdicts import AGREE, MIN_GAIN
 from identification.errors import IdentificationError
-from identification.identify import identify
-from identification.kinematic_model import KinematicModel
-from identification.regression.consistent import ConsistentRegressor
-
-JOINT_ATOMS = ("armature", "viscous", "coulomb")
-
-
-def inertial_correction(arm: Arm, runs: list[tuple]) -> KinematicModel:
-    """The consistent fit's rigid body pulled toward arm's nominal model, minus the nominal
-    rigid body: the torque to add to the nominal model (its joint atoms left out); each run
-    with its own sensor offset, each body inside its link's ellipsoid."""
-    library = arm.library
-    nominal = arm.nominal.atom_parameters()
-    q, qd, qdd, tau = (np.concatenate([r[i] for r in runs]) for i in range(4))
-    labels = np.repeat(np.arange(len(runs)), [len(r[0]) for r in runs])  # an offset per run
-    regressor = ConsistentRegressor(nominal, ellipsoids=arm.ellipsoids)
-    fit = identify(q, qd, qdd, tau, library, 0.0, regressor=regressor, runs=labels).model
-    delta = fit.coefficients - library.fold @ nominal
-    delta[[k for k, n in enumerate(library.names) if n.startswith(JOINT_ATOMS)]] = 0.0
-    return KinematicModel(library, delta, np.zeros(library.dof), "consistent")
 
 
 def read_runs(data: str, validate: str | None = None) -> tuple[Runs, Runs | None]:
@@ -142,29 +124,6 @@ class RunsRun:
         return out
 
 
-def robot_scales(arm: Arm, runs: list[tuple]) -> Scales:
-    """The scales that bound arm's named coefficients (identification.closeloop.ranges): its
-    torque and speed limits, joint spans and mass, the runs' torques and speeds where it
-    declares none."""
-    tau, qd, q = (np.concatenate([r[i] for r in runs]) for i in (3, 1, 0))
-    mass = float(sum(body.mass for body in arm.pinocchio.inertias))
-    return Scales.of(arm.torque_limit, arm.speed_bounds, *arm.position_limits, mass, tau, qd, q)
-
-
-def ranges_json(scales: Scales) -> dict:
-    """Per effect, its range per joint ([low, high]), as closeloop.json states it."""
-    from identification.closeloop.effects import EffectTerm
-
-    dof = len(scales.torque)
-    out = {e: [list(scales.bounds(EffectTerm(e, j, 0.0))) for j in range(1, dof + 1)]
-           for e in ("viscous", "coulomb", "sigmoid", "armature", "spring", "load_friction")}
-    out["payload_mass"] = list(scales.bounds(EffectTerm("payload", dof, 0.0)))
-    out["inertial_scale"] = [0.0, 1.0]
-    out["rule"] = ("identification.closeloop.ranges: from the robot's torque and speed limits "
-                   "(the data's where it declares none), joint spans and mass")
-    return out
-
-
 def _times(runs: Runs) -> tuple[np.ndarray, ...]:
     """Each run's time stamps, checked (harness.data.runs.run_times): its `t`, else its
     samples at the rate its meta records."""
@@ -205,7 +164,8 @@ def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs |
             model, runs, _times(data), held, None if validate is None else _times(validate),
             holdout, carrier if len(carrier) > 1 else carrier[0],
             lambda r: robot_scales(arm, r),
-            (lambda train: inertial_correction(arm, train)) if declared == "pinocchio" else None,
+            (lambda train: inertial_correction(arm.library, arm.nominal.atom_parameters(),
+                                                 arm.ellipsoids, train)) if declared == "pinocchio" else None,
             reach, detect)
     except IdentificationError as exc:
         raise UserError(f"{','.join(data.files)}: {exc}") from None

@@ -6,14 +6,14 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.closeloop.noise_level import noise_line, runs_line
-from harness.closeloop.run import run_closeloop
+from harness.closeloop.plant import run_closeloop
 from harness.commands import SUMMARY
 from harness.errors import UserError
 from harness.io import write_json
 from harness.robots.arm import Arm
 from harness.robots.registry import ROBOTS
 from harness.robots.resolve import resolve_arm, variant_of
+from identification.closeloop.noise_level import noise_line, runs_line
 
 
 def register(sub) -> None:
@@ -181,7 +181,7 @@ def _plant_arms(args) -> tuple[Arm, Arm]:
 
 def _run_data(args) -> int:
     """closeloop --data: on the runs, or (--declared identified) on one log."""
-    from harness.closeloop.measured import run_measured
+    from harness.closeloop.one_log import run_measured
     from harness.closeloop.runs import read_runs, run_runs
 
     if args.declared == "identified" and ("," in args.data or args.validate):

@@ -16,12 +16,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.closeloop.payload import candidate_bodies, last_body
 from harness.data.dataset import STATE_KEYS, load_arrays
 from harness.data.ingest import CURRENT_KEY
 from harness.data.runs import Runs
 from harness.errors import UserError
 from harness.robots.arm import Arm
+from harness.robots.bodies import candidate_bodies, last_body
 from harness.robots.resolve import resolve_arm
 from identification.drive_gains import GAIN_BLOCKS, identify_drive_gains
 from identification.errors import IdentificationError
@@ -61,7 +61,7 @@ def gain_runs(data: list[str], loaded: str | list[str] | None, mass: float | Non
     """The unloaded runs as torque with the gains identified from them and the loaded runs,
     the arm, and the gains' report (MODEL.json's drive_gains); the load on the link `body`, else
     on the body near the chain's end whose fit predicts the held-out blocks' currents best
-    (harness.closeloop.payload.candidate_bodies: no rule on a joint's name). UserError, one
+    (harness.robots.bodies.candidate_bodies: no rule on a joint's name). UserError, one
     line, on bad input, before anything is written."""
     if loaded is None or mass is None:
         raise UserError("--loaded L.npz and --load-mass KG go together: the loaded run and its "

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.closeloop.measured import rigid_library
+from harness.closeloop.one_log import rigid_library
 from harness.data.generate import generate
 from harness.identify.peers import joint_friction_columns, least_squares
 from harness.identify.scoring import NOISE, SAMPLES, perturbed_nominal, sines_motion

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.closeloop.measured import rigid_library
+from harness.closeloop.one_log import rigid_library
 from harness.robots.arm import Arm
 from identification.library.kinematic import COULOMB_WIDTH
 

@@ -55,7 +55,7 @@ def torque_model(model: ModelFile, arm: Arm) -> TorqueModel:
     payload = model.payload
     try:
         if payload.get("kind") == "closeloop":  # closeloop --data's DIR/model.json
-            from harness.closeloop.model_file import closeloop_model
+            from harness.robots.closed_model import closeloop_model
 
             return closeloop_model(payload, arm, Path(model.spec))
         if model.recorded is None:

@@ -24,8 +24,8 @@ from harness.closeloop.acceptance import (
     reference_ratios,
 )
 from harness.closeloop.figures import error_figure, residual_figure
+from harness.closeloop.plant import CloseLoopRun, run_closeloop
 from harness.closeloop.plants import DECLARED_MJCF
-from harness.closeloop.run import CloseLoopRun, run_closeloop
 from harness.data.generate import SAMPLE_RATE
 from harness.report.results import Context, SectionResult, check
 from harness.robots.arm import Arm

@@ -1,5 +1,5 @@
 """The body a load rides on, chosen by the data: the payload candidate fitted on each candidate
-body near the chain's end (harness.closeloop.payload.candidate_bodies) and scored by held-out
+body near the chain's end (harness.robots.bodies.candidate_bodies) and scored by held-out
 validation (leave one run out, or contiguous blocks of one run); the body whose payload
 predicts the held-out samples best carries it. No rule on a joint's name: on
 example-robot-data's finger_edu, whose joints are all named finger_..., the gripper rule put a

@@ -1,5 +1,5 @@
 """A payload rigidly attached to the last body (or the body a gripper's jaw turns on,
-harness.closeloop.payload.last_body): its 10 inertial parameters, fitted physically
+harness.robots.bodies.last_body): its 10 inertial parameters, fitted physically
 consistent and plausible, as one candidate of the close-the-loop dictionary.
 
 The torque of a chain is linear in the last body's standard parameters

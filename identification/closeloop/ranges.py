@@ -106,3 +106,15 @@ def unbounded(dof: int) -> Scales:
     """No bounds but the signs (a caller with no robot at hand: tests of the fits alone)."""
     inf = np.full(dof, np.inf)
     return Scales(inf, np.ones(dof), np.ones(dof), np.inf)
+
+
+def ranges_json(scales: Scales) -> dict:
+    """Per effect, its range per joint ([low, high]), as closeloop.json states it."""
+    dof = len(scales.torque)
+    out = {e: [list(scales.bounds(EffectTerm(e, j, 0.0))) for j in range(1, dof + 1)]
+           for e in ("viscous", "coulomb", "sigmoid", "armature", "spring", "load_friction")}
+    out["payload_mass"] = list(scales.bounds(EffectTerm("payload", dof, 0.0)))
+    out["inertial_scale"] = [0.0, 1.0]
+    out["rule"] = ("identification.closeloop.ranges: from the robot's torque and speed limits "
+                   "(the data's where it declares none), joint spans and mass")
+    return out

@@ -13,7 +13,7 @@ Savitzky-Golay with the window chosen from the data, handed over at RATE Hz), th
 - the same at the source's own derivative window (SOURCE_WINDOW samples): the nominal and
   least-squares figures must reproduce the README's (a check of this pipeline against the
   published numbers), and the identified model is compared on identical inputs;
-- closing the loop (`closeloop --data`, harness.closeloop.measured): the rigid-body
+- closing the loop (`closeloop --data`, harness.closeloop.one_log): the rigid-body
   identification's residual traced per joint to named effects, added, errors before and
   after held out, joints nothing explains reported.
 """
@@ -34,7 +34,7 @@ from harness.bench.real_data.figures import (
 )
 from harness.bench.real_data.models import score_models
 from harness.bench.real_data.report import markdown
-from harness.closeloop.measured import run_measured
+from harness.closeloop.one_log import run_measured
 from harness.data.ingest import ingest
 from harness.io import write_npz
 from harness.report.results import Context, Row, SectionResult, Target, check

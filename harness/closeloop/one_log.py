@@ -14,12 +14,12 @@ from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 
-from harness.closeloop.payload import last_body
-from harness.closeloop.runs import robot_scales
 from harness.data.dataset import load_arrays
 from harness.data.runs import run_times
 from harness.errors import UserError
 from harness.robots.arm import Arm
+from harness.robots.bodies import last_body
+from harness.robots.scales import robot_scales
 from identification.closeloop.events.detect import Events
 from identification.closeloop.events.runs import events_json
 from identification.closeloop.measured import (

@@ -16,8 +16,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from harness.closeloop.payload import last_body
 from harness.robots.arm import Arm
+from harness.robots.bodies import last_body
 from harness.robots.resolve import resolve_arm
 from identification.closeloop.effects import UNITS, EffectTerm
 from identification.closeloop.extended import closed_model

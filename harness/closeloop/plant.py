@@ -38,14 +38,14 @@ import mujoco
 import numpy as np
 
 from harness.closeloop.arm_plants import arm_variant_xml
-from harness.closeloop.payload import PayloadTorque, last_body
 from harness.closeloop.plants import Variant, true_effects
-from harness.closeloop.runs import robot_scales
 from harness.data.dataset import Dataset
 from harness.data.generate import generate
 from harness.errors import UserError
 from harness.robots.arm import Arm
+from harness.robots.bodies import PayloadTorque, last_body
 from harness.robots.registry import flange_frame
+from harness.robots.scales import robot_scales
 from harness.robots.torque_models import load_torque_model
 from identification.closeloop import pipeline
 from identification.closeloop.effects import Effect, EffectTerm

@@ -1,10 +1,12 @@
-"""Torque of a unit point mass at the end effector, from the declared Pinocchio model.
+"""The bodies of an arm a load can ride on, and the torque of a unit point mass on one.
 
-Inverse dynamics is linear in the inertial parameters, so a payload of mass m
-at the end effector adds m * tau_unit(q, qd, qdd), where tau_unit is the RNEA
-of the same kinematic tree carrying nothing but 1 kg at the end-effector point
-(mass m, first moment m c, rotational inertia m (|c|^2 I - c c^T) about the
-joint frame, c the end-effector position in the last link's joint frame).
+Which bodies: `candidate_bodies` (the last joints' bodies, among which the data choose: the
+measured loop's payload, identify's drive gains' load) and `last_body` (the one a link names,
+or the last). The torque: inverse dynamics is linear in the inertial parameters, so a payload
+of mass m at the end effector adds m * tau_unit(q, qd, qdd), where tau_unit is the RNEA of the
+same kinematic tree carrying nothing but 1 kg at the end-effector point (mass m, first moment
+m c, rotational inertia m (|c|^2 I - c c^T) about the joint frame, c the end-effector position
+in the last link's joint frame).
 """
 
 from __future__ import annotations
