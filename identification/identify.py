@@ -5,7 +5,7 @@
 consistent) on the first 1 - holdout of the samples and scores it on the rest, in time order;
 relative RMS error is ||tau_hat - tau_clean|| / ||tau_clean|| per joint there (tau when no
 clean torque is given), each held-out run with its sensor offset by the rule of
-identification.closeloop.offsets (held_out_offset) on a measured log. The regression target
+identification.closeloop.closed.offsets (held_out_offset) on a measured log. The regression target
 is the raw measured torque, not a denoised one: denoising only correlates the residuals
 (docs/identification.md, 'identification.identify'). Without a regressor,
 identification.choice picks the library's default (coupled when the library has atoms).
@@ -21,7 +21,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from identification.choice import choose_regressor
-from identification.closeloop.offsets import (
+from identification.closeloop.closed.offsets import (
     RULE,
     ScoredRun,
     held_out_offset,
@@ -203,7 +203,7 @@ def split_training(q, qd, qdd, tau, dof: int, name: str, holdout: float, n_featu
 def split_runs(samples: tuple, n_train: int, runs=None) -> tuple[list[tuple], list[ScoredRun]]:
     """The training runs' samples (q, qd, qdd, tau) (each run's part among the first n_train)
     and the held-out runs, in order, each with its offset by the rule
-    (identification.closeloop.offsets): a held-out part of a run trained on from that run's
+    (identification.closeloop.closed.offsets): a held-out part of a run trained on from that run's
     trained samples, a run never trained on from every training run's."""
     labels = np.zeros(len(samples[0]), int) if runs is None else np.asarray(runs)
     trained_part = np.arange(len(labels)) < n_train

@@ -13,11 +13,11 @@ from harness.closeloop.acceptance import absorbed_joints, checks, coefficient_er
 from harness.closeloop.plant import run_closeloop
 from harness.closeloop.plants import DECLARED_MJCF, Variant, write_variant
 from harness.robots.arm import Arm
-from identification.closeloop.effects import Effect
-from identification.closeloop.extended import ExtendedModel
-from identification.closeloop.loop import projected_dictionary
-from identification.closeloop.residual import noise_sigma
-from identification.closeloop.selection import refit
+from identification.closeloop.candidates.effects import Effect
+from identification.closeloop.closed.extended import ExtendedModel
+from identification.closeloop.selection.bic import refit
+from identification.closeloop.selection.plant import projected_dictionary
+from identification.closeloop.selection.residual import noise_sigma
 from identification.metrics import rel_error
 
 COUPLED = DECLARED_MJCF.parent / "lynxmotion_coupled.xml"

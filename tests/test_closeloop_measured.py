@@ -17,7 +17,7 @@ import pytest
 from harness.cli import main
 from harness.closeloop.one_log import rigid_library
 from harness.robots.arm import Arm
-from identification.closeloop.measured import close_loop_measured
+from identification.closeloop.selection.one_log import close_loop_measured
 from identification.friction import sigmoid_friction
 from tests.helpers import lynxmotion_motion
 
@@ -221,7 +221,7 @@ def test_a_run_scored_whole_without_a_rest_takes_the_training_runs_offset(tmp_pa
 
 
 def test_first_rest_counts_the_still_samples_before_the_motion():
-    from identification.closeloop.offsets import MIN_REST, REST_SPEED, first_rest
+    from identification.closeloop.closed.offsets import MIN_REST, REST_SPEED, first_rest
 
     qd = np.zeros((50, 2))
     qd[30:, 1] = 2 * REST_SPEED
@@ -232,7 +232,7 @@ def test_first_rest_counts_the_still_samples_before_the_motion():
 
 
 def test_an_effect_of_one_run_only_is_not_named_with_two():
-    from identification.closeloop.runs import close_loop_runs
+    from identification.closeloop.selection.runs import close_loop_runs
 
     declared = LYNX.nominal
     runs = []
@@ -252,7 +252,7 @@ def test_a_mujoco_friction_plant_at_two_seeds_names_its_effects_on_both():
     generated at two seeds: each run alone and both together name exactly those, within 10 %."""
     from harness.closeloop.plants import true_effects
     from harness.data.generate import generate
-    from identification.closeloop.runs import close_loop_runs
+    from identification.closeloop.selection.runs import close_loop_runs
     from models import MODELS
 
     plant = Arm.of(MODELS / "lynxmotion" / "lynxmotion_friction.xml")

@@ -13,11 +13,11 @@ from harness.data.generate import inverse_torques
 from harness.robots.arm import Arm
 from harness.robots.baseline import PinocchioModel
 from harness.robots.bodies import PayloadTorque
-from identification.closeloop.effects import EffectTerm, build_dictionary, effect_torque
-from identification.closeloop.extended import ExtendedModel
-from identification.closeloop.residual import ljung_box, noise_sigma
-from identification.closeloop.robustness import screen
-from identification.closeloop.selection import select_effects
+from identification.closeloop.candidates.effects import EffectTerm, build_dictionary, effect_torque
+from identification.closeloop.closed.extended import ExtendedModel
+from identification.closeloop.selection.bic import select_effects
+from identification.closeloop.selection.residual import ljung_box, noise_sigma
+from identification.closeloop.selection.screening import screen
 
 
 def _states(n=600, seed=0):

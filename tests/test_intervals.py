@@ -13,8 +13,8 @@ from scipy.stats import t as student
 
 from harness.robots.arm import Arm
 from harness.robots.bodies import last_body
-from identification.closeloop.payload import BodyTorque, standard
-from identification.closeloop.runs import close_loop_runs
+from identification.closeloop.candidates.payload import BodyTorque, standard
+from identification.closeloop.selection.runs import close_loop_runs
 from identification.intervals import jackknife
 from tests.helpers import lynxmotion_motion
 

@@ -1,4 +1,4 @@
-"""The body a load rides on, chosen by the data (identification.closeloop.load_body), never by a
+"""The body a load rides on, chosen by the data (identification.closeloop.candidates.load_body), never by a
 joint's name: on example-robot-data's finger_edu (every joint named finger_...) a 0.02 kg load
 on its last link is named there within 5 % (the gripper rule put it on the middle link and read
 277 kg); on the SO-101, a part held by its jaw is named on the body the jaw turns on; a link
@@ -13,8 +13,8 @@ import pytest
 
 from harness.robots.arm import Arm
 from harness.robots.bodies import candidate_bodies, last_body
-from identification.closeloop.payload import BodyTorque, describe, standard
-from identification.closeloop.runs import close_loop_runs
+from identification.closeloop.candidates.payload import BodyTorque, describe, standard
+from identification.closeloop.selection.runs import close_loop_runs
 from identification.signals import multisine
 
 FINGER = "finger_edu_description/robots/finger_edu.urdf"

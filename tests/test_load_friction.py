@@ -21,10 +21,10 @@ import pytest
 from harness.robots.arm import Arm
 from harness.robots.bodies import last_body
 from harness.robots.closed_model import closeloop_model, model_payload
-from identification.closeloop.effects import EffectTerm
-from identification.closeloop.load_friction import EFFECT
-from identification.closeloop.payload import BodyTorque, describe, standard
-from identification.closeloop.runs import RUNS_EFFECTS, close_loop_runs
+from identification.closeloop.candidates.effects import EffectTerm
+from identification.closeloop.candidates.load_friction import EFFECT
+from identification.closeloop.candidates.payload import BodyTorque, describe, standard
+from identification.closeloop.selection.runs import RUNS_EFFECTS, close_loop_runs
 from tests.helpers import lynxmotion_motion
 
 LYNX = Arm.of("lynxmotion")
@@ -87,7 +87,7 @@ def test_the_casadi_form_is_the_numeric_one(loop):
 
 def test_a_load_friction_term_needs_the_load():
     m = lynxmotion_motion(10, seed=1)
-    from identification.closeloop.effects import effect_torque
+    from identification.closeloop.candidates.effects import effect_torque
 
     with pytest.raises(ValueError, match="load torque"):
         effect_torque((EffectTerm(EFFECT, 2, 0.1),), m.q, m.qd, m.qdd)
@@ -98,7 +98,7 @@ def test_a_payload_that_trades_with_the_load_friction_is_read_as_a_range(loop):
     the two trade on the data and the payload is reported as its interval's range, not a
     point (issue #67: one real load read 2.38 and 2.17 kg on two runs); on the loop's
     well-excited Lynxmotion runs it is told apart."""
-    from identification.closeloop.load_friction import told_apart
+    from identification.closeloop.candidates.load_friction import told_apart
 
     rng = np.random.default_rng(0)
     payload = rng.normal(size=(500, 3))

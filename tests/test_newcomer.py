@@ -174,7 +174,7 @@ def test_excite_and_generate_print_one_condition_number(tmp_path, capsys):
 def test_closeloop_says_when_its_leftover_is_the_sensor_noise(tmp_path, capsys):
     """On a clean simulated robot closeloop names nothing (right) and left the user to guess
     whether 0.035 after is good: it is what the data's declared noise alone gives."""
-    from identification.closeloop.noise_level import declared_sigma, noise_line
+    from identification.closeloop.closed.noise_level import declared_sigma, noise_line
 
     data = tmp_path / "d.npz"
     assert main(["generate", "--robot", "lynxmotion", "--samples", "1500", "--seed", "4",

@@ -1,4 +1,4 @@
-"""A held-out run's sensor offset: one rule (identification.closeloop.offsets.held_out_offset)
+"""A held-out run's sensor offset: one rule (identification.closeloop.closed.offsets.held_out_offset)
 for identify, closeloop and predict.
 
 Runs of the declared Lynxmotion (its RNEA), each with its own sensor offset and a rest before
@@ -17,7 +17,7 @@ import pytest
 
 from harness.cli import main
 from harness.robots.arm import Arm
-from identification.closeloop.offsets import (
+from identification.closeloop.closed.offsets import (
     first_rest,
     held_out_offset,
     residual_offset,

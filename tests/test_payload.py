@@ -18,7 +18,7 @@ import pytest
 
 from harness.robots.arm import Arm
 from harness.robots.bodies import last_body
-from identification.closeloop.payload import (
+from identification.closeloop.candidates.payload import (
     consistent_fit,
     describe,
     standard,
@@ -86,7 +86,7 @@ def test_the_fit_stays_consistent_and_within_reach():
 
 def test_a_payload_entry_of_model_json_reads_back():
     from harness.robots.closed_model import _term
-    from identification.closeloop.effects import EffectTerm
+    from identification.closeloop.candidates.effects import EffectTerm
 
     params = standard(2.7, [0.03, 0.16, 0.02], [0.01, 0.001, 0.012, -0.002, 0.0005, 0.008])
     term = EffectTerm("payload", 6, 2.7, params=tuple(params), body="wrist_3_link")
@@ -238,7 +238,7 @@ def test_a_part_held_by_a_jaw_gripper_is_named_on_the_gripper(tmp_path):
 def _lynx_runs(coms, mass: float = 0.3, n: int = 300):
     """Two runs of the Lynxmotion (its RNEA, 0.002 N m noise), each carrying mass kg on its
     last body with the centre of mass given for it."""
-    from identification.closeloop.payload import BodyTorque
+    from identification.closeloop.candidates.payload import BodyTorque
     from tests.helpers import lynxmotion_motion
 
     arm = Arm.of("lynxmotion")
@@ -262,7 +262,7 @@ def test_the_runs_centres_of_mass_agree_only_when_they_do(monkeypatch, second, a
     case only.
     (The coefficients' jackknife intervals, not read here, are left out: they take 3/4 of
     the loop's time.)"""
-    from identification.closeloop import runs as loop_runs
+    from identification.closeloop.selection import runs as loop_runs
 
     monkeypatch.setattr(loop_runs, "jackknife", lambda fit, rows: (
         None, np.full_like(fit(np.concatenate(rows)), np.nan)))
@@ -277,7 +277,7 @@ def test_a_payload_s_centre_of_mass_is_where_the_mass_was_put():
     in its frame: the body's parameters minus the arm's read back (describe, and the payload's
     entry in closeloop.json and model.json, as the bench's payload case reads its truth) as
     1.5 kg at that point, with no rotational inertia about it."""
-    from identification.closeloop.effects import EffectTerm
+    from identification.closeloop.candidates.effects import EffectTerm
 
     arm, put = Arm.of("ur5"), np.array([0.03, -0.02, 0.08])
     loaded = arm.pinocchio.copy()

@@ -1,4 +1,4 @@
-"""Physical or nothing (identification.closeloop.ranges): an effect whose coefficient leaves its
+"""Physical or nothing (identification.closeloop.verdicts.ranges): an effect whose coefficient leaves its
 physical range is never named, on any path of the loop, however much it lowers the error.
 
 Each range is tried on the Lynxmotion (motors of 10 N m, 10 rad/s; 1.0 kg): a log whose
@@ -15,12 +15,12 @@ from harness.closeloop.one_log import rigid_library
 from harness.robots.arm import Arm
 from harness.robots.bodies import last_body
 from harness.robots.scales import robot_scales
-from identification.closeloop.effects import EffectTerm, effect_torque
-from identification.closeloop.loop import close_loop
-from identification.closeloop.measured import close_loop_measured
-from identification.closeloop.payload import BodyTorque, standard
-from identification.closeloop.ranges import ACCEL_TIME, LOAD_FRICTION_MAX, Scales
-from identification.closeloop.runs import close_loop_runs
+from identification.closeloop.candidates.effects import EffectTerm, effect_torque
+from identification.closeloop.candidates.payload import BodyTorque, standard
+from identification.closeloop.selection.one_log import close_loop_measured
+from identification.closeloop.selection.plant import close_loop
+from identification.closeloop.selection.runs import close_loop_runs
+from identification.closeloop.verdicts.ranges import ACCEL_TIME, LOAD_FRICTION_MAX, Scales
 from tests.helpers import lynxmotion_motion
 
 LYNX = Arm.of("lynxmotion")

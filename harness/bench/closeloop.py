@@ -41,7 +41,7 @@ from harness.closeloop.push_case import push_case, push_markdown, push_targets, 
 from harness.report.results import Context, Row, SectionResult, Target, check
 from harness.robots.arm import Arm
 from harness.robots.bodies import PayloadTorque
-from identification.closeloop.effects import effect_torque
+from identification.closeloop.candidates.effects import effect_torque
 
 SAMPLES = 4000  # measured samples per plant
 NOISE = 0.05  # torque noise std / torque std

@@ -8,7 +8,7 @@ import numpy as np
 
 from harness.closeloop.plant import CloseLoopRun
 from harness.report.figures import plt, save_figure
-from identification.closeloop.effects import UNITS, effect_torque
+from identification.closeloop.candidates.effects import UNITS, effect_torque
 
 AXIS = {"viscous": ("qd", "rad/s"), "coulomb": ("qd + lead qdd", "rad/s"),
         "armature": ("qdd", "rad/s^2"), "offset": ("sample", "-"), "spring": ("q", "rad"),

@@ -2,7 +2,7 @@
 log (`ingest`) or any dataset of the contract, on an arm's rigid-body base atoms.
 
 The loop is identification.closeloop.pipeline.close_the_log: the external torques found with
-the robot's nominal model and left out, then identification.closeloop.measured; here the
+the robot's nominal model and left out, then identification.closeloop.selection.one_log; here the
 robot's rigid-body library is built from its kinematics and the outcome written as
 closeloop.json. Errors are against the
 measured torque `tau` (and, where the file has one, also against `tau_clean`).
@@ -22,14 +22,14 @@ from harness.robots.bodies import last_body
 from harness.robots.scales import robot_scales
 from identification.closeloop.events.detect import Events
 from identification.closeloop.events.runs import events_json
-from identification.closeloop.measured import (
+from identification.closeloop.pipeline import close_the_log
+from identification.closeloop.selection.one_log import (
     EXPLAINED,
     MIN_GAIN,
     STRUCTURE,
     VALIDATION_BLOCKS,
     MeasuredLoop,
 )
-from identification.closeloop.pipeline import close_the_log
 from identification.errors import IdentificationError
 from identification.library.kinematic import KinematicLibrary
 from identification.metrics import rel_error

@@ -31,8 +31,8 @@ from harness.data.generate import generate
 from harness.data.runs import Runs
 from harness.robots.arm import Arm
 from harness.robots.bodies import last_body
-from identification.closeloop.offsets import run_tail, scored_error
-from identification.closeloop.payload import describe
+from identification.closeloop.candidates.payload import describe
+from identification.closeloop.closed.offsets import run_tail, scored_error
 
 # the case's draws: drawn once on 2026-12-07 (random.SystemRandom().randrange(10_000)) and
 # written here; no setting of the loop or of this case was chosen on them. The seed 8123 the

@@ -10,7 +10,7 @@ fraction of the samples.
 
 Declared models: `pinocchio` (the closed-form baseline, fixed), `identified`
 (the sparse prior-knowledge-library model fitted on the same training part; its
-kept terms are refitted jointly with the effects, identification.closeloop.identified)
+kept terms are refitted jointly with the effects, identification.closeloop.selection.plant_identified)
 or a MODEL.json (fixed). closeloop.json carries the contract's keys for the
 chosen one and, under `declared_models`, the effects and errors for both
 built-in declared models.
@@ -48,12 +48,12 @@ from harness.robots.registry import flange_frame
 from harness.robots.scales import robot_scales
 from harness.robots.torque_models import load_torque_model
 from identification.closeloop import pipeline
-from identification.closeloop.effects import Effect, EffectTerm
+from identification.closeloop.candidates.effects import Effect, EffectTerm
+from identification.closeloop.closed.truth import score_truth
 from identification.closeloop.events.detect import Events
 from identification.closeloop.events.runs import events_json
-from identification.closeloop.loop import CloseLoopResult, is_unexplained
 from identification.closeloop.pipeline import close_the_plant
-from identification.closeloop.truth import score_truth
+from identification.closeloop.selection.plant import CloseLoopResult, is_unexplained
 from identification.library.base import Library
 from identification.library.prior_knowledge import prior_knowledge_library
 from identification.torque_model import TorqueModel
@@ -121,7 +121,7 @@ class CloseLoopRun:
 
 def declared_model(spec: str, arm: Arm) -> TorqueModel | Library:
     """'pinocchio' or a MODEL.json path: a fixed torque model of arm; 'identified': the
-    library the loop identifies its declared model with (identification.closeloop.identified;
+    library the loop identifies its declared model with (identification.closeloop.selection.plant_identified;
     the Lynxmotion's prior-knowledge library)."""
     if spec == "identified":
         if "prior" not in arm.entry.libraries:

@@ -19,7 +19,7 @@ import numpy as np
 from harness.io import write_text
 from harness.robots.arm import Arm
 from harness.robots.registry import DEFAULT_ROBOT
-from identification.closeloop.effects import EffectTerm
+from identification.closeloop.candidates.effects import EffectTerm
 from models import MODELS
 
 DECLARED_MJCF = MODELS / "lynxmotion" / "lynxmotion.xml"
@@ -69,8 +69,9 @@ def write_variant(variant: Variant, directory: Path) -> Path:
 
 
 def friction_shape(plant: mujoco.MjModel, dof: int, friction: float) -> tuple[float, float]:
-    """(lead s, eps rad/s) of MuJoCo's regularized frictionloss on a dof (identification.closeloop.effects):
-    lead = 1 / b, b = 2 / (dmax timeconst); eps = R f / b, R = (1 - dmin) / dmin * invweight0."""
+    """(lead s, eps rad/s) of MuJoCo's regularized frictionloss on a dof
+    (identification.closeloop.candidates.effects): lead = 1 / b, b = 2 / (dmax timeconst);
+    eps = R f / b, R = (1 - dmin) / dmin * invweight0."""
     dmin, dmax = plant.dof_solimp[dof, :2]
     timeconst = max(plant.dof_solref[dof, 0], 2 * plant.opt.timestep)  # MuJoCo's lower bound
     b = 2.0 / (dmax * timeconst)

@@ -7,9 +7,9 @@ The declared model is the robot's nominal model (`pinocchio`: its URDF/MJCF) or 
 MODEL.json; with the nominal model the inertial candidate is the rigid-body correction
 of the physically consistent fit pulled toward it (identification.regression.consistent): a payload,
 a wrong mass or centre of mass, named as such rather than absorbed by springs and friction.
-Effects are chosen by identification.closeloop.runs; scores are on the --validate runs, or
+Effects are chosen by identification.closeloop.selection.runs; scores are on the --validate runs, or
 without them on the last --holdout of every run (the rest trains), each scored run with its
-sensor offset by the rule identify and predict use (identification.closeloop.offsets: the
+sensor offset by the rule identify and predict use (identification.closeloop.closed.offsets: the
 model's mean residual on the training runs' samples, or on its own run's trained part),
 before and after alike.
 """
@@ -27,19 +27,19 @@ from harness.robots.bodies import candidate_bodies, last_body
 from harness.robots.closed_model import model_payload
 from harness.robots.scales import robot_scales
 from harness.robots.torque_models import load_torque_model, read_model
+from identification.closeloop.candidates.inertial import inertial_correction
+from identification.closeloop.candidates.payload import REACH
+from identification.closeloop.closed.leftover import LEFT, Leftover
+from identification.closeloop.closed.offsets import RULE, ScoredRun, held_out_offset
 from identification.closeloop.events.detect import Events
 from identification.closeloop.events.runs import (
     events_json,
     events_line,
 )
-from identification.closeloop.inertial import inertial_correction
-from identification.closeloop.leftover import LEFT, Leftover
-from identification.closeloop.offsets import RULE, ScoredRun, held_out_offset
-from identification.closeloop.payload import REACH
 from identification.closeloop.pipeline import close_the_loop
-from identification.closeloop.ranges import ranges_json
-from identification.closeloop.runs import RunsLoop
-from identification.closeloop.verdicts import AGREE, MIN_GAIN
+from identification.closeloop.selection.runs import RunsLoop
+from identification.closeloop.verdicts.agreement import AGREE, MIN_GAIN
+from identification.closeloop.verdicts.ranges import ranges_json
 from identification.errors import IdentificationError
 
 

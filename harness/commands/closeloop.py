@@ -13,7 +13,7 @@ from harness.io import write_json
 from harness.robots.arm import Arm
 from harness.robots.registry import ROBOTS
 from harness.robots.resolve import resolve_arm, variant_of
-from identification.closeloop.noise_level import noise_line, runs_line
+from identification.closeloop.closed.noise_level import noise_line, runs_line
 
 
 def register(sub) -> None:

@@ -11,7 +11,7 @@ from harness.io import write_npz
 from harness.robots.registry import DEFAULT_ROBOT
 from harness.robots.resolve import resolve_arm
 from harness.robots.torque_models import read_model, torque_model
-from identification.closeloop.offsets import (
+from identification.closeloop.closed.offsets import (
     MIN_REST,
     RECORDED,
     REST_SPEED,
@@ -61,7 +61,7 @@ def run(args) -> int:
     if args.offset_from_rest:
         offset, start = _offset_from_rest(args.data, states, model)
         source = f"the log's first rest ({start} samples, not scored)"
-    else:  # the rule held-out runs are scored by (identification.closeloop.offsets)
+    else:  # the rule held-out runs are scored by (identification.closeloop.closed.offsets)
         offset = held_out_offset(model, new_run_offset(read.payload, model))
         start, source = 0, RECORDED
     if measured:
@@ -105,7 +105,7 @@ def new_run_offset(payload, model) -> np.ndarray:
 
 
 def _offset_from_rest(path: str, states: dict, model) -> tuple[np.ndarray, int]:
-    """The log's offset from its first rest (identification.closeloop.offsets) and the rest's
+    """The log's offset from its first rest (identification.closeloop.closed.offsets) and the rest's
     length in samples."""
     if "tau" not in states:
         raise UserError(f"{path}: --offset-from-rest needs the log's torque (tau)")

@@ -69,10 +69,10 @@ CANDIDATES = 3  # the bodies the last joints move: where a load is looked for
 
 
 def candidate_bodies(arm, count: int = CANDIDATES) -> tuple:
-    """The bodies (identification.closeloop.payload.LastBody) the last `count` joints move,
+    """The bodies (identification.closeloop.candidates.payload.LastBody) the last `count` joints move,
     the last first: where the measured loop looks for a load when no link is named; the data
-    choose among them (identification.closeloop.load_body)."""
-    from identification.closeloop.payload import LastBody
+    choose among them (identification.closeloop.candidates.load_body)."""
+    from identification.closeloop.candidates.payload import LastBody
 
     model = arm.pinocchio
     last = model.njoints - 1
@@ -91,12 +91,12 @@ JAW = re.compile(r"gripper|finger|jaw|claw", re.IGNORECASE)
 
 
 def last_body(arm, link: str | None = None):
-    """The body a payload rides on (identification.closeloop.payload.LastBody): the link
+    """The body a payload rides on (identification.closeloop.candidates.payload.LastBody): the link
     named (any link of the arm, a fixed one on the body it is fixed to), else the link the
     last joint moves (the first body frame of that joint), or the one before when the last
     joint is a gripper's jaw (JAW: SO-100/101, TALOS's arm, the Z1). UserError for a link
     the arm lacks or one no joint moves."""
-    from identification.closeloop.payload import LastBody
+    from identification.closeloop.candidates.payload import LastBody
 
     model = arm.pinocchio
     bodies = [f for f in model.frames if f.type == pin.FrameType.BODY]

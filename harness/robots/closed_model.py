@@ -6,7 +6,7 @@ rigid-body correction (a MODEL.json on the robot's base atoms) or null, "offsets
 constant torque per joint the model adds (N m; 0 as written by the loop), "effects": [{"joint",
 "effect", "coefficient", "unit", shape...}], "sensor_offsets": {"training", "heldout": per
 run, per joint (N m); "new_run": per joint, the offset a run the model was not trained on
-is scored with (identification.closeloop.offsets.held_out_offset: `predict` adds it on a
+is scored with (identification.closeloop.closed.offsets.held_out_offset: `predict` adds it on a
 measured log); "rule"}}: read by `predict` and `plan` through
 harness.robots.torque_models.torque_model. A sensor offset is a property of a run, not of
 the robot: reported under "sensor_offsets", never added to the torque a planner uses.
@@ -19,10 +19,10 @@ from pathlib import Path
 from harness.robots.arm import Arm
 from harness.robots.bodies import last_body
 from harness.robots.resolve import resolve_arm
-from identification.closeloop.effects import UNITS, EffectTerm
-from identification.closeloop.extended import closed_model
-from identification.closeloop.offsets import RULE
-from identification.closeloop.payload import standard
+from identification.closeloop.candidates.effects import UNITS, EffectTerm
+from identification.closeloop.candidates.payload import standard
+from identification.closeloop.closed.extended import closed_model
+from identification.closeloop.closed.offsets import RULE
 from identification.errors import IdentificationError
 from identification.kinematic_model import KinematicModel
 from identification.model import model_from_dict, model_to_dict

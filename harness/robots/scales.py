@@ -1,5 +1,5 @@
 """The scales of a robot that bound what the measured loop may name of it
-(identification.closeloop.ranges): its torque and speed limits, joint spans and mass, the
+(identification.closeloop.verdicts.ranges): its torque and speed limits, joint spans and mass, the
 data's torques and speeds where it declares none."""
 
 from __future__ import annotations
@@ -7,11 +7,11 @@ from __future__ import annotations
 import numpy as np
 
 from harness.robots.arm import Arm
-from identification.closeloop.ranges import Scales
+from identification.closeloop.verdicts.ranges import Scales
 
 
 def robot_scales(arm: Arm, runs: list[tuple]) -> Scales:
-    """The scales that bound arm's named coefficients (identification.closeloop.ranges): its
+    """The scales that bound arm's named coefficients (identification.closeloop.verdicts.ranges): its
     torque and speed limits, joint spans and mass, the runs' torques and speeds where it
     declares none."""
     tau, qd, q = (np.concatenate([r[i] for r in runs]) for i in (3, 1, 0))

@@ -29,7 +29,7 @@ from harness.closeloop.plants import DECLARED_MJCF
 from harness.data.generate import SAMPLE_RATE
 from harness.report.results import Context, SectionResult, check
 from harness.robots.arm import Arm
-from identification.closeloop.loop import UNEXPLAINED_SIZE
+from identification.closeloop.selection.plant import UNEXPLAINED_SIZE
 
 NOISE = 0.05  # torque noise std / torque std of the measured data
 HOLDOUT = 0.25  # last fraction of the samples, held out for the errors

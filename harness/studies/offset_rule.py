@@ -8,7 +8,7 @@ rel_error against the measured torque, on the run's motion after its first rest)
 the oracle's (the true offset):
 
 - training (the rule): the model's mean residual on the training runs' samples
-  (identification.closeloop.offsets.held_out_offset, what identify, closeloop and predict
+  (identification.closeloop.closed.offsets.held_out_offset, what identify, closeloop and predict
   score with);
 - rest: the run's first rest's reading (the model's mean residual there);
 - none: 0;
@@ -48,7 +48,7 @@ from harness.identify.fits import arm_identification
 from harness.identify.scoring import perturbed_nominal, sines_motion
 from harness.report.results import Context, SectionResult, Target, check
 from harness.robots.arm import Arm
-from identification.closeloop.offsets import first_rest, held_out_offset, residual_offset
+from identification.closeloop.closed.offsets import first_rest, held_out_offset, residual_offset
 from identification.identify import identify
 from identification.kinematic_model import KinematicModel
 from identification.metrics import rel_error

@@ -1,34 +1,34 @@
-"""The measured loop on runs of one robot, as its steps (`closeloop --data`):
+"""The measured loop, as its steps; each step a folder of identification/closeloop:
 
-1. residual and events: the declared model's external-torque estimate on every run, the
-   world's transients found and left out (identification.closeloop.events);
+1. events/: the declared model's external-torque estimate on every run (a momentum observer),
+   the world's transients (a push, a bump) found and left out of every later step
+   (`leave_out_events`);
 2. the split: training runs, and the scored runs (the --validate runs, or the last holdout of
-   every run), each scored run with its sensor offset by the rule identify and predict use:
-   the model's mean residual on the training runs' samples, or on its own run's trained
-   part for a holdout (identification.closeloop.offsets);
-3. candidates, selection and verdicts on the training runs: joint effects, the load's body,
-   load friction, the rigid-body correction, each named only in its physical range and where
-   it holds run to run (identification.closeloop.runs, .verdicts, .ranges);
-4. the closed model (the declared model and the named terms) scored before and after, and
-   what it leaves per joint (identification.closeloop.leftover).
+   every run), each scored run with its sensor offset by the rule identify and predict use
+   (closed/offsets.py);
+3. candidates/: what the declared model may lack: joint effects (effects.py), load friction
+   (load_friction.py), a payload on one of the bodies the data choose among (payload.py,
+   load_body.py), the rigid-body correction (inertial.py);
+4. selection/: which candidates the training data name: validated run by run
+   (selection/runs.py), on one log's validation blocks (selection/one_log.py), or by BIC on a
+   simulated plant (selection/plant.py, plant_identified.py);
+5. verdicts/: named only in its physical range (verdicts/ranges.py) and where it holds from
+   one run to the next (verdicts/agreement.py);
+6. closed/: the closed model, one composition of the declared model and the named terms
+   (closed/extended.py), scored before and after, and what it leaves per joint
+   (closed/leftover.py, noise_level.py).
 
-The same front serves every path of `closeloop`, each entering at its own function:
+Every path of `closeloop` enters here, at its own function, and every path starts with step 1:
 
-- runs of a robot against a fixed declared model (`--data`, `--validate`): `close_the_loop`,
-  the steps above;
+- runs of a robot against a fixed declared model (`--data`, `--validate`): `close_the_loop`;
 - one log whose declared model is its own rigid-body identification (`--data --declared
-  identified`): `close_the_log` (step 1, then identification.closeloop.measured: the
-  identification on the training part, candidates and selection on its validation blocks);
+  identified`): `close_the_log`;
 - a simulated plant (`--plant`): `leave_out_events`, then `close_the_plant` for each declared
-  model compared (identification.closeloop.loop, or .identified for a declared model
-  identified on the same data: selection by BIC on the training part, screened by its halves
-  and validation blocks).
-
-Step 1 is `leave_out_events` on every path: no fit and no score of any path sees the samples
-of an external torque.
+  model compared.
 
 What a robot is (its model, its load's body, its scales, the rigid-body correction's fit) is
-the caller's: this module sees arrays and torque models only.
+the caller's (harness/robots: bodies.py, scales.py; the command's files in harness/closeloop):
+this module sees arrays and torque models only.
 """
 
 from __future__ import annotations
@@ -38,22 +38,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from identification.closeloop.events.detect import Events
-from identification.closeloop.events.runs import run_events, without_events
-from identification.closeloop.identified import close_loop_identified
-from identification.closeloop.leftover import Leftover, leftover
-from identification.closeloop.loop import CloseLoopResult, close_loop
-from identification.closeloop.measured import MeasuredLoop, close_loop_measured
-from identification.closeloop.offsets import (
+from identification.closeloop.candidates.payload import REACH, LastBody
+from identification.closeloop.closed.leftover import Leftover, leftover
+from identification.closeloop.closed.offsets import (
     ScoredRun,
     run_tail,
     scored_error,
     scored_offsets,
     whole_run,
 )
-from identification.closeloop.payload import REACH, LastBody
-from identification.closeloop.ranges import Scales
-from identification.closeloop.runs import RunsLoop, close_loop_runs
+from identification.closeloop.events.detect import Events
+from identification.closeloop.events.runs import run_events, without_events
+from identification.closeloop.selection.one_log import MeasuredLoop, close_loop_measured
+from identification.closeloop.selection.plant import CloseLoopResult, close_loop
+from identification.closeloop.selection.plant_identified import close_loop_identified
+from identification.closeloop.selection.runs import RunsLoop, close_loop_runs
+from identification.closeloop.verdicts.ranges import Scales
 from identification.library.base import Library
 
 
@@ -95,7 +95,7 @@ def close_the_log(nominal, library, run: tuple, times, holdout: float = 0.25,
                   ) -> tuple[MeasuredLoop, tuple, Events]:
     """One log (q, qd, qdd, tau[, tau_clean]) against its own rigid-body identification
     (library: the robot's rigid-body atoms) on its first 1 - holdout: the events found with the
-    nominal model and left out, then identification.closeloop.measured on what is kept.
+    nominal model and left out, then identification.closeloop.selection.one_log on what is kept.
     Returns the loop, the kept arrays and the events."""
     (kept,), (found,) = leave_out_events(nominal, [run], [times], body,
                                          None if scales is None else scales([run[:4]]))
@@ -112,7 +112,7 @@ def close_the_plant(declared, run: tuple, holdout: float = 0.25, payload=None,
     leave_out_events, is the caller's: once for every declared model it compares) against a
     fixed declared torque model, or a library (identification.library.base.Library) the
     declared model is identified with on the training part: the plant loop
-    (identification.closeloop.loop / .identified); payload: the unit payload torque at the
+    (identification.closeloop.selection.plant / .identified); payload: the unit payload torque at the
     flange (its `symbolic` form for the planner); scales(runs) -> the robot's scales."""
     split = int(round(len(run[0]) * (1.0 - holdout)))
     train_scales = None if scales is None else scales([tuple(a[:split] for a in run[:4])])

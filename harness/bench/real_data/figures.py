@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.report.figures import plt, save_figure
-from identification.closeloop.effects import effect_torque
+from identification.closeloop.candidates.effects import effect_torque
 
 FRICTION = ("viscous", "coulomb", "sigmoid")
 COLORS = {"nominal": "0.6", "least_squares": "tab:blue", "identified": "tab:green",

@@ -142,7 +142,7 @@ def onset(z: np.ndarray, t: np.ndarray, a: int, b: int) -> float:
 def find_events(model, t, q, qd, qdd, tau, body=None, scales=None) -> Events:
     """External-torque events of a log (t (n,) s; q, qd, qdd, tau (n, dof)) against the
     declared torque model; body: the load's body's regressor (state_columns), or None; scales:
-    the robot's (identification.closeloop.ranges), which bound the persistent effects (None:
+    the robot's (identification.closeloop.verdicts.ranges), which bound the persistent effects (None:
     unbounded)."""
     t = np.asarray(t, float)
     r = observer(model, t, q, qd, tau)

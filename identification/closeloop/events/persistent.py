@@ -17,7 +17,7 @@ REACH = 1.0  # m: a load's centre of mass within it, for its bounds
 def state_columns(model, q, qd, qdd, body=None, pose: bool = True, scales=None,
                   ) -> list[tuple[np.ndarray, np.ndarray]]:
     """Per joint j, the (n, k) torques of the persistent effects the detection removes and the
-    (k,) bound on each one's coefficient (scales: the robot's, identification.closeloop.ranges;
+    (k,) bound on each one's coefficient (scales: the robot's, identification.closeloop.verdicts.ranges;
     None: unbounded): an offset (+- tau_max), viscous (+- tau_max / v_max) and dry friction
     (+- tau_max), the declared torque's scale (+- 1), a spring or tendon from every joint's
     pose (+- tau_max / that joint's span), and, with body (a callable (q, qd, qdd) ->

@@ -28,13 +28,13 @@ coefficient follow the CLI contract:
                                                 of the model's torque (the declared model and
                                                 its payload); the shape is the joint's Coulomb
                                                 shape. On a measured log only
-                                                (identification.closeloop.runs).
+                                                (identification.closeloop.selection.runs).
 - `sigmoid`  tau_j = phi1 [s(phi2 (qd_j + phi3)) - s(phi2 phi3)], s(x) = 1 / (1 + e^-x)
                                                 phi1 in N m; the friction model Gaz et al.
                                                 (RA-L 2019) identified on a real Panda:
                                                 steepness phi2 (s/rad) and shift phi3 (rad/s)
                                                 are shape parameters estimated from the data
-                                                (identification.closeloop.measured). Not in
+                                                (identification.closeloop.selection.one_log). Not in
                                                 the default dictionary of simulated plants.
 
 Why that Coulomb shape. MuJoCo's dry friction (joint `frictionloss` f) is a soft
@@ -64,7 +64,7 @@ import numpy as np
 from identification.friction import sigmoid_friction
 
 JOINT_EFFECTS = ("viscous", "coulomb", "armature", "offset", "spring")
-# the candidates on a measured log (identification.closeloop.measured): Gaz et al.'s sigmoid
+# the candidates on a measured log (identification.closeloop.selection.one_log): Gaz et al.'s sigmoid
 # friction beside viscous and Coulomb; the offset is part of the declared model there
 MEASURED_EFFECTS = ("viscous", "coulomb", "sigmoid", "armature", "spring")
 UNITS = {"viscous": "N m s/rad", "coulomb": "N m", "armature": "kg m^2", "offset": "N m",
@@ -105,14 +105,14 @@ class EffectTerm:
     steepness: float = SIGMOID_STEEPNESS  # s/rad, sigmoid shape only (phi2)
     shift: float = 0.0  # rad/s, sigmoid shape only (phi3)
     params: tuple[float, ...] = ()  # payload on a measured log: the last body's 10 standard
-    # parameters (identification.closeloop.payload), coefficient = mass (kg)
+    # parameters (identification.closeloop.candidates.payload), coefficient = mass (kg)
     body: str = ""  # the body a payload is on
 
     def to_json(self) -> dict:
         out = {"joint": self.joint, "effect": self.effect, "coefficient": self.coefficient,
                "unit": UNITS[self.effect]}
         if self.effect == "payload" and self.params:
-            from identification.closeloop.payload import describe
+            from identification.closeloop.candidates.payload import describe
 
             mass, com, inertia = describe(self.params)
             out.update(body=self.body, mass=mass, com=com.tolist(), inertia=inertia.tolist(),

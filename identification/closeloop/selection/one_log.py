@@ -10,19 +10,19 @@ validation blocks of the training part (the held-out part only scores):
    regression on the robot's rigid-body base atoms, identification.identify; a constant
    sensor offset per joint is part of it).
 2. Candidates, per joint: `viscous`, `coulomb`, `sigmoid` (Gaz et al.'s friction),
-   `armature`, `spring` (identification.closeloop.effects). The shapes of the nonlinear
+   `armature`, `spring` (identification.closeloop.candidates.effects). The shapes of the nonlinear
    ones (Coulomb lead and width, sigmoid steepness and shift) are fitted per joint by
    variable projection: the least-squares residual of the rigid-body atoms, the offsets,
    the joint's viscous column and the candidate, minimized over the shape.
-3. Forward selection by block cross-validation (identification.closeloop.crossval): the
+3. Forward selection by block cross-validation (identification.closeloop.selection.crossval): the
    candidate that lowers the validation error most is added while it lowers its own
    joint's validation error sum of squares by at least MIN_GAIN and its coefficient in
-   the joint fit lies in its physical range (identification.closeloop.ranges).
+   the joint fit lies in its physical range (identification.closeloop.verdicts.ranges).
 4. Adding: the rigid-body atoms the declared model kept, the offsets and the named effects
    refitted jointly by weighted least squares on the training part.
 5. A joint is `unexplained` when its declared residual carries structure - validation
    power above its white-noise level (estimated from second differences of the residual,
-   identification.closeloop.residual.noise_sigma) of more than STRUCTURE noise sigmas RMS -
+   identification.closeloop.selection.residual.noise_sigma) of more than STRUCTURE noise sigmas RMS -
    and the named effects remove less than EXPLAINED of that structured power: something
    is left that no candidate accounts for, and it is said rather than forced onto a name.
    Measured on structure, not on the whole residual power: where noise dominates, the
@@ -42,19 +42,19 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.optimize import minimize
 
-from identification.closeloop.crossval import BlockValidation, weighted_fit
-from identification.closeloop.effects import (
+from identification.closeloop.candidates.effects import (
     COULOMB_SHAPES,
     MEASURED_EFFECTS,
     EffectTerm,
     effect_torque,
 )
-from identification.closeloop.extended import ExtendedModel
-from identification.closeloop.loop import check_data
-from identification.closeloop.ranges import Scales, unbounded
-from identification.closeloop.residual import noise_sigma
-from identification.closeloop.selection import EPS_RANGE, LEAD_RANGE
-from identification.closeloop.verdicts import best_left
+from identification.closeloop.closed.extended import ExtendedModel
+from identification.closeloop.selection.bic import EPS_RANGE, LEAD_RANGE
+from identification.closeloop.selection.crossval import BlockValidation, weighted_fit
+from identification.closeloop.selection.plant import check_data
+from identification.closeloop.selection.residual import noise_sigma
+from identification.closeloop.verdicts.agreement import best_left
+from identification.closeloop.verdicts.ranges import Scales, unbounded
 from identification.identify import identify
 from identification.kinematic_model import KinematicModel
 from identification.library.kinematic import KinematicLibrary
@@ -243,7 +243,7 @@ def close_loop_measured(library: KinematicLibrary, q, qd, qdd, tau, holdout: flo
                         effects=MEASURED_EFFECTS, scales: Scales | None = None) -> MeasuredLoop:
     """Identify the rigid body (library: its atoms, no joint atoms) on the first 1 - holdout
     of the samples, trace its residual to named effects, add them, score on the rest;
-    scales: the robot's, which bound every named coefficient (identification.closeloop.ranges;
+    scales: the robot's, which bound every named coefficient (identification.closeloop.verdicts.ranges;
     None: the signs only)."""
     dof = library.dof
     q, qd, qdd, tau, _, split = check_data(q, qd, qdd, tau, tau, dof, holdout)

@@ -2,11 +2,11 @@
 
 A joint is unexplained when its held-out residual stays above its sensor noise by more
 than LEFT noise sigmas RMS (the noise from second differences of the residual, run by run,
-identification.closeloop.residual.noise_sigma): structure the catalogue does not span.
+identification.closeloop.selection.residual.noise_sigma): structure the catalogue does not span.
 What is left is described by its correlation with the joint's position, velocity and the
 time within its run (a drift). A sensor offset is a property of a run, not of the robot:
 the residual's shape is described about each run's own mean (the scores take the offset
-from samples they do not count: identification.closeloop.offsets).
+from samples they do not count: identification.closeloop.closed.offsets).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from identification.closeloop.residual import noise_sigma
+from identification.closeloop.selection.residual import noise_sigma
 
 LEFT = 1.0  # noise sigmas RMS of structure left: twice the noise's power
 ROUNDING = 1e-9  # of the joint's torque RMS: a residual below it is rounding, not structure

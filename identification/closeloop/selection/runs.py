@@ -9,10 +9,10 @@ MODEL.json) and the training runs:
    a held-out run in validation gets its own refitted). Rows of joint j weigh 1 / (RMS of
    its target).
 2. Candidates, per joint: `viscous`, `coulomb`, `armature`, `spring` (the Coulomb shape
-   fitted by variable projection, identification.closeloop.measured.candidates),
+   fitted by variable projection, identification.closeloop.selection.one_log.candidates),
    `load_friction` (dry friction growing with the joint's load torque, its shape fitted:
-   identification.closeloop.load_friction), when given, a payload on the last body
-   (identification.closeloop.payload), and, when given, `inertial`: the rigid-body
+   identification.closeloop.candidates.load_friction), when given, a payload on the last body
+   (identification.closeloop.candidates.payload), and, when given, `inertial`: the rigid-body
    correction of the consistent fit pulled toward the declared model
    (identification.regression.consistent), one column acting on every joint, its
    coefficient a scale (1 = the consistent fit's correction).
@@ -20,7 +20,7 @@ MODEL.json) and the training runs:
    blocks of it). A candidate is named when it cuts its joint's validation error power by
    >= MIN_GAIN in total and on no held-out run makes any joint it acts on worse (one run
    alone: in total only, its blocks are too short to each decide), its coefficient lies in
-   its physical range (identification.closeloop.ranges), and its coefficient fitted on
+   its physical range (identification.closeloop.verdicts.ranges), and its coefficient fitted on
    each run alone agrees with every other run's within AGREE combined standard errors (a
    run's error from the spread over RUN_BLOCKS blocks of it: coloured residuals make the
    white-noise formula far too small).
@@ -28,7 +28,7 @@ MODEL.json) and the training runs:
    (named load friction: alternated with the load of the model fitted); an effect whose
    refitted coefficient leaves its range is dropped and the rest refitted.
    The offsets stay out of it: a sensor offset is a property of a run, not of the robot, so
-   a new run is scored with its own offset refitted (identification.closeloop.leftover).
+   a new run is scored with its own offset refitted (identification.closeloop.closed.leftover).
 """
 
 from __future__ import annotations
@@ -37,19 +37,16 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from identification.closeloop.crossval import BlockValidation, weighted_fit
-from identification.closeloop.effects import EffectTerm, effect_torque
-from identification.closeloop.extended import ExtendedModel, closed_model
-from identification.closeloop.load_body import choose_body
-from identification.closeloop.load_friction import (
+from identification.closeloop.candidates.effects import EffectTerm, effect_torque
+from identification.closeloop.candidates.load_body import choose_body
+from identification.closeloop.candidates.load_friction import (
     EFFECT,
     refit_under_load,
     spread_with_and_without,
     told_apart,
     with_payload,
 )
-from identification.closeloop.measured import VALIDATION_BLOCKS, _Projector, candidates
-from identification.closeloop.payload import (
+from identification.closeloop.candidates.payload import (
     REACH,
     LastBody,
     com_spread,
@@ -57,8 +54,10 @@ from identification.closeloop.payload import (
     named_payload,
     payload_column,
 )
-from identification.closeloop.ranges import Scales, unbounded
-from identification.closeloop.verdicts import (
+from identification.closeloop.closed.extended import ExtendedModel, closed_model
+from identification.closeloop.selection.crossval import BlockValidation, weighted_fit
+from identification.closeloop.selection.one_log import VALIDATION_BLOCKS, _Projector, candidates
+from identification.closeloop.verdicts.agreement import (
     AGREE,
     MIN_GAIN,
     RUN_BLOCKS,
@@ -67,6 +66,7 @@ from identification.closeloop.verdicts import (
     rows_of,
     verdict,
 )
+from identification.closeloop.verdicts.ranges import Scales, unbounded
 from identification.errors import IdentificationError
 from identification.intervals import RULE, jackknife
 from identification.torque_model import TorqueModel, as_states
@@ -88,7 +88,7 @@ class Named:
     per_run_std: tuple[float, ...]  # standard error of each run's coefficient
     gain: float  # fraction of its joint's validation error power it removes
     physical: bool  # has a physical reading (see module docstring)
-    detail: tuple = ()  # a payload's per-run figures (identification.closeloop.payload)
+    detail: tuple = ()  # a payload's per-run figures (identification.closeloop.candidates.payload)
     interval: float = float("nan")  # the coefficient's 95 % half-width (intervals.jackknife)
 
     def to_json(self) -> dict:
@@ -125,8 +125,8 @@ def close_loop_runs(declared: TorqueModel, runs: list[tuple[np.ndarray, ...]],
     robot ((n_r, dof) each, rad, rad/s, rad/s^2, N m); inertial: the rigid-body correction
     candidate (a TorqueModel of the torque to add to declared), or None; body: the body whose
     payload (centre of mass within reach m of its joint) is a candidate, a tuple of candidate
-    bodies the data choose among (identification.closeloop.load_body), or None;
-    scales: the robot's, which bound every named coefficient (identification.closeloop.ranges;
+    bodies the data choose among (identification.closeloop.candidates.load_body), or None;
+    scales: the robot's, which bound every named coefficient (identification.closeloop.verdicts.ranges;
     None: the signs only)."""
     dof = declared.dof
     scales = scales or unbounded(dof)

@@ -15,12 +15,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from identification.closeloop.effects import Effect, EffectDictionary, EffectTerm
-from identification.closeloop.extended import ExtendedModel
-from identification.closeloop.identified import KeptSpan, refit_kept
-from identification.closeloop.loop import projected_dictionary
-from identification.closeloop.residual import noise_sigma
-from identification.closeloop.selection import refine_coulomb, refit
+from identification.closeloop.candidates.effects import Effect, EffectDictionary, EffectTerm
+from identification.closeloop.closed.extended import ExtendedModel
+from identification.closeloop.selection.bic import refine_coulomb, refit
+from identification.closeloop.selection.plant import projected_dictionary
+from identification.closeloop.selection.plant_identified import KeptSpan, refit_kept
+from identification.closeloop.selection.residual import noise_sigma
 from identification.metrics import rel_error
 from identification.torque_model import TorqueModel
 

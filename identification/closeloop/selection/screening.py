@@ -7,7 +7,7 @@ are fitted on). A selected effect is therefore only *named* if
 
 1. stable: its coefficients fitted on the first and the second half of the training part
    agree, |c1 - c2| <= STABILITY |c| + Z_NOISE se(c1 - c2) (se from the white-noise level),
-2. physical: its coefficient lies in its physical range (identification.closeloop.ranges),
+2. physical: its coefficient lies in its physical range (identification.closeloop.verdicts.ranges),
 3. useful: leaving it out raises the block cross-validated error (VALIDATION_BLOCKS
    contiguous blocks of the training part, each predicted from the others) on the joints
    it acts on.
@@ -28,8 +28,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from identification.closeloop.effects import EffectTerm, PayloadTorque, effect_torque
-from identification.closeloop.ranges import Scales, unbounded
+from identification.closeloop.candidates.effects import EffectTerm, PayloadTorque, effect_torque
+from identification.closeloop.verdicts.ranges import Scales, unbounded
 
 STABILITY = 0.10  # relative disagreement of the two halves' coefficients tolerated
 Z_NOISE = 4.0  # ... plus this many standard errors of the difference from sensor noise
@@ -157,7 +157,7 @@ def screen(target: np.ndarray, base: list[np.ndarray], terms: tuple[EffectTerm, 
            sigma: np.ndarray, q, qd, qdd, payload: PayloadTorque | None = None,
            scales: Scales | None = None) -> Screening:
     """Keep the robust terms among `terms` (selected on target (n, dof), N m), refitted;
-    scales: the robot's, which bound every coefficient (identification.closeloop.ranges; None:
+    scales: the robot's, which bound every coefficient (identification.closeloop.verdicts.ranges; None:
     the signs only)."""
     scales = scales or unbounded(q.shape[1])
     problem = StackedProblem(target, base, _columns(terms, q, qd, qdd, payload), sigma)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from identification.closeloop.leftover import LEFT
+from identification.closeloop.closed.leftover import LEFT
 
 AT_LEVEL = float(np.sqrt(1.0 + LEFT**2))
 

@@ -158,7 +158,7 @@ def com_spread(base, target, effects, regressor, w, rows: list[np.ndarray], bloc
 def com_agreement(com: np.ndarray, std: np.ndarray, within: float) -> bool:
     """Whether the runs' centres of mass (runs, 3) m agree within `within` combined standard
     errors (the measured loop holds them to the runs' coefficients' rule,
-    identification.closeloop.verdicts.AGREE: within one, two runs of one load would disagree
+    identification.closeloop.verdicts.agreement.AGREE: within one, two runs of one load would disagree
     one time in three)."""
     diff = np.abs(com[:, None] - com[None, :])
     return bool(np.all(diff <= within * np.hypot(std[:, None], std[None, :]) + 1e-12))

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from identification.closeloop.crossval import BlockValidation
-from identification.closeloop.payload import LastBody, payload_column
+from identification.closeloop.candidates.payload import LastBody, payload_column
+from identification.closeloop.selection.crossval import BlockValidation
 
 
 def choose_body(bodies: tuple[LastBody, ...], base, target, states, w, reach: float, folds,

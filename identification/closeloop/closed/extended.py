@@ -11,8 +11,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from identification.closeloop.effects import EffectTerm, PayloadTorque, effect_torque
-from identification.closeloop.payload import BodyTorque, LastBody
+from identification.closeloop.candidates.effects import EffectTerm, PayloadTorque, effect_torque
+from identification.closeloop.candidates.payload import BodyTorque, LastBody
 from identification.errors import IdentificationError
 from identification.torque_model import TorqueModel, as_states
 
@@ -28,7 +28,7 @@ class ExtendedModel:
     payload term is present.
     fallback: joints (1..dof) on which the model is `original` (the declared model as
     given; default `declared`) without any effect: the effects made them worse on
-    validation (identification.closeloop.robustness).
+    validation (identification.closeloop.selection.screening).
     """
 
     def __init__(self, declared: TorqueModel, terms: tuple[EffectTerm, ...],

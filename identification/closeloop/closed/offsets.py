@@ -37,7 +37,7 @@ RULE = ("a scored run's sensor offset is the model's mean residual on the sample
         "trained on (a --holdout tail), else every training run's, pooled (a run never "
         "trained on: a --validate run, a log given to predict, which reads it as "
         "sensor_offsets.new_run); never from the samples scored, never from a rest, whose "
-        "reading holds the joints' static friction (identification.closeloop.offsets; "
+        "reading holds the joints' static friction (identification.closeloop.closed.offsets; "
         "torquebench study offset_rule)")
 SAME_RUN = "the run's trained samples (the same sensor zero)"
 RECORDED = ("the model file's offset for a new run (sensor_offsets.new_run; else the model's "

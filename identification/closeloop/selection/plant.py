@@ -1,10 +1,10 @@
 """Close the loop on measured data: residual -> missing effect -> add it -> error before/after.
 
 1. Residual of the declared model on the training part (first 1 - holdout of the
-   samples in time order) and its diagnostics (identification.closeloop.residual).
+   samples in time order) and its diagnostics (identification.closeloop.selection.residual).
 2. Tracing: forward selection with BIC over the effect dictionary
-   (identification.closeloop.selection), all joints at once; then screening
-   (identification.closeloop.robustness): only effects whose coefficients agree on
+   (identification.closeloop.selection.bic), all joints at once; then screening
+   (identification.closeloop.selection.screening): only effects whose coefficients agree on
    the two halves of the training part and that lower its block cross-validated
    error are named, the others are returned as `candidates` with the reason, and a
    joint the effects make worse on validation falls back to the declared model.
@@ -27,7 +27,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from identification.closeloop.effects import (
+from identification.closeloop.candidates.effects import (
     Effect,
     EffectDictionary,
     EffectTerm,
@@ -35,10 +35,10 @@ from identification.closeloop.effects import (
     build_dictionary,
     effect_torque,
 )
-from identification.closeloop.extended import ExtendedModel
-from identification.closeloop.residual import JointDiagnostics, diagnose, noise_sigma
-from identification.closeloop.robustness import Candidate, Screening, screen
-from identification.closeloop.selection import Selection, refine_coulomb, select_effects
+from identification.closeloop.closed.extended import ExtendedModel
+from identification.closeloop.selection.bic import Selection, refine_coulomb, select_effects
+from identification.closeloop.selection.residual import JointDiagnostics, diagnose, noise_sigma
+from identification.closeloop.selection.screening import Candidate, Screening, screen
 from identification.errors import IdentificationError
 from identification.metrics import rel_error
 from identification.torque_model import TorqueModel, as_states
@@ -151,7 +151,7 @@ def screened_trace(target, base, residual, sigma, states, payload, project=None,
     have hidden a robust effect, e.g. a Coulomb column taking a viscous one's place next to
     a tendon), until screening rejects nothing new; every rejection is kept as a candidate.
 
-    target, base: the screening's regression (identification.closeloop.robustness.screen);
+    target, base: the screening's regression (identification.closeloop.selection.screening.screen);
     residual: the selection's (the target with the base's span projected out by project)."""
     excluded: frozenset[str] = frozenset()
     rejected: dict[str, Candidate] = {}
@@ -229,7 +229,7 @@ def close_loop(declared: TorqueModel, q, qd, qdd, tau, tau_clean, holdout: float
                payload: PayloadTorque | None = None, symbolic_payload=None,
                scales=None) -> CloseLoopResult:
     """Trace the declared model's residual on measured data to named effects and add them;
-    scales: the robot's, which bound every named coefficient (identification.closeloop.ranges)."""
+    scales: the robot's, which bound every named coefficient (identification.closeloop.verdicts.ranges)."""
     q, qd, qdd, tau, tau_clean, split = check_data(q, qd, qdd, tau, tau_clean, declared.dof,
                                                    holdout)
     train = slice(0, split)

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize
 
-from identification.closeloop.effects import (
+from identification.closeloop.candidates.effects import (
     COULOMB_SHAPES,
     Effect,
     EffectDictionary,

@@ -30,16 +30,16 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from identification.closeloop.effects import EffectTerm, PayloadTorque, effect_torque
-from identification.closeloop.extended import ExtendedModel
-from identification.closeloop.loop import (
+from identification.closeloop.candidates.effects import EffectTerm, PayloadTorque, effect_torque
+from identification.closeloop.closed.extended import ExtendedModel
+from identification.closeloop.selection.plant import (
     CloseLoopResult,
     check_data,
     outcome,
     screened_trace,
     trace,
 )
-from identification.closeloop.residual import noise_sigma
+from identification.closeloop.selection.residual import noise_sigma
 from identification.feature_model import IdentifiedModel
 from identification.identify import identify
 from identification.library.base import Library
@@ -103,7 +103,7 @@ def refit_kept(model: IdentifiedModel, terms: tuple[EffectTerm, ...], q, qd, qdd
     effects' projection is not the joint refit then. A joint no effect acts on is left as
     identified: the joint refit leaves its least-squares coefficients unchanged there, and
     the identification's own (regularized, possibly coupled) fit is better on it
-    (docs/identification.md, 'identification.closeloop.identified')."""
+    (docs/identification.md, 'identification.closeloop.selection.plant_identified')."""
     if not terms:
         return model
     target = tau - effect_torque(terms, q, qd, qdd, payload)
@@ -124,7 +124,7 @@ def _not_better_in_training(extended: ExtendedModel, identified: IdentifiedModel
     samples. There the two differ only by the re-identification (shared coefficients move
     when another joint's target changes), a fit on the same training part, whose small
     in-sample gains do not carry over; large ones do (docs/identification.md,
-    'identification.closeloop.identified')."""
+    'identification.closeloop.selection.plant_identified')."""
     touched = np.any(effect_torque(extended.terms, *states, extended._payload) != 0, axis=0)
     sse = [np.sum((tau - m.torque(*states)) ** 2, axis=0) for m in (extended, identified)]
     margin = 1.0 - np.sqrt(2.0 / len(tau))

@@ -1,6 +1,6 @@
-"""The measured loop's rules for naming an effect (identification.closeloop.runs): the gains
+"""The measured loop's rules for naming an effect (identification.closeloop.selection.runs): the gains
 it needs, on every joint of every held-out run, the agreement between runs, its physical
-range (identification.closeloop.ranges), and what is said of a candidate left out."""
+range (identification.closeloop.verdicts.ranges), and what is said of a candidate left out."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from identification.closeloop.crossval import weighted_fit
-from identification.closeloop.effects import EffectTerm
-from identification.closeloop.ranges import Scales
+from identification.closeloop.candidates.effects import EffectTerm
+from identification.closeloop.selection.crossval import weighted_fit
+from identification.closeloop.verdicts.ranges import Scales
 from identification.intervals import jackknife
 
 MIN_GAIN = 0.02  # an effect must cut its joint's validation error power by >= 2 %

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from identification.closeloop.effects import EffectTerm
+from identification.closeloop.candidates.effects import EffectTerm
 
 ACCEL_TIME = 0.5  # s
 LOAD_FRICTION_MAX = 0.5  # N m per N m
@@ -115,6 +115,6 @@ def ranges_json(scales: Scales) -> dict:
            for e in ("viscous", "coulomb", "sigmoid", "armature", "spring", "load_friction")}
     out["payload_mass"] = list(scales.bounds(EffectTerm("payload", dof, 0.0)))
     out["inertial_scale"] = [0.0, 1.0]
-    out["rule"] = ("identification.closeloop.ranges: from the robot's torque and speed limits "
+    out["rule"] = ("identification.closeloop.verdicts.ranges: from the robot's torque and speed limits "
                    "(the data's where it declares none), joint spans and mass")
     return out

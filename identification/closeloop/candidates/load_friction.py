@@ -1,5 +1,5 @@
 """Dry friction that grows with the load a joint carries, as candidates of the measured loop
-(identification.closeloop.runs).
+(identification.closeloop.selection.runs).
 
 A load on the flange presses every gear downstream of it harder: a joint's dry friction is
 F_c + mu |L_j| (Hamon, Gautier & Garrec, "Dynamic identification of robots with a dry
@@ -10,7 +10,7 @@ model plus the payload candidate fitted on the training runs (the load as far as
 know it before anything is named), and once effects are named the closed model without its
 load friction, alternated with the joint fit until the coefficients settle (REFITS passes).
 The column of joint j is |L_j| sat((qd_j + lead qdd_j) / eps), mu in N m per N m; its shape
-(lead, eps) is fitted by variable projection (identification.closeloop.measured.fit_shape)
+(lead, eps) is fitted by variable projection (identification.closeloop.selection.one_log.fit_shape)
 on the residual the payload candidate leaves: on the residual itself a load's torque, far
 larger, sets the shape (the UR5 payload case: eps at its 2 rad/s bound, a viscous term).
 """
@@ -21,8 +21,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from identification.closeloop.effects import EffectTerm, effect_torque
-from identification.closeloop.payload import com_agreement
+from identification.closeloop.candidates.effects import EffectTerm, effect_torque
+from identification.closeloop.candidates.payload import com_agreement
 
 EFFECT = "load_friction"
 REFITS = 3  # passes of (load from the model, joint fit) once load friction is named
@@ -33,7 +33,7 @@ def load_candidates(project, residual: np.ndarray, load: np.ndarray, states) -> 
     """Unit `load_friction` terms on every joint and their (n, dof) columns under the load
     (n, dof) N m, each one's shape fitted on residual (n, dof) N m (project: the measured
     loop's projection off the runs' offsets)."""
-    from identification.closeloop.measured import fit_shape
+    from identification.closeloop.selection.one_log import fit_shape
 
     dof = load.shape[1]
     out, cols = [], []
@@ -83,7 +83,7 @@ def refit_under_load(fit: Callable, model_load: Callable, terms: list[EffectTerm
 
 def spread_with_and_without(detail: dict, fit_spread: Callable, others: list[int],
                             terms: list[EffectTerm], within: float) -> dict:
-    """A named payload's per-run detail (identification.closeloop.payload.named_payload) with
+    """A named payload's per-run detail (identification.closeloop.candidates.payload.named_payload) with
     what the runs' centres of mass do without the named load friction, and which reading the
     loop believes: fit_spread(effects) -> (mass, com, std) per run with those effects beside."""
     without = [i for i in others if terms[i].effect != EFFECT]
