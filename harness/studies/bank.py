@@ -34,11 +34,9 @@ from harness.bench.planning.section import CAUSAL_STARTS
 from harness.cli import main
 from harness.plan.arm_config import planner_config
 from harness.plan.causal import against_causal
+from harness.plan.fresh import arm_scenarios
 from harness.report.results import Context, SectionResult, Target, check
 from harness.robots.arm import Arm
-from planning.penalty.solver import Planner
-from planning.scenarios import random_scenarios
-from planning.types import Segment
 
 SEED = 9784  # drawn once; see the module's docstring
 # rad: the 6- and 7-joint arms' start and goal are drawn within +-SPAN of zero (their
@@ -73,20 +71,8 @@ def run(ctx: Context) -> SectionResult:
 
 
 def draw(name: str, count: int, seed: int, span: float | None = None) -> list:
-    """The robot's random scenarios (planning.scenarios), from its unobstructed optimum;
-    start and goal within +-span rad of zero (None: the joints' ranges)."""
-    arm = Arm.of(name)
-    config = planner_config(arm)
-    planner = Planner(arm.nominal, config)
-
-    def free_motion(start, goal, duration):
-        return planner.solve(Segment.from_rest(start, duration, goal)).trajectory
-
-    lower, upper = np.asarray(config.lower), np.asarray(config.upper)
-    if span is not None:  # start and goal within +-span: reachable in 2 s
-        lower, upper = np.maximum(lower, -span), np.minimum(upper, span)
-    return random_scenarios(count, seed, free_motion, config.geometry, lower, upper,
-                            config.threshold)
+    """The robot's random scenarios (harness.plan.fresh.arm_scenarios)."""
+    return arm_scenarios(Arm.of(name), count, seed, span)
 
 
 def causal(robot: str, scenario, bank: dict, starts: int) -> dict:

@@ -90,7 +90,8 @@ def markdown(r: dict) -> list[str]:
            "convergence at every re-plan, harness.plan.causal; true energy): " + "; ".join(
                f"{name} {c['executed_J']:.4f} J against {c['reference_J']:.4f} J "
                f"({c['excess_pct']:+.2f} %)" for name, c in r.get("against_causal", {}).items())
-           + ".", "",
+           + " (the crossing and the swaying crossing are the planner's development scenarios)."
+           + fresh_text(r.get("fresh_scenarios")), "",
            f"Speed (closed form, crossing scenario; CPU time of the planning thread): cold plan "
            f"median {speed['cold_cpu_median_ms']:.0f} ms, max {speed['cold_cpu_max_ms']:.0f} ms; "
            f"warm re-plan with the obstacle one sample further median "
@@ -113,3 +114,14 @@ def markdown(r: dict) -> list[str]:
 
 def _angles(values) -> str:
     return "(" + ", ".join(f"{v:.3g}" for v in values) + ")"
+
+
+def fresh_text(fresh: dict | None) -> str:
+    """The planner on the fresh scenarios (harness.bench.planning.section.fresh_scenarios)."""
+    if not fresh:
+        return ""
+    rows = "; ".join(f"{c['executed_J']:.4f} J against {c['reference_J']:.4f} J "
+                     f"({c['excess_pct']:+.2f} %{'' if c['reference_feasible'] else ', reference infeasible'}"
+                     f"{'' if c['clear'] else ', clearance not kept'})" for c in fresh["rows"])
+    return (f" On {len(fresh['rows'])} fresh scenarios (seed {fresh['seed']}, drawn once; start "
+            f"and goal within +-{fresh['span_rad']:g} rad; no setting chosen on them): {rows}.")
