@@ -68,7 +68,7 @@ def motion(arm, family: str, seed: int, samples: int):
     return m.q, m.qd, m.qdd, m.tau_clean
 
 
-def datasets(arm, seeds, samples: int, families=FAMILIES):
+def datasets(arm, seeds, samples: int, families=FAMILIES, noises=NOISES):
     """Every (family, seed, noise) draw as a Dataset; the noise seeded by (seed, noise); a
     file's motion is the same for every seed."""
     from harness.data.dataset import Dataset
@@ -79,7 +79,7 @@ def datasets(arm, seeds, samples: int, families=FAMILIES):
     for family in families:
         for seed in seeds:
             q, qd, qdd, clean = motion(arm, family, seed, samples)
-            for noise in NOISES:
+            for noise in noises:
                 rng = np.random.default_rng([seed, round(100 * noise), 31])
                 tau = clean + torque_noise(clean, noise, BIAS, rng)
                 out.append(Dataset(np.arange(samples) / SAMPLE_RATE, q, qd, qdd, tau, clean,
@@ -97,15 +97,20 @@ def judges(arm, judge: int, samples: int):
             for k, name in enumerate(JUDGES)]
 
 
-def summarize(draws: list[dict]) -> dict:
-    """Per 'family noise': the ratio to the oracle per joint, its median over draws and
-    judges, the worst over them, and the median and worst of all; the default's relative
-    error per joint, median over draws and judges."""
+def family_and_noise(draw: dict) -> str:
+    """summarize's group of a draw: 'family noise'."""
+    return f"{draw['family']} {draw['noise']:g}"
+
+
+def summarize(draws: list[dict], fit: str = "default", reference: str = "oracle",
+              group=family_and_noise) -> dict:
+    """Per group (by default 'family noise'): the ratio of fit's judge errors to reference's
+    per joint, its median over draws and judges, the worst over them, and the median and
+    worst of all; fit's relative error per joint, median over draws and judges."""
     groups: dict[str, list] = {}
     for d in draws:
-        groups.setdefault(f"{d['family']} {d['noise']:g}", []).append(
-            [[np.array(d["default"][j]) / np.array(d["oracle"][j]), d["default"][j]]
-             for j in JUDGES])
+        groups.setdefault(group(d), []).append(
+            [[np.array(d[fit][j]) / np.array(d[reference][j]), d[fit][j]] for j in JUDGES])
     out = {}
     for key, both in groups.items():
         r, errors = np.array(both)[:, :, 0], np.array(both)[:, :, 1]  # draws, judges, dof

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from harness.data.generate import SAMPLE_RATE, generate, inverse_torques
+from harness.identify.selection import kept_terms
 from harness.robots.arm import Arm
 from harness.robots.baseline import PinocchioModel
 from identification.identify import identify
@@ -141,7 +142,8 @@ def perturbed_prior_fit(library: KinematicLibrary, baseline: PinocchioModel,
 def score_draw(data, fits: dict[str, Fit], baseline: PinocchioModel, judges: list[Motion]) -> dict:
     """Each fit's identification and the oracle on one dataset (the first 1 - HOLDOUT
     trains), scored on every judge motion against its clean torque: relative RMS error per
-    joint; the model of each fit kept under 'models'."""
+    joint (a coupled sparse fit's kept terms under 'kept'); the model of each fit kept under
+    'models'."""
     n = int(round(len(data.q) * (1 - HOLDOUT)))
     seed = int(data.meta["seed"])
     out: dict = {"seed": seed, "models": {}}
@@ -154,6 +156,9 @@ def score_draw(data, fits: dict[str, Fit], baseline: PinocchioModel, judges: lis
         out[name] = {m.name: rel_error(result.model.torque(m.q, m.qd, m.qdd), m.tau_clean).tolist()
                      for m in judges}
         out[name]["timing"] = {"cpu_s": cpu}
+        kept = kept_terms(result)
+        if kept is not None:  # a coupled sparse fit: the terms its selection kept
+            out[name]["kept"] = kept
         if result.physical and "plausible" in result.physical:  # each body inside its link
             out[name]["plausible"] = [bool(p) for p in result.physical["plausible"]]
     oracle, cpu = oracle_fit(baseline, data, n)
