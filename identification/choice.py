@@ -32,15 +32,19 @@ FEATURE_REGRESSORS = {"coupled": CoupledRegressor, "per-joint": PerJointRegresso
 
 
 def choose_regressor(library, method: str | None = None,
-                     selector: SparseRegression | None = None) -> TorqueRegressor:
+                     selector: SparseRegression | None = None,
+                     structure: KinematicLibrary | None = None) -> TorqueRegressor:
     """The sparse regressor for library: on a robot's base atoms the coupled one (method is
     not used there); on a feature library `method` ("coupled", "per-joint", "jointwise";
-    None: coupled when the library has Lagrangian atoms, else per-joint)."""
+    None: coupled when the library has Lagrangian atoms, else per-joint). structure: the
+    robot's base atoms the coupled fit on a feature library is held to (None: free)."""
     if isinstance(library, KinematicLibrary):
         return BaseAtomRegressor(selector)
     method = method or ("coupled" if library.atoms else "per-joint")
     if method not in FEATURE_REGRESSORS:
         raise IdentificationError(f"method must be 'coupled', 'per-joint' or 'jointwise', got {method!r}")
+    if method == "coupled":
+        return CoupledRegressor(selector, structure)
     return FEATURE_REGRESSORS[method](selector)
 
 
@@ -64,11 +68,14 @@ def choose_prior(requested: str, measured: bool, library) -> str:
     return requested
 
 
-def choose_fit(library, prior: str, method: str,
-               nominal: Callable[[], np.ndarray]) -> TorqueRegressor:
+def choose_fit(library, prior: str, method: str, nominal: Callable[[], np.ndarray],
+               structure: Callable[[], KinematicLibrary] | None = None) -> TorqueRegressor:
     """The regressor for a chosen prior: 'none' the sparse fit by `method` ('auto': the
-    library's default), 'nominal' the consistent fit toward nominal() (the robot's nominal
-    atom parameters, computed only then), 'flat' the consistent fit without a prior."""
+    library's default; structure(): the robot's base atoms a coupled fit on a feature library
+    is held to, None: free), 'nominal' the consistent fit toward nominal() (the robot's
+    nominal atom parameters, computed only then), 'flat' the consistent fit without a prior."""
     if prior == "none":
-        return choose_regressor(library, None if method == "auto" else method)
+        held = structure() if structure is not None and not isinstance(library,
+                                                                        KinematicLibrary) else None
+        return choose_regressor(library, None if method == "auto" else method, structure=held)
     return ConsistentRegressor(nominal() if prior == "nominal" else None)

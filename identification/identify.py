@@ -68,6 +68,8 @@ class Identification:
                "seconds": self.seconds}
         if self.method == "coupled":
             out["noise_sigma"] = self.regressions[0].sigma_.tolist()
+            if hasattr(self.regressions[0], "structure_"):  # held to the rigid-body structure
+                out["rigid_body"] = self.regressions[0].structure_
         if self.scored:  # a measured log: each held-out run's offset and where it came from
             out["heldout_runs"] = [r.to_json(self.model) for r in self.scored]
         if self.physical:

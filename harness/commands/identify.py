@@ -9,7 +9,7 @@ import warnings
 from harness.commands import SUMMARY
 from harness.data.runs import join, load_runs, split_files
 from harness.identify.drive_gains import current_or_torque, describe, gain_runs
-from harness.identify.fits import arm_identification
+from harness.identify.fits import RIGID_BODY, arm_identification
 from harness.io import write_json
 from harness.robots.registry import DEFAULT_ROBOT
 from harness.robots.resolve import resolve_arm
@@ -67,6 +67,12 @@ def register(sub) -> None:
                    "the default) or entropic (the LogDet divergence of its pseudo-inertia: "
                    "what the data leave open stays a scaled copy of the nominal body, never a "
                    "degenerate one; docs/identification.md, 'Prior metric')")
+    p.add_argument("--rigid-body", action=argparse.BooleanOptionalAction, default=RIGID_BODY,
+                   help="with the coupled fit on a feature library (the Lynxmotion's prior "
+                   "library): hold the kept atoms' coefficients to the directions a rigid body "
+                   "of the robot's kinematics also gives, unless an F-test rejects it (MODEL.json "
+                   "metrics.rigid_body says which; docs/identification.md, 'Over many draws'); "
+                   f"default: {'on' if RIGID_BODY else 'off'}")
     p.add_argument("--loaded", default=None, metavar="L.npz[,L2.npz]",
                    help="for logs of motor currents with unknown drive gains (ingest "
                    "--gains-unknown): runs carrying a load of known mass near the chain's end; "
@@ -109,7 +115,7 @@ def run(args) -> int:
     arm = resolve_arm(args.robot, data=runs.records)  # every --data and --validate run checked
     library, regressor = arm_identification(arm, dof, args.library, args.prior, args.method,
                                             meta.get("mode") == "measured log", args.plausible,
-                                            args.prior_metric)
+                                            args.prior_metric, args.rigid_body)
     if args.prior_metric != "ridge" and getattr(regressor, "nominal", None) is None:
         raise IdentificationError(f"--prior-metric {args.prior_metric} measures the pull toward "
                                   "the URDF's bodies: it needs the consistent fit with a prior "

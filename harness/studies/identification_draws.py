@@ -21,7 +21,7 @@ draw of each family at 5 %.
 
 from __future__ import annotations
 
-from harness.identify.fits import arm_identification
+from harness.identify.fits import RIGID_BODY, arm_identification
 from harness.identify.outside_default import JUDGES, datasets, judges, summarize
 from harness.identify.scoring import HOLDOUT, fixed_fit, score_draw
 from harness.identify.selection import selection
@@ -36,9 +36,12 @@ FRESH_JUDGE = 6626
 DEV_SEEDS, DEV_JUDGE = tuple(range(3001, 3011)), 3050  # where the loss was diagnosed
 SAMPLES = 4000
 MEDIAN_TARGET, WORST_TARGET = 1.1, 2.0  # x oracle, per joint, over draws and judges
-# arm -> (fit name, identify's --library), and the noise levels it is studied at
-ARMS = {"lynxmotion": ((("default", "auto"), ("--library kinematic", "kinematic")), NOISES),
-        "ur5": ((("default", "auto"),), (0.05,))}
+# arm -> (fit name, arm_identification's options: identify's), the noise levels studied
+ARMS = {"lynxmotion": ((("default", {}),
+                        ("--no-rigid-body" if RIGID_BODY else "--rigid-body",
+                         {"rigid_body": not RIGID_BODY}),
+                        ("--library kinematic", {"library": "kinematic"})), NOISES),
+        "ur5": ((("default", {}),), (0.05,))}
 
 
 def by_noise(draw: dict) -> str:
@@ -122,8 +125,7 @@ def run(ctx: Context) -> SectionResult:
     for robot, (named, noises) in arms.items():
         arm = Arm.of(robot)
         named = named[:1] if ctx.quick else named
-        fits = {name: fixed_fit(*arm_identification(arm, library=library))
-                for name, library in named}
+        fits = {name: fixed_fit(*arm_identification(arm, **options)) for name, options in named}
         r = study(arm, fits, FRESH_SEEDS[:1] if ctx.quick else FRESH_SEEDS, FRESH_JUDGE,
                   (0.05,) if ctx.quick else noises)
         results[robot] = r
@@ -149,7 +151,7 @@ def development(robot: str = "lynxmotion") -> dict:
     """study() of robot's fits on the development draws (DEV_SEEDS, DEV_JUDGE)."""
     arm = Arm.of(robot)
     named, noises = ARMS[robot]
-    fits = {name: fixed_fit(*arm_identification(arm, library=lib)) for name, lib in named}
+    fits = {name: fixed_fit(*arm_identification(arm, **options)) for name, options in named}
     return study(arm, fits, DEV_SEEDS, DEV_JUDGE, noises)
 
 

@@ -28,6 +28,7 @@ from identification.library.kinematic import KinematicLibrary
 from identification.regression.base import run_centring
 from identification.regression.coupled import AtomBasis, CoupledRegression, restriction_pvalue
 from identification.regression.sparse import SparseRegression
+from identification.regression.structure import hold_to_structure
 
 
 @dataclass(frozen=True)
@@ -103,12 +104,22 @@ class PerJointRegressor(_FeatureRegressor):
 
 @dataclass(frozen=True)
 class CoupledRegressor(_FeatureRegressor):
-    """One Lagrangian: the library's atoms, each coefficient shared by every joint."""
+    """One Lagrangian: the library's atoms, each coefficient shared by every joint.
+
+    structure: the robot's base atoms (a KinematicLibrary): the kept atoms' coefficients are
+    then held to the directions a rigid body of its kinematics also gives
+    (regression.structure; reported as the regression's structure_); None: left free."""
+
+    structure: KinematicLibrary | None = None
 
     def fit(self, library: Library, q, qd, qdd, tau) -> TorqueFit:
         cond = _conditioned(library.evaluate(q, qd, qdd), library.names)
         basis = AtomBasis.from_atoms(library.atoms, library.dof, library.name)
-        reg = CoupledRegression(selector=self.selector).fit(basis.evaluate(q, qd, qdd), tau)
+        design = basis.evaluate(q, qd, qdd)
+        reg = CoupledRegression(selector=self.selector).fit(design, tau)
+        if self.structure is not None:
+            reg.structure_ = hold_to_structure(reg, design, tau,
+                                               self.structure.evaluate(q, qd, qdd))
         model = IdentifiedModel(library.dof, tuple(_coupled_joints(library, basis, reg)),
                                 library.name, "coupled")
         return TorqueFit(model, cond, "coupled", (reg,), basis)
