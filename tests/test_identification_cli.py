@@ -285,3 +285,20 @@ def test_data_or_a_model_of_another_robot_is_one_line_naming_it(tmp_path, capsys
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "records robot 'panda'" in err[0] and "'ur5'" in err[0], err
     assert not pred.exists()
+
+
+@pytest.mark.parametrize("flag", ["--rigid-body", "--no-rigid-body"])
+def test_identify_says_whether_the_fit_was_held_to_the_rigid_body(tmp_path, arrays, flag):
+    """--rigid-body: MODEL.json's metrics.rigid_body records the hold (the data, generated
+    from the robot's own rigid body, bear it out); --no-rigid-body: the fit is left free and
+    no such record is written. Both keep the model's keys."""
+    data, out = _write(tmp_path, arrays), tmp_path / "MODEL.json"
+    assert main(["identify", "--data", str(data), "--out", str(out), flag]) == 0
+    payload = json.loads(out.read_text())
+    held = payload["metrics"].get("rigid_body")
+    if flag == "--rigid-body":
+        assert held["held"] and 0 < held["directions"] < held["atoms"]
+        assert held["pvalue"] >= 0.01
+    else:
+        assert held is None
+    assert payload["method"] == "coupled" and len(payload["joints"]) == 3

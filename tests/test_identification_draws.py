@@ -1,0 +1,50 @@
+"""The study identification_draws and what it reads of a selection
+(harness.identify.selection): seeds apart, the noise-free terms and the selection's ceiling."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from harness.identify.fits import arm_identification
+from harness.identify.outside_default import datasets, judges
+from harness.identify.scoring import HOLDOUT, fixed_fit, score_draw
+from harness.identify.selection import ceiling_errors, selection
+from harness.robots.arm import Arm
+from harness.studies.identification_draws import DEV_JUDGE, DEV_SEEDS, FRESH_JUDGE, FRESH_SEEDS
+from identification.regression.coupled import AtomBasis
+
+
+def test_fresh_seeds_are_apart_from_development_and_every_scored_seed():
+    from harness.bench.identification import FRESH_SEED, LEVELS, NEXT_RUNS
+    from harness.identify import outside_default
+    from harness.identify.excitation import FRESH_DRAWS
+    from harness.identify.excitation import FRESH_JUDGE as EXCITE_JUDGE
+
+    used = (set(DEV_SEEDS) | {DEV_JUDGE, FRESH_SEED, EXCITE_JUDGE} | set(NEXT_RUNS)
+            | set(FRESH_DRAWS) | {s for seeds in LEVELS.values() for s in seeds}
+            | set(outside_default.DEV_SEEDS) | set(outside_default.FRESH_SEEDS)
+            | {outside_default.DEV_JUDGE, outside_default.FRESH_JUDGE})
+    assert len(set(FRESH_SEEDS)) == len(FRESH_SEEDS) >= 10
+    assert not (set(FRESH_SEEDS) | {FRESH_JUDGE}) & used
+
+
+def test_the_selection_record_of_a_free_coupled_fit_on_a_lynxmotion_draw():
+    """The prior library's coupled fit, left free: on its noise-free draw it keeps the
+    atoms whose torque a rigid body gives (least squares on them is exact on a fresh motion);
+    at 5 % it keeps the same atoms, and its judge errors are the ceiling's (weighted least
+    squares on those atoms, computed apart)."""
+    arm = Arm.of("lynxmotion")
+    fit = fixed_fit(*arm_identification(arm, rigid_body=False))
+    motions = judges(arm, DEV_JUDGE, 2000)
+    data = datasets(arm, DEV_SEEDS[:1], 2000, ("fourier",), (0.05,))[0]
+    d = score_draw(data, {"free": fit}, arm.nominal, motions)
+    record = selection(fit, data, HOLDOUT, d["free"]["kept"], motions)
+    assert record["dropped"] == [] and record["spurious"] == []
+    assert 0 < len(record["needed"]) < len(fit.library.atoms)
+    for judge, errors in record["ceiling"].items():
+        np.testing.assert_allclose(d["free"][judge], errors, rtol=0.02)
+    clean = type(data)(data.t, data.q, data.qd, data.qdd, data.tau_clean, data.tau_clean,
+                       data.meta)
+    atoms = AtomBasis.from_atoms(fit.library.atoms, 3, fit.library.name)
+    exact = ceiling_errors(atoms, clean, 1500, record["needed"], motions)
+    assert max(max(e) for e in exact.values()) <= 1e-8
