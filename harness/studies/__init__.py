@@ -27,9 +27,10 @@ STUDIES = {
                        "and a Fourier series of other harmonics, 5 and 10 % noise), fresh "
                        "draws, judged on fresh motions against the oracle (issue #56 item 15)",
     "identification_draws": "identification over many fresh draws of data the project did "
-                            "not design (Lynxmotion at 2, 5 and 10 % noise, default and "
-                            "--library kinematic; UR5 at 5 %): per joint the ratio to the "
-                            "oracle, median and worst, what the selection dropped and cost",
+                            "not design (2, 5 and 10 % noise; Lynxmotion: default, held to "
+                            "the rigid body or not, --library kinematic; UR5): per joint the "
+                            "ratio to the oracle, median and worst, what the selection "
+                            "dropped and cost",
     "prior_metric": "the consistent fit's prior metric, ridge against entropic, under a "
                     "perturbed URDF prior and the URDF as truth, on fresh draws (Lynxmotion, "
                     "UR5, Kinova; issue #56 item 3)",

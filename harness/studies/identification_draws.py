@@ -11,12 +11,13 @@ clean torque and kept beyond them, and the selection's cost, the fit's error ove
 ceiling's (harness.identify.selection: least squares on exactly the noise-free terms).
 
 Arms and fits: the Lynxmotion, `identify`'s default (the prior-knowledge library, the coupled
-sparse fit) and `--library kinematic` (its base atoms from its kinematics); with the full
-study the UR5, its default (the kinematic base atoms), at 5 % only (a 6-joint draw takes
-about ten times a Lynxmotion draw). Scored on FRESH_SEEDS and FRESH_JUDGE (drawn once, no
+sparse fit), `--rigid-body` or `--no-rigid-body` (the other side of identify's default:
+that fit held to the robot's rigid-body structure, identification.regression.structure) and
+`--library kinematic` (its base atoms from its kinematics); with the full study the UR5, its
+default (the kinematic base atoms). Scored on FRESH_SEEDS and FRESH_JUDGE (drawn once, no
 setting chosen on them); DEV_SEEDS and DEV_JUDGE are the draws the loss was diagnosed on
-(docs/identification.md, 'Over many draws'). Quick: the Lynxmotion's default, one fresh
-draw of each family at 5 %.
+(docs/identification.md, 'Over many draws', with the run time). Quick: the Lynxmotion's
+default, one fresh draw of each family at 5 %.
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ ARMS = {"lynxmotion": ((("default", {}),
                         ("--no-rigid-body" if RIGID_BODY else "--rigid-body",
                          {"rigid_body": not RIGID_BODY}),
                         ("--library kinematic", {"library": "kinematic"})), NOISES),
-        "ur5": ((("default", {}),), (0.05,))}
+        "ur5": ((("default", {}),), NOISES)}
 
 
 def by_noise(draw: dict) -> str:
