@@ -1,6 +1,7 @@
 """The declared torque model composed with named terms: itself a TorqueModel.
 
-ExtendedModel adds joint effects to a declared model; closed_model composes what the measured
+ExtendedModel adds joint effects to a declared model; Summed, Scaled and WithOffsets (a sensor's
+offset on a model's torque) are the other pieces; closed_model composes what the measured
 loop names (the declared model, a rigid-body correction's scale, a payload's body, the joint
 effects and constant offsets) into one, what model.json holds.
 """
@@ -97,6 +98,21 @@ class Summed:
 
     def symbolic_torque(self, q, qd, qdd):
         return sum(m.symbolic_torque(q, qd, qdd) for m in self.models) + self.offsets
+
+
+class WithOffsets:
+    """A torque model plus a constant torque per joint (a sensor offset, N m): what a
+    measured torque is compared with."""
+
+    def __init__(self, model, offsets: np.ndarray):
+        # `bias`, not `offsets`: a model's `offsets` are the ones its torque leaves out
+        self.model, self.bias, self.dof = model, np.asarray(offsets, float), model.dof
+
+    def torque(self, q, qd, qdd) -> np.ndarray:
+        return self.model.torque(q, qd, qdd) + self.bias
+
+    def symbolic_torque(self, q, qd, qdd):
+        return self.model.symbolic_torque(q, qd, qdd) + self.bias
 
 
 class Scaled:

@@ -48,7 +48,7 @@ from identification.closeloop.candidates.effects import (
     EffectTerm,
     effect_torque,
 )
-from identification.closeloop.closed.extended import ExtendedModel
+from identification.closeloop.closed.extended import ExtendedModel, WithOffsets
 from identification.closeloop.selection.bic import EPS_RANGE, LEAD_RANGE
 from identification.closeloop.selection.crossval import BlockValidation, weighted_fit
 from identification.closeloop.selection.plant import check_data
@@ -70,21 +70,6 @@ SIGMOID_SHAPES = tuple((s, d) for s in (2.0, 5.0, 10.0, 20.0, 50.0, 100.0)
                        for d in (-0.05, 0.0, 0.05))  # (s/rad, rad/s): start grid
 STEEPNESS_RANGE = (0.5, 500.0)  # s/rad
 SHIFT_RANGE = (-0.5, 0.5)  # rad/s
-
-
-class WithOffsets:
-    """A torque model plus a constant torque per joint (a sensor offset, N m): what a
-    measured torque is compared with."""
-
-    def __init__(self, model, offsets: np.ndarray):
-        # `bias`, not `offsets`: a model's `offsets` are the ones its torque leaves out
-        self.model, self.bias, self.dof = model, np.asarray(offsets, float), model.dof
-
-    def torque(self, q, qd, qdd) -> np.ndarray:
-        return self.model.torque(q, qd, qdd) + self.bias
-
-    def symbolic_torque(self, q, qd, qdd):
-        return self.model.symbolic_torque(q, qd, qdd) + self.bias
 
 
 @dataclass(frozen=True)
