@@ -20,3 +20,13 @@ SUMMARY = {
     "sweep": "identification error over a grid of robots, noise levels, seeds, methods and "
              "sample counts, on Ray",
 }
+
+
+def add_chain_option(parser) -> None:
+    """--chain, beside every --robot: the arm between two links of a whole robot's URDF."""
+    parser.add_argument(
+        "--chain", default=None, metavar="BASE_LINK:TIP_LINK",
+        help="the arm between two links of a whole robot's URDF (a torso and two arms: "
+        "torso_link:arm_left_7_link); every other joint held fixed at 0, or at its nearest "
+        "limit when 0 is outside them (said in the model's robot record, 'held'); recorded "
+        "with the data and the model, so later commands find it")

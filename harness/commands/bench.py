@@ -24,7 +24,7 @@ from pathlib import Path
 
 from harness import interrupt
 from harness.bench import SECTIONS, load_section
-from harness.commands import SUMMARY
+from harness.commands import SUMMARY, add_chain_option
 from harness.errors import UserError
 from harness.report.results import Context
 from harness.report.writer import SectionOutcome, write_report
@@ -78,6 +78,7 @@ def register(subparsers) -> None:
     p.add_argument("--robot", default=None,
                    help=f"registered robot or URDF/MJCF path (default {DEFAULT_ROBOT}); every "
                    "robot gets the same sections, plus the extras its registry entry declares")
+    add_chain_option(p)
     p.add_argument("--no-video", action="store_true", help="do not render replay videos")
     p.add_argument("--sections", default=None,
                    help=f"comma-separated sections to run, in pipeline order (default: all: "
@@ -141,7 +142,7 @@ def run_pipeline(ctx: Context, names, progress: Progress, module_of=load_section
 
 def run(args) -> int:
     out_dir = Path(args.out)
-    arm = resolve_arm(args.robot)
+    arm = resolve_arm(args.robot, chain=args.chain)
     arm.chain  # noqa: B018 - a robot that is no serial arm: one line, before any section
     if out_dir.exists() and not out_dir.is_dir():
         raise UserError(f"--out {out_dir} exists and is not a directory")

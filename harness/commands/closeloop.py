@@ -7,11 +7,11 @@ from pathlib import Path
 import numpy as np
 
 from harness.closeloop.plant import run_closeloop
-from harness.commands import SUMMARY
+from harness.commands import SUMMARY, add_chain_option
 from harness.errors import UserError
 from harness.io import write_json
 from harness.robots.arm import Arm
-from harness.robots.registry import ROBOTS
+from harness.robots.registry import ROBOTS, chain_reference
 from harness.robots.resolve import resolve_arm, variant_of
 from identification.closeloop.closed.noise_level import noise_line, runs_line
 
@@ -20,6 +20,7 @@ def register(sub) -> None:
     p = sub.add_parser("closeloop", help=SUMMARY["closeloop"])
     p.add_argument("--plant", help="MJCF of the arm (may carry undeclared effects): measured "
                    "data are simulated on it")
+    add_chain_option(p)
     p.add_argument("--data", help="dataset .npz files instead, comma-separated runs of one "
                    "robot (measured logs from `ingest`): the loop on the declared model, "
                    "effects named only if they hold from one run to the next; writes "
@@ -166,7 +167,7 @@ def _data_arm(args, records: list[tuple[str, dict]]) -> Arm:
         from harness.robots.torque_models import read_model
 
         model = read_model(args.declared).recorded
-    return resolve_arm(args.robot, model=model, data=records)
+    return resolve_arm(args.robot, model=model, data=records, chain=args.chain)
 
 
 def _plant_arms(args) -> tuple[Arm, Arm]:
@@ -175,8 +176,8 @@ def _plant_arms(args) -> tuple[Arm, Arm]:
     path = Path(args.plant)
     if args.plant not in ROBOTS and path.suffix and not path.is_file():  # else: unknown robot
         raise UserError(f"plant file not found: {args.plant}")
-    plant = Arm.of(args.plant)
-    return plant, (resolve_arm(args.robot) if args.robot else variant_of(plant))
+    plant = Arm.of(chain_reference(args.plant, args.chain))
+    return plant, (resolve_arm(args.robot, chain=args.chain) if args.robot else variant_of(plant))
 
 
 def _run_data(args) -> int:

@@ -8,7 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from harness.commands import SUMMARY
+from harness.commands import SUMMARY, add_chain_option
 from harness.data.excitation_file import write_trajectory
 from harness.data.excite import DEFAULT_ACCELERATION, ITERATIONS, design_for, floor_below_home
 from harness.data.generate import CONDITION_MEANING, CONDITION_WORDS
@@ -21,6 +21,7 @@ def register(sub) -> None:
     p = sub.add_parser("excite", help=SUMMARY["excite"])
     p.add_argument("--robot", "--plant", dest="robot", default="lynxmotion",
                    help="robot name (lynxmotion, double_pendulum, ur5, panda) or URDF/MJCF path")
+    add_chain_option(p)
     p.add_argument("--duration", type=float, required=True, help="period of the excitation (s)")
     p.add_argument("--rate", type=float, required=True, help="sample rate of the file (Hz)")
     p.add_argument("--accel-limit", dest="accel_limit", type=float, default=DEFAULT_ACCELERATION,
@@ -48,7 +49,7 @@ def run(args) -> int:
     _check_writable(Path(args.out))
     if args.iterations < 0:
         raise UserError(f"--iterations must be >= 0, got {args.iterations}")
-    arm = resolve_arm(args.robot)
+    arm = resolve_arm(args.robot, chain=args.chain)
     lowest = floor_below_home(arm, args.floor)
     if lowest is not None:
         print(f"note: at q = 0 the arm reaches z = {lowest:.3g} m, below the floor at "

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from harness.commands import SUMMARY
+from harness.commands import SUMMARY, add_chain_option
 from harness.errors import UserError
 from harness.robots.export import FORMATS, export_model
 from harness.robots.registry import DEFAULT_ROBOT
@@ -16,6 +16,7 @@ def register(sub) -> None:
     p.add_argument("--robot", default=None,
                    help=f"robot name or URDF/MJCF path (default: the MODEL.json's, else "
                    f"{DEFAULT_ROBOT})")
+    add_chain_option(p)
     p.add_argument("--format", choices=FORMATS, required=True,
                    help="urdf: the robot's URDF with each body's <inertial> and each joint's "
                    "<dynamics damping friction>; mjcf: MuJoCo's model with the inertials, "
@@ -31,7 +32,7 @@ def run(args) -> int:
     model = read_model(args.model)
     if model.payload is None:
         raise UserError("export takes a MODEL.json written by `identify`, not 'pinocchio'")
-    arm = resolve_arm(args.robot, model=model.recorded)
+    arm = resolve_arm(args.robot, model=model.recorded, chain=args.chain)
     torque_model(model, arm)  # a well-formed model of this arm's kinematics
     what = export_model(model.payload, arm, args.format, args.out)
     print(f"wrote {args.out}: {what}")

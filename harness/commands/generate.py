@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from harness.commands import SUMMARY
+from harness.commands import SUMMARY, add_chain_option
 from harness.data.excitation_file import read_trajectory
 from harness.data.generate import CONDITION_MEANING, CONDITION_WORDS, generate
 from harness.io import write_npz
@@ -17,6 +17,7 @@ def register(sub) -> None:
     p = sub.add_parser("generate", help=SUMMARY["generate"])
     p.add_argument("--plant", "--robot", dest="plant", default="lynxmotion",
                    help="robot name (lynxmotion, double_pendulum, ur5, panda) or URDF/MJCF path")
+    add_chain_option(p)
     p.add_argument("--samples", type=int, default=None,
                    help="samples (default 4000, or every row of --excitation)")
     p.add_argument("--noise", type=float, default=0.05, help="torque noise std / torque std")
@@ -35,7 +36,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    arm = resolve_arm(args.plant)
+    arm = resolve_arm(args.plant, chain=args.chain)
     excitation = None
     if args.excitation is not None:
         excitation = read_trajectory(args.excitation, arm.dof)

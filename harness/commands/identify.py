@@ -6,7 +6,7 @@ import argparse
 import sys
 import warnings
 
-from harness.commands import SUMMARY
+from harness.commands import SUMMARY, add_chain_option
 from harness.data.runs import join, load_runs, split_files
 from harness.identify.drive_gains import current_or_torque, describe, gain_runs
 from harness.identify.fits import RIGID_BODY, arm_identification
@@ -35,6 +35,7 @@ def register(sub) -> None:
     p.add_argument("--robot", default=None,
                    help="robot name or URDF/MJCF path (default: the robot the data record, else "
                    f"{DEFAULT_ROBOT})")
+    add_chain_option(p)
     p.add_argument("--library", choices=LIBRARIES, default="auto",
                    help="kinematic: base atoms generated from the robot's kinematics (any arm); "
                    "prior: derived from simple structures (3-DOF arm, symmetric links); "
@@ -112,7 +113,8 @@ def run(args) -> int:
         runs = join(runs, validate)
     data, meta = runs.arrays, runs.metas[0]
     dof = data["q"].shape[1]
-    arm = resolve_arm(args.robot, data=runs.records)  # every --data and --validate run checked
+    # every --data and --validate run checked
+    arm = resolve_arm(args.robot, data=runs.records, chain=args.chain)
     library, regressor = arm_identification(arm, dof, args.library, args.prior, args.method,
                                             meta.get("mode") == "measured log", args.plausible,
                                             args.prior_metric, args.rigid_body)

@@ -3,7 +3,7 @@ contract (.npz)."""
 
 from __future__ import annotations
 
-from harness.commands import SUMMARY
+from harness.commands import SUMMARY, add_chain_option
 from harness.data.bag import is_bag
 from harness.data.dataset import check_arrays
 from harness.data.ingest import ingest
@@ -27,6 +27,7 @@ def register(sub) -> None:
     p.add_argument("--topic", default=None,
                    help="with --bag: the JointState topic (default: the recording's only one)")
     p.add_argument("--robot", required=True, help="registered robot or URDF/MJCF path")
+    add_chain_option(p)
     p.add_argument("--out", required=True, help="output dataset .npz")
     p.add_argument("--rate", type=float, default=None,
                    help="output rate in Hz (every k-th resampled sample, after the "
@@ -53,7 +54,7 @@ def run(args) -> int:
     source = args.csv if args.bag is None else args.bag
     if args.csv is not None and is_bag(args.csv):
         raise UserError(f"--csv {args.csv} is a folder or a rosbag2 file: give it as --bag")
-    arm = resolve_arm(args.robot)
+    arm = resolve_arm(args.robot, chain=args.chain)
     dof = arm.dof
     gains = None
     if args.current_gains is not None:

@@ -14,7 +14,7 @@ import logging
 import re
 import sys
 
-from harness.commands import SUMMARY
+from harness.commands import SUMMARY, add_chain_option
 from harness.io import write_json
 from harness.plan.anytime_options import add_anytime_options
 from harness.plan.arm_config import DURATION, default_obstacle
@@ -54,6 +54,7 @@ def register(sub) -> None:
     p.add_argument("--robot", default=None,
                    help="registered robot or URDF/MJCF path: its links, joint and torque limits and its "
                         "pinocchio baseline (default: the model's robot, else lynxmotion)")
+    add_chain_option(p)
     p.add_argument("--start", default=None,
                    help="start angles, one per joint (rad); default: the robot's registered "
                         "motion (on the Lynxmotion the paper's)")
@@ -197,7 +198,8 @@ def register(sub) -> None:
 
 def run(args) -> int:
     model_file = read_model(args.model)
-    arm = resolve_arm(args.robot, model=model_file.recorded)  # once: --robot, else the model's
+    # once: --robot, else the model's
+    arm = resolve_arm(args.robot, model=model_file.recorded, chain=args.chain)
     logger = logging.getLogger(compiled.__name__)
     notice = BuildNotice(arm.label)
     logger.addHandler(notice)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.commands import SUMMARY
+from harness.commands import SUMMARY, add_chain_option
 from harness.data.dataset import STATE_KEYS, load_arrays
 from harness.errors import UserError
 from harness.io import write_npz
@@ -31,6 +31,7 @@ def register(sub) -> None:
                    help="robot name or URDF/MJCF path (default: a MODEL.json's own, else the "
                    f"robot the data record, else {DEFAULT_ROBOT}); a MODEL.json identified "
                    "for another robot, or data of another, is an error")
+    add_chain_option(p)
     p.add_argument("--out", required=True,
                    help="output .npz: tau, the model's torque at the data's states; on a "
                    "measured log (no tau_clean: ingested or sensed), the torque its sensor would "
@@ -52,7 +53,7 @@ def register(sub) -> None:
 def run(args) -> int:
     states, meta = load_arrays(args.data, STATE_KEYS, optional=("tau", "tau_clean"))
     read = read_model(args.model)
-    arm = resolve_arm(args.robot, model=read.recorded, data=[(args.data, meta)])
+    arm = resolve_arm(args.robot, model=read.recorded, data=[(args.data, meta)], chain=args.chain)
     model = torque_model(read, arm)
     if states["q"].shape[1] != model.dof:
         raise UserError(f"data has {states['q'].shape[1]} joints, model has {model.dof}")

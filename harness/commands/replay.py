@@ -7,7 +7,7 @@ import math
 from dataclasses import asdict
 from pathlib import Path
 
-from harness.commands import SUMMARY
+from harness.commands import SUMMARY, add_chain_option
 from harness.errors import UserError
 from harness.io import read_json, write_json
 
@@ -26,6 +26,7 @@ def register(subparsers) -> None:
                    help="registered robot or URDF/MJCF path (default: the robot PLAN.json "
                         "records, else lynxmotion): its scene, built around it if it has none, "
                         "and its Pinocchio feedforward")
+    add_chain_option(p)
     p.add_argument("--plant", default=None,
                    help="what is simulated: an MJCF scene with its motors (as it is), a URDF or "
                         "MJCF of the robot with other dynamics (a scene built around it, its "
@@ -62,7 +63,7 @@ def run(args) -> int:
 
     plan = read_plan(args.plan)
     reference = plan_reference(plan)
-    arm = resolve_arm(args.robot, data=[(args.plan, plan)])
+    arm = resolve_arm(args.robot, data=[(args.plan, plan)], chain=args.chain)
     geometry = arm.geometry
     radii = plan.get("link_radii")
     if isinstance(radii, list) and len(radii) == len(geometry.links) and any(radii):

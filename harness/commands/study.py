@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from harness.commands import SUMMARY
+from harness.commands import SUMMARY, add_chain_option
 from harness.commands.bench import Progress, command_line, machine, run_pipeline, verdict
 from harness.errors import UserError
 from harness.report.results import Context
@@ -29,6 +29,7 @@ def register(subparsers) -> None:
     p.add_argument("--list", action="store_true", help="name every study and exit")
     p.add_argument("--quick", action="store_true", help="the study's smoke-test size")
     p.add_argument("--robot", default=None, help=f"robot (default {DEFAULT_ROBOT})")
+    add_chain_option(p)
     p.add_argument("--no-video", action="store_true", help="do not render videos")
     p.set_defaults(func=run)
 
@@ -43,7 +44,7 @@ def run(args) -> int:
     if not args.out:
         raise UserError("--out DIR is required")
     out_dir = Path(args.out)
-    arm = resolve_arm(args.robot)
+    arm = resolve_arm(args.robot, chain=args.chain)
     arm.chain  # noqa: B018 - a robot that is no serial arm: one line, before any section
     out_dir.mkdir(parents=True, exist_ok=True)
     progress = Progress()

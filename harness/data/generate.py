@@ -129,8 +129,9 @@ def generate(
         t, rate = _along(excitation, arm.dof, samples, mode)
         cond = _condition_fn(arm, robot, rate, samples)(exc)
     rng = np.random.default_rng(seed + 1)
-    meta = dict(plant=arm.reference, robot_hash=arm.record["hash"], mode=mode, noise=noise,
-                bias=bias, seed=seed, dof=arm.dof, samples=samples, rate=rate,
+    meta = dict(plant=arm.reference, robot_hash=arm.record["hash"],
+                **{k: arm.record[k] for k in ("chain", "held") if k in arm.record},
+                mode=mode, noise=noise, bias=bias, seed=seed, dof=arm.dof, samples=samples, rate=rate,
                 excitation_condition=cond)
     if pushes and mode != "measured":
         raise UserError("pushes act on a simulated plant: --mode measured")

@@ -22,7 +22,14 @@ import numpy as np
 import pinocchio as pin
 
 from harness.errors import UserError
-from harness.robots.registry import ROBOTS, Robot, flange_frame, robot_entry
+from harness.robots.registry import (
+    ROBOTS,
+    Robot,
+    chain_reference,
+    flange_frame,
+    robot_entry,
+    split_reference,
+)
 from identification.library.chain import ChainError, KinematicChain
 from planning.formulation.kinematics import ArmGeometry
 
@@ -39,10 +46,10 @@ class Arm:
     def of(name_or_path: str | Path) -> Arm:
         """The Arm of a registered name or a URDF/MJCF path (cached: parsed once per process);
         UserError for an unknown name or a missing file."""
-        name = str(name_or_path)
-        if name not in ROBOTS and Path(name).is_file():
-            name = str(Path(name).resolve())
-        return _arm(name)
+        robot, chain = split_reference(str(name_or_path))
+        if robot not in ROBOTS and Path(robot).is_file():
+            robot = str(Path(robot).resolve())
+        return _arm(chain_reference(robot, chain))
 
     def __repr__(self) -> str:
         return f"Arm({self.reference!r})"
@@ -53,8 +60,11 @@ class Arm:
 
     @property
     def label(self) -> str:
-        """A short name for messages: the registered name, else the file's name."""
-        return self.reference if self.registered else Path(self.reference).name
+        """A short name for messages: the registered name, else the file's name; a chain's
+        followed by its base and tip links."""
+        robot, chain = split_reference(self.reference)
+        name = robot if robot in ROBOTS else Path(robot).name
+        return name if chain is None else f"{name} ({chain})"
 
     # --- the models, parsed once -----------------------------------------------------------
     @cached_property
@@ -99,7 +109,9 @@ class Arm:
         (an MJCF is also checked for loops in MuJoCo)."""
         if self.entry.urdf is None:
             self.mujoco  # noqa: B018 - an MJCF's equality constraints close a loop
-        name = self.reference if self.registered else Path(self.reference).stem
+        robot, chain = split_reference(self.reference)
+        name = robot if robot in ROBOTS else Path(robot).stem
+        name = name if chain is None else f"{name}:{chain}"
         try:
             chain = KinematicChain.from_pinocchio(self.pinocchio, name)
         except ChainError as exc:
@@ -120,15 +132,21 @@ class Arm:
     @cached_property
     def record(self) -> dict:
         """What a MODEL.json records of its robot: name and kinematics hash, and for a robot
-        given by its file that file's absolute path (so later commands find it)."""
+        given by its file that file's absolute path (so later commands find it); for a chain
+        of a whole robot (--chain) its base and tip links ('BASE:TIP') and the joints held
+        fixed (joint, type, position in rad or m)."""
         record = {"name": self.chain.name, "hash": self.chain.digest()}
-        from harness.robots.files import inertia_repairs
+        from harness.robots.files import held_joints, inertia_repairs
 
+        if self.entry.chain is not None:
+            record["chain"] = ":".join(self.entry.chain)
+            record["held"] = held_joints(self.entry)
         if self.entry.urdf is not None:  # a link inertia repaired for MuJoCo (harness.robots.urdf)
             repairs = inertia_repairs(self.entry)
             if repairs:
                 record["repaired_inertias"] = repairs
-        return record if self.registered else {**record, "file": self.reference}
+        return record if self.registered else {**record,
+                                               "file": split_reference(self.reference)[0]}
 
     # --- geometry and limits ---------------------------------------------------------------
     @cached_property

@@ -22,6 +22,7 @@ import pinocchio as pin
 
 from harness.errors import UserError
 from harness.robots.registry import Robot
+from harness.robots.subchain import hold_outside_chain
 from harness.robots.urdf import arm_urdf, repair_inertias, strip_geometry
 
 # What Pinocchio's bindings raise on a description they cannot map (boost.python's
@@ -84,7 +85,17 @@ def read_text(path: Path) -> str:
 
 def arm_urdf_text(entry: Robot) -> str:
     """The entry's URDF with its arm joints only (the others fixed)."""
-    return arm_urdf(read_text(entry.urdf), entry.name)
+    return arm_urdf(read_text(entry.urdf), str(entry.urdf) if entry.chain else entry.name,
+                    entry.chain)
+
+
+def held_joints(entry: Robot) -> list[dict]:
+    """The joints the entry's chain holds fixed (harness.robots.subchain.hold_outside_chain:
+    joint, type, position); none without a chain."""
+    if entry.chain is None:
+        return []
+    return hold_outside_chain(ET.fromstring(read_text(entry.urdf)), *entry.chain,
+                              str(entry.urdf))
 
 
 def inertia_repairs(entry: Robot) -> list[dict]:

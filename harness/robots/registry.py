@@ -46,6 +46,25 @@ class Robot:
     # (harness.robots.extras: "paper", the paper's Tables III-IV and planning scenario)
     extras: tuple[str, ...] = ()
     logs: tuple[str, ...] = ()  # measured logs of this robot shipped under data/
+    # the arm between two links of a whole robot's URDF (base link, tip link), every other
+    # joint held fixed (harness.robots.subchain); None: the file's arm joints
+    chain: tuple[str, str] | None = None
+
+
+CHAIN_MARK = "#"  # an Arm's reference of a chain: FILE#BASE_LINK:TIP_LINK
+
+
+def split_reference(reference: str) -> tuple[str, str | None]:
+    """(robot name or file, chain 'BASE:TIP' or None) of an Arm's reference."""
+    if CHAIN_MARK in reference and reference not in ROBOTS and not Path(reference).is_file():
+        robot, chain = reference.rsplit(CHAIN_MARK, 1)
+        return robot, chain
+    return reference, None
+
+
+def chain_reference(robot: str, chain: str | None) -> str:
+    """The reference of robot's arm between the links chain names (robot itself if None)."""
+    return robot if not chain else f"{robot}{CHAIN_MARK}{chain}"
 
 
 @cache
@@ -110,7 +129,16 @@ def get_robot(name: str) -> Robot:
 
 def robot_entry(name_or_path: str | Path) -> Robot:
     """The registry entry of a registered robot, or an entry with the defaults for the URDF or
-    MJCF file at name_or_path (UserError if it is neither)."""
+    MJCF file at name_or_path (UserError if it is neither); a reference with a chain
+    (chain_reference) gives the entry of that chain of the robot's URDF."""
+    robot, chain = split_reference(str(name_or_path))
+    if chain is not None:
+        from harness.robots.subchain import parse_chain
+
+        entry, links = robot_entry(robot), parse_chain(chain)
+        if entry.urdf is None:
+            raise UserError(f"--chain needs the robot's URDF: {entry.mjcf} is an MJCF")
+        return Robot(name=str(name_or_path), urdf=entry.urdf, source=entry.source, chain=links)
     if str(name_or_path) in ROBOTS:
         return get_robot(str(name_or_path))
     path = Path(name_or_path)

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from harness.errors import UserError
 from harness.robots.arm import Arm
-from harness.robots.registry import DEFAULT_ROBOT, ROBOTS
+from harness.robots.registry import DEFAULT_ROBOT, ROBOTS, chain_reference, split_reference
 
 
 def recorded_robot(record) -> str | None:
@@ -26,17 +26,21 @@ def recorded_robot(record) -> str | None:
         return None
     robot = record.get("robot") or record.get("plant")
     if isinstance(robot, dict):  # a model's record: the robot's file where it has one
+        chain = robot.get("chain")
         robot = robot.get("file") or robot.get("name")
+        if isinstance(robot, str) and isinstance(chain, str):
+            robot = chain_reference(split_reference(robot)[0], chain)
     return robot if robot not in (None, "") else None
 
 
 def resolve_arm(given: str | None = None, *, model: tuple[str, dict] | None = None,
-                data: Iterable[tuple[str, dict]] = (), default: str | None = DEFAULT_ROBOT
-                ) -> Arm:
+                data: Iterable[tuple[str, dict]] = (), default: str | None = DEFAULT_ROBOT,
+                chain: str | None = None) -> Arm:
     """The arm a command works on, by the one rule (module docstring), every record checked.
 
     given: --robot; model: (its file, MODEL.json's robot record {"name", "hash"}); data: (file,
-    record) of each dataset or plan. UserError, one line, when the records name a robot that
+    record) of each dataset or plan; chain: --chain BASE:TIP, the arm between two links of the
+    robot (given or recorded). UserError, one line, when the records name a robot that
     cannot be found without --robot, or a robot whose kinematics differ from the arm's."""
     data = [(f, r) for f, r in data if isinstance(r, dict)]
     named = [recorded_robot(r) for _, r in data]
@@ -44,8 +48,10 @@ def resolve_arm(given: str | None = None, *, model: tuple[str, dict] | None = No
         (n for n in named if n), None) or default
     if chosen is None:
         raise UserError("no robot given and none recorded: pass --robot")
+    if chain is not None and isinstance(chosen, str):
+        given = chosen = chain_reference(split_reference(chosen)[0], chain)
     if not isinstance(chosen, str) or "\0" in chosen or not (
-            chosen in ROBOTS or Path(chosen).is_file() or chosen == given):
+            _resolvable(chosen) or chosen == given):
         raise UserError(f"the records name robot {str(chosen)[:60]!r}, neither a registered "
                         "robot nor an existing URDF/MJCF file: pass --robot")
     arm = Arm.of(chosen)
@@ -79,7 +85,8 @@ def _check_data(arm: Arm, file: str, record: dict, name: str | None, given: bool
 
 
 def _resolvable(name: str) -> bool:
-    return name in ROBOTS or ("\0" not in name and Path(name).is_file())
+    robot = split_reference(name)[0] if "\0" not in name else name
+    return robot in ROBOTS or ("\0" not in robot and Path(robot).is_file())
 
 
 def _check_dof(arm: Arm, file: str, record: dict) -> None:

@@ -15,6 +15,8 @@ identifies and plans the arm, so:
   together: finger_edu's izz = 0, which Pinocchio accepts) is repaired to the nearest one it
   takes (repair_inertias: the smallest moments raised, the axes kept), said once on stderr
   and recorded (Arm.record's `repaired_inertias`), in the text both engines read;
+- given a chain (base link, tip link: `--chain`), every joint off the path between them is
+  held fixed first (harness.robots.subchain), so a whole robot's arm is such an arm;
 - visual and collision geometry is dropped (inertias come from <inertial>), and ROS's
   lower = upper = 0 "no limit" removed, so MuJoCo loads the file without warnings;
 - a joint's Coulomb friction (<dynamics friction>) is dropped: MuJoCo would make
@@ -37,6 +39,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from harness.errors import UserError
+from harness.robots.subchain import hold_outside_chain
 
 MOVING = ("revolute", "continuous")
 # Attributes that hold numbers: a NaN or inf there is one clear error, never a model that
@@ -113,8 +116,10 @@ def _say(source: str, repairs: list[dict]) -> None:
               f"valid one: {changed} kg m^2", file=sys.stderr)
 
 
-def arm_urdf(text: str, source: str) -> str:
-    """The URDF with non-arm joints held fixed; UserError if it is not a fixed-base arm."""
+def arm_urdf(text: str, source: str, chain: tuple[str, str] | None = None) -> str:
+    """The URDF with non-arm joints held fixed; UserError if it is not a fixed-base arm.
+    chain: (base link, tip link): the arm between them, every other joint held fixed
+    (harness.robots.subchain)."""
     try:
         root = ET.fromstring(text)
     except ET.ParseError as exc:
@@ -122,6 +127,7 @@ def arm_urdf(text: str, source: str) -> str:
     if root.tag != "robot":
         raise UserError(f"invalid URDF {source}: the root element is <{root.tag}>, not <robot>")
     _check_numbers(root, source)
+    held_outside = hold_outside_chain(root, *chain, source) if chain else []
     joints = root.findall("joint")
     below: dict[str, list[ET.Element]] = {}
     for joint in joints:
@@ -144,7 +150,7 @@ def arm_urdf(text: str, source: str) -> str:
     coulomb = [d for j in joints for d in j.findall("dynamics") if d.get("friction") is not None]
     repaired = repair_inertias(root)
     _say(source, repaired)
-    if continuous or coulomb or repaired:
+    if continuous or coulomb or repaired or held_outside:
         for joint in continuous:
             _one_turn(joint)
         for dynamics in coulomb:
@@ -155,11 +161,13 @@ def arm_urdf(text: str, source: str) -> str:
         kind, name = joint.get("type"), joint.get("name")
         if kind in ("floating", "planar"):
             raise UserError(f"URDF {source}: joint '{name}' is {kind}: a moving base is not "
-                            "supported (fixed-base serial arms only)")
+                            "supported (fixed-base serial arms only; a whole robot's arm: "
+                            "--chain BASE_LINK:TIP_LINK)")
         if kind == "prismatic":
             if moves_below(joint):
                 raise UserError(f"URDF {source}: prismatic arm joint '{name}' is not supported "
-                                "(revolute arm joints only)")
+                                "(revolute arm joints only; a whole robot's arm: --chain "
+                                "BASE_LINK:TIP_LINK holds the joints off it fixed)")
             held.append(name)
     if not held:
         return text
