@@ -17,6 +17,8 @@ import pytest
 
 from harness.cli import main
 from harness.commands.replay import _plant_words, summary
+from harness.errors import UserError
+from harness.robots.arm import Arm
 from harness.robots.registry import ROBOTS, erd_robots_dir
 from tests.test_replay import quintic_plan
 
@@ -61,9 +63,33 @@ def test_robots_lists_the_registered_and_example_robot_datas_urdfs(capsys):
     for name in ROBOTS:
         assert f"  {name}" in out
     ur3 = erd_robots_dir() / "ur_description" / "urdf" / "ur3_robot.urdf"
-    assert f"  {ur3}\n" in out and str(erd_robots_dir()) in out
+    assert f"  {ur3}: 6 joints\n" in out and str(erd_robots_dir()) in out
     assert main(["robots", "--registered"]) == 0
     assert str(ur3) not in capsys.readouterr().out
+
+
+def test_robots_lists_only_what_loads_as_usable_and_the_others_with_the_reason(capsys):
+    """finger_edu was listed as usable while MuJoCo refused it; TIAGo Pro's whole robot is
+    refused by every command (a prismatic torso below its arms)."""
+    assert main(["robots"]) == 0
+    out = capsys.readouterr().out
+    usable, refused = out.split("not usable as they are")
+    rows = dict(line.strip().split(": ", 1) for line in refused.splitlines()[1:] if line.strip())
+    tiago = erd_robots_dir() / "tiago_pro_description" / "robots" / "tiago_pro.urdf"
+    assert "prismatic arm joint 'torso_lift_joint'" in rows[str(tiago)]
+    assert f"  {tiago}" not in usable
+    # the joint counts of usable files, read apart from the harness: the URDF's moving joints
+    # (the UR3's six revolute, the SO-100's six: its jaw is revolute)
+    import xml.etree.ElementTree as ET
+
+    for path in (erd_robots_dir() / "ur_description" / "urdf" / "ur3_robot.urdf",
+                 erd_robots_dir() / "so_arm_description" / "urdf" / "so100.urdf"):
+        moving = [j for j in ET.parse(path).getroot().iter("joint")
+                  if j.get("type") in ("revolute", "continuous")]
+        assert f"  {path}: {len(moving)} joints\n" in usable
+    for path in rows:  # every file refused is refused by the commands too (chain, engines)
+        with pytest.raises(UserError):
+            Arm.of(path).dof and Arm.of(path).mujoco  # noqa: B018
 
 
 def test_the_replay_table_says_what_separates_its_two_clearances():

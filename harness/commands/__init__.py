@@ -15,7 +15,7 @@ SUMMARY = {
     "plan": "energy-optimal trajectory avoiding a moving obstacle",
     "predict": "torques of a model (MODEL.json or 'pinocchio') on data",
     "replay": "execute a planned trajectory in MuJoCo and measure energy, clearance, tracking",
-    "robots": "list the registered robots and example-robot-data's URDFs",
+    "robots": "list the registered robots and example-robot-data's URDFs, each checked",
     "study": "run one long study on demand and write its report",
     "sweep": "identification error over a grid of robots, noise levels, seeds, methods and "
              "sample counts, on Ray",

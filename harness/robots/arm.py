@@ -122,7 +122,8 @@ class Arm:
             parent = chain.parents[j]
             on = "the base" if parent < 0 else f"joint '{names[parent + 1]}'"
             raise UserError(f"robot {self.reference}: joint '{names[j + 1]}' does not follow "
-                            f"joint '{names[j]}' (it hangs on {on}): not a serial chain")
+                            f"joint '{names[j]}' (it hangs on {on}): not a serial chain (one arm "
+                            "of a whole robot: --chain BASE_LINK:TIP_LINK)")
         return chain
 
     @property
