@@ -94,8 +94,12 @@ def evaluate(execution: Execution, scenario: Scenario, model: TorqueModel,
     problems += _rate_problems(np.abs(qdd).max(axis=0), config.acceleration_limit,
                                "acceleration", "rad/s^2")
     if sample_clearance.min() < config.threshold - CLEARANCE_TOLERANCE:
+        k, link = np.unravel_index(np.argmin(clearance[refine::refine]),
+                                   clearance[refine::refine].shape)
         problems.append(f"clearance {sample_clearance.min():.4f} m < threshold "
-                        f"{config.threshold} m - {CLEARANCE_TOLERANCE} m")
+                        f"{config.threshold} m - {CLEARANCE_TOLERANCE} m (link "
+                        f"'{config.geometry.link_names[link]}' at t = "
+                        f"{t[refine::refine][k]:.3f} s)")
     return PlanResult(t, q, qd, qdd, obstacle, clearance, sample_clearance,
                       executed_energy(model, execution, t), end_error, limit, peak_torque,
                       execution, not problems, tuple(problems), peak_velocity)

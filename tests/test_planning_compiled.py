@@ -138,6 +138,23 @@ def test_the_plan_command_says_each_compile_stage_on_a_terminal(monkeypatch, cap
     assert capsys.readouterr().err == ""
 
 
+def test_a_first_plan_says_how_long_compiling_took_on_any_stderr(monkeypatch):
+    """The plan's line (written or refused) ends with the time compiling took, terminal or
+    not; nothing when nothing was compiled."""
+    from harness.plan import messages
+    from harness.plan.messages import BuildNotice
+
+    clock = iter([10.0, 40.0, 41.0, 53.5])  # two stages: 30 s and 12.5 s
+    monkeypatch.setattr(messages.time, "perf_counter", lambda: next(clock))
+    monkeypatch.setattr("sys.stderr.isatty", lambda: False)
+    notice = BuildNotice("panda", 7)
+    assert notice.compiled_note() == ""
+    for stage in ("the NLP solvers' functions", "the safety checks"):
+        notice.emit(_record(stage, 2000, False))
+        notice.emit(_record(stage, 2000, True))
+    assert notice.compiled_note().startswith("; compiling the planner took 42.5 s of this run")
+
+
 def _record(stage: str, kilobytes: int, done: bool) -> logging.LogRecord:
     record = logging.LogRecord(compiled.log.name, logging.INFO, __file__, 0, "compiling", (),
                                None)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 
 import numpy as np
 import pytest
@@ -173,7 +174,14 @@ def test_obstacle_parked_on_the_goal_is_flagged(paper, baseline):
     blocked = dataclasses.replace(scenario, obstacle=parked)
     result = evaluate(execute(segments(planner), blocked), blocked, baseline, planner.config)
     assert not result.feasible
-    assert any("clearance" in p for p in result.problems)
+    # the closest approach is the flange's (on the last link) at the goal, at the end: the
+    # problem names that link, that time and the clearance reached
+    found = [re.search(r"clearance (-?[0-9.]+) m < .* \(link '(.+?)' at t = ([0-9.]+) s\)", p)
+             for p in result.problems]
+    clearance, link, t = next(f.groups() for f in found if f)
+    assert link == planner.config.geometry.link_names[-1]
+    assert float(t) == pytest.approx(scenario.duration, abs=1e-9)
+    assert float(clearance) == pytest.approx(-planner.config.geometry.link_radii[-1], abs=1e-4)
 
 
 def test_warm_replan_finds_the_cold_optimum(paper, baseline):

@@ -232,8 +232,9 @@ def _run(args, arm: Arm, model_file, notice: BuildNotice) -> int:
     search_failure_note(result.execution.search_failures)
     first_plan_note(result.execution.first_plan_fallback)
     if not result.feasible:  # the torque limits' diagnosis builds IPOPT's NLP: only now
-        raise PlanningError(torque_diagnosis(planner, scenario)
-                            or infeasible(result.problems, config, scenario, either))
+        raise PlanningError((torque_diagnosis(planner, scenario)
+                             or infeasible(result.problems, config, scenario, either))
+                            + notice.compiled_note())
     write_json(args.out, {**to_json(result, scenario, config, args.model),  # links whose
                           "unread_geometry": [u._asdict() for u in arm.unread_geometry]})  # mesh failed
     if args.trajectory:
@@ -242,5 +243,5 @@ def _run(args, arm: Arm, model_file, notice: BuildNotice) -> int:
     print(f"wrote {args.out}: energy {result.energy:.4f} J, min clearance "
           f"{result.sample_clearance.min():.4f} m (closest: "
           f"{closest_link(result, config)['closest_link']}), "
-          f"{len(result.execution.segments) - 1} re-plans")
+          f"{len(result.execution.segments) - 1} re-plans{notice.compiled_note()}")
     return 0

@@ -185,12 +185,19 @@ class BuildNotice(logging.Handler):
         self.robot, self.joints = robot, joints
         self.began: float | None = None
         self.ended = 0.0
+        self.seconds = 0.0  # compiling, all stages, on any stderr (compiled_note)
+        self._stage_began: float | None = None
 
     def emit(self, record) -> None:
         stage = getattr(record, "stage", None)
-        if stage is None or not sys.stderr.isatty():
+        if stage is None:
             return
         now = time.perf_counter()
+        if record.done and self._stage_began is not None:
+            self.seconds += now - self._stage_began
+        self._stage_began = None if record.done else now
+        if not sys.stderr.isatty():
+            return
         if record.done:
             self.ended = now
             return
@@ -208,6 +215,14 @@ class BuildNotice(logging.Handler):
         if self.began is not None and sys.stderr.isatty():
             print(f"{self._head()}: done in {self.ended - self.began:.0f} s", file=sys.stderr,
                   flush=True)
+
+    def compiled_note(self) -> str:
+        """'' when nothing was compiled, else what compiling took of this run (the first plan
+        on a robot compiles its planner once; later plans load it)."""
+        if self.seconds <= 0:
+            return ""
+        return (f"; compiling the planner took {self.seconds:.1f} s of this run (the first "
+                f"plan for {self.robot}: later plans reuse it)")
 
     def _head(self) -> str:
         joints = "" if self.joints is None else f" ({self.joints} joints)"
