@@ -132,20 +132,29 @@ def targets_markdown(outcomes) -> list[str]:
 
 
 def targets_verdict(outcomes) -> str:
-    """What the top line says of the targets: how many met, and which were missed or not
-    measured, by name."""
-    targets = [(o.name, t) for o in outcomes for t in o.targets]
+    """What the top line says of the targets: how many met, missed and not measured (the
+    missed ones are named below it: targets_missed)."""
+    targets = [t for o in outcomes for t in o.targets]
     if not targets:
         return "no targets"
-    missed = [f"{name}: {t.name}" for name, t in targets if t.met is False]
-    unmeasured = [f"{name}: {t.name}" for name, t in targets if t.met is None]
-    met = sum(t.met is True for _, t in targets)
-    text = f"{met} of {len(targets)} targets met"
-    if missed:
-        text = f"**{text}** — missed: {'; '.join(missed)}"
-    if unmeasured:
-        text += f" — not measured: {'; '.join(unmeasured)}"
-    return text
+    missed = sum(t.met is False for t in targets)
+    unmeasured = sum(t.met is None for t in targets)
+    text = f"{sum(t.met is True for t in targets)} of {len(targets)} targets met"
+    counts = [f"{n} {what}" for n, what in ((missed, "missed"), (unmeasured, "not measured"))
+              if n]
+    return f"**{text}** ({', '.join(counts)}: listed below)" if missed else \
+        text + (f" ({counts[0]}: listed below)" if counts else "")
+
+
+def targets_missed(outcomes, limit: int | None = None) -> list[str]:
+    """One bullet per missed, then per unmeasured target (section: name); at most limit
+    bullets, the rest counted in a last one."""
+    targets = [(o.name, t) for o in outcomes for t in o.targets]
+    lines = [*(f"- missed: {name}: {t.name}" for name, t in targets if t.met is False),
+             *(f"- not measured: {name}: {t.name}" for name, t in targets if t.met is None)]
+    if limit is not None and len(lines) > limit:
+        lines = [*lines[:limit - 1], f"- ... and {len(lines) - limit + 1} more (report.md)"]
+    return lines
 
 
 def headline_markdown(outcomes) -> list[str]:
@@ -172,20 +181,32 @@ def _section_markdown(o: SectionOutcome, out_dir: Path) -> list[str]:
     return lines + links + [""]
 
 
-def report_markdown(outcomes: list[SectionOutcome], meta: dict, out_dir: Path) -> str:
-    """The human-readable report."""
+def status_line(outcomes, meta: dict) -> str:
+    """The report's top line (under 200 characters): the robot, the time, how many checks
+    hold and how many targets were met; what failed or was missed is listed below it."""
     failed = [o.name for o in outcomes if o.status == "failed"]
     checks = failed_checks(outcomes)
     total = sum(len(o.checks) for o in outcomes)
-    status = (f"sections failed: {', '.join(failed)}" if failed else
-              f"**{len(checks)} of {total} checks failed** ({', '.join(checks)})" if checks else
+    status = (f"{len(failed)} sections failed" if failed else
+              f"**{len(checks)} of {total} checks failed**" if checks else
               f"all {total} checks hold") + f"; {targets_verdict(outcomes)}"
     elapsed = (meta.get("timing") or {}).get("elapsed_s", 0.0)
-    lines = ["# torquebench report", "",
-             f"Robot `{meta.get('robot')}`, {elapsed:.0f} s in total"
-             f"{' (quick mode)' if meta.get('quick') else ''}: {status}. Checks must hold (a "
-             "failure is a bug and fails the run); targets are what the project aims at, "
-             "reported with their gap.", "",
+    robot = str(meta.get("robot"))
+    robot = Path(robot).name if "/" in robot else robot  # a file's path: its name
+    return (f"Robot `{robot}`, {elapsed:.0f} s in total"
+            f"{' (quick mode)' if meta.get('quick') else ''}: {status}.")
+
+
+def report_markdown(outcomes: list[SectionOutcome], meta: dict, out_dir: Path) -> str:
+    """The human-readable report."""
+    failed = [o.name for o in outcomes if o.status == "failed"]
+    below = [*(f"- section failed: {name}" for name in failed),
+             *(f"- check failed: {name}" for name in failed_checks(outcomes)),
+             *targets_missed(outcomes)]
+    lines = ["# torquebench report", "", status_line(outcomes, meta), "",
+             *below, *([""] if below else []),
+             "Checks must hold (a failure is a bug and fails the run); targets are what the "
+             "project aims at, reported with their gap.", "",
              "## Headline", "", *headline_markdown(outcomes), "",
              "## Targets", "", *targets_markdown(outcomes), ""]
     for outcome in outcomes:
@@ -193,14 +214,25 @@ def report_markdown(outcomes: list[SectionOutcome], meta: dict, out_dir: Path) -
     return "\n".join(lines).rstrip() + "\n"
 
 
+HEADLINE_LINES = 40  # headline.md stays shorter than this
+
+
+def headline_file(outcomes, meta: dict) -> list[str]:
+    """headline.md: the top line, the headline rows and the targets missed or not measured
+    (the whole table is report.md's), under HEADLINE_LINES lines."""
+    lines = [status_line(outcomes, meta), "", "## Headline", "", *headline_markdown(outcomes),
+             "", "## Targets", "", f"{targets_verdict(outcomes)}; the whole table: report.md."]
+    room = HEADLINE_LINES - 2 - len(lines)
+    missed = targets_missed(outcomes, max(room, 1))
+    return [*lines, *([""] if missed else []), *missed]
+
+
 def write_report(out_dir: Path, outcomes: list[SectionOutcome], meta: dict) -> dict:
     """Write report.json, report.md and headline.md into out_dir; returns the JSON payload."""
     out_dir = Path(out_dir)
     payload = report_json(outcomes, meta, out_dir)
     json.dumps(payload, allow_nan=False)  # fail before writing anything
-    write_text(out_dir / "headline.md", "\n".join(
-        ["## Headline", "", *headline_markdown(outcomes), "", "## Targets", "",
-         *targets_markdown(outcomes)]) + "\n")
+    write_text(out_dir / "headline.md", "\n".join(headline_file(outcomes, meta)) + "\n")
     write_text(out_dir / "report.md", report_markdown(outcomes, meta, out_dir))
     write_json(out_dir / "report.json", payload)
     return payload
