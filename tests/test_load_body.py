@@ -47,6 +47,29 @@ def test_a_link_inertia_mujoco_refuses_is_repaired_and_recorded(capsys):
                                atol=1e-8)
 
 
+def test_an_inertia_repaired_to_the_triangle_inequality_is_one_mujoco_takes(tmp_path):
+    """The Allegro hand's link_15.0 (A + B < C): repaired to A + B = C exactly, MuJoCo still
+    refused it (its own eigenvalues round below); a one-joint arm carrying that inertia loads
+    in both engines, its moments still within 1e-5 of the triangle's equality."""
+    import xml.etree.ElementTree as ET
+
+    from harness.robots.registry import erd_robots_dir
+
+    hand = ET.parse(erd_robots_dir() / "allegro_hand_description/urdf/allegro_left_hand.urdf")
+    link = next(k for k in hand.getroot().iter("link") if k.get("name") == "link_15.0")
+    inertia = ET.tostring(link.find("inertial"), encoding="unicode")
+    urdf = tmp_path / "one.urdf"
+    urdf.write_text(f"""<robot name="one"><link name="base"/>
+      <link name="tip">{inertia}</link>
+      <joint name="j" type="revolute"><parent link="base"/><child link="tip"/>
+        <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+    </robot>""")
+    arm = Arm.of(urdf)
+    moments = np.sort(arm.mujoco.body_inertia[arm.mujoco.body("tip").id])
+    assert moments[0] + moments[1] >= moments[2]
+    assert moments[0] + moments[1] <= moments[2] * (1 + 1e-5)
+
+
 def _runs(arm: Arm, body, params, seeds=(21, 22), n=1500):
     lo, hi = arm.position_limits
     centre, amplitude = (lo + hi) / 2, 0.4 * (hi - lo)

@@ -67,6 +67,10 @@ def _check_numbers(root: ET.Element, source: str) -> None:
 MOMENT_FLOOR = 1e-6  # a repaired principal moment: at least this fraction of the largest
 MOMENT_MIN = 1e-9  # kg m^2, and at least this
 MUJOCO_MIN = 1e-15  # mjMINVAL: MuJoCo refuses a principal moment not above it
+# of the largest moment, above the triangle inequality's equality: MuJoCo checks A + B >= C on
+# its own eigenvalues of the written tensor, which at equality can round either way (the
+# Allegro hand's link_15.0 was refused after a repair to equality)
+TRIANGLE_SLACK = 1e-6
 KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 _said: set[tuple[str, str]] = set()
 
@@ -75,8 +79,8 @@ def repair_inertias(root: ET.Element) -> list[dict]:
     """Every link inertia MuJoCo would refuse, repaired in place to the nearest valid one:
     its principal moments (eigenvalues) raised to at least MOMENT_FLOOR of the largest (and
     MOMENT_MIN), then the smallest raised until the two smaller hold the largest (a rigid
-    body's triangle inequality), its principal axes kept. One entry per link repaired: the
-    link, the inertia before and after (ixx, ixy, ixz, iyy, iyz, izz; kg m^2)."""
+    body's triangle inequality, with TRIANGLE_SLACK), its principal axes kept. One entry per
+    link repaired: the link, the inertia before and after (ixx, ixy, ixz, iyy, iyz, izz; kg m^2)."""
     repairs = []
     for link in root.iter("link"):
         inertia = link.find("inertial/inertia")
@@ -93,7 +97,7 @@ def repair_inertias(root: ET.Element) -> list[dict]:
         if moments[0] > MUJOCO_MIN and moments[0] + moments[1] >= moments[2]:
             continue  # MuJoCo's checks: positive moments, the triangle inequality
         fixed = np.maximum(moments, max(MOMENT_FLOOR * moments[-1], MOMENT_MIN))
-        fixed[0] = max(fixed[0], fixed[2] - fixed[1])
+        fixed[0] = max(fixed[0], fixed[2] - fixed[1] + TRIANGLE_SLACK * fixed[2])
         new = axes @ np.diag(fixed) @ axes.T
         after = [new[0, 0], new[0, 1], new[0, 2], new[1, 1], new[1, 2], new[2, 2]]
         for key, value in zip(KEYS, after, strict=True):
