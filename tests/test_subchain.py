@@ -38,6 +38,12 @@ def reduced(path: Path, arm: Arm, held: dict[str, float]) -> pin.Model:
     return pin.buildReducedModel(full, lock, q)
 
 
+def configuration(model: pin.Model, q: np.ndarray) -> np.ndarray:
+    """Pinocchio's configuration of one angle per joint: (cos, sin) for a continuous joint."""
+    return np.concatenate([[np.cos(a), np.sin(a)] if joint.nq == 2 else [a]
+                           for joint, a in zip(model.joints[1:], q, strict=True)])
+
+
 def cross_check(path: Path, chain: str, seed: int, held: dict[str, float]) -> float:
     """The largest torque difference (N m) of the chain's arm from the reduced whole model, over
     random states: Pinocchio's RNEA and MuJoCo's inverse dynamics (damping zeroed) on the
@@ -53,7 +59,7 @@ def cross_check(path: Path, chain: str, seed: int, held: dict[str, float]) -> fl
     worst = 0.0
     for _ in range(5):
         q, qd, qdd = (rng.uniform(-1.5, 1.5, arm.dof) for _ in range(3))
-        expected = pin.rnea(truth, truth.createData(), q, qd, qdd)
+        expected = pin.rnea(truth, truth.createData(), configuration(truth, q), qd, qdd)
         ours = pin.rnea(arm.pinocchio, arm.pinocchio.createData(), q, qd, qdd)
         data.qpos[:], data.qvel[:], data.qacc[:] = q, qd, qdd
         mujoco.mj_inverse(model, data)
@@ -79,6 +85,8 @@ def test_the_chain_has_the_reduced_whole_models_dynamics():
 
 
 def test_whole_robots_from_example_robot_data():
+    """TIAGo Pro's, TALOS's and PR2's left arms (the torso, the head, the other arm, the
+    wheels and the grippers held)."""
     from harness.robots.registry import erd_robots_dir
 
     robots = erd_robots_dir()
@@ -91,7 +99,9 @@ def test_whole_robots_from_example_robot_data():
     for path, chain, held in ((robots / "tiago_pro_description/robots/tiago_pro.urdf",
                                "torso_lift_link:arm_left_7_link", {}),
                               (talos, "torso_2_link:arm_left_7_link",
-                               {"arm_right_2_joint": upper})):
+                               {"arm_right_2_joint": upper}),
+                              (robots / "pr2_description/urdf/pr2.urdf",  # its materials'
+                               "torso_lift_link:l_wrist_roll_link", {})):  # value: a name
         assert Arm.of(f"{path}#{chain}").dof == 7
         assert cross_check(path, chain, 3, held) <= 1e-9
 

@@ -53,7 +53,7 @@ def _check_numbers(root: ET.Element, source: str) -> None:
     for element in root.iter():
         for key in NUMERIC:
             raw = element.get(key)
-            if raw is None:
+            if raw is None or (key == "value" and element.tag != "mass"):  # a material's name
                 continue
             try:
                 ok = all(math.isfinite(float(v)) for v in raw.split())
