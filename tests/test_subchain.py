@@ -106,6 +106,24 @@ def test_whole_robots_from_example_robot_data():
         assert cross_check(path, chain, 3, held) <= 1e-9
 
 
+def test_stated_holds_are_kept_and_checked():
+    """--hold: the torso pitched to 0.3 rad and the right arm's joint 2 at -1.0 rad; the
+    chain's dynamics are the reduction's at those positions (the pitch tilts gravity in the
+    arm's frame: not the default hold's)."""
+    stated = {"torso_pitch_joint": 0.3, "arm_right_2_joint": -1.0}
+    hold = ",".join(f"{k}={v}" for k, v in stated.items())
+    arm = Arm.of(f"{URDF}#{LEFT}@{hold}")
+    assert {h["joint"]: h["position"] for h in arm.record["held"]}["torso_pitch_joint"] == 0.3
+    assert arm.record["hold"] == stated
+    assert cross_check(URDF, f"{LEFT}@{hold}", 4, {**HELD, **stated}) <= 1e-9
+    assert cross_check(URDF, f"{LEFT}@{hold}", 4, HELD) > 1e-3  # the default's is another
+    for bad, message in (("torso_pitch_joint=0.9", "outside its limits"),
+                         ("arm_left_2_joint=0.1", "not a moving joint off the chain"),
+                         ("torso_pitch_joint=x", "--hold must be JOINT=POSITION")):
+        with pytest.raises(UserError, match=message):
+            Arm.of(f"{URDF}#{LEFT}@{bad}").dof  # noqa: B018
+
+
 def test_a_chain_through_a_prismatic_joint_or_of_unknown_links_is_one_clear_error():
     with pytest.raises(UserError, match="prismatic arm joint 'torso_lift_joint'"):
         Arm.of(f"{URDF}#base_link:left_tool").dof  # noqa: B018
@@ -119,16 +137,17 @@ def test_a_chain_through_a_prismatic_joint_or_of_unknown_links_is_one_clear_erro
 
 def test_excite_generate_identify_plan_on_a_chain(tmp_path):
     traj, data, model, plan = (tmp_path / n for n in ("t.csv", "d.npz", "m.json", "p.json"))
-    robot = ["--robot", str(URDF), "--chain", LEFT]
+    robot = ["--robot", str(URDF), "--chain", LEFT, "--hold", "torso_pitch_joint=0.3"]
     assert main(["excite", *robot, "--duration", "4", "--rate", "100", "--iterations", "2",
                  "--harmonics", "5", "--floor", "none", "--out", str(traj)]) == 0
     assert main(["generate", *robot, "--excitation", str(traj), "--noise", "0",
                  "--out", str(data)]) == 0
     meta = json.loads(str(np.load(data)["meta"]))
-    assert meta["chain"] == LEFT and meta["plant"].endswith(f"#{LEFT}")
+    assert meta["chain"] == LEFT and meta["plant"].endswith(f"#{LEFT}@torso_pitch_joint=0.3")
     assert main(["identify", "--data", str(data), "--out", str(model)]) == 0  # the data's arm
     record = json.loads(model.read_text())["robot"]
     assert record["chain"] == LEFT and record["file"] == str(URDF)
+    assert record["hold"] == {"torso_pitch_joint": 0.3}
     assert main(["plan", "--no-compile", "--model", str(model), "--start", "0.3,0.5,-0.5",
                  "--goal", "-0.3,0.8,-1.0", "--duration", "1", "--obstacle-from", "3,3,3",
                  "--obstacle-to", "3,3,4", "--out", str(plan)]) == 0

@@ -28,5 +28,19 @@ def add_chain_option(parser) -> None:
         "--chain", default=None, metavar="BASE_LINK:TIP_LINK",
         help="the arm between two links of a whole robot's URDF (a torso and two arms: "
         "torso_link:arm_left_7_link); every other joint held fixed at 0, or at its nearest "
-        "limit when 0 is outside them (said in the model's robot record, 'held'); recorded "
-        "with the data and the model, so later commands find it")
+        "limit when 0 is outside them, or where --hold says (said in the model's robot record, "
+        "'held'); recorded with the data and the model, so later commands find it")
+    parser.add_argument(
+        "--hold", default=None, metavar="JOINT=POSITION[,...]",
+        help="with --chain: the positions (rad, or m for a prismatic joint) some held joints "
+        "are held at, within their limits (torso_lift_joint=0.2)")
+
+
+def chain_option(args) -> str | None:
+    """--chain with --hold's positions (harness.robots.subchain's BASE:TIP@JOINT=POSITION,...);
+    None without --chain."""
+    if getattr(args, "hold", None) and not args.chain:
+        from harness.errors import UserError
+
+        raise UserError("--hold holds joints off a --chain: give --chain BASE_LINK:TIP_LINK")
+    return args.chain and (f"{args.chain}@{args.hold}" if args.hold else args.chain)

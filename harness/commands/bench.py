@@ -24,7 +24,7 @@ from pathlib import Path
 
 from harness import interrupt
 from harness.bench import SECTIONS, load_section
-from harness.commands import SUMMARY, add_chain_option
+from harness.commands import SUMMARY, add_chain_option, chain_option
 from harness.errors import UserError
 from harness.report.results import Context
 from harness.report.writer import SectionOutcome, write_report
@@ -142,7 +142,7 @@ def run_pipeline(ctx: Context, names, progress: Progress, module_of=load_section
 
 def run(args) -> int:
     out_dir = Path(args.out)
-    arm = resolve_arm(args.robot, chain=args.chain)
+    arm = resolve_arm(args.robot, chain=chain_option(args))
     arm.chain  # noqa: B018 - a robot that is no serial arm: one line, before any section
     if out_dir.exists() and not out_dir.is_dir():
         raise UserError(f"--out {out_dir} exists and is not a directory")

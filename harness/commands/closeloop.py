@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.closeloop.plant import run_closeloop
-from harness.commands import SUMMARY, add_chain_option
+from harness.commands import SUMMARY, add_chain_option, chain_option
 from harness.errors import UserError
 from harness.io import write_json
 from harness.robots.arm import Arm
@@ -167,7 +167,7 @@ def _data_arm(args, records: list[tuple[str, dict]]) -> Arm:
         from harness.robots.torque_models import read_model
 
         model = read_model(args.declared).recorded
-    return resolve_arm(args.robot, model=model, data=records, chain=args.chain)
+    return resolve_arm(args.robot, model=model, data=records, chain=chain_option(args))
 
 
 def _plant_arms(args) -> tuple[Arm, Arm]:
@@ -176,8 +176,8 @@ def _plant_arms(args) -> tuple[Arm, Arm]:
     path = Path(args.plant)
     if args.plant not in ROBOTS and path.suffix and not path.is_file():  # else: unknown robot
         raise UserError(f"plant file not found: {args.plant}")
-    plant = Arm.of(chain_reference(args.plant, args.chain))
-    return plant, (resolve_arm(args.robot, chain=args.chain) if args.robot else variant_of(plant))
+    plant = Arm.of(chain_reference(args.plant, chain_option(args)))
+    return plant, (resolve_arm(args.robot, chain=chain_option(args)) if args.robot else variant_of(plant))
 
 
 def _run_data(args) -> int:

@@ -8,7 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from harness.commands import SUMMARY, add_chain_option
+from harness.commands import SUMMARY, add_chain_option, chain_option
 from harness.data.excitation_file import write_trajectory
 from harness.data.excite import DEFAULT_ACCELERATION, ITERATIONS, design_for, floor_below_home
 from harness.data.generate import CONDITION_MEANING, CONDITION_WORDS
@@ -49,7 +49,7 @@ def run(args) -> int:
     _check_writable(Path(args.out))
     if args.iterations < 0:
         raise UserError(f"--iterations must be >= 0, got {args.iterations}")
-    arm = resolve_arm(args.robot, chain=args.chain)
+    arm = resolve_arm(args.robot, chain=chain_option(args))
     lowest = floor_below_home(arm, args.floor)
     if lowest is not None:
         print(f"note: at q = 0 the arm reaches z = {lowest:.3g} m, below the floor at "

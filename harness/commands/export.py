@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from harness.commands import SUMMARY, add_chain_option
+from harness.commands import SUMMARY, add_chain_option, chain_option
 from harness.errors import UserError
 from harness.robots.export import FORMATS, export_model
 from harness.robots.registry import DEFAULT_ROBOT
@@ -32,7 +32,7 @@ def run(args) -> int:
     model = read_model(args.model)
     if model.payload is None:
         raise UserError("export takes a MODEL.json written by `identify`, not 'pinocchio'")
-    arm = resolve_arm(args.robot, model=model.recorded, chain=args.chain)
+    arm = resolve_arm(args.robot, model=model.recorded, chain=chain_option(args))
     torque_model(model, arm)  # a well-formed model of this arm's kinematics
     what = export_model(model.payload, arm, args.format, args.out)
     print(f"wrote {args.out}: {what}")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from harness.commands import SUMMARY, add_chain_option
+from harness.commands import SUMMARY, add_chain_option, chain_option
 from harness.data.excitation_file import read_trajectory
 from harness.data.generate import CONDITION_MEANING, CONDITION_WORDS, generate
 from harness.io import write_npz
@@ -36,7 +36,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    arm = resolve_arm(args.plant, chain=args.chain)
+    arm = resolve_arm(args.plant, chain=chain_option(args))
     excitation = None
     if args.excitation is not None:
         excitation = read_trajectory(args.excitation, arm.dof)

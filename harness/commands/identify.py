@@ -6,7 +6,7 @@ import argparse
 import sys
 import warnings
 
-from harness.commands import SUMMARY, add_chain_option
+from harness.commands import SUMMARY, add_chain_option, chain_option
 from harness.data.runs import join, load_runs, split_files
 from harness.identify.drive_gains import current_or_torque, describe, gain_runs
 from harness.identify.fits import RIGID_BODY, arm_identification
@@ -114,7 +114,7 @@ def run(args) -> int:
     data, meta = runs.arrays, runs.metas[0]
     dof = data["q"].shape[1]
     # every --data and --validate run checked
-    arm = resolve_arm(args.robot, data=runs.records, chain=args.chain)
+    arm = resolve_arm(args.robot, data=runs.records, chain=chain_option(args))
     library, regressor = arm_identification(arm, dof, args.library, args.prior, args.method,
                                             meta.get("mode") == "measured log", args.plausible,
                                             args.prior_metric, args.rigid_body)

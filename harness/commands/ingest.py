@@ -3,7 +3,7 @@ contract (.npz)."""
 
 from __future__ import annotations
 
-from harness.commands import SUMMARY, add_chain_option
+from harness.commands import SUMMARY, add_chain_option, chain_option
 from harness.data.bag import is_bag
 from harness.data.dataset import check_arrays
 from harness.data.ingest import ingest
@@ -54,7 +54,7 @@ def run(args) -> int:
     source = args.csv if args.bag is None else args.bag
     if args.csv is not None and is_bag(args.csv):
         raise UserError(f"--csv {args.csv} is a folder or a rosbag2 file: give it as --bag")
-    arm = resolve_arm(args.robot, chain=args.chain)
+    arm = resolve_arm(args.robot, chain=chain_option(args))
     dof = arm.dof
     gains = None
     if args.current_gains is not None:

@@ -14,7 +14,7 @@ import logging
 import re
 import sys
 
-from harness.commands import SUMMARY, add_chain_option
+from harness.commands import SUMMARY, add_chain_option, chain_option
 from harness.io import write_json
 from harness.plan.anytime_options import add_anytime_options
 from harness.plan.arm_config import DURATION, default_obstacle
@@ -199,7 +199,7 @@ def register(sub) -> None:
 def run(args) -> int:
     model_file = read_model(args.model)
     # once: --robot, else the model's
-    arm = resolve_arm(args.robot, model=model_file.recorded, chain=args.chain)
+    arm = resolve_arm(args.robot, model=model_file.recorded, chain=chain_option(args))
     logger = logging.getLogger(compiled.__name__)
     notice = BuildNotice(arm.label)
     logger.addHandler(notice)

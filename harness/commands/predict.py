@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.commands import SUMMARY, add_chain_option
+from harness.commands import SUMMARY, add_chain_option, chain_option
 from harness.data.dataset import STATE_KEYS, load_arrays
 from harness.errors import UserError
 from harness.io import write_npz
@@ -53,7 +53,7 @@ def register(sub) -> None:
 def run(args) -> int:
     states, meta = load_arrays(args.data, STATE_KEYS, optional=("tau", "tau_clean"))
     read = read_model(args.model)
-    arm = resolve_arm(args.robot, model=read.recorded, data=[(args.data, meta)], chain=args.chain)
+    arm = resolve_arm(args.robot, model=read.recorded, data=[(args.data, meta)], chain=chain_option(args))
     model = torque_model(read, arm)
     if states["q"].shape[1] != model.dof:
         raise UserError(f"data has {states['q'].shape[1]} joints, model has {model.dof}")

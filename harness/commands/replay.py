@@ -7,7 +7,7 @@ import math
 from dataclasses import asdict
 from pathlib import Path
 
-from harness.commands import SUMMARY, add_chain_option
+from harness.commands import SUMMARY, add_chain_option, chain_option
 from harness.errors import UserError
 from harness.io import read_json, write_json
 
@@ -63,7 +63,7 @@ def run(args) -> int:
 
     plan = read_plan(args.plan)
     reference = plan_reference(plan)
-    arm = resolve_arm(args.robot, data=[(args.plan, plan)], chain=args.chain)
+    arm = resolve_arm(args.robot, data=[(args.plan, plan)], chain=chain_option(args))
     geometry = arm.geometry
     radii = plan.get("link_radii")
     if isinstance(radii, list) and len(radii) == len(geometry.links) and any(radii):

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from harness.commands import SUMMARY, add_chain_option
+from harness.commands import SUMMARY, add_chain_option, chain_option
 from harness.commands.bench import Progress, command_line, machine, run_pipeline, verdict
 from harness.errors import UserError
 from harness.report.results import Context
@@ -44,7 +44,7 @@ def run(args) -> int:
     if not args.out:
         raise UserError("--out DIR is required")
     out_dir = Path(args.out)
-    arm = resolve_arm(args.robot, chain=args.chain)
+    arm = resolve_arm(args.robot, chain=chain_option(args))
     arm.chain  # noqa: B018 - a robot that is no serial arm: one line, before any section
     out_dir.mkdir(parents=True, exist_ok=True)
     progress = Progress()

@@ -130,7 +130,7 @@ def generate(
         cond = _condition_fn(arm, robot, rate, samples)(exc)
     rng = np.random.default_rng(seed + 1)
     meta = dict(plant=arm.reference, robot_hash=arm.record["hash"],
-                **{k: arm.record[k] for k in ("chain", "held") if k in arm.record},
+                **{k: arm.record[k] for k in ("chain", "held", "hold") if k in arm.record},
                 mode=mode, noise=noise, bias=bias, seed=seed, dof=arm.dof, samples=samples, rate=rate,
                 excitation_condition=cond)
     if pushes and mode != "measured":

@@ -142,6 +142,8 @@ class Arm:
         if self.entry.chain is not None:
             record["chain"] = ":".join(self.entry.chain)
             record["held"] = held_joints(self.entry)
+            if self.entry.hold:  # the positions stated (--hold), as given
+                record["hold"] = dict(self.entry.hold)
         if self.entry.urdf is not None:  # a link inertia repaired for MuJoCo (harness.robots.urdf)
             repairs = inertia_repairs(self.entry)
             if repairs:

@@ -86,7 +86,7 @@ def read_text(path: Path) -> str:
 def arm_urdf_text(entry: Robot) -> str:
     """The entry's URDF with its arm joints only (the others fixed)."""
     return arm_urdf(read_text(entry.urdf), str(entry.urdf) if entry.chain else entry.name,
-                    entry.chain)
+                    entry.chain, entry.hold)
 
 
 def held_joints(entry: Robot) -> list[dict]:
@@ -95,7 +95,7 @@ def held_joints(entry: Robot) -> list[dict]:
     if entry.chain is None:
         return []
     return hold_outside_chain(ET.fromstring(read_text(entry.urdf)), *entry.chain,
-                              str(entry.urdf))
+                              str(entry.urdf), entry.hold)
 
 
 def inertia_repairs(entry: Robot) -> list[dict]:

@@ -49,9 +49,10 @@ class Robot:
     # the arm between two links of a whole robot's URDF (base link, tip link), every other
     # joint held fixed (harness.robots.subchain); None: the file's arm joints
     chain: tuple[str, str] | None = None
+    hold: tuple[tuple[str, float], ...] = ()  # positions stated for held joints (--hold)
 
 
-CHAIN_MARK = "#"  # an Arm's reference of a chain: FILE#BASE_LINK:TIP_LINK
+CHAIN_MARK = "#"  # an Arm's reference of a chain: FILE#BASE_LINK:TIP_LINK[@JOINT=POSITION,...]
 
 
 def split_reference(reference: str) -> tuple[str, str | None]:
@@ -133,12 +134,13 @@ def robot_entry(name_or_path: str | Path) -> Robot:
     (chain_reference) gives the entry of that chain of the robot's URDF."""
     robot, chain = split_reference(str(name_or_path))
     if chain is not None:
-        from harness.robots.subchain import parse_chain
+        from harness.robots.subchain import parse_chain, parse_hold
 
         entry, links = robot_entry(robot), parse_chain(chain)
         if entry.urdf is None:
             raise UserError(f"--chain needs the robot's URDF: {entry.mjcf} is an MJCF")
-        return Robot(name=str(name_or_path), urdf=entry.urdf, source=entry.source, chain=links)
+        return Robot(name=str(name_or_path), urdf=entry.urdf, source=entry.source, chain=links,
+                     hold=parse_hold(chain))
     if str(name_or_path) in ROBOTS:
         return get_robot(str(name_or_path))
     path = Path(name_or_path)

@@ -17,6 +17,7 @@ from pathlib import Path
 from harness.errors import UserError
 from harness.robots.arm import Arm
 from harness.robots.registry import DEFAULT_ROBOT, ROBOTS, chain_reference, split_reference
+from harness.robots.subchain import HOLD_MARK
 
 
 def recorded_robot(record) -> str | None:
@@ -26,8 +27,10 @@ def recorded_robot(record) -> str | None:
         return None
     robot = record.get("robot") or record.get("plant")
     if isinstance(robot, dict):  # a model's record: the robot's file where it has one
-        chain = robot.get("chain")
+        chain, hold = robot.get("chain"), robot.get("hold")
         robot = robot.get("file") or robot.get("name")
+        if isinstance(hold, dict) and isinstance(chain, str):
+            chain += HOLD_MARK + ",".join(f"{j}={v!r}" for j, v in hold.items())
         if isinstance(robot, str) and isinstance(chain, str):
             robot = chain_reference(split_reference(robot)[0], chain)
     return robot if robot not in (None, "") else None

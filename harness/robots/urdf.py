@@ -120,10 +120,11 @@ def _say(source: str, repairs: list[dict]) -> None:
               f"valid one: {changed} kg m^2", file=sys.stderr)
 
 
-def arm_urdf(text: str, source: str, chain: tuple[str, str] | None = None) -> str:
+def arm_urdf(text: str, source: str, chain: tuple[str, str] | None = None,
+             hold: tuple[tuple[str, float], ...] = ()) -> str:
     """The URDF with non-arm joints held fixed; UserError if it is not a fixed-base arm.
-    chain: (base link, tip link): the arm between them, every other joint held fixed
-    (harness.robots.subchain)."""
+    chain: (base link, tip link): the arm between them, every other joint held fixed, at
+    the positions hold states for some (harness.robots.subchain)."""
     try:
         root = ET.fromstring(text)
     except ET.ParseError as exc:
@@ -131,7 +132,7 @@ def arm_urdf(text: str, source: str, chain: tuple[str, str] | None = None) -> st
     if root.tag != "robot":
         raise UserError(f"invalid URDF {source}: the root element is <{root.tag}>, not <robot>")
     _check_numbers(root, source)
-    held_outside = hold_outside_chain(root, *chain, source) if chain else []
+    held_outside = hold_outside_chain(root, *chain, source, hold) if chain else []
     joints = root.findall("joint")
     below: dict[str, list[ET.Element]] = {}
     for joint in joints:
