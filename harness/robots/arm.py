@@ -22,14 +22,8 @@ import numpy as np
 import pinocchio as pin
 
 from harness.errors import UserError
-from harness.robots.registry import (
-    ROBOTS,
-    Robot,
-    chain_reference,
-    flange_frame,
-    robot_entry,
-    split_reference,
-)
+from harness.robots import registry
+from harness.robots.registry import ROBOTS, Robot, flange_frame, robot_entry
 from identification.library.chain import ChainError, KinematicChain
 from planning.formulation.kinematics import ArmGeometry
 
@@ -46,10 +40,10 @@ class Arm:
     def of(name_or_path: str | Path) -> Arm:
         """The Arm of a registered name or a URDF/MJCF path (cached: parsed once per process);
         UserError for an unknown name or a missing file."""
-        robot, chain = split_reference(str(name_or_path))
+        robot, chain = registry.split_reference(str(name_or_path))
         if robot not in ROBOTS and Path(robot).is_file():
             robot = str(Path(robot).resolve())
-        return _arm(chain_reference(robot, chain))
+        return _arm(registry.chain_reference(robot, chain))
 
     def __repr__(self) -> str:
         return f"Arm({self.reference!r})"
@@ -62,9 +56,7 @@ class Arm:
     def label(self) -> str:
         """A short name for messages: the registered name, else the file's name; a chain's
         followed by its base and tip links."""
-        robot, chain = split_reference(self.reference)
-        name = robot if robot in ROBOTS else Path(robot).name
-        return name if chain is None else f"{name} ({chain})"
+        return registry.reference_name(self.reference, "{name} ({chain})", stem=False)
 
     # --- the models, parsed once -----------------------------------------------------------
     @cached_property
@@ -109,9 +101,7 @@ class Arm:
         (an MJCF is also checked for loops in MuJoCo)."""
         if self.entry.urdf is None:
             self.mujoco  # noqa: B018 - an MJCF's equality constraints close a loop
-        robot, chain = split_reference(self.reference)
-        name = robot if robot in ROBOTS else Path(robot).stem
-        name = name if chain is None else f"{name}:{chain}"
+        name = registry.reference_name(self.reference, "{name}:{chain}", stem=True)
         try:
             chain = KinematicChain.from_pinocchio(self.pinocchio, name)
         except ChainError as exc:
@@ -137,19 +127,15 @@ class Arm:
         of a whole robot (--chain) its base and tip links ('BASE:TIP') and the joints held
         fixed (joint, type, position in rad or m)."""
         record = {"name": self.chain.name, "hash": self.chain.digest()}
-        from harness.robots.files import held_joints, inertia_repairs
+        from harness.robots.files import chain_record, inertia_repairs
 
-        if self.entry.chain is not None:
-            record["chain"] = ":".join(self.entry.chain)
-            record["held"] = held_joints(self.entry)
-            if self.entry.hold:  # the positions stated (--hold), as given
-                record["hold"] = dict(self.entry.hold)
+        record.update(chain_record(self.entry))
         if self.entry.urdf is not None:  # a link inertia repaired for MuJoCo (harness.robots.urdf)
             repairs = inertia_repairs(self.entry)
             if repairs:
                 record["repaired_inertias"] = repairs
         return record if self.registered else {**record,
-                                               "file": split_reference(self.reference)[0]}
+                                               "file": registry.split_reference(self.reference)[0]}
 
     # --- geometry and limits ---------------------------------------------------------------
     @cached_property

@@ -89,13 +89,16 @@ def arm_urdf_text(entry: Robot) -> str:
                     entry.chain, entry.hold)
 
 
-def held_joints(entry: Robot) -> list[dict]:
-    """The joints the entry's chain holds fixed (harness.robots.subchain.hold_outside_chain:
-    joint, type, position); none without a chain."""
+def chain_record(entry: Robot) -> dict:
+    """What Arm.record keeps of the entry's chain: 'chain' (BASE:TIP), 'held' (the joints it
+    holds fixed: harness.robots.subchain.hold_outside_chain's joint, type, position) and the
+    positions --hold stated ('hold', as given); {} without a chain."""
     if entry.chain is None:
-        return []
-    return hold_outside_chain(ET.fromstring(read_text(entry.urdf)), *entry.chain,
+        return {}
+    held = hold_outside_chain(ET.fromstring(read_text(entry.urdf)), *entry.chain,
                               str(entry.urdf), entry.hold)
+    record = {"chain": ":".join(entry.chain), "held": held}
+    return {**record, "hold": dict(entry.hold)} if entry.hold else record
 
 
 def inertia_repairs(entry: Robot) -> list[dict]:

@@ -63,6 +63,14 @@ def split_reference(reference: str) -> tuple[str, str | None]:
     return reference, None
 
 
+def reference_name(reference: str, form: str, stem: bool) -> str:
+    """A short name of an Arm's reference: the registered name, else its file's name (stem:
+    without the suffix); a chain's put into form ("{name}", "{chain}")."""
+    robot, chain = split_reference(reference)
+    name = robot if robot in ROBOTS else (Path(robot).stem if stem else Path(robot).name)
+    return name if chain is None else form.format(name=name, chain=chain)
+
+
 def chain_reference(robot: str, chain: str | None) -> str:
     """The reference of robot's arm between the links chain names (robot itself if None)."""
     return robot if not chain else f"{robot}{CHAIN_MARK}{chain}"
