@@ -8,6 +8,11 @@ and `lynxmotion.xml` itself as the control. Each: measured data (5 % torque nois
 zero sensor bias), effects traced and added for both declared models (Pinocchio, and
 the model identified on the same training data), held-out error before/after against
 the clean measured torque.
+
+Beside them, the same data through `closeloop --data`'s selection (validated on blocks of the
+one run, identification.closeloop.selection.runs; Pinocchio declared): whether one selection
+could serve the plant path too. What it names against the plant's truth is reported, not
+scored; the plant path keeps its own selection while the two disagree.
 """
 
 from __future__ import annotations
@@ -26,7 +31,9 @@ from harness.closeloop.acceptance import (
 from harness.closeloop.figures import error_figure, residual_figure
 from harness.closeloop.plant import CloseLoopRun, run_closeloop
 from harness.closeloop.plants import DECLARED_MJCF
+from harness.closeloop.runs import run_runs
 from harness.data.generate import SAMPLE_RATE
+from harness.data.runs import Runs
 from harness.report.results import Context, SectionResult, check
 from harness.robots.arm import Arm
 from identification.closeloop.selection.plant import UNEXPLAINED_SIZE
@@ -110,6 +117,7 @@ def run(ctx: Context) -> SectionResult:
             figures.append(fig)
     results = {name: {r.declared: _results(r) for r in (run, *run.others)}
                for name, run in runs.items()}
+    by_runs = {name: runs_selection(run, arm) for name, run in runs.items()}
     md = [
         f"Measured data ({samples} samples at {SAMPLE_RATE:g} Hz, {100 * NOISE:g} % torque noise, "
         "zero sensor bias, Savitzky-Golay qd/qdd). Each plant is closed twice on the same "
@@ -131,6 +139,15 @@ def run(ctx: Context) -> SectionResult:
         "listed as rejected candidates, and a joint the effects make worse on validation "
         "blocks falls back to the declared model.", "",
         *_table(runs), "",
+        "The same data through `closeloop --data`'s selection (forward selection validated on "
+        "blocks of the run, physical ranges, load friction and a payload on a body the data "
+        "choose; Pinocchio declared; errors against the measured torque):", "",
+        "| plant | plant effects | named by the runs selection | the plant's set (nothing where "
+        "outside the dictionary) | "
+        "error before | error after |", "|---|---|---|---|---|---|",
+        *[f"| {name} | {row['truth'] or '-'} | {row['named'] or '-'} | "
+          f"{'yes' if row['same_set'] else 'no'} | {_fmt(row['error_before'], '.3f')} | "
+          f"{_fmt(row['error_after'], '.3f')} |" for name, row in by_runs.items()], "",
         "Effects are selected by forward selection with BIC over viscous, Coulomb, armature, "
         "offset and spring per joint plus an end-effector payload. The Coulomb candidate is "
         "MuJoCo's regularized dry friction, f clip((qd + lead qdd) / eps, -1, 1) (derived in "
@@ -141,4 +158,21 @@ def run(ctx: Context) -> SectionResult:
     ]
     checks = [check(f"{plant}.{declared}.{k}", v) for plant, by_model in results.items()
               for declared, r in by_model.items() for k, v in r["checks"].items()]
+    results["runs_selection"] = by_runs
     return SectionResult("\n".join(md), results, checks, figures=figures)
+
+
+def runs_selection(run: CloseLoopRun, arm: Arm) -> dict:
+    """The plant's measured data closed by `closeloop --data`'s loop on the one run (its last
+    HOLDOUT scored): what it names against the plant's truth."""
+    d = run.data
+    arrays = {"q": d.q, "qd": d.qd, "qdd": d.qdd, "tau": d.tau, "tau_clean": d.tau_clean}
+    out = run_runs(Runs(arrays, (dict(d.meta),), (str(d.meta["plant"]),), (len(d.q),), (d.t,)),
+                   arm, "pinocchio", None, HOLDOUT)
+    truth = {(t.effect, t.joint) for t in run.truth}
+    named = {(n.term.effect, n.term.joint) for n in out.loop.named}
+    return {"truth": ", ".join(f"{t.effect} j{t.joint} {t.coefficient:.4g}" for t in run.truth),
+            "named": ", ".join(f"{n.term.effect} j{n.term.joint} {n.term.coefficient:.4g}"
+                               for n in out.loop.named),
+            "same_set": not named if run.outside_dictionary else truth == named,
+            "error_before": out.error_before.tolist(), "error_after": out.error_after.tolist()}
