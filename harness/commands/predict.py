@@ -2,12 +2,25 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from harness.commands import SUMMARY, add_chain_option, chain_option
 from harness.data.dataset import STATE_KEYS, load_arrays
 from harness.errors import UserError
-from harness.io import write_npz
+from harness.io import write_json, write_npz
+from harness.replay.friction import PlantFriction
+from harness.replay.rollout import (
+    DIVERGED,
+    WINDOWS,
+    fidelity,
+    held_model,
+    log_step,
+    rollout_model,
+    table,
+    window_samples,
+)
 from harness.robots.registry import DEFAULT_ROBOT
 from harness.robots.resolve import resolve_arm
 from harness.robots.torque_models import read_model, torque_model
@@ -47,11 +60,22 @@ def register(sub) -> None:
                    "mean residual there) instead of the model file's, and rel_error "
                    "scored on the samples after the rest, as `closeloop` scores a --validate "
                    "log; needs the data's tau")
+    p.add_argument("--rollout", nargs="?", const=",".join(f"{w:g}" for w in WINDOWS),
+                   default=None, metavar="SECONDS[,...]",
+                   help="also roll the model out in MuJoCo (the robot's own file for "
+                   "'pinocchio', else the MJCF `export --format mjcf` writes): from the log's "
+                   "q, qd at the start of each window of these lengths (default "
+                   f"{','.join(f'{w:g}' for w in WINDOWS)}), driven by the log's tau (less "
+                   "the sensor offset added to the prediction), against the log's q and qd; "
+                   "per window length and joint the RMS errors and the fraction of windows "
+                   "that diverge, in --rollout-out and as a table")
+    p.add_argument("--rollout-out", default=None, metavar="ROLLOUT.json",
+                   help="where --rollout writes (default: beside --out, NAME.rollout.json)")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    states, meta = load_arrays(args.data, STATE_KEYS, optional=("tau", "tau_clean"))
+    states, meta = load_arrays(args.data, STATE_KEYS, optional=("tau", "tau_clean", "t"))
     read = read_model(args.model)
     arm = resolve_arm(args.robot, model=read.recorded, data=[(args.data, meta)], chain=chain_option(args))
     model = torque_model(read, arm)
@@ -72,6 +96,8 @@ def run(args) -> int:
         scored["rel_error"] = rel_error(tau[start:], states["tau"][start:])
     if args.offset_from_rest:
         scored["rest_samples"] = np.array(start)
+    rollout = None if args.rollout is None else _rollout(args, read, arm, model, states, meta,
+                                                          offset if measured else None)
     write_npz(args.out, tau=tau, offset=np.broadcast_to(offset, (len(tau), model.dof)),
               offset_from=np.array(source if measured else "none (tau_clean: no sensor)"),
               **scored)
@@ -81,7 +107,52 @@ def run(args) -> int:
         errors = ", ".join(f"{e:.4g}" for e in scored["rel_error"])
         where = f" after its first rest (samples {start}-{len(tau) - 1})" if start else ""
         print(f"relative error against the data's tau{where}, per joint: [{errors}]")
+    if rollout is not None:
+        path, payload, figures = rollout
+        write_json(path, payload)
+        print(f"wrote {path}: rollout of {payload['model']}\n{table(figures)}")
     return 0
+
+
+def _rollout(args, read, arm, model, states: dict, meta: dict, offset) -> tuple:
+    """(path, ROLLOUT.json payload, figures) of --rollout; UserError before anything is
+    written for a log or model it cannot roll out."""
+    seconds = parse_windows(args.rollout)
+    missing = [k for k in ("t", "tau") if k not in states]
+    if missing:
+        raise UserError(f"{args.data}: --rollout needs the log's {' and '.join(missing)}")
+    held, words = held_model(read.payload, arm)
+    step = log_step(states["t"])
+    for s in seconds:
+        window_samples(s, step, len(states["q"]))
+    tau = states["tau"] - (0.0 if offset is None else offset)
+    plant = rollout_model(held, step)
+    figures = [fidelity(plant, states["t"], states["q"], states["qd"], tau, s) for s in seconds]
+    friction = PlantFriction.of(model)
+    path = args.rollout_out or str(Path(args.out).with_suffix("")) + ".rollout.json"
+    payload = {"model": f"{args.model}: {words}", "robot": arm.reference, "data": args.data,
+               "seed": meta.get("seed"), "samples": len(states["q"]), "log_step_s": step,
+               "timestep_s": plant.opt.timestep,
+               "torque": "the log's tau, linear between samples, as qfrc_applied (actuators off)",
+               "offset_removed": None if offset is None else np.broadcast_to(
+                   offset, (model.dof,)).tolist(),
+               "not_in_mujoco": list(friction.described) if friction else [],
+               "diverged_when": f"non-finite, unstable, or a joint over {DIVERGED:.4g} rad off",
+               "windows": [f.to_json() for f in figures],
+               "units": {"seconds": "s", "q_rms": "rad", "qd_rms": "rad/s"}}
+    return path, payload, figures
+
+
+def parse_windows(text: str) -> list[float]:
+    """--rollout's window lengths (s); UserError unless positive numbers."""
+    try:
+        seconds = [float(x) for x in text.split(",")]
+    except ValueError:
+        raise UserError(f"--rollout takes window lengths in seconds, e.g. 0.1,0.5,1; got "
+                        f"'{text}'") from None
+    if not all(np.isfinite(s) and s > 0 for s in seconds):
+        raise UserError(f"--rollout windows must be positive seconds, got '{text}'")
+    return seconds
 
 
 def new_run_offset(payload, model) -> np.ndarray:
