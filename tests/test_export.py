@@ -237,3 +237,22 @@ def test_a_gripper_held_fixed_is_left_massless(tmp_path):
     q = np.random.default_rng(5).uniform(-1, 1, exported.nq)
     _close(pin.computeGeneralizedGravity(exported, exported.createData(), q)[:nominal.nv],
            pin.computeGeneralizedGravity(nominal, nominal.createData(), q[:nominal.nq]))
+
+
+def test_a_thin_body_on_the_edge_of_consistency_loads_in_plain_mujoco(tmp_path):
+    """A consistent fit leaves thin links on the edge of the triangle inequality: the Panda
+    log's identified link 5 has principal moments A + B - C = 9e-9 of C = 0.018 kg m^2, which
+    MuJoCo's 6-digit XML writer breaks ('inertia must satisfy A + B >= C'). The export is read
+    back by plain MuJoCo with the moments as given."""
+    from harness.robots.export import export_model
+
+    arm = Arm.of("panda")
+    parameters = arm.nominal.atom_parameters().copy()
+    moments = (3.64837983e-07, 1.84853302e-02, 1.84856859e-02)  # the fit's link 5, kg m^2
+    mass = parameters[40]
+    parameters[40:50] = [mass, 0, 0, 0, moments[0], 0, moments[1], 0, 0, moments[2]]
+    out = tmp_path / "thin.xml"
+    export_model({"body_parameters": parameters.tolist()}, arm, "mjcf", out)
+    exported = mujoco.MjModel.from_xml_path(str(out))
+    body = exported.jnt_bodyid[4]
+    assert np.allclose(np.sort(exported.body_inertia[body]), moments, rtol=1e-12, atol=0)

@@ -154,6 +154,36 @@ def _set_inertial(link, mass: float, c, inertia) -> None:
     ET.SubElement(inertial, "inertia", {k: f"{inertia[i]:.12g}" for k, i in names.items()})
 
 
+def _full_precision(path: str, model: mujoco.MjModel) -> None:
+    """The MJCF at path with every body's inertial and every joint's armature, damping and
+    frictionloss rewritten from model at full precision. MuJoCo's writer keeps 6 significant
+    digits: a consistent fit leaves thin links on the edge of the triangle inequality (the
+    Panda's link 5: A + B - C = 9e-9 of C = 0.018 kg m^2), which 6 digits break, and plain
+    MuJoCo then refuses the file ('inertia must satisfy A + B >= C')."""
+    def text(values) -> str:
+        return " ".join(f"{v:.17g}" for v in np.atleast_1d(values))
+    tree = ET.parse(path)
+    for body in tree.getroot().iter("body"):
+        i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, body.get("name", ""))
+        inertial = body.find("inertial")
+        if i < 0 or inertial is None:
+            continue
+        inertial.attrib.pop("fullinertia", None)
+        inertial.set("pos", text(model.body_ipos[i]))
+        inertial.set("quat", text(model.body_iquat[i]))
+        inertial.set("mass", text(model.body_mass[i]))
+        inertial.set("diaginertia", text(model.body_inertia[i]))
+    for joint in tree.getroot().iter("joint"):
+        j = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, joint.get("name", ""))
+        if j < 0:
+            continue
+        dof = model.jnt_dofadr[j]
+        joint.set("armature", text(model.dof_armature[dof]))
+        joint.set("damping", text(model.dof_damping[dof]))
+        joint.set("frictionloss", text(model.dof_frictionloss[dof]))
+    tree.write(path)
+
+
 def export_model(payload: dict, arm: Arm, fmt: str, out: str | Path) -> str:
     """Write MODEL.json's payload for arm in fmt to out, whole or not at all; what it wrote,
     in words."""
@@ -177,6 +207,7 @@ def export_model(payload: dict, arm: Arm, fmt: str, out: str | Path) -> str:
 
         def write(tmp: str) -> None:
             mujoco.mj_saveLastXML(tmp, model)
+            _full_precision(tmp, model)
         atomic_write(out, write, suffix=".xml")
         return f"robot {arm.label}'s MuJoCo model with the identified bodies"
     atomic_write(out, lambda tmp: Path(tmp).write_text(text), suffix="." + fmt)
