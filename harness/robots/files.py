@@ -148,8 +148,9 @@ def mjcf_spec(path: Path) -> mujoco.MjSpec:
 
 def model_to_save(entry: Robot) -> mujoco.MjModel:
     """The entry's MuJoCo model parsed again, for `export --format mjcf` alone: MuJoCo saves a
-    model through the XML it parsed last (mj_saveLastXML; both it and MjSpec.to_xml keep 6
-    digits: harness.robots.export rewrites the inertials at full precision), so the model to change and save must be the last one parsed from XML."""
+    model through the XML it parsed last (mj_saveLastXML; it and MjSpec.to_xml keep 6 digits,
+    harness.robots.export rewrites the inertials at full precision), so the model to change and
+    save must be the last one parsed from XML."""
     if entry.mjcf is not None:
         return _parse(lambda: mujoco.MjModel.from_xml_path(str(entry.mjcf)), entry.mjcf,
                       f"invalid MJCF {entry.mjcf}")
