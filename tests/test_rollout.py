@@ -102,17 +102,34 @@ def test_the_exported_mjcf_stepped_through_its_motors_gives_the_figure(log):
     assert np.allclose(reported["q_rms"], expected, rtol=1e-9, atol=1e-12)
 
 
-@pytest.mark.parametrize("case", ["longer", "no_bodies", "bad_windows"])
+def test_the_held_out_part_alone(log):
+    """--rollout-holdout 0.5: the windows tile the last 200 of the 400 samples."""
+    out = log / "half.npz"
+    assert main(["predict", "--model", "pinocchio", "--data", str(log / "log.npz"), "--rollout",
+                 "0.1", "--rollout-holdout", "0.5", "--out", str(out)]) == 0
+    report = json.loads((log / "half.rollout.json").read_text())
+    assert report["from_sample"] == 200 and report["windows"][0]["windows"] == 9
+
+
+BAD = {  # case: (model, extra arguments, words of the error)
+    "longer": ("pinocchio", ["--rollout", "0.1,5"], "longer than the log"),
+    "longer_than_its_part": ("pinocchio", ["--rollout", "1.5", "--rollout-holdout", "0.5"],
+                             "longer than the log"),
+    "no_bodies": (None, ["--rollout", "0.1"], "no bodies"),
+    "bad_windows": ("pinocchio", ["--rollout", "0.1,-1"], "positive"),
+    "bad_holdout": ("pinocchio", ["--rollout", "0.1", "--rollout-holdout", "1.5"], "(0, 1]"),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD))
 def test_bad_input_is_one_line_and_nothing_written(log, capsys, case):
-    model = {"longer": "pinocchio", "bad_windows": "pinocchio",
-             "no_bodies": _model(log / "bare.json", bodies=False)}[case]
-    windows = {"longer": "0.1,5", "no_bodies": "0.1", "bad_windows": "0.1,-1"}[case]
+    model, extra, words = BAD[case]
+    model = model or _model(log / "bare.json", bodies=False)
     out = log / f"bad_{case}.npz"
     capsys.readouterr()
-    code = main(["predict", "--model", model, "--data", str(log / "log.npz"), "--rollout",
-                 windows, "--out", str(out)])
+    code = main(["predict", "--model", model, "--data", str(log / "log.npz"), *extra,
+                 "--out", str(out)])
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1, err
-    assert {"longer": "longer than the log", "no_bodies": "no bodies",
-            "bad_windows": "positive"}[case] in err
+    assert words in err, err
     assert not out.exists() and not (log / f"bad_{case}.rollout.json").exists()

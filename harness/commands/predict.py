@@ -14,12 +14,9 @@ from harness.replay.friction import PlantFriction
 from harness.replay.rollout import (
     DIVERGED,
     WINDOWS,
-    fidelity,
     held_model,
-    log_step,
-    rollout_model,
+    roll_out,
     table,
-    window_samples,
 )
 from harness.robots.registry import DEFAULT_ROBOT
 from harness.robots.resolve import resolve_arm
@@ -69,6 +66,9 @@ def register(sub) -> None:
                    "the sensor offset added to the prediction), against the log's q and qd; "
                    "per window length and joint the RMS errors and the fraction of windows "
                    "that diverge, in --rollout-out and as a table")
+    p.add_argument("--rollout-holdout", type=float, default=None, metavar="FRACTION",
+                   help="--rollout's windows on the last FRACTION of the log only (the part "
+                   "`identify --holdout` scores; default: the whole log)")
     p.add_argument("--rollout-out", default=None, metavar="ROLLOUT.json",
                    help="where --rollout writes (default: beside --out, NAME.rollout.json)")
     p.set_defaults(func=run)
@@ -96,6 +96,8 @@ def run(args) -> int:
         scored["rel_error"] = rel_error(tau[start:], states["tau"][start:])
     if args.offset_from_rest:
         scored["rest_samples"] = np.array(start)
+    if args.rollout is None and args.rollout_holdout is not None:
+        raise UserError("--rollout-holdout chooses --rollout's windows: give --rollout too")
     rollout = None if args.rollout is None else _rollout(args, read, arm, model, states, meta,
                                                           offset if measured else None)
     write_npz(args.out, tau=tau, offset=np.broadcast_to(offset, (len(tau), model.dof)),
@@ -122,17 +124,15 @@ def _rollout(args, read, arm, model, states: dict, meta: dict, offset) -> tuple:
     if missing:
         raise UserError(f"{args.data}: --rollout needs the log's {' and '.join(missing)}")
     held, words = held_model(read.payload, arm)
-    step = log_step(states["t"])
-    for s in seconds:
-        window_samples(s, step, len(states["q"]))
     tau = states["tau"] - (0.0 if offset is None else offset)
-    plant = rollout_model(held, step)
-    figures = [fidelity(plant, states["t"], states["q"], states["qd"], tau, s) for s in seconds]
+    done = roll_out(held, states["t"], states["q"], states["qd"], tau, seconds,
+                    args.rollout_holdout)
+    figures = done.figures
     friction = PlantFriction.of(model)
     path = args.rollout_out or str(Path(args.out).with_suffix("")) + ".rollout.json"
     payload = {"model": f"{args.model}: {words}", "robot": arm.reference, "data": args.data,
-               "seed": meta.get("seed"), "samples": len(states["q"]), "log_step_s": step,
-               "timestep_s": plant.opt.timestep,
+               "seed": meta.get("seed"), "samples": len(states["q"]), "from_sample": done.start,
+               "log_step_s": done.log_step, "timestep_s": done.timestep,
                "torque": "the log's tau, linear between samples, as qfrc_applied (actuators off)",
                "offset_removed": None if offset is None else np.broadcast_to(
                    offset, (model.dof,)).tolist(),

@@ -150,6 +150,32 @@ def _rms(errors: list[np.ndarray]) -> np.ndarray | None:
     return np.sqrt(np.mean(np.concatenate(errors) ** 2, axis=0)) if errors else None
 
 
+@dataclass(frozen=True)
+class Rollout:
+    """A model's figures per window length on a log (from sample `start` on)."""
+
+    log_step: float  # s
+    timestep: float  # s, MuJoCo's, as stepped
+    start: int
+    figures: list[WindowFidelity]
+
+
+def roll_out(held: mujoco.MjModel, t, q, qd, tau, seconds, holdout: float | None = None
+             ) -> Rollout:
+    """held (held_model's) rolled out on the log over windows of each of seconds, on the last
+    holdout fraction of its samples (the part `identify --holdout` scores; None: all);
+    UserError before any rollout for a window the log (or its part) cannot hold."""
+    step = log_step(t)
+    start = 0 if holdout is None else int(round(len(q) * (1 - holdout)))
+    if holdout is not None and not 0 < holdout <= 1:
+        raise UserError(f"--rollout-holdout must be in (0, 1], got {holdout:g}")
+    part = [np.asarray(x)[start:] for x in (np.ravel(t), q, qd, tau)]
+    for s in seconds:
+        window_samples(s, step, len(part[0]))
+    plant = rollout_model(held, step)
+    return Rollout(step, plant.opt.timestep, start, [fidelity(plant, *part, s) for s in seconds])
+
+
 def table(figures: list[WindowFidelity]) -> str:
     """One short table: per window length, windows, diverged, RMS per joint."""
     def joints(x):
