@@ -104,3 +104,28 @@ def test_the_identified_model_is_what_identify_fits(tmp_path):
     models, _ = score_models(Arm.of(ROBOT), a["q"], a["qd"], a["qdd"], a["tau"], HOLDOUT)
     ours = json.loads(model.read_text())["metrics"]["heldout_rel_rmse"]
     np.testing.assert_allclose(models["identified"].heldout, ours, rtol=1e-6)
+
+
+def test_the_rollout_figures_are_what_predict_rollout_writes(tmp_path):
+    """The section's rollout figures (its own identification, in memory) are the ones the
+    documented commands give: `identify`, then `predict --rollout 0.1,0.5 --rollout-holdout
+    0.25` of 'pinocchio' and of the MODEL.json (its MJCF exported to a file and read back)."""
+    import json
+
+    from harness.bench.real_data.rollout import rollout_figures
+    from harness.bench.real_data.section import _models
+    from harness.cli import main
+    from harness.io import write_npz
+
+    ingested, _, identification, _ = _models(None)
+    section = rollout_figures(Arm.of(ROBOT), identification, ingested.arrays, HOLDOUT)
+    npz, model = tmp_path / "panda.npz", tmp_path / "model.json"
+    write_npz(npz, **ingested.npz())
+    assert main(["identify", "--data", str(npz), "--robot", ROBOT, "--out", str(model)]) == 0
+    for name, spec in (("nominal", "pinocchio"), ("identified", str(model))):
+        assert main(["predict", "--model", spec, "--data", str(npz), "--rollout", "0.1,0.5",
+                     "--rollout-holdout", str(HOLDOUT), "--out", str(tmp_path / "p.npz")]) == 0
+        written = json.loads((tmp_path / "p.rollout.json").read_text())["windows"]
+        for ours, theirs in zip(section[name]["windows"], written, strict=True):
+            assert ours["windows"] == theirs["windows"] and ours["diverged"] == theirs["diverged"]
+            np.testing.assert_allclose(ours["q_rms"], theirs["q_rms"], rtol=1e-6)

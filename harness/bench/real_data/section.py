@@ -15,7 +15,9 @@ Savitzky-Golay with the window chosen from the data, handed over at RATE Hz), th
   published numbers), and the identified model is compared on identical inputs;
 - closing the loop (`closeloop --data`, harness.closeloop.one_log): the rigid-body
   identification's residual traced per joint to named effects, added, errors before and
-  after held out, joints nothing explains reported.
+  after held out, joints nothing explains reported;
+- rollout in MuJoCo on the held-out part (harness.bench.real_data.rollout): the nominal URDF
+  and the identified model's exported MJCF, reported figures.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from harness.bench.real_data.figures import (
 )
 from harness.bench.real_data.models import score_models
 from harness.bench.real_data.report import markdown
+from harness.bench.real_data.rollout import rollout_figures, rollout_markdown
 from harness.closeloop.one_log import run_measured
 from harness.data.ingest import ingest
 from harness.io import write_npz
@@ -150,6 +153,7 @@ def log_result(out_dir: Path) -> SectionResult:
                                  before[:r.split], after[:r.split], r.terms,
                                  figures_dir / "real_data_residual_velocity.png"),
     ]
+    rollout = rollout_figures(Arm.of(ROBOT), identification, a, HOLDOUT)
     seconds = time.process_time() - start
     results = {
         "robot": ROBOT, "log": str(LOG.relative_to(DATA.parent)), "holdout": HOLDOUT,
@@ -169,6 +173,7 @@ def log_result(out_dir: Path) -> SectionResult:
                                                  "file": npz.relative_to(out_dir).as_posix()}},
         "cpu_s": seconds,
         "acceptance": acceptance,
+        "rollout": rollout,
     }
     results["timing"] = {"cpu_s": results.pop("cpu_s")}
     headline = [Row("A real Panda's torque log (Gaz et al. 2019), last 25 % held out: identified "
@@ -178,4 +183,5 @@ def log_result(out_dir: Path) -> SectionResult:
                     f"{np.median(same_data):.2f}, worst {np.max(same_data):.2f}")]
     md = markdown(data.meta, models, reference, nominal_ref, nominal_whole, ratio, same_data,
                   source, loop, acceptance, seconds, figures)
+    md += "\n\n" + "\n".join(rollout_markdown(rollout))
     return SectionResult(md, results, checks, targets, headline, figures)
