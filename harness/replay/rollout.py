@@ -26,6 +26,7 @@ import numpy as np
 from harness.errors import UserError
 from harness.robots.arm import Arm
 from harness.robots.export import export_model
+from harness.robots.files import plain_mujoco
 from harness.robots.inertials import model_standard_parameters
 
 WINDOWS = (0.1, 0.5, 1.0)  # s, the window lengths `predict --rollout` takes by default
@@ -64,7 +65,7 @@ def held_model(payload: dict | None, arm: Arm) -> tuple[mujoco.MjModel, str]:
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "model.xml"
         export_model(payload, arm, "mjcf", path)
-        return mujoco.MjModel.from_xml_path(str(path)), "its exported MJCF (export --format mjcf)"
+        return plain_mujoco(path), "its exported MJCF (export --format mjcf)"
 
 
 def log_step(t: np.ndarray) -> float:

@@ -1,6 +1,7 @@
 """The one place a robot's file is parsed: into MuJoCo and into Pinocchio, with one clear
 error line for a file either cannot read. Only harness.robots.arm.Arm calls these (once per
-model, lazily); everything else asks an Arm.
+model, lazily), but for the MJCF `export` writes (model_to_save) and reads back
+(plain_mujoco, the rollout's); everything else asks an Arm.
 
 A registered robot with an MJCF is compiled from it (its scene, the replay's, from its scene
 file); any URDF keeps its arm joints only (grippers and fingers held fixed) and, for MuJoCo,
@@ -157,6 +158,12 @@ def model_to_save(entry: Robot) -> mujoco.MjModel:
     text = strip_geometry(arm_urdf_text(entry))
     return _parse(lambda: mujoco.MjModel.from_xml_string(text), entry.urdf,
                   f"invalid URDF {entry.urdf}")
+
+
+def plain_mujoco(path: Path) -> mujoco.MjModel:
+    """The MJCF at path as plain MuJoCo reads it (MjModel.from_xml_path, no spec of this
+    project's): a file `export --format mjcf` wrote, read back as its user would."""
+    return _parse(lambda: mujoco.MjModel.from_xml_path(str(path)), path, f"invalid MJCF {path}")
 
 
 def parse_pinocchio(entry: Robot) -> pin.Model:
