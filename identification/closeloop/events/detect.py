@@ -33,11 +33,11 @@ from identification.closeloop.events.persistent import (
 
 ON = 8.0  # robust scales of the residual: an event starts where a joint exceeds it
 OFF = 3.0  # ... and lasts while a joint exceeds this (hysteresis)
+LOOKBACK = 0.5  # s before an event's ON crossing searched for its change point
+RISE = 3.0 / GAIN  # s after the crossing the change point's fit sees (three time constants)
 MIN_DURATION = 0.15  # s: shorter excursions are the robot's own (module docstring, 3.)
 MARGIN = 0.1  # s left out on each side of an event (the observer's lag is 1 / GAIN = 20 ms)
 ROUNDS = 4  # persistent fit and detection, again without the events, at most
-RISE = 0.1  # s after an event crosses ON over which its rise is measured (onset)
-RISE_SHARE = 0.25  # the share of that rise which marks the onset
 
 
 @dataclass(frozen=True)
@@ -95,48 +95,54 @@ class Events:
                 "effects")
 
 
-def _intervals(z: np.ndarray, t: np.ndarray) -> list[tuple[int, int]]:
-    """[start, end) sample ranges of events in z (n, dof), robust scales: from where a joint
-    first exceeds ON, back while that joint exceeds OFF and on while any joint that exceeded
-    ON in it exceeds OFF; at least MIN_DURATION long."""
-    n = len(z)
-    out: list[tuple[int, int]] = []
-    k = 0
+def change_point(v: np.ndarray, t: np.ndarray, lo: int, k: int) -> float:
+    """When a rise of v (n,), robust scales, crossing ON at sample k began (s): the
+    likelihood-ratio change point of a step through the observer's own lag (a matched
+    filter): over onsets t0 from t[lo] to t[k] a quarter sample apart, the one whose response
+    level + A (1 - exp(-GAIN (t - t0))), A > 0, fits v[lo:k + RISE] best in least squares.
+    A level before the event (what the persistent fit left) is the fit's constant rather
+    than part of the event; a noise sample does not move the onset as a band's edge would."""
+    stop = min(len(v), k + int(np.ceil(RISE / max(t[k] - t[k - 1], 1e-12))) + 1)
+    seg, at = v[lo:stop], t[lo:stop]
+    starts = np.arange(t[lo], t[k], (t[k] - t[k - 1]) / 4)
+    if len(starts) == 0:
+        return float(t[k])
+    h = np.clip(1.0 - np.exp(-GAIN * (at[None, :] - starts[:, None])), 0.0, None)
+    h -= h.mean(axis=1, keepdims=True)
+    fit = h @ (seg - seg.mean())
+    score = np.where(fit > 0, fit**2 / np.maximum(np.sum(h**2, axis=1), 1e-300), -np.inf)
+    return float(starts[int(np.argmax(score))])
+
+
+def intervals(z: np.ndarray, t: np.ndarray) -> list[tuple[int, int, float]]:
+    """Events in z (n, dof), the signed residual in robust scales: [start, end) sample ranges
+    and each one's onset (s). An event is found where a joint first exceeds ON in size; its
+    onset is that joint's change point (change_point, signed as its crossing, searched back
+    LOOKBACK s and never into the event before: events a calm gap separates stay apart); it
+    starts at the first sample from the onset and lasts while any joint that
+    exceeded ON in it exceeds OFF, at least MIN_DURATION long."""
+    n, size = len(z), np.abs(z)
+    out: list[tuple[int, int, float]] = []
+    k = floor = 0
     while k < n:
-        if np.max(z[k]) <= ON:
+        if np.max(size[k]) <= ON:
             k += 1
             continue
-        first = int(np.argmax(z[k]))
-        a = k
-        while a > 0 and z[a - 1, first] > OFF:
-            a -= 1
-        active = z[k] > ON
+        j = int(np.argmax(size[k]))
+        v = np.sign(z[k, j]) * z[:, j]
+        lo = max(floor, int(np.searchsorted(t, t[k] - LOOKBACK)))
+        when = change_point(v, t, lo, k) if k > lo else float(t[k])
+        a = min(int(np.searchsorted(t, when)), k)
+        active = size[k] > ON
         b = k
-        while b < n and np.any(z[b, active] > OFF):
-            active |= z[b] > ON
+        while b < n and np.any(size[b, active] > OFF):
+            active |= size[b] > ON
             b += 1
         if t[b - 1] - t[a] >= MIN_DURATION:
-            out.append((a, b))
+            out.append((a, b, when))
+            floor = b
         k = b
     return out
-
-
-def onset(z: np.ndarray, t: np.ndarray, a: int, b: int) -> float:
-    """When the external torque of the event at samples [a, b) began (s): where the first
-    joint to cross ON first reaches RISE_SHARE of its rise over RISE s from that crossing,
-    less the observer's own lag to that share of a step (-ln(1 - RISE_SHARE) / GAIN). A
-    threshold crossing comes early or late with the push's size and the states' smoothing (a
-    Savitzky-Golay derivative spreads a push's start both ways, 20-30 ms early on development
-    draws; 60-75 ms early on an arm held still, whose noise is small); a share of the rise over
-    RISE does not depend on the size. RISE and RISE_SHARE were chosen on development draws
-    (seeds 101-103 and 1-2 on the three arms of the pushes study, moving and held), never on
-    the study's or the bench's."""
-    k = a + int(np.argmax(np.max(z[a:b], axis=1) > ON))
-    j = int(np.argmax(z[k]))
-    stop = min(b, int(np.searchsorted(t, t[k] + RISE)) + 1)
-    half = RISE_SHARE * float(np.max(z[k:stop, j]))
-    first = a + int(np.argmax(z[a:stop, j] >= half))
-    return float(max(t[a], t[first] + np.log(1.0 - RISE_SHARE) / GAIN))
 
 
 def find_events(model, t, q, qd, qdd, tau, body=None, scales=None) -> Events:
@@ -154,28 +160,28 @@ def find_events(model, t, q, qd, qdd, tau, body=None, scales=None) -> Events:
     kept = np.ones(len(t), bool)
     kept[: int(np.ceil(3.0 / (GAIN * dt)))] = False  # the observer's start-up transient
     settle = kept.copy()
-    found: list[tuple[int, int]] = []
+    found: list[tuple[int, int, float]] = []
     rounds = 0
     while rounds < ROUNDS:
         rounds += 1
         res, scale = persistent_residual(r, plain if rounds == 1 else full, kept)
-        z = np.abs(res - np.median(res[kept], axis=0)) / scale
+        z = (res - np.median(res[kept], axis=0)) / scale
         z[~settle] = 0.0
-        spans = _intervals(z, t)
+        spans = intervals(z, t)
         new = settle.copy()
-        for a, b in spans:
+        for a, b, _ in spans:
             new &= ~((t >= t[a] - MARGIN) & (t <= t[b - 1] + MARGIN))
         if spans == found and rounds > 1:
             break
         found, kept = spans, new
     events = []
-    for a, b in found:
+    for a, b, when in found:
         seg = res[a:b] - np.median(res[kept], axis=0)
         peak = seg[np.argmax(np.abs(seg), axis=0), np.arange(seg.shape[1])]
-        joints = tuple(int(j) + 1 for j in np.flatnonzero(np.max(z[a:b], axis=0) > ON))
-        events.append(Event(onset(z, t, a, b), float(t[b - 1]), tuple(map(float, peak)), joints))
+        joints = tuple(int(j) + 1 for j in np.flatnonzero(np.max(np.abs(z[a:b]), axis=0) > ON))
+        events.append(Event(when, float(t[b - 1]), tuple(map(float, peak)), joints))
     kept_out = np.ones(len(t), bool)
-    for a, b in found:
+    for a, b, _ in found:
         kept_out &= ~((t >= t[a] - MARGIN) & (t <= t[b - 1] + MARGIN))
     return Events(tuple(events), ON * scale, scale, kept_out, rounds, t,
                   res - np.median(res[kept], axis=0))

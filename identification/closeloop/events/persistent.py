@@ -12,6 +12,10 @@ from scipy.optimize import lsq_linear
 BISQUARE = 4.685  # Tukey's constant (95 % efficiency at Gaussian residuals)
 FRICTION_WIDTH = 0.02  # rad/s, the dry-friction column's tanh width
 REACH = 1.0  # m: a load's centre of mass within it, for its bounds
+MOVING = 0.15  # a column is a persistent effect's only if at least this share of the fitted
+# samples lie off its median by a tenth of its largest excursion (moving_columns); chosen on
+# development draws (the pushes case's seeds 1-2 on the Lynxmotion, 1 on the UR5): a pushed
+# held arm's velocity and pose columns 0.02-0.11, a moving arm's 0.2-0.99
 
 
 def state_columns(model, q, qd, qdd, body=None, pose: bool = True, scales=None,
@@ -53,15 +57,27 @@ def robust_scale(x: np.ndarray) -> np.ndarray:
     return np.maximum(1.4826 * np.median(np.abs(x - med), axis=0), 1e-12)
 
 
+def moving_columns(X: np.ndarray) -> np.ndarray:
+    """(k,) bool: the columns of X (n, k) that move over the run rather than at a few of its
+    instants (module constant MOVING); a constant is the offset's, and kept. On an arm held
+    still the velocity, the deflection and every function of them move only while a push
+    deflects the arm: fitted, such a column is the push, nothing persistent."""
+    dev = np.abs(X - np.median(X, axis=0))
+    largest = np.max(dev, axis=0)
+    constant = largest <= 1e-12 * np.maximum(np.max(np.abs(X), axis=0), 1e-300)
+    return constant | (np.mean(dev > 0.1 * largest, axis=0) >= MOVING)
+
+
 def persistent_residual(r: np.ndarray, cols: list[tuple[np.ndarray, np.ndarray]],
                         use: np.ndarray, iterations: int = 8) -> tuple[np.ndarray, np.ndarray]:
     """r minus, per joint, its bisquare fit on that joint's columns (both low-passed alike),
-    each coefficient within its bound (state_columns), fitted on the samples use; returns that
-    residual (n, dof) and its robust scale (dof,) on those samples."""
+    each coefficient within its bound (state_columns) and held at zero on a column not
+    moving_columns, fitted on the samples use; returns that residual (n, dof) and its robust
+    scale (dof,) on those samples."""
     res = np.empty_like(r)
     for j, (X, bound) in enumerate(cols):
         size = np.maximum(np.sqrt(np.mean(X[use] ** 2, axis=0)), 1e-12)
-        X, bound = X / size, np.maximum(bound * size, 1e-300)
+        X, bound = X / size, np.maximum(bound * size * moving_columns(X[use]), 1e-300)
         y, weight = r[:, j], np.ones(len(r))
         out = y.copy()
         for _ in range(iterations):

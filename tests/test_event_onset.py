@@ -1,0 +1,61 @@
+"""Where an event starts (identification.closeloop.events.detect.intervals), on synthetic
+observer signals whose onsets are known: a step of external torque through the observer's own
+first-order lag (the closed form 1 - exp(-GAIN (t - t0))) over coloured noise of unit robust
+scale, with what the real residual carries before a push (a level the persistent fit left)
+and between two pushes (a calm gap)."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import lfilter
+
+from identification.closeloop.events.detect import intervals
+from identification.closeloop.events.observer import GAIN
+
+DT = 0.005  # s, 200 Hz
+
+
+def _noise(n: int, dof: int, seed: int) -> np.ndarray:
+    """White noise through the observer's lag, rescaled to unit robust scale per joint."""
+    a = np.exp(-GAIN * DT)
+    x = lfilter([1 - a], [1, -a], np.random.default_rng(seed).normal(size=(n, dof)), axis=0)
+    return x / (1.4826 * np.median(np.abs(x - np.median(x, axis=0)), axis=0))
+
+
+def _step(t: np.ndarray, start: float, end: float) -> np.ndarray:
+    """The observer's response (exact first-order lag) to a unit step over [start, end)."""
+    on = np.where(t > start, 1 - np.exp(-GAIN * (t - start)), 0.0)
+    off = np.where(t > end, 1 - np.exp(-GAIN * (t - end)), 0.0)
+    return on - off
+
+
+def test_a_step_onset_is_located_within_two_samples_after_a_level_left_before_it():
+    t = np.arange(1600) * DT
+    for seed, (start, size, level) in enumerate([(3.0013, 25.0, 0.0), (4.1027, 12.0, 4.0),
+                                                 (2.5031, 60.0, -2.5), (5.0042, 10.0, 5.0)]):
+        z = _noise(len(t), 2, seed)
+        z[:, 1] += level * ((t > start - 0.6) & (t < start + 0.5))  # the persistent fit left
+        z[:, 1] += size * _step(t, start, start + 0.5)
+        (event,) = intervals(z, t)
+        a, b, onset = event
+        assert abs(onset - start) <= 2 * DT, (seed, onset, start)
+        assert t[a - 1] < onset <= t[a] and abs(t[b - 1] - (start + 0.5)) < 0.1
+
+
+def test_a_calm_gap_splits_two_pushes_and_each_keeps_its_onset():
+    t = np.arange(1600) * DT
+    z = _noise(len(t), 3, 7)
+    first, second = (2.0021, 2.6), (2.8033, 3.4)  # 0.2 s between them, all joints calm
+    z[:, 0] += 30.0 * _step(t, *first)
+    z[:, 2] -= 6.0 * _step(t, *first)  # the first push felt below ON on joint 3 too
+    z[:, 2] -= 14.0 * _step(t, *second)
+    found = intervals(z, t)
+    assert len(found) == 2
+    for (a, b, onset), (start, end) in zip(found, (first, second), strict=True):
+        assert abs(onset - start) <= 2 * DT
+        assert t[a - 1] < onset <= t[a] and t[b - 1] < end + 0.1
+
+
+def test_noise_alone_is_no_event():
+    t = np.arange(4000) * DT
+    assert intervals(_noise(len(t), 3, 11), t) == []
