@@ -33,7 +33,7 @@ from identification.closeloop.events.persistent import (
 
 ON = 8.0  # robust scales of the residual: an event starts where a joint exceeds it
 OFF = 3.0  # ... and lasts while a joint exceeds this (hysteresis)
-LOOKBACK = 0.5  # s before an event's ON crossing searched for its change point
+LOOKBACK = 0.2  # s before an event's rise above OFF searched for its change point
 RISE = 3.0 / GAIN  # s after the crossing the change point's fit sees (three time constants)
 MIN_DURATION = 0.15  # s: shorter excursions are the robot's own (module docstring, 3.)
 MARGIN = 0.1  # s left out on each side of an event (the observer's lag is 1 / GAIN = 20 ms)
@@ -98,10 +98,11 @@ class Events:
 def change_point(v: np.ndarray, t: np.ndarray, lo: int, k: int) -> float:
     """When a rise of v (n,), robust scales, crossing ON at sample k began (s): the
     likelihood-ratio change point of a step through the observer's own lag (a matched
-    filter): over onsets t0 from t[lo] to t[k] a quarter sample apart, the one whose response
-    level + A (1 - exp(-GAIN (t - t0))), A > 0, fits v[lo:k + RISE] best in least squares.
-    A level before the event (what the persistent fit left) is the fit's constant rather
-    than part of the event; a noise sample does not move the onset as a band's edge would."""
+    filter): over onsets t0 from t[lo] to t[k] a quarter sample apart,
+    the one whose response level + A (1 - exp(-GAIN (t - t0))), A > 0, fits v[lo:k + RISE]
+    best in least squares. A level before the event (what the persistent fit left) is the
+    fit's constant rather than part of the event; a noise sample does not move the onset as
+    the edge of a band would."""
     stop = min(len(v), k + int(np.ceil(RISE / max(t[k] - t[k - 1], 1e-12))) + 1)
     seg, at = v[lo:stop], t[lo:stop]
     starts = np.arange(t[lo], t[k], (t[k] - t[k - 1]) / 4)
@@ -116,11 +117,12 @@ def change_point(v: np.ndarray, t: np.ndarray, lo: int, k: int) -> float:
 
 def intervals(z: np.ndarray, t: np.ndarray) -> list[tuple[int, int, float]]:
     """Events in z (n, dof), the signed residual in robust scales: [start, end) sample ranges
-    and each one's onset (s). An event is found where a joint first exceeds ON in size; its
-    onset is that joint's change point (change_point, signed as its crossing, searched back
-    LOOKBACK s and never into the event before: events a calm gap separates stay apart); it
-    starts at the first sample from the onset and lasts while any joint that
-    exceeded ON in it exceeds OFF, at least MIN_DURATION long."""
+    and each one's onset (s). An event is found where a joint first exceeds ON in size, from
+    where that joint, signed as its crossing, last rose above OFF, and lasts while any joint
+    that exceeded ON in it exceeds OFF, at least MIN_DURATION long (never reaching into the
+    event before: events a calm gap separates stay apart). Its onset is that joint's change
+    point (change_point, searched from LOOKBACK s before its rise above OFF), its samples
+    from there."""
     n, size = len(z), np.abs(z)
     out: list[tuple[int, int, float]] = []
     k = floor = 0
@@ -130,16 +132,18 @@ def intervals(z: np.ndarray, t: np.ndarray) -> list[tuple[int, int, float]]:
             continue
         j = int(np.argmax(size[k]))
         v = np.sign(z[k, j]) * z[:, j]
-        lo = max(floor, int(np.searchsorted(t, t[k] - LOOKBACK)))
-        when = change_point(v, t, lo, k) if k > lo else float(t[k])
-        a = min(int(np.searchsorted(t, when)), k)
+        rise = k  # back while that joint exceeds OFF with the crossing's sign (hysteresis)
+        while rise > floor and v[rise - 1] > OFF:
+            rise -= 1
         active = size[k] > ON
         b = k
         while b < n and np.any(size[b, active] > OFF):
             active |= size[b] > ON
             b += 1
-        if t[b - 1] - t[a] >= MIN_DURATION:
-            out.append((a, b, when))
+        if t[b - 1] - t[rise] >= MIN_DURATION:
+            lo = max(floor, int(np.searchsorted(t, t[rise] - LOOKBACK)))
+            when = change_point(v, t, lo, k) if k > lo else float(t[k])
+            out.append((min(int(np.searchsorted(t, when)), k), b, when))
             floor = b
         k = b
     return out
