@@ -9,12 +9,17 @@ found with the declared model and left out of every fit and score of the loop.
    position loop a push deflects the arm, so during a push the torque is a function of the
    (deflected) pose, and a fit that sees the push would explain it so; fitted elsewhere, the
    function must predict the event's samples, which a tendon's or a spring's does and a
-   push's does not.
+   push's does not. A function that moves only at a few instants of the run (an arm held
+   still moves only while pushed) is no persistent effect (persistent.moving_columns).
 3. The threshold: the robust scale of what is left (1.4826 x its median absolute deviation per
-   joint). An event starts where a joint exceeds ON scales, reaches back while that joint
-   exceeds OFF (hysteresis) and lasts while a joint that exceeded ON in it exceeds OFF, at
-   least MIN_DURATION long (shorter excursions are the robot's own: the shipped Panda log's
-   joint 7 at its velocity reversals, 70-145 ms; docs/closeloop.md).
+   joint). An event is found where a joint exceeds ON scales, reaches back while that joint
+   exceeds OFF (hysteresis, never into the event before) and lasts while a joint that
+   exceeded ON in it exceeds OFF, at least MIN_DURATION long (shorter excursions are the
+   robot's own: the shipped Panda log's joint 7 at its velocity reversals, 70-145 ms;
+   docs/closeloop.md). Its onset is the change point of that joint's rise: the step through
+   the observer's lag that fits it best (change_point), not where it crossed a threshold,
+   which comes late by the time the rise takes to reach it and early by any level left
+   before it.
 4. Its samples and MARGIN on each side are left out, the persistent fit is made again
    without them, and detection repeats until the events stop changing.
 """
@@ -76,10 +81,11 @@ class Events:
                 "rule": (f"generalized-momentum observer on the declared model (gain {GAIN:g} "
                          "1/s); persistent effects (offset, viscous and dry friction, the "
                          "declared torque's scale, the load's body) removed by a bisquare fit; "
-                         f"an event starts above {ON:g} robust scales (1.4826 x the median "
+                         f"an event is found above {ON:g} robust scales (1.4826 x the median "
                          f"absolute deviation per joint) and lasts while above {OFF:g}, at least "
-                         f"{MIN_DURATION * 1e3:.0f} ms; its samples and {MARGIN:g} s each side "
-                         "are left out of every fit and score")}
+                         f"{MIN_DURATION * 1e3:.0f} ms; its onset the likelihood-ratio change "
+                         "point of a step through the observer's lag; its samples and "
+                         f"{MARGIN:g} s each side are left out of every fit and score")}
 
     def line(self) -> str:
         """One line for the command's output."""
