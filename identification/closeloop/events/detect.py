@@ -40,6 +40,8 @@ ON = 8.0  # robust scales of the residual: an event starts where a joint exceeds
 OFF = 3.0  # ... and lasts while a joint exceeds this (hysteresis)
 LOOKBACK = 0.2  # s before an event's rise above OFF searched for its change point
 RISE = 3.0 / GAIN  # s after the crossing the change point's fit sees (three time constants)
+# LOOKBACK and RISE were set on development draws (the push case's seeds 1-2, Lynxmotion) and
+# synthetic steps (tests/test_event_onset.py), never on the study's or the bench's
 MIN_DURATION = 0.15  # s: shorter excursions are the robot's own (module docstring, 3.)
 MARGIN = 0.1  # s left out on each side of an event (the observer's lag is 1 / GAIN = 20 ms)
 ROUNDS = 4  # persistent fit and detection, again without the events, at most
