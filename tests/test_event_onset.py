@@ -59,3 +59,15 @@ def test_a_calm_gap_splits_two_pushes_and_each_keeps_its_onset():
 def test_noise_alone_is_no_event():
     t = np.arange(4000) * DT
     assert intervals(_noise(len(t), 3, 11), t) == []
+
+
+def test_a_column_that_moves_only_while_pushed_is_no_persistent_effect():
+    from identification.closeloop.events.persistent import moving_columns
+
+    t = np.arange(4000) * DT
+    rng = np.random.default_rng(5)
+    held = 1e-5 * rng.normal(size=len(t)) + 0.01 * _step(t, 7.0, 7.5)  # deflected while pushed
+    moving = np.sin(2 * np.pi * 0.3 * t) + 0.01 * rng.normal(size=len(t))
+    sign = np.tanh(np.cos(2 * np.pi * 0.2 * t) / 0.02)  # dry friction of a moving joint
+    X = np.stack([held, moving, sign, np.ones(len(t))], axis=1)
+    assert moving_columns(X).tolist() == [False, True, True, True]
