@@ -35,6 +35,7 @@ from identification.closeloop.events.persistent import (
     persistent_residual,
     state_columns,
 )
+from identification.errors import IdentificationError
 
 ON = 8.0  # robust scales of the residual: an event starts where a joint exceeds it
 OFF = 3.0  # ... and lasts while a joint exceeds this (hysteresis)
@@ -132,6 +133,8 @@ def intervals(z: np.ndarray, t: np.ndarray) -> list[tuple[int, int, float]]:
     point (change_point, searched from LOOKBACK s before its rise above OFF), its samples
     from there."""
     n, size = len(z), np.abs(z)
+    if not np.all(np.isfinite(z)):  # a NaN is never above ON nor below OFF: no event ends
+        raise IdentificationError("the external-torque residual is not finite")
     out: list[tuple[int, int, float]] = []
     k = floor = 0
     while k < n:

@@ -77,7 +77,9 @@ def persistent_residual(r: np.ndarray, cols: list[tuple[np.ndarray, np.ndarray]]
     res = np.empty_like(r)
     for j, (X, bound) in enumerate(cols):
         size = np.maximum(np.sqrt(np.mean(X[use] ** 2, axis=0)), 1e-12)
-        X, bound = X / size, np.maximum(bound * size * moving_columns(X[use]), 1e-300)
+        # an unbounded coefficient (bound inf) of a column held at zero: 1e-300, not inf x 0
+        X, bound = X / size, np.where(moving_columns(X[use]), np.maximum(bound * size, 1e-300),
+                                      1e-300)
         y, weight = r[:, j], np.ones(len(r))
         out = y.copy()
         for _ in range(iterations):
