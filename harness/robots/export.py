@@ -24,6 +24,7 @@ from harness.errors import UserError
 from harness.io import atomic_write
 from harness.robots.arm import Arm
 from harness.robots.inertials import centroidal_inertia, model_standard_parameters, set_standard_parameters
+from harness.robots.native_friction import inverse_gap, native_friction, set_native_friction
 from identification.library.kinematic import atom_unit
 from identification.model import joint_entries
 
@@ -154,12 +155,13 @@ def _set_inertial(link, mass: float, c, inertia) -> None:
     ET.SubElement(inertial, "inertia", {k: f"{inertia[i]:.12g}" for k, i in names.items()})
 
 
-def _full_precision(path: str, model: mujoco.MjModel) -> None:
+def _full_precision(path: str, model: mujoco.MjModel) -> ET.ElementTree:
     """The MJCF at path with every body's inertial and every joint's armature, damping and
-    frictionloss rewritten from model at full precision. MuJoCo's writer keeps 6 significant
-    digits: a consistent fit leaves thin links on the edge of the triangle inequality (the
-    Panda's link 5: A + B - C = 9e-9 of C = 0.018 kg m^2), which 6 digits break, and plain
-    MuJoCo then refuses the file ('inertia must satisfy A + B >= C')."""
+    frictionloss (and its solreffriction, solimpfriction) rewritten from model at full
+    precision. MuJoCo's writer keeps 6 significant digits: a consistent fit leaves thin links
+    on the edge of the triangle inequality (the Panda's link 5: A + B - C = 9e-9 of C = 0.018
+    kg m^2), which 6 digits break, and plain MuJoCo then refuses the file ('inertia must
+    satisfy A + B >= C')."""
     def text(values) -> str:
         return " ".join(f"{v:.17g}" for v in np.atleast_1d(values))
     tree = ET.parse(path)
@@ -181,12 +183,17 @@ def _full_precision(path: str, model: mujoco.MjModel) -> None:
         joint.set("armature", text(model.dof_armature[dof]))
         joint.set("damping", text(model.dof_damping[dof]))
         joint.set("frictionloss", text(model.dof_frictionloss[dof]))
-    tree.write(path)
+        joint.set("solreffriction", text(model.dof_solref[dof]))
+        joint.set("solimpfriction", text(model.dof_solimp[dof]))
+    return tree
 
 
-def export_model(payload: dict, arm: Arm, fmt: str, out: str | Path) -> str:
+def export_model(payload: dict, arm: Arm, fmt: str, out: str | Path, offset=None, log=None,
+                 report: list[str] | None = None) -> str:
     """Write MODEL.json's payload for arm in fmt to out, whole or not at all; what it wrote,
-    in words."""
+    in words. mjcf: offset (dof,) N m is the sensor offset its motors' bias holds (None:
+    zero); log (q, qd, qdd, the torque the model says the sensor reads) measures what the
+    approximation costs (_write_mjcf); report collects what was approximated, in lines."""
     if fmt not in FORMATS:
         raise UserError(f"--format must be one of {', '.join(FORMATS)}, got {fmt}")
     params = model_standard_parameters(payload)
@@ -201,15 +208,9 @@ def export_model(payload: dict, arm: Arm, fmt: str, out: str | Path) -> str:
     elif fmt == "urdf":
         text = export_urdf(params, arm)
     else:
-        from harness.robots.files import model_to_save
-
-        model = set_standard_parameters(model_to_save(arm.entry), params)
-
-        def write(tmp: str) -> None:
-            mujoco.mj_saveLastXML(tmp, model)
-            _full_precision(tmp, model)
-        atomic_write(out, write, suffix=".xml")
-        return f"robot {arm.label}'s MuJoCo model with the identified bodies"
+        atomic_write(out, lambda tmp: _write_mjcf(tmp, payload, params, arm, offset, log, report),
+                     suffix=".xml")
+        return f"robot {arm.label}'s MuJoCo model with the identified bodies and friction"
     atomic_write(out, lambda tmp: Path(tmp).write_text(text), suffix="." + fmt)
     if params is None:
         return "the model's terms (it has no bodies)"
@@ -221,3 +222,54 @@ def export_model(payload: dict, arm: Arm, fmt: str, out: str | Path) -> str:
                + ", ".join(f"{a:.3g}" for a in armature) + " kg m^2) is not in it: URDF has "
                "none (--format mjcf or csv keeps it)")
     return f"robot {arm.label}'s URDF with the identified bodies{dropped}"
+
+
+def _write_mjcf(path: str, payload: dict, params: np.ndarray, arm: Arm, offset, log,
+                report: list[str] | None) -> None:
+    """MuJoCo's model of the arm at path with the identified bodies, the model's friction in
+    MuJoCo's terms (harness.robots.native_friction) and a motor per joint whose bias holds the
+    sensor offset; a comment in the file (and report) says what was approximated and, given
+    a log, the torque RMS gap per joint of the file's inverse dynamics against the model."""
+    from harness.robots.files import model_to_save, plain_mujoco
+
+    model = set_standard_parameters(model_to_save(arm.entry), params)
+    frictions = native_friction(payload, params, arm.velocity_limit)
+    set_native_friction(model, frictions)
+    offset = np.zeros(model.njnt) if offset is None else np.asarray(offset, float)
+    bias = -(offset + np.array([f.constant for f in frictions]))
+    mujoco.mj_saveLastXML(path, model)
+    tree = _full_precision(path, model)
+    root = tree.getroot()
+    actuators = root.find("actuator")
+    if actuators is None:
+        actuators = ET.SubElement(root, "actuator")
+    for j in range(model.njnt):
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)
+        ET.SubElement(actuators, "general", name=f"sensor_torque_{name}", joint=name,
+                      gaintype="fixed", gainprm="1", biastype="affine",
+                      biasprm=f"{bias[j]:.17g} 0 0", ctrllimited="false")
+    tree.write(path)
+    lines = approximation_lines(frictions, bias)
+    if log is not None:
+        gap = inverse_gap(plain_mujoco(Path(path)), bias, *log)
+        lines.append("torque RMS gap per joint on the log's states (mj_inverse of this file, "
+                     "less its motors' bias, against the model's torque): "
+                     + ", ".join(f"{g:.3g}" for g in gap) + " N m")
+    root.insert(0, ET.Comment(" " + "\n     ".join(lines) + " "))
+    tree.write(path)
+    if report is not None:
+        report.extend(lines)
+
+
+def approximation_lines(frictions, bias: np.ndarray) -> list[str]:
+    """What the MJCF holds of the model's friction and offset, and what it approximates."""
+    lines = ["exported by torquebench: joint friction as MuJoCo's frictionloss f (its linear "
+             "zone eps set by solimpfriction's dmin) + damping d, fitted to the model's "
+             "friction on [-V, V] rad/s; motor 'sensor_torque_<joint>': ctrl = the torque the "
+             "sensor reads, force = ctrl + bias (the sensor offset and the fit's constant)"]
+    for j, f in enumerate(frictions, start=1):
+        own = f", its own column {f.own:.3g} N m approximated" if f.own else ""
+        lines.append(f"joint {j}: f {f.frictionloss:.4g} N m, eps {f.width:.3g} rad/s, d "
+                     f"{f.damping:.4g} N m s/rad, bias {bias[j - 1]:.4g} N m{own}; friction RMS "
+                     f"gap {f.gap:.3g} N m over V = {f.speed:.3g}")
+    return lines
