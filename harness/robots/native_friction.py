@@ -70,13 +70,15 @@ def fit_joint(viscous: float, coulomb: float, law: FrictionLaw, phi1: float, spe
     return NativeFriction(float(f), float(d), float(k), float(eps), speed, gap, phi1)
 
 
-def own_coefficients(payload: dict) -> tuple[list[FrictionLaw], np.ndarray]:
+def own_coefficients(payload: dict, dof: int) -> tuple[list[FrictionLaw], np.ndarray]:
     """Each joint's friction law and its own column's coefficient (a sigmoid's phi1, a
-    Stribeck's F_s; 0 for a law without a column)."""
-    joints = joint_entries(payload)
+    Stribeck's F_s; 0 for a law without a column, and for a payload of bodies alone)."""
+    phi1 = np.zeros(dof)
+    if payload.get("joints") is None:
+        return [FrictionLaw() for _ in range(dof)], phi1
+    joints = joint_entries(payload, dof)
     laws = [FrictionLaw.from_dict(x) for x in payload.get("friction") or []] \
         or [FrictionLaw() for _ in joints]
-    phi1 = np.zeros(len(joints))
     for j, (joint, law) in enumerate(zip(joints, laws, strict=True)):
         if law.has_column:
             phi1[j] = dict(zip(joint["terms"], joint["coefficients"], strict=True)).get(
@@ -88,7 +90,7 @@ def native_friction(payload: dict, params: np.ndarray, speeds) -> list[NativeFri
     """Each joint's NativeFriction from MODEL.json's payload and its 13 dof standard
     parameters, fitted over [-V, V] with V from speeds (None or non-finite: FIT_SPEED)."""
     dof = params.size // 13
-    laws, phi1 = own_coefficients(payload)
+    laws, phi1 = own_coefficients(payload, dof)
     out = []
     for j in range(dof):
         v = FIT_SPEED if speeds is None or not np.isfinite(speeds[j]) else float(speeds[j])
