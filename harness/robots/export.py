@@ -228,7 +228,7 @@ def _write_mjcf(path: str, payload: dict, params: np.ndarray, arm: Arm, offset, 
                 report: list[str] | None) -> None:
     """MuJoCo's model of the arm at path with the identified bodies, the model's friction in
     MuJoCo's terms (harness.robots.native_friction) and a motor per joint whose bias holds the
-    sensor offset; a comment in the file (and report) says what was approximated and, given
+    sensor offset (_bias_motors); a comment in the file (and report) says what was approximated and, given
     a log, the torque RMS gap per joint of the file's inverse dynamics against the model."""
     from harness.robots.files import model_to_save, plain_mujoco
 
@@ -240,14 +240,7 @@ def _write_mjcf(path: str, payload: dict, params: np.ndarray, arm: Arm, offset, 
     mujoco.mj_saveLastXML(path, model)
     tree = _full_precision(path, model)
     root = tree.getroot()
-    actuators = root.find("actuator")
-    if actuators is None:
-        actuators = ET.SubElement(root, "actuator")
-    for j in range(model.njnt):
-        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)
-        ET.SubElement(actuators, "general", name=f"sensor_torque_{name}", joint=name,
-                      gaintype="fixed", gainprm="1", biastype="affine",
-                      biasprm=f"{bias[j]:.17g} 0 0", ctrllimited="false")
+    _bias_motors(root, model, bias)
     tree.write(path)
     lines = approximation_lines(frictions, bias)
     if log is not None:
@@ -265,11 +258,43 @@ def approximation_lines(frictions, bias: np.ndarray) -> list[str]:
     """What the MJCF holds of the model's friction and offset, and what it approximates."""
     lines = ["exported by torquebench: joint friction as MuJoCo's frictionloss f (its linear "
              "zone eps set by solimpfriction's dmin) + damping d, fitted to the model's "
-             "friction on [-V, V] rad/s; motor 'sensor_torque_<joint>': ctrl = the torque the "
-             "sensor reads, force = ctrl + bias (the sensor offset and the fit's constant)"]
+             "friction on [-V, V] rad/s; a motor per joint (the file's own, else "
+             "'sensor_torque_<joint>'): ctrl x gain x gear = the torque the sensor reads, the force on "
+             "the joint that + bias (less the sensor offset and the fit's constant)"]
     for j, f in enumerate(frictions, start=1):
         own = f", its own column {f.own:.3g} N m approximated" if f.own else ""
         lines.append(f"joint {j}: f {f.frictionloss:.4g} N m, eps {f.width:.3g} rad/s, d "
                      f"{f.damping:.4g} N m s/rad, bias {bias[j - 1]:.4g} N m{own}; friction RMS "
                      f"gap {f.gap:.3g} N m over V = {f.speed:.3g}")
     return lines
+
+
+def _bias_motors(root: ET.Element, model: mujoco.MjModel, bias: np.ndarray) -> None:
+    """Each joint's motor given the bias (N m at the joint): the file's own motor on the joint
+    where it has one (_motor_of), its bias made affine, else a new motor
+    'sensor_torque_<joint>' of gear 1; its control is the torque the sensor reads."""
+    actuators = root.find("actuator")
+    if actuators is None:
+        actuators = ET.SubElement(root, "actuator")
+    elements = list(actuators)  # in the compiled model's order
+    for j in range(model.njnt):
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)
+        own = [a for a in range(min(model.nu, len(elements))) if _motor_of(model, a, j)]
+        if len(own) == 1:
+            element, gear = elements[own[0]], model.actuator_gear[own[0], 0]
+            element.tag = "general"  # MuJoCo's writer gives one already; <motor> has no bias
+        else:
+            element, gear = ET.SubElement(actuators, "general", name=f"sensor_torque_{name}",
+                                          joint=name, ctrllimited="false"), 1.0
+        element.set("biastype", "affine")
+        element.set("biasprm", f"{bias[j] / gear:.17g} 0 0")
+
+
+def _motor_of(model: mujoco.MjModel, actuator: int, joint: int) -> bool:
+    """Whether the actuator is a plain motor of the joint: a joint transmission, no dynamics,
+    a fixed gain and no bias (so the bias is free to hold the offset)."""
+    return (model.actuator_trntype[actuator] == mujoco.mjtTrn.mjTRN_JOINT
+            and model.actuator_trnid[actuator, 0] == joint
+            and model.actuator_dyntype[actuator] == mujoco.mjtDyn.mjDYN_NONE
+            and model.actuator_gaintype[actuator] == mujoco.mjtGain.mjGAIN_FIXED
+            and model.actuator_biastype[actuator] == mujoco.mjtBias.mjBIAS_NONE)
