@@ -256,3 +256,19 @@ def test_a_thin_body_on_the_edge_of_consistency_loads_in_plain_mujoco(tmp_path):
     exported = mujoco.MjModel.from_xml_path(str(out))
     body = exported.jnt_bodyid[4]
     assert np.allclose(np.sort(exported.body_inertia[body]), moments, rtol=1e-12, atol=0)
+
+
+def test_the_mjcf_says_what_its_friction_costs_on_a_log(fitted, capsys):
+    """--data: the mjcf export's torque gap on the log's states is on stderr and in the file;
+    with another format it is refused in one line, nothing written."""
+    out = fitted / "costed.xml"
+    assert main(["export", "--model", str(fitted / "m.json"), "--robot", "ur5", "--format", "mjcf",
+                 "--data", str(fitted / "d.npz"), "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    gap = [line for line in err.splitlines() if "torque RMS gap per joint" in line]
+    assert len(gap) == 1 and gap[0].split(": ")[-1] in out.read_text()
+    csv_out = fitted / "costed.csv"
+    assert main(["export", "--model", str(fitted / "m.json"), "--robot", "ur5", "--format", "csv",
+                 "--data", str(fitted / "d.npz"), "--out", str(csv_out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--format mjcf" in err and not csv_out.exists()

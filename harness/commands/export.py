@@ -24,10 +24,13 @@ def register(sub) -> None:
     p.add_argument("--format", choices=FORMATS, required=True,
                    help="urdf: the robot's URDF with each body's <inertial> and each joint's "
                    "<dynamics damping friction>; mjcf: MuJoCo's model with the inertials, "
-                   "armature, damping, frictionloss; csv: body or joint, parameter, value, unit, "
-                   "nominal, about (first moments and inertias about the link frame, its "
-                   "joint's, not the centre of mass; a model without bodies: its terms). "
-                   "URDF has no armature: the line written says what was left out")
+                   "armature, the model's friction as frictionloss (its smoothing set) + "
+                   "damping, a motor per joint whose bias holds the sensor offset (what was "
+                   "approximated: a comment in the file and stderr); csv: body or joint, "
+                   "parameter, value, unit, nominal, about (first moments and inertias "
+                   "about the link frame, its joint's, not the centre of mass; a model "
+                   "without bodies: its terms). URDF has no armature: the line written says "
+                   "what was left out")
     p.add_argument("--data", default=None, metavar="LOG.npz",
                    help="mjcf: also measure what the file's approximation of the model's "
                    "friction costs on this log's states: per joint, the torque RMS gap of the "

@@ -123,7 +123,8 @@ def _rollout(args, read, arm, model, states: dict, meta: dict, offset) -> tuple:
     missing = [k for k in ("t", "tau") if k not in states]
     if missing:
         raise UserError(f"{args.data}: --rollout needs the log's {' and '.join(missing)}")
-    held, words = held_model(read.payload, arm)
+    approximated: list[str] = []
+    held, words = held_model(read.payload, arm, approximated)
     tau = states["tau"] - (0.0 if offset is None else offset)
     done = roll_out(held, states["t"], states["q"], states["qd"], tau, seconds,
                     args.rollout_holdout)
@@ -137,6 +138,7 @@ def _rollout(args, read, arm, model, states: dict, meta: dict, offset) -> tuple:
                "offset_removed": None if offset is None else np.broadcast_to(
                    offset, (model.dof,)).tolist(),
                "not_in_mujoco": list(friction.described) if friction else [],
+               "approximated_in_mujoco": approximated,
                "diverged_when": f"non-finite, unstable, or a joint over {DIVERGED:.4g} rad off",
                "windows": [f.to_json() for f in figures],
                "units": {"seconds": "s", "q_rms": "rad", "qd_rms": "rad/s"}}

@@ -52,10 +52,12 @@ class WindowFidelity:
                 "qd_rms": None if self.qd_rms is None else self.qd_rms.tolist()}
 
 
-def held_model(payload: dict | None, arm: Arm) -> tuple[mujoco.MjModel, str]:
+def held_model(payload: dict | None, arm: Arm, report: list[str] | None = None
+               ) -> tuple[mujoco.MjModel, str]:
     """The MuJoCo model a `--model` is as MuJoCo holds it, and its words: 'pinocchio' (payload
     None) the robot's own file; a MODEL.json with bodies the MJCF `export --format mjcf`
-    writes, read back by plain MuJoCo; UserError for a model without bodies."""
+    writes, read back by plain MuJoCo (report: what the export approximated, its lines);
+    UserError for a model without bodies."""
     if payload is None:
         return arm.mujoco, f"robot {arm.label}'s own model ({arm.entry.mjcf or arm.entry.urdf})"
     if model_standard_parameters(payload) is None:
@@ -64,7 +66,7 @@ def held_model(payload: dict | None, arm: Arm) -> tuple[mujoco.MjModel, str]:
                         "roll out --model pinocchio")
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "model.xml"
-        export_model(payload, arm, "mjcf", path)
+        export_model(payload, arm, "mjcf", path, report=report)
         return plain_mujoco(path), "its exported MJCF (export --format mjcf)"
 
 

@@ -5,7 +5,8 @@ order: per body about its joint's frame, which for a URDF is the child link's fr
 joint armature, viscous, Coulomb). urdf: every moving link's <inertial> and its joint's
 <dynamics damping friction> (the links below it that the identification held fixed - welded
 links, a gripper's fingers - are in its parameters and left massless; URDF has no armature);
-mjcf: MuJoCo's model of the robot with the same inertials, armature, damping, frictionloss;
+mjcf: MuJoCo's model of the robot with the same inertials and armature, the model's friction and
+sensor offset in MuJoCo's terms (harness.robots.native_friction; _write_mjcf);
 csv: body or joint, parameter, value, unit, nominal, about (the frame of a body's first
 moment and inertia: its link frame, not the centre of mass). A model without bodies (the sparse fit on
 base atoms, a feature model) exports its terms as csv and refuses urdf/mjcf in one line.
