@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
+import secrets
 from collections.abc import Callable
 from pathlib import Path
 
@@ -20,14 +20,16 @@ def atomic_write(path: str | Path, write: Callable[[str], None], suffix: str = "
     if path.is_dir():
         raise UserError(f"output path {path} is a directory, expected a file name")
     output_dir(path.parent)
+    # the temporary's name is known before the file exists, so an interrupt at any instant
+    # after its creation (even inside the call that creates it) finds it and removes it
+    tmp = str(path.parent / f".{path.name}.{secrets.token_hex(8)}{suffix}")
     try:
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
-    except OSError as exc:
-        raise UserError(f"cannot write to {path.parent}: {exc.strerror}") from None
-    os.close(fd)
-    try:
+        try:
+            os.close(os.open(tmp, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
+        except OSError as exc:
+            raise UserError(f"cannot write to {path.parent}: {exc.strerror}") from None
         write(tmp)
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; results are ordinary files
+        os.chmod(tmp, 0o666 & ~_umask())  # created 0600; results are ordinary files
         interrupt.check()  # no new result after Ctrl-C, even one a library swallowed
         os.replace(tmp, path)
     except BaseException:
