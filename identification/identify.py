@@ -31,7 +31,7 @@ from identification.closeloop.closed.offsets import (
 )
 from identification.errors import IdentificationError
 from identification.library.base import Conditioning
-from identification.metrics import rel_error
+from identification.metrics import HELD_OUT, error_measure, error_reference, rel_error
 from identification.regression.base import validation_mask
 from identification.regression.coupled import AtomBasis
 from identification.regression.torque import TorqueRegressor
@@ -54,12 +54,14 @@ class Identification:
     physical: dict = field(default_factory=dict)  # consistent: prior, weight, consistency
     scored: tuple = field(default=(), repr=False)  # ScoredRun per held-out run (a measured log)
     trained: tuple = field(default=(), repr=False)  # each training run's trained samples
+    reference: str = "measured"  # the held-out errors' (identification.metrics.REFERENCES)
 
     def metrics(self) -> dict:
         """JSON metrics; the held-out errors are null when nothing was held out (holdout 0)."""
         out = {"method": self.method,
                "heldout_rel_rmse": _nullable(self.heldout_rel_rmse),
                "heldout_mse": _nullable(self.heldout_mse),
+               "error_measure": error_measure(self.reference, HELD_OUT),
                "library_size": self.conditioning.size,
                "library_rank": self.conditioning.rank,
                "library_condition": self.conditioning.condition,
@@ -170,7 +172,8 @@ def identify(q, qd, qdd, tau, library, holdout: float = 0.25, tau_clean=None,
         rel, mse = heldout_errors(fit.model, q, qd, qdd, tau, tau_clean, n, scored)
     return Identification(fit.model, rel, mse, fit.conditioning, seconds, fit.regressions,
                           fit.method, fit.basis, fit.physical,
-                          tuple(scored) if tau_clean is None else (), tuple(trained))
+                          tuple(scored) if tau_clean is None else (), tuple(trained),
+                          error_reference(tau_clean is not None))
 
 
 def _runs(regressor, runs, n: int) -> dict:

@@ -21,7 +21,7 @@ from harness.data.sensors import SensorConfig, encoder, estimate_derivatives
 from harness.errors import UserError
 from harness.robots.arm import Arm
 from identification.excitation.fourier import FourierExcitation
-from identification.metrics import rel_error
+from identification.metrics import error_measure, rel_error
 
 OMEGA, ZETA = 30.0, 1.0  # rad/s, closed-loop bandwidth and damping of the tracking error
 
@@ -126,7 +126,8 @@ def _mass_matrix(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
 
 def state_errors(arm: Arm, est: tuple, true: tuple) -> dict:
     """Relative RMS errors of estimated qd, qdd and of the torque they imply."""
-    out = {"qd_rel_rmse": rel_error(est[1], true[1]).tolist(),
+    out = {"error_measure": error_measure("states", "all samples"),
+           "qd_rel_rmse": rel_error(est[1], true[1]).tolist(),
            "qdd_rel_rmse": rel_error(est[2], true[2]).tolist()}
     baseline = arm.nominal
     out["tau_from_states_rel_rmse"] = rel_error(baseline.torque(*est), baseline.torque(*true)).tolist()
