@@ -84,9 +84,13 @@ def onset_error(found: float, start: float, visible: float) -> float:
     return min(found - start, 0.0) + max(found - visible, 0.0)
 
 
-def score_events(pushes, found, external: np.ndarray, t: np.ndarray) -> dict:
+def score_events(pushes, found, external: np.ndarray, t: np.ndarray,
+                 stops: np.ndarray | None = None) -> dict:
     """A run's events (identification.closeloop.events.Events) against its pushes and their
-    true joint torque external (n, dof) N m at times t."""
+    true joint torque external (n, dof) N m at times t; stops (n, dof) N m: the torque of the
+    plant's joint stops (MuJoCo's constraint force): an event no push overlaps where a stop
+    reached the threshold is the world too (a push drove the joint onto its stop), counted
+    apart, not as false."""
     found_pushes, delays, below, latency, onset = [], [], [], [], []
     for push in pushes:
         inside = np.flatnonzero((t >= push.start) & (t <= push.start + push.duration))
@@ -99,11 +103,18 @@ def score_events(pushes, found, external: np.ndarray, t: np.ndarray) -> dict:
         latency.append(hit[0].start - t[inside[np.argmax(seen)]] if hit and seen.any() else None)
         visible = t[inside[np.argmax(seen)]] if seen.any() else push.start + push.duration
         onset.append(None if not hit else onset_error(hit[0].start, push.start, visible))
-    false = [e for e in found.events if not any(
+    unpushed = [e for e in found.events if not any(
         e.start <= p.start + p.duration and e.end >= p.start for p in pushes)]
+
+    def at_stop(e) -> bool:
+        if stops is None:
+            return False
+        inside = (t >= e.start) & (t <= e.end)
+        return bool(inside.any() and np.any(np.abs(stops[inside]) >= found.threshold))
+    false = [e for e in unpushed if not at_stop(e)]
     return {"pushes": [p.to_json() for p in pushes], "found": found_pushes, "delay": delays,
             "delay_from_threshold": latency, "onset_error": onset, "below_threshold": below,
-            "false_events": len(false),
+            "false_events": len(false), "events_at_stops": len(unpushed) - len(false),
             "events": [e.to_json() for e in found.events]}
 
 
@@ -179,7 +190,7 @@ def push_case(arm: Arm, seed: int, directory: Path, samples: int = SAMPLES,
         train = _runs([d for d, _ in pushed[:-1]], "pushed")
         held = _runs([pushed[-1][0]], "pushed")
         loop = run_runs(train, arm, validate=held)
-        scores = [score_events(p, ev, d.truth["tau_external"], d.t)
+        scores = [score_events(p, ev, d.truth["tau_external"], d.t, d.truth["tau_constraint"])
                   for (d, p), ev in zip(pushed, loop.found, strict=True)]
         quiet = run_runs(_runs(calm[:-1], "calm"), arm, validate=_runs(calm[-1:], "calm"))
         blind = run_runs(train, arm, validate=held, detect=False)
@@ -211,6 +222,7 @@ def summary(cases: list[dict]) -> dict:
     onsets = [d for r in runs for d in r["onset_error"] if d is not None]
     minutes = sum(p["minutes"] for c in cases for p in c["plants"].values())
     false = sum(r["false_events"] for r in runs)
+    stops = sum(r["events_at_stops"] for r in runs)
     quiet_false = sum(p["false_events_without_pushes"] for c in cases for p in c["plants"].values())
 
     def drift(key: str, which: str) -> list[float | None]:
@@ -228,6 +240,7 @@ def summary(cases: list[dict]) -> dict:
     return {"pushes": len(found), "found": sum(found), "above_threshold": len(visible),
             "found_above_threshold": sum(visible),
             "false_events": false, "false_per_minute": false / minutes if minutes else 0.0,
+            "events_at_stops": stops,
             "false_events_without_pushes": quiet_false,
             "false_per_minute_without_pushes": quiet_false / minutes if minutes else 0.0,
             "false_per_minute_all": (false + quiet_false) / (2 * minutes) if minutes else 0.0,
@@ -298,7 +311,9 @@ def push_markdown(cases: list[dict], s: dict) -> str:
                       + " |")
     md += ["", f"Over {len(cases)} draws: {s['found']} of {s['pushes']} pushes found "
            f"({s['found_above_threshold']} of the {s['above_threshold']} whose joint torque "
-           f"reached the threshold); {s['false_events']} false events on pushed runs and "
+           f"reached the threshold); {s['false_events']} false events on pushed runs (and "
+           f"{s['events_at_stops']} where no push acted but a push had driven a joint onto its "
+           "stop, whose torque reached the threshold: the world too, not counted false) and "
            f"{s['false_events_without_pushes']} on the same runs unpushed; onset from the push's "
            f"start median {fig(s['delay_median'], 1e3, 'ms')}, largest "
            f"{fig(s['delay_max_abs'], 1e3, 'ms')}; outside [start, first threshold crossing] "
