@@ -54,6 +54,9 @@ STUDIES = {
                    "training runs', first rest's, none, both rests, a blend and the rule the "
                    "commands use, against the true offset on simulated UR5 and Panda runs with "
                    "static friction at rest, and on the real Panda log cut into runs",
+    "replan_profile": "an anytime-SQP iteration and a warm re-plan cut into their parts (the "
+                      "compiled evaluation, the QP's build, DAQP, the merit, the checks, the "
+                      "Python around them) on the Lynxmotion's and the README's UR5 scenarios",
     "closeloop_plants": "closing the loop on the Lynxmotion's hand-written plants, with both "
                         "declared models (Pinocchio and the identified one)",
 }
