@@ -67,6 +67,7 @@ class Frame:
     def __init__(self, rows, cols, layout: Layout, equality, lbx_slacks):
         self.rows, self.cols, self.nc = rows, cols, layout.nc
         self.lbx, self.equality = np.asarray(lbx_slacks, float), np.asarray(equality, bool)
+        self.equal_rows = self.rows[self.equality]  # the equality rows' NLP indices
         # the power samples' epigraph rows (above, below: P - e, -P - e) and slacks (e), the
         # bounded clearance rows (D + v) and their slacks (v): their indices in the NLP and
         # their positions among the QP's rows and variables

@@ -117,7 +117,8 @@ class AnytimeSQP:
         clock = Clock() if clock is None else clock
         lbg, ubg = np.asarray(lbg, float), np.asarray(ubg, float)
         frame = self._frame(lbg, ubg)
-        point = self._restored(self.evaluate(x0, p, lam_g0, lbg, ubg), p, lbg, ubg, lam_g0)
+        point = self._restored(self.evaluate(x0, p, lam_g0, lbg, ubg), p, lbg, ubg, lam_g0,
+                               frame)
         accept(point)
         accepted = 1
         lam_x = np.zeros(len(point.x)) if lam_x0 is None else np.asarray(lam_x0, float)
@@ -207,12 +208,12 @@ class AnytimeSQP:
                                               self.lbx[cols[lay.nc:]])
         return frame
 
-    def _restored(self, point: Point, p, lbg, ubg, lam) -> Point:
+    def _restored(self, point: Point, p, lbg, ubg, lam, frame: Frame) -> Point:
         """The point with its equality rows restored by one least-change Newton step in the
         coefficients where it leaves them (a cold start point with bumps reaches the goal but
         not at rest, which the trust region would take the whole budget to mend,
         (docs/realtime.md, 'planning.anytime.sqp')); the point as it is otherwise."""
-        equal = np.flatnonzero(lbg == ubg)
+        equal = frame.equal_rows
         residual = point.g[equal] - lbg[equal]
         if not len(equal) or np.max(np.abs(residual)) <= VIOLATED:
             return point
