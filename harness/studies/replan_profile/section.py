@@ -44,7 +44,9 @@ REPLAN_PARTS = (("iterations", "the SQP iterations (the table above)"),
                 ("round", "a round around its solve: screening, parameters, bounds, start, "
                           "packing the plan"),
                 ("bank", "the bank around its solves: its checks of its plans, scores, "
-                         "bookkeeping"))
+                         "bookkeeping"),
+                ("checks", "of all these, the calls of the compiled safety checks (clearance "
+                           "at the forecast samples, limits and torques, dense energy)"))
 
 
 def run(ctx: Context) -> SectionResult:
@@ -131,7 +133,8 @@ def _windows(replans: list[dict]) -> dict:
     sqp, rounds, choice = column("sqp"), column("round"), column("choice")
     iterations = column("iterations")
     values = {"iterations": iterations, "solve setup": sqp - iterations, "choice": choice,
-              "round": rounds - sqp - choice, "bank": whole - rounds}
+              "round": rounds - sqp - choice, "bank": whole - rounds,
+              "checks": column("checks")}
     out = {"replan": _stats(whole)}
     for name, _ in REPLAN_PARTS:
         out[name] = {**_stats(values[name]), "share": float(values[name].sum() / whole.sum())}
