@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from planning.anytime import qp_kernels as kernels
+from planning.anytime import point_kernels
 from planning.anytime.budget import RECENT, Clock
 from planning.anytime.elastic_qp import VIOLATED, Frame, Layout, Point, linear_change, step
 from planning.formulation import compiled
@@ -69,7 +69,7 @@ class AnytimeSQP:
         self.settled_share = settled_share  # 0: never settles (solved to convergence)
         n = len(self.lbx)
         self.sizes = (n, rows)  # variables, constraint rows
-        # the slacks' rows and columns (above, below, e, clearance, v), for kernels.reset
+        # the slacks' rows and columns (above, below, e, clearance, v), for point_kernels.reset
         self._slacks = tuple(np.arange(part.start, part.stop) for part in
                              (layout.above, layout.below, layout.e, layout.clearance, layout.v))
         self.spent_ms = 0.0  # CPU ms in the compiled evaluations and the QP solver, so far
@@ -98,7 +98,7 @@ class AnytimeSQP:
         self.spent_ms += 1e3 * (time.thread_time() - began)
         n, rows = self.sizes
         lbg = np.asarray(lbg, float)
-        f, grad, g, jac, hess, x, violation = kernels.reset(
+        f, grad, g, jac, hess, x, violation = point_kernels.reset(
             out, np.asarray(x, float), lbg, lbg if ubg is None else ubg, n, rows,
             self.layout.nc, *self._slacks)
         return Point(x, f, g, grad, jac, hess, 0.0 if ubg is None else violation)

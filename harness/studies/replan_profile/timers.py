@@ -24,7 +24,7 @@ from contextlib import ExitStack, contextmanager
 
 import daqp
 
-from planning.anytime import elastic_qp, solver, sqp
+from planning.anytime import elastic_qp, point_kernels, solver, sqp
 from planning.anytime import qp_kernels as kernels
 from planning.bank.planner import BankPlanner
 from planning.formulation import compiled
@@ -48,6 +48,7 @@ PARTS = {
 _KERNELS = {"model": "QP build", "branches": "QP build", "convex": "QP build",
             "held_out": "QP build", "assemble": "QP build", "unpack": "unpack",
             "reset": "reset and merit", "violation": "reset and merit"}
+_MODULES = (kernels, point_kernels)  # where the kernels are (either, by the code's age)
 _CHECKS = ("clearance_check", "motion_check", "dense_energy")
 
 
@@ -200,8 +201,9 @@ def _buffered_init(recorder: Recorder, init):
 @contextmanager
 def installed(recorder: Recorder):
     """The timers in place (module attributes patched, put back on exit)."""
-    patches = [(kernels, name, recorder.leaf(part, getattr(kernels, name)))
-               for name, part in _KERNELS.items() if hasattr(kernels, name)]
+    patches = [(module, name, recorder.leaf(part, getattr(module, name)))
+               for module in _MODULES for name, part in _KERNELS.items()
+               if name in vars(module)]
     patches += [(daqp, "solve", _daqp(recorder, daqp.solve)),
                 (compiled.Buffered, "__call__", _buffered_call(recorder,
                                                                compiled.Buffered.__call__)),
