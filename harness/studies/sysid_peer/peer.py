@@ -1,0 +1,267 @@
+"""mujoco.sysid (MuJoCo's system-identification toolbox, the `sysid` extra) fitting a robot's
+MJCF to a log as its own examples do: every moving body's inertia in the toolbox's
+pseudo-inertia (log-Cholesky) parameters with its default bounds, and per joint armature,
+damping, frictionloss and a motor's bias (the sensor offset); its residual: the rollout's
+joint positions and velocities against the log's, each window started from the log's state
+and driven by its torque, each signal normalized by its norm over the window; its default
+optimizer (mujoco.minimize's Levenberg-Marquardt, finite-difference Jacobian).
+
+Two of the toolbox's defects on this path are worked around here (docs/identification.md,
+"mujoco.sysid as a peer"):
+- its pseudo-inertia writer (apply_body_theta_inertia) zeroes the body's diagonal inertia and
+  sets a NaN `iquat` for the compiler to take `fullinertia`, which MuJoCo 4.0.1 refuses ("mass
+  and inertia of moving bodies must be larger than mjMINVAL"); it also compiles the spec once
+  per body per evaluation (_infer_inertial): write_pseudo_inertia writes the same inertia as
+  principal moments and axes (harness.robots.inertials.body_inertials), no compile;
+- its optimizer has no time limit: the residual stops it at the budget (Budget) and the best
+  point it evaluated is kept.
+"""
+
+from __future__ import annotations
+
+import io
+import time
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from harness.robots.arm import Arm
+from harness.robots.inertials import MIN_MASS, body_inertials, fixed_children
+
+BOUNDS = {"armature": (0.0, 1.0), "damping": (0.0, 10.0), "frictionloss": (0.0, 10.0),
+          "bias": (-10.0, 10.0)}  # kg m^2, N m s/rad, N m, N m: wide, as a user starts
+OFF_BOUND = 0.01  # a start at a bound moved this fraction of the range in (the toolbox's
+# move_off_bounds: armature 0.01 kg m^2, damping and frictionloss 0.1)
+JOINT_FIELDS = ("armature", "damping", "frictionloss")  # the standard parameters' joint order
+
+
+def toolbox():
+    """mujoco.sysid; ImportError naming the extra when its dependencies are missing (the
+    package then imports empty)."""
+    from mujoco import sysid
+    if not hasattr(sysid, "optimize"):
+        raise ImportError("mujoco.sysid needs the sysid extra: pip install 'torquebench[sysid]' "
+                          "(make install installs it)")
+    return sysid
+
+
+def joint_names(model: mujoco.MjModel) -> list[str]:
+    return [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(model.njnt)]
+
+
+def peer_spec(arm: Arm, parameters: np.ndarray) -> mujoco.MjSpec:
+    """The arm's MuJoCo spec with its joints' bodies and joints given 13 dof standard
+    parameters (harness.robots.inertials; the welded bodies' inertia in their joint's body),
+    a motor per joint 'torque_<joint>' (gear 1, affine bias) and sensors 'q_<joint>',
+    'qd_<joint>' (all positions, then all velocities): the model the toolbox fits."""
+    spec, model = arm.spec.copy(), arm.mujoco
+    names = joint_names(model)
+    for j, name in enumerate(names):
+        body = model.jnt_bodyid[j]
+        write_inertia(spec.body(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, body)),
+                      parameters[10 * j:10 * j + 10])
+        for child in fixed_children(model, body):
+            welded = spec.body(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, child))
+            welded.explicitinertial, welded.fullinertia = True, np.full(6, np.nan)
+            welded.mass, welded.inertia = MIN_MASS, [MIN_MASS] * 3
+        for field_name, value in zip(JOINT_FIELDS, parameters[10 * len(names) + j::len(names)]):
+            set_joint(spec.joint(name), field_name, value)
+        motor = spec.add_actuator(name=f"torque_{name}", target=name,
+                                  trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        motor.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+    for kind, prefix in ((mujoco.mjtSensor.mjSENS_JOINTPOS, "q"),
+                         (mujoco.mjtSensor.mjSENS_JOINTVEL, "qd")):
+        for name in names:
+            spec.add_sensor(name=f"{prefix}_{name}", type=kind, objname=name,
+                            objtype=mujoco.mjtObj.mjOBJ_JOINT)
+    return spec
+
+
+def write_inertia(body, standard: np.ndarray) -> None:
+    """A spec body given one body's 10 standard parameters (principal moments and axes)."""
+    mass, c, moments, quat = body_inertials(standard)
+    body.explicitinertial = True
+    body.mass, body.ipos, body.inertia, body.iquat = mass, c, moments, quat
+    body.fullinertia = np.full(6, np.nan)
+
+
+def standard_of_pi(pi: np.ndarray) -> np.ndarray:
+    """The toolbox's inertial vector (m, h, the 3x3 inertia about the origin, flat) as the
+    project's 10 standard parameters (m, h, Ixx, Ixy, Iyy, Ixz, Iyz, Izz)."""
+    inertia = np.asarray(pi[4:], float).reshape(3, 3)
+    return np.r_[pi[:4], inertia[0, 0], inertia[0, 1], inertia[1, 1], inertia[0, 2],
+                 inertia[1, 2], inertia[2, 2]]
+
+
+def write_pseudo_inertia(body_name: str):
+    """The toolbox modifier of a body's pseudo-inertia parameters theta (module docstring)."""
+    from mujoco.sysid._src.model_modifier import pi_from_theta
+
+    def modifier(spec: mujoco.MjSpec, param) -> None:
+        write_inertia(spec.body(body_name), standard_of_pi(pi_from_theta(param.value)))
+    return modifier
+
+
+def peer_parameters(spec: mujoco.MjSpec, model: mujoco.MjModel):
+    """The toolbox's ParameterDict of spec (peer_spec's), compiled as model: per joint its
+    body's pseudo-inertia (the toolbox's default bounds), armature, damping, frictionloss and
+    its motor's bias (BOUNDS), started from the spec's values, moved off their bounds."""
+    sysid = toolbox()
+    params = sysid.ParameterDict()
+    for j, name in enumerate(joint_names(model)):
+        body = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, model.jnt_bodyid[j])
+        params.add(sysid.body_inertia_param(spec, model, body, sysid.InertiaType.Pseudo,
+                                            modifier=write_pseudo_inertia(body)))
+        for field_name in JOINT_FIELDS:
+            params.add(sysid.Parameter(
+                f"{name}_{field_name}", joint_value(spec.joint(name), field_name),
+                *BOUNDS[field_name],
+                modifier=lambda s, p, n=name, f=field_name: set_joint(s.joint(n), f, p.value[0])))
+        params.add(sysid.Parameter(
+            f"{name}_bias", 0.0, *BOUNDS["bias"],
+            modifier=lambda s, p, n=name: _set_bias(s.actuator(f"torque_{n}"), p.value[0])))
+    params.move_off_bounds(fraction=OFF_BOUND)
+    return params
+
+
+def joint_value(joint, field_name: str) -> float:
+    return float(np.ravel(getattr(joint, field_name))[0])
+
+
+def set_joint(joint, field_name: str, value: float) -> None:
+    """A spec joint's armature, damping (MuJoCo 4's first damping coefficient, the linear
+    one) or frictionloss."""
+    if field_name == "damping":
+        joint.damping[0] = value
+    else:
+        setattr(joint, field_name, value)
+
+
+def _set_bias(actuator, value: float) -> None:
+    actuator.biasprm[0] = value
+
+
+@dataclass(frozen=True)
+class Windows:
+    """A log's part cut into rollouts of `samples` log steps, as the toolbox's ModelSequences
+    wants them: each window's initial state, torque and measured q, qd, its time from 0."""
+
+    start: int  # first sample
+    stop: int  # one past the last
+    samples: int
+
+
+def model_sequences(spec: mujoco.MjSpec, model: mujoco.MjModel, t, q, qd, tau,
+                    windows: Windows):
+    """The toolbox's ModelSequences of spec on the log's windows."""
+    sysid = toolbox()
+    names = joint_names(model)
+    sensors = [f"q_{n}" for n in names] + [f"qd_{n}" for n in names]
+    starts = range(windows.start, windows.stop - windows.samples, windows.samples)
+    states, controls, measured = [], [], []
+    for k in starts:
+        part = slice(k, k + windows.samples + 1)
+        times = t[part] - t[k]
+        states.append(sysid.create_initial_state(model, q[k], qd[k]))
+        controls.append(sysid.TimeSeries(times, tau[part]))
+        measured.append(sysid.TimeSeries.from_names(times, np.c_[q[part], qd[part]], model,
+                                                    sensors))
+    return sysid.ModelSequences("arm", spec, [f"window_{k}" for k in starts], states,
+                                controls, measured)
+
+
+class Budget(Exception):
+    """The fit's time budget is spent (raised from inside the toolbox's residual)."""
+
+
+@dataclass
+class BudgetedResidual:
+    """The toolbox's residual function, stopped at `seconds` of wall time: keeps the best
+    point evaluated (its cost: half the sum of squared residuals) and counts evaluations."""
+
+    residual_fn: object
+    seconds: float
+    started: float = field(default_factory=time.perf_counter)
+    best: tuple = (np.inf, None)
+    evaluations: int = 0
+
+    def __call__(self, x, params, **kwargs):
+        if time.perf_counter() - self.started > self.seconds:
+            raise Budget
+        out = self.residual_fn(x, params, **kwargs)
+        self.evaluations += 1 if np.ndim(x) == 1 else np.shape(x)[1]
+        if np.ndim(x) == 1:
+            r = np.concatenate(out[0])
+            cost = 0.5 * float(r @ r) if np.all(np.isfinite(r)) else np.inf
+            if cost < self.best[0]:
+                self.best = (cost, np.array(x, float))
+        return out
+
+
+@dataclass(frozen=True)
+class PeerFit:
+    """The toolbox's fit: 13 dof standard parameters (armature, damping, frictionloss as the
+    joint terms), each motor's bias (N m), the compiled model, and how it ran."""
+
+    parameters: np.ndarray
+    bias: np.ndarray
+    model: mujoco.MjModel
+    seconds: float  # wall
+    evaluations: int  # rollouts of every window, finite-difference columns counted
+    stopped: str  # "converged" or "budget"
+    cost_start: float  # half the sum of squared residuals
+    cost: float
+    count: int  # parameters fitted
+
+
+def fit_peer(arm: Arm, t, q, qd, tau, windows: Windows, seconds: float,
+             start: np.ndarray | None = None, threads: int = 2) -> PeerFit:
+    """The toolbox's fit (module docstring) on the log's windows from start (13 dof standard
+    parameters; None: the robot's file), stopped at `seconds` of wall time."""
+    sysid = toolbox()
+    spec = peer_spec(arm, arm.nominal.atom_parameters() if start is None else start)
+    model = spec.compile()
+    params = peer_parameters(spec, model)
+    sequences = model_sequences(spec, model, np.ravel(t), q, qd, tau, windows)
+    residual = BudgetedResidual(sysid.build_residual_fn(models_sequences=[sequences],
+                                                        n_threads=threads), seconds)
+    x0 = params.as_vector()
+    residual(x0, params.copy())
+    cost_start = residual.best[0]
+    stopped = "converged"
+    try:
+        fitted, _ = sysid.optimize(params, residual, optimizer="mujoco", verbose=False,
+                                   output=io.StringIO())  # its per-iteration table
+        x = fitted.as_vector()
+    except Budget:
+        stopped, x = "budget", residual.best[1]
+    fitted = params.copy()
+    fitted.update_from_vector(x)
+    final = sysid.apply_param_modifiers(fitted, spec)
+    cost = residual.best[0] if stopped == "budget" else _cost(residual.residual_fn, x, fitted)
+    return PeerFit(standard_parameters(fitted, model), _biases(fitted, model), final,
+                   time.perf_counter() - residual.started, residual.evaluations, stopped,
+                   cost_start, cost, x.size)
+
+
+def _cost(residual_fn, x, params) -> float:
+    r = np.concatenate(residual_fn(x, params)[0])
+    return 0.5 * float(r @ r)
+
+
+def standard_parameters(params, model: mujoco.MjModel) -> np.ndarray:
+    """13 dof standard parameters of a fitted ParameterDict (peer_parameters')."""
+    from mujoco.sysid._src.model_modifier import pi_from_theta
+
+    out, joints = [], {f: [] for f in JOINT_FIELDS}
+    for j, name in enumerate(joint_names(model)):
+        body = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, model.jnt_bodyid[j])
+        out.append(standard_of_pi(pi_from_theta(params[f"{body}_inertia"].value)))
+        for f in JOINT_FIELDS:
+            joints[f].append(float(params[f"{name}_{f}"].value[0]))
+    return np.concatenate([*out, *(joints[f] for f in JOINT_FIELDS)])
+
+
+def _biases(params, model: mujoco.MjModel) -> np.ndarray:
+    return np.array([float(params[f"{n}_bias"].value[0]) for n in joint_names(model)])
