@@ -53,10 +53,13 @@ def joint_names(model: mujoco.MjModel) -> list[str]:
 def peer_spec(arm: Arm, parameters: np.ndarray) -> mujoco.MjSpec:
     """The arm's MuJoCo spec with its joints' bodies and joints given 13 dof standard
     parameters (harness.robots.inertials; the welded bodies' inertia in their joint's body),
-    a motor per joint 'torque_<joint>' (gear 1, affine bias) and sensors 'q_<joint>',
+    its own actuators and sensors replaced by a motor per joint 'torque_<joint>' (gear 1,
+    affine bias) and sensors 'q_<joint>',
     'qd_<joint>' (all positions, then all velocities): the model the toolbox fits."""
     spec, model = arm.spec.copy(), arm.mujoco
     names = joint_names(model)
+    for element in [*spec.actuators, *spec.sensors]:  # the file's own: the log's torque
+        spec.delete(element)  # drives the joints, q and qd are what it records
     for j, name in enumerate(names):
         body = model.jnt_bodyid[j]
         write_inertia(spec.body(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, body)),
@@ -190,12 +193,13 @@ class BudgetedResidual:
         if time.perf_counter() - self.started > self.seconds:
             raise Budget
         out = self.residual_fn(x, params, **kwargs)
-        self.evaluations += 1 if np.ndim(x) == 1 else np.shape(x)[1]
-        if np.ndim(x) == 1:
-            r = np.concatenate(out[0])
+        columns = 1 if np.ndim(x) == 1 else np.shape(x)[1]
+        self.evaluations += columns
+        if columns == 1:  # a point (mujoco.minimize passes it as one column), not a Jacobian
+            r = np.concatenate([np.ravel(part) for part in out[0]])
             cost = 0.5 * float(r @ r) if np.all(np.isfinite(r)) else np.inf
             if cost < self.best[0]:
-                self.best = (cost, np.array(x, float))
+                self.best = (cost, np.array(x, float).ravel())
         return out
 
 
