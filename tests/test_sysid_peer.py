@@ -13,8 +13,7 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.robots.arm import Arm
-from harness.studies.sysid_peer.peer import (
+from harness.identify.rollout_fit import (
     Budget,
     BudgetedResidual,
     Windows,
@@ -24,6 +23,7 @@ from harness.studies.sysid_peer.peer import (
     toolbox,
     write_pseudo_inertia,
 )
+from harness.robots.arm import Arm
 from harness.studies.sysid_peer.scoring import score_mujoco
 
 sysid = toolbox()
@@ -124,7 +124,7 @@ def test_windows_line_up_with_a_log_mujoco_made():
         params[f"{name}_bias"].value = np.array([bias[j]])
     x = params.as_vector()
     residual = sysid.build_residual_fn(
-        models_sequences=[model_sequences(spec, model, t, q, qd, tau, Windows(0, len(t), 50))],
+        models_sequences=[model_sequences(spec, model, t, q, qd, tau, [Windows(0, len(t), 50)])],
         n_threads=1)
 
     def cost(v):
@@ -145,13 +145,13 @@ def test_budget_stops_and_keeps_the_best_point():
     def residual_fn(x, params):
         calls.append(x)
         return [np.atleast_1d(np.ravel(x) - 1.0)], None, None
-    budget = BudgetedResidual(residual_fn, seconds=3600)
+    budget = BudgetedResidual(residual_fn, seconds=3600, clock=lambda: 0.0)
     budget(np.array([3.0]), None)
     budget(np.array([[2.0]]), None)  # a point as one column, as mujoco.minimize passes it
     budget(np.array([[0.0, 5.0]]), None)  # a Jacobian's columns: not points
     assert budget.best[0] == pytest.approx(0.5) and budget.best[1].tolist() == [2.0]
     assert budget.evaluations == 4
-    budget.seconds = 0.0
+    budget.seconds = -1.0
     with pytest.raises(Budget):
         budget(np.array([1.0]), None)
 
@@ -180,3 +180,18 @@ def test_study_quick(tmp_path):
     assert names == ["nominal", "identify (exported MJCF)", "mujoco.sysid"]
     peer = section["results"]["peer"]
     assert peer["cost"] <= peer["cost_start"] and peer["parameters"] == 14 * 7
+
+
+def test_budget_refuses_a_call_that_would_end_past_it():
+    now = [0.0]
+
+    def slow(x, params):  # each column takes 1 s of the budget's clock
+        now[0] += np.shape(np.atleast_2d(x))[1] if np.ndim(x) == 2 else 1.0
+        return [np.ravel(x)], None, None
+    budget = BudgetedResidual(slow, seconds=3.5, clock=lambda: now[0])
+    budget(np.array([[1.0, 2.0]]), None)  # a Jacobian of 2 columns: ends at 2 s
+    with pytest.raises(Budget):  # another would end at 4 s
+        budget(np.array([[1.0, 2.0]]), None)
+    budget(np.array([0.5]), None)  # a point: ends at 3 s
+    with pytest.raises(Budget):
+        budget(np.array([0.5]), None)

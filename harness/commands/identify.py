@@ -10,6 +10,8 @@ from harness.commands import SUMMARY, add_chain_option, chain_option
 from harness.data.runs import join, load_runs, split_files
 from harness.identify.drive_gains import current_or_torque, describe, gain_runs
 from harness.identify.fits import RIGID_BODY, arm_identification
+from harness.identify.refine import REFINEMENTS, refine_command
+from harness.identify.refine import SECONDS as REFINE_SECONDS
 from harness.io import write_json
 from harness.robots.registry import DEFAULT_ROBOT
 from harness.robots.resolve import resolve_arm
@@ -88,6 +90,16 @@ def register(sub) -> None:
                    help="with --loaded: the link the load is fixed to (default: chosen by the "
                         "data among the bodies the last three joints move, by held-out "
                         "validation; MODEL.json drive_gains.load.body_choice)")
+    p.add_argument("--refine", choices=REFINEMENTS, default="none",
+                   help="rollout: the consistent fit's exported MJCF refined by rollouts "
+                        "against the fitted part's q and qd (mujoco.sysid's optimizer, the "
+                        "sysid extra; every body kept physically consistent), written to "
+                        "--refine-out, MODEL.json 'refined' says what it did")
+    p.add_argument("--refine-seconds", type=float, default=REFINE_SECONDS, metavar="S",
+                   help=f"with --refine rollout: its wall-time budget (default {REFINE_SECONDS:g})")
+    p.add_argument("--refine-out", default=None, metavar="MODEL.xml",
+                   help="with --refine rollout: the refined MJCF (default: --out with the "
+                        "suffix .refined.xml)")
     p.set_defaults(func=run)
 
 
@@ -133,6 +145,9 @@ def run(args) -> int:
         print(f"torquebench identify: warning: {' '.join(line.split())}", file=sys.stderr)
     payload = model_payload(result, arm.record, held, "tau_clean" if "tau_clean" in data else "tau")
     payload["sensor_offsets"] = result.sensor_offsets()
+    if args.refine == "rollout":
+        for line in refine_command(args, payload, arm, runs, result, holdout):
+            print(line)
     if gains:
         payload["drive_gains"] = gains
         for line in describe(gains):

@@ -13,8 +13,8 @@ Two of the toolbox's defects on this path are worked around here (docs/identific
   and inertia of moving bodies must be larger than mjMINVAL"); it also compiles the spec once
   per body per evaluation (_infer_inertial): write_pseudo_inertia writes the same inertia as
   principal moments and axes (harness.robots.inertials.body_inertials), no compile;
-- its optimizer has no time limit: the residual stops it at the budget (Budget) and the best
-  point it evaluated is kept.
+- its optimizer has no time limit: the residual stops it before a call that would end past
+  the budget (BudgetedResidual) and the best point it evaluated is kept.
 """
 
 from __future__ import annotations
@@ -53,12 +53,9 @@ def joint_names(model: mujoco.MjModel) -> list[str]:
 def peer_spec(arm: Arm, parameters: np.ndarray) -> mujoco.MjSpec:
     """The arm's MuJoCo spec with its joints' bodies and joints given 13 dof standard
     parameters (harness.robots.inertials; the welded bodies' inertia in their joint's body),
-    its own actuators and sensors replaced by a motor per joint 'torque_<joint>' (gear 1,
-    affine bias): the model the toolbox fits (it compares the rollout's state)."""
+    driven and sensed for the toolbox (drive_and_sense): the model the peer fits."""
     spec, model = arm.spec.copy(), arm.mujoco
     names = joint_names(model)
-    for element in [*spec.actuators, *spec.sensors]:  # the file's own: the log's torque
-        spec.delete(element)  # drives the joints, the rollout's q and qd are compared
     for j, name in enumerate(names):
         body = model.jnt_bodyid[j]
         write_inertia(spec.body(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, body)),
@@ -67,12 +64,42 @@ def peer_spec(arm: Arm, parameters: np.ndarray) -> mujoco.MjSpec:
             welded = spec.body(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, child))
             welded.explicitinertial, welded.fullinertia = True, np.full(6, np.nan)
             welded.mass, welded.inertia = MIN_MASS, [MIN_MASS] * 3
-        for field_name, value in zip(JOINT_FIELDS, parameters[10 * len(names) + j::len(names)]):
+        values = parameters[10 * len(names) + j::len(names)]
+        for field_name, value in zip(JOINT_FIELDS, values, strict=True):
             set_joint(spec.joint(name), field_name, value)
+    return drive_and_sense(spec, names, np.zeros(len(names)))
+
+
+def drive_and_sense(spec: mujoco.MjSpec, names: list[str], bias: np.ndarray) -> mujoco.MjSpec:
+    """spec (changed, and returned) with its own actuators and sensors replaced by a motor per
+    joint 'torque_<joint>' (gear 1, its affine bias the given one, N m) and sensors
+    'q_<joint>', 'qd_<joint>' (the toolbox checks a log's columns against the model's sensors;
+    it compares the rollout's state)."""
+    for element in [*spec.actuators, *spec.sensors]:  # the file's own: the log's torque
+        spec.delete(element)  # drives the joints, the rollout's q and qd are compared
+    for name, b in zip(names, bias, strict=True):
         motor = spec.add_actuator(name=f"torque_{name}", target=name,
                                   trntype=mujoco.mjtTrn.mjTRN_JOINT)
         motor.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+        motor.biasprm[0] = b
+    for kind, prefix in ((mujoco.mjtSensor.mjSENS_JOINTPOS, "q"),
+                         (mujoco.mjtSensor.mjSENS_JOINTVEL, "qd")):
+        for name in names:
+            spec.add_sensor(name=f"{prefix}_{name}", type=kind, objname=name,
+                            objtype=mujoco.mjtObj.mjOBJ_JOINT)
     return spec
+
+
+def file_spec(path) -> tuple[mujoco.MjSpec, np.ndarray]:
+    """The MJCF at path (`export --format mjcf`'s: its motors' bias holds the sensor offset)
+    driven and sensed for the toolbox, and that bias per joint (N m at the joint)."""
+    model = mujoco.MjModel.from_xml_path(str(path))
+    bias = np.zeros(model.njnt)
+    for a in range(model.nu):
+        if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:
+            bias[model.actuator_trnid[a, 0]] += model.actuator_biasprm[a, 0] \
+                * model.actuator_gear[a, 0]
+    return drive_and_sense(mujoco.MjSpec.from_file(str(path)), joint_names(model), bias), bias
 
 
 def write_inertia(body, standard: np.ndarray) -> None:
@@ -101,7 +128,7 @@ def write_pseudo_inertia(body_name: str):
 
 
 def peer_parameters(spec: mujoco.MjSpec, model: mujoco.MjModel):
-    """The toolbox's ParameterDict of spec (peer_spec's), compiled as model: per joint its
+    """The toolbox's ParameterDict of spec (drive_and_sense's), compiled as model: per joint its
     body's pseudo-inertia (the toolbox's default bounds), armature, damping, frictionloss and
     its motor's bias (BOUNDS), started from the spec's values, moved off their bounds."""
     sysid = toolbox()
@@ -116,7 +143,7 @@ def peer_parameters(spec: mujoco.MjSpec, model: mujoco.MjModel):
                 *BOUNDS[field_name],
                 modifier=lambda s, p, n=name, f=field_name: set_joint(s.joint(n), f, p.value[0])))
         params.add(sysid.Parameter(
-            f"{name}_bias", 0.0, *BOUNDS["bias"],
+            f"{name}_bias", float(spec.actuator(f"torque_{name}").biasprm[0]), *BOUNDS["bias"],
             modifier=lambda s, p, n=name: _set_bias(s.actuator(f"torque_{n}"), p.value[0])))
     params.move_off_bounds(fraction=OFF_BOUND)
     return params
@@ -150,25 +177,26 @@ class Windows:
 
 
 def model_sequences(spec: mujoco.MjSpec, model: mujoco.MjModel, t, q, qd, tau,
-                    windows: Windows):
-    """The toolbox's ModelSequences of spec on the log's windows."""
+                    windows: list[Windows]):
+    """The toolbox's ModelSequences of spec on the log's windows (each part's: a run's)."""
     sysid = toolbox()
     names = joint_names(model)
     # the rollout's state, not joint sensors: a sensor after mj_step holds the state before
     # it, one timestep behind the state's time stamp (0.5 ms late on the Lynxmotion: 1 % of a
     # perturbed model's residual on a log MuJoCo made)
     signals = [f"{n}_qpos" for n in names] + [f"{n}_qvel" for n in names]
-    starts = range(windows.start, windows.stop - windows.samples, windows.samples)
+    starts = [(k, w.samples) for w in windows
+              for k in range(w.start, w.stop - w.samples, w.samples)]
     states, controls, measured = [], [], []
-    for k in starts:
-        part = slice(k, k + windows.samples + 1)
+    for k, samples in starts:
+        part = slice(k, k + samples + 1)
         times = t[part] - t[k]
         states.append(sysid.create_initial_state(model, q[k], qd[k]))
         controls.append(sysid.TimeSeries(times, tau[part]))
         measured.append(sysid.TimeSeries.from_names(times, np.c_[q[part], qd[part]], model,
                                                     signals))
-    return sysid.ModelSequences("arm", spec, [f"window_{k}" for k in starts], states,
-                                controls, measured, allow_missing_sensors=True)
+    return sysid.ModelSequences("arm", spec, [f"window_{k}" for k, _ in starts], states,
+                                controls, measured)
 
 
 class Budget(Exception):
@@ -177,20 +205,29 @@ class Budget(Exception):
 
 @dataclass
 class BudgetedResidual:
-    """The toolbox's residual function, stopped at `seconds` of wall time: keeps the best
-    point evaluated (its cost: half the sum of squared residuals) and counts evaluations."""
+    """The toolbox's residual function, stopped at `seconds` of wall time: a call that would
+    end past it (its time taken as the last call's with as many columns) raises Budget; keeps
+    the best point evaluated (its cost: half the sum of squared residuals), counts rollouts."""
 
     residual_fn: object
     seconds: float
-    started: float = field(default_factory=time.perf_counter)
+    clock: object = time.perf_counter
+    started: float | None = None
     best: tuple = (np.inf, None)
     evaluations: int = 0
+    took: dict = field(default_factory=dict)  # columns -> seconds of the last such call
+
+    def __post_init__(self) -> None:
+        if self.started is None:
+            self.started = self.clock()
 
     def __call__(self, x, params, **kwargs):
-        if time.perf_counter() - self.started > self.seconds:
+        columns = 1 if np.ndim(x) == 1 else np.shape(x)[1]
+        begun = self.clock()
+        if begun + self.took.get(columns, 0.0) - self.started > self.seconds:
             raise Budget
         out = self.residual_fn(x, params, **kwargs)
-        columns = 1 if np.ndim(x) == 1 else np.shape(x)[1]
+        self.took[columns] = self.clock() - begun
         self.evaluations += columns
         if columns == 1:  # a point (mujoco.minimize passes it as one column), not a Jacobian
             r = np.concatenate([np.ravel(part) for part in out[0]])
@@ -201,7 +238,7 @@ class BudgetedResidual:
 
 
 @dataclass(frozen=True)
-class PeerFit:
+class RolloutFit:
     """The toolbox's fit: 13 dof standard parameters (armature, damping, frictionloss as the
     joint terms), each motor's bias (N m), the compiled model, and how it ran."""
 
@@ -214,14 +251,29 @@ class PeerFit:
     cost_start: float  # half the sum of squared residuals
     cost: float
     count: int  # parameters fitted
+    windows: int
+
+    def to_json(self) -> dict:
+        return {"parameters_fitted": self.count, "windows": self.windows,
+                "evaluations": self.evaluations, "stopped": self.stopped,
+                "cost_start": self.cost_start, "cost": self.cost,
+                "standard_parameters": self.parameters.tolist(), "bias": self.bias.tolist(),
+                "timing": {"seconds": self.seconds}}
 
 
-def fit_peer(arm: Arm, t, q, qd, tau, windows: Windows, seconds: float,
-             start: np.ndarray | None = None, threads: int = 2) -> PeerFit:
-    """The toolbox's fit (module docstring) on the log's windows from start (13 dof standard
-    parameters; None: the robot's file), stopped at `seconds` of wall time."""
+def fit_peer(arm: Arm, t, q, qd, tau, windows: list[Windows], seconds: float,
+             start: np.ndarray | None = None) -> RolloutFit:
+    """The toolbox's fit (module docstring) of the arm's file (start: 13 dof standard
+    parameters instead of its own) on the log's windows, stopped at `seconds` of wall time."""
+    return fit_rollout(peer_spec(arm, arm.nominal.atom_parameters() if start is None
+                                 else start), t, q, qd, tau, windows, seconds)
+
+
+def fit_rollout(spec: mujoco.MjSpec, t, q, qd, tau, windows: list[Windows], seconds: float,
+                threads: int = 2) -> RolloutFit:
+    """The toolbox's fit (module docstring) of spec (drive_and_sense's) from its own values on
+    the log's windows, stopped at `seconds` of wall time."""
     sysid = toolbox()
-    spec = peer_spec(arm, arm.nominal.atom_parameters() if start is None else start)
     model = spec.compile()
     params = peer_parameters(spec, model)
     sequences = model_sequences(spec, model, np.ravel(t), q, qd, tau, windows)
@@ -241,9 +293,9 @@ def fit_peer(arm: Arm, t, q, qd, tau, windows: Windows, seconds: float,
     fitted.update_from_vector(x)
     final = sysid.apply_param_modifiers(fitted, spec)
     cost = residual.best[0] if stopped == "budget" else _cost(residual.residual_fn, x, fitted)
-    return PeerFit(standard_parameters(fitted, model), _biases(fitted, model), final,
-                   time.perf_counter() - residual.started, residual.evaluations, stopped,
-                   cost_start, cost, x.size)
+    return RolloutFit(standard_parameters(fitted, model), _biases(fitted, model), final,
+                      residual.clock() - residual.started, residual.evaluations, stopped,
+                      cost_start, cost, x.size, len(sequences.measured_rollout))
 
 
 def _cost(residual_fn, x, params) -> float:
