@@ -188,10 +188,74 @@ def test_budget_refuses_a_call_that_would_end_past_it():
     def slow(x, params):  # each column takes 1 s of the budget's clock
         now[0] += np.shape(np.atleast_2d(x))[1] if np.ndim(x) == 2 else 1.0
         return [np.ravel(x)], None, None
-    budget = BudgetedResidual(slow, seconds=3.5, clock=lambda: now[0])
-    budget(np.array([[1.0, 2.0]]), None)  # a Jacobian of 2 columns: ends at 2 s
-    with pytest.raises(Budget):  # another would end at 4 s
+    budget = BudgetedResidual(slow, seconds=4.5, clock=lambda: now[0])
+    budget(np.array([0.5]), None)  # the start: ends at 1 s
+    budget(np.array([[1.0, 2.0]]), None)  # a Jacobian of 2 columns: ends at 3 s
+    with pytest.raises(Budget):  # another would end at 5 s
         budget(np.array([[1.0, 2.0]]), None)
-    budget(np.array([0.5]), None)  # a point: ends at 3 s
+    budget(np.array([0.5]), None)  # a point: ends at 4 s
     with pytest.raises(Budget):
         budget(np.array([0.5]), None)
+    late = BudgetedResidual(slow, seconds=-1.0, clock=lambda: now[0])
+    late(np.array([0.5]), None)  # the start is evaluated whatever the budget
+
+
+def _file_log(path, n: int = 101):
+    """A log plain MuJoCo makes of the MJCF at path: its motors' control (the torque the
+    sensor reads) linear between 100 Hz samples, q and qd recorded."""
+    model = mujoco.MjModel.from_xml_path(str(path))
+    data, dt = mujoco.MjData(model), 0.01
+    lo, hi = model.jnt_range.T
+    data.qpos[:] = (lo + hi) / 2
+    t = np.arange(n) * dt
+    tau = 0.3 * np.sin(2 * np.pi * np.outer(t, [0.7, 1.1, 1.7]))
+    sub = int(round(dt / model.opt.timestep))
+    q, qd = np.empty((n, model.nv)), np.empty((n, model.nv))
+    for i in range(n):
+        q[i], qd[i] = data.qpos, data.qvel
+        for s in range(sub):
+            w = s / sub
+            data.ctrl[:] = tau[i] if i == n - 1 else (1 - w) * tau[i] + w * tau[i + 1]
+            mujoco.mj_step(model, data)
+    return t, q, qd, tau
+
+
+def test_refinement_starts_from_the_exported_file(tmp_path):
+    """On a log plain MuJoCo made of the exported MJCF, the refinement's start (the same
+    export, read back, driven by the toolbox) has a nil residual; without the sensor offset
+    in its bias it does not; the refined file loads in plain MuJoCo."""
+    from harness.identify.refine import refine_rollout
+    from harness.robots.export import export_model
+
+    arm = Arm.of("lynxmotion")
+    truth = arm.nominal.atom_parameters().copy()
+    truth[30:] = [2e-4, 1e-4, 5e-5, 0.01, 0.005, 0.004, 0.02, 0.01, 0.005]
+    payload, offset = {"body_parameters": truth.tolist()}, np.array([0.03, -0.02, 0.01])
+    export_model(payload, arm, "mjcf", tmp_path / "plant.xml", offset=offset)
+    log = _file_log(tmp_path / "plant.xml")
+    _, right = refine_rollout(payload, arm, *log, [(0, len(log[0]))], offset, 1e-9,
+                              tmp_path / "refined.xml")
+    _, wrong = refine_rollout(payload, arm, *log, [(0, len(log[0]))], 0 * offset, 1e-9)
+    assert right["cost_start"] < 1e-6 * wrong["cost_start"]
+    refined = mujoco.MjModel.from_xml_path(str(tmp_path / "refined.xml"))
+    assert refined.nu == 3 and np.allclose(refined.body_mass, mujoco.MjModel.from_xml_path(
+        str(tmp_path / "plant.xml")).body_mass, rtol=1e-6)
+
+
+def _identify(tmp_path, *extra):
+    data = tmp_path / "lx.npz"
+    if not data.exists():
+        assert main(["generate", "--robot", "lynxmotion", "--samples", "400", "--seed", "5",
+                     "--out", str(data)]) == 0
+    return main(["identify", "--data", str(data), "--out", str(tmp_path / "m.json"), *extra])
+
+
+@pytest.mark.parametrize("extra, words", [
+    (("--prior", "none", "--refine", "rollout"), "has none"),
+    (("--prior", "nominal", "--refine", "rollout", "--refine-seconds", "0"), "must be positive"),
+])
+def test_refine_refused_in_one_line(tmp_path, capsys, extra, words):
+    assert _identify(tmp_path, *extra) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and words in err[0]
+    assert not (tmp_path / "m.json").exists() and not (tmp_path / "m.refined.xml").exists()

@@ -127,10 +127,11 @@ def write_pseudo_inertia(body_name: str):
     return modifier
 
 
-def peer_parameters(spec: mujoco.MjSpec, model: mujoco.MjModel):
+def peer_parameters(spec: mujoco.MjSpec, model: mujoco.MjModel, off_bounds: bool = True):
     """The toolbox's ParameterDict of spec (drive_and_sense's), compiled as model: per joint its
     body's pseudo-inertia (the toolbox's default bounds), armature, damping, frictionloss and
-    its motor's bias (BOUNDS), started from the spec's values, moved off their bounds."""
+    its motor's bias (BOUNDS), started from the spec's values (off_bounds: those at a bound
+    moved OFF_BOUND of the range in, as the toolbox advises from a rough start)."""
     sysid = toolbox()
     params = sysid.ParameterDict()
     for j, name in enumerate(joint_names(model)):
@@ -145,7 +146,8 @@ def peer_parameters(spec: mujoco.MjSpec, model: mujoco.MjModel):
         params.add(sysid.Parameter(
             f"{name}_bias", float(spec.actuator(f"torque_{name}").biasprm[0]), *BOUNDS["bias"],
             modifier=lambda s, p, n=name: _set_bias(s.actuator(f"torque_{n}"), p.value[0])))
-    params.move_off_bounds(fraction=OFF_BOUND)
+    if off_bounds:
+        params.move_off_bounds(fraction=OFF_BOUND)
     return params
 
 
@@ -224,7 +226,8 @@ class BudgetedResidual:
     def __call__(self, x, params, **kwargs):
         columns = 1 if np.ndim(x) == 1 else np.shape(x)[1]
         begun = self.clock()
-        if begun + self.took.get(columns, 0.0) - self.started > self.seconds:
+        late = begun + self.took.get(columns, 0.0) - self.started > self.seconds
+        if late and self.best[1] is not None:  # the first point is evaluated whatever the budget
             raise Budget
         out = self.residual_fn(x, params, **kwargs)
         self.took[columns] = self.clock() - begun
@@ -266,16 +269,16 @@ def fit_peer(arm: Arm, t, q, qd, tau, windows: list[Windows], seconds: float,
     """The toolbox's fit (module docstring) of the arm's file (start: 13 dof standard
     parameters instead of its own) on the log's windows, stopped at `seconds` of wall time."""
     return fit_rollout(peer_spec(arm, arm.nominal.atom_parameters() if start is None
-                                 else start), t, q, qd, tau, windows, seconds)
+                                 else start), t, q, qd, tau, windows, seconds, True)
 
 
 def fit_rollout(spec: mujoco.MjSpec, t, q, qd, tau, windows: list[Windows], seconds: float,
-                threads: int = 2) -> RolloutFit:
-    """The toolbox's fit (module docstring) of spec (drive_and_sense's) from its own values on
-    the log's windows, stopped at `seconds` of wall time."""
+                off_bounds: bool, threads: int = 2) -> RolloutFit:
+    """The toolbox's fit (module docstring) of spec (drive_and_sense's) from its own values
+    (off_bounds: peer_parameters') on the log's windows, stopped at `seconds` of wall time."""
     sysid = toolbox()
     model = spec.compile()
-    params = peer_parameters(spec, model)
+    params = peer_parameters(spec, model, off_bounds)
     sequences = model_sequences(spec, model, np.ravel(t), q, qd, tau, windows)
     residual = BudgetedResidual(sysid.build_residual_fn(models_sequences=[sequences],
                                                         n_threads=threads), seconds)
