@@ -10,8 +10,9 @@ moves every body's pseudo-inertia (log-Cholesky parameters: every body stays phy
 consistent whatever the step), armature, damping, frictionloss and the bias, within the
 toolbox's default bounds around the start (mass x [0.1, 10], principal stretches x [0.5, 2],
 centre of mass +-0.5 m) and rollout_fit.BOUNDS, the start itself not moved off them;
-stopped at a wall-time budget, the best point evaluated kept. What the MJCF cannot hold (a sigmoid's shape) stays approximated as the export
-approximates it; the refined model is the MJCF, not the torque law in MODEL.json.
+stopped at a wall-time budget, the best point evaluated kept. What the MJCF cannot hold (a
+sigmoid's shape) stays approximated as the export approximates it; the refined model is the
+MJCF, not the torque law in MODEL.json.
 """
 
 from __future__ import annotations
