@@ -27,8 +27,9 @@ $(UV_STAMP):
 
 # exactly the versions in uv.lock (a package it lacks is removed; pip and uv stay), the project
 # editable with its dev and sysid extras (mujoco.sysid: study sysid_peer, identify --refine
-# rollout); refused if uv.lock does not match pyproject.toml (make lock-check). uv installs the wheels in parallel: about 25 s here against about 105 s for pip;
-# `pip install .` works as well, with pyproject.toml's ranges (make install-check)
+# rollout); refused if uv.lock does not match pyproject.toml (make lock-check). uv installs
+# the wheels in parallel: about 25 s here against about 105 s for pip; `pip install .` works
+# as well, with pyproject.toml's ranges (make install-check)
 $(STAMP): pyproject.toml uv.lock $(UV_STAMP)
 	UV_PROJECT_ENVIRONMENT=$(VENV) $(UV) sync --quiet --locked --extra dev --extra sysid
 	touch $(STAMP)
