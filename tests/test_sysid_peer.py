@@ -154,6 +154,11 @@ def test_budget_stops_and_keeps_the_best_point():
     budget.seconds = -1.0
     with pytest.raises(Budget):
         budget(np.array([1.0]), None)
+    counted = BudgetedResidual(residual_fn, seconds=3600, rollouts=3, clock=lambda: 0.0)
+    counted(np.array([1.0]), None)
+    counted(np.array([[0.0, 5.0]]), None)  # 3 rollouts: at the limit
+    with pytest.raises(Budget):
+        counted(np.array([1.0]), None)
 
 
 def test_scoring_applies_the_motor_bias():
@@ -176,10 +181,12 @@ def test_study_quick(tmp_path):
     out = tmp_path / "s"
     assert main(["study", "sysid_peer", "--quick", "--no-video", "--out", str(out)]) == 0
     section = json.loads((out / "report.json").read_text())["sections"]["sysid_peer"]
-    names = [m["name"] for m in section["results"]["models"]]
-    assert names == ["nominal", "identify (exported MJCF)", "mujoco.sysid"]
-    peer = section["results"]["peer"]
-    assert peer["cost"] <= peer["cost_start"] and peer["parameters"] == 14 * 7
+    panda = section["results"]["panda"]
+    assert [m["name"] for m in panda["models"]] == [
+        "nominal", "identify (exported MJCF)", "mujoco.sysid", "identify --refine rollout"]
+    for fit in (panda["peer"], panda["refined"]):
+        assert fit["cost"] <= fit["cost_start"] and fit["parameters_fitted"] == 14 * 7
+        assert fit["evaluations"] <= 110
 
 
 def test_budget_refuses_a_call_that_would_end_past_it():
@@ -259,3 +266,18 @@ def test_refine_refused_in_one_line(tmp_path, capsys, extra, words):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and words in err[0]
     assert not (tmp_path / "m.json").exists() and not (tmp_path / "m.refined.xml").exists()
+
+
+def test_a_plate_past_the_edge_by_rounding_compiles():
+    """A body whose moments break A + B >= C by rounding (3e-16 kg m^2, as the Panda's link 3
+    came out of one of the optimizer's steps) is written at the edge, not refused."""
+    from harness.identify.rollout_fit import write_inertia
+
+    arm = Arm.of("panda")
+    spec = peer_spec(arm, arm.nominal.atom_parameters())
+    plate = np.zeros(10)  # m, h, Ixx, Ixy, Iyy, Ixz, Iyz, Izz about the body's origin
+    plate[0], plate[4], plate[6], plate[9] = 1.0, 0.067306, 0.30264923, 0.36995523 + 3.3e-16
+    write_inertia(spec.body("panda_link3"), plate)
+    model = spec.compile()
+    a, b, c = np.sort(model.body_inertia[model.body("panda_link3").id])
+    assert a + b >= c and c == pytest.approx(0.36995523, rel=1e-12)

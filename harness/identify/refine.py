@@ -41,11 +41,12 @@ def fitted_parts(labels, n_train: int) -> list[tuple[int, int]]:
 
 
 def refine_rollout(payload: dict, arm: Arm, t, q, qd, tau, parts: list[tuple[int, int]],
-                   offset, seconds: float = SECONDS, out: Path | None = None
-                   ) -> tuple[RolloutFit, dict]:
+                   offset, seconds: float = SECONDS, out: Path | None = None,
+                   rollouts: int | None = None) -> tuple[RolloutFit, dict]:
     """The model (MODEL.json's payload, a consistent fit) refined on the log's parts (module
-    docstring), its sensor offset `offset` (dof,) in the start's bias; out: where to write
-    the refined MJCF. Returns the fit and its record for MODEL.json."""
+    docstring), its sensor offset `offset` (dof,) in the start's bias, for `seconds` of wall
+    time or `rollouts` (rollout_fit.BudgetedResidual); out: where to write the refined MJCF.
+    Returns the fit and its record for MODEL.json."""
     t = np.ravel(t)
     samples = int(round(WINDOW / np.median(np.diff(t))))
     windows = [Windows(a, b, samples) for a, b in parts if b - a > samples]
@@ -53,8 +54,9 @@ def refine_rollout(payload: dict, arm: Arm, t, q, qd, tau, parts: list[tuple[int
         start = Path(folder) / "start.xml"
         export_model(payload, arm, "mjcf", start, offset=offset)
         spec, bias = file_spec(start)
-    fit = fit_rollout(spec, t, q, qd, tau, windows, seconds, off_bounds=False)
+    fit = fit_rollout(spec, t, q, qd, tau, windows, seconds, False, rollouts)
     record = {"method": "rollout", "window_s": WINDOW, "budget_s": seconds,
+              "budget_rollouts": rollouts,
               "start_bias": bias.tolist(), **fit.to_json()}
     if out is not None:
         Path(out).write_text(spec.to_xml())  # spec holds the fit's values (rollout_fit)

@@ -103,8 +103,15 @@ def file_spec(path) -> tuple[mujoco.MjSpec, np.ndarray]:
 
 
 def write_inertia(body, standard: np.ndarray) -> None:
-    """A spec body given one body's 10 standard parameters (principal moments and axes)."""
+    """A spec body given one body's 10 standard parameters (principal moments and axes). A
+    consistent body on the edge (a plate, A + B = C) comes out of the toolbox's parameters up
+    to 3e-16 kg m^2 past it by rounding, which MuJoCo refuses: its largest moment is lowered
+    to the sum of the other two (MuJoCo's own balanceinertia would set all three to their
+    mean)."""
     mass, c, moments, quat = body_inertials(standard)
+    largest = int(np.argmax(moments))
+    a, b = np.delete(moments, largest)
+    moments[largest] = min(moments[largest], a + b)
     body.explicitinertial = True
     body.mass, body.ipos, body.inertia, body.iquat = mass, c, moments, quat
     body.fullinertia = np.full(6, np.nan)
@@ -207,12 +214,15 @@ class Budget(Exception):
 
 @dataclass
 class BudgetedResidual:
-    """The toolbox's residual function, stopped at `seconds` of wall time: a call that would
-    end past it (its time taken as the last call's with as many columns) raises Budget; keeps
-    the best point evaluated (its cost: half the sum of squared residuals), counts rollouts."""
+    """The toolbox's residual function, stopped at `seconds` of wall time (a call that would
+    end past it, its time taken as the last call's with as many columns, raises Budget) or at
+    `rollouts` evaluations of every window (a finite-difference column counts one; None: no
+    such limit, a limit the same on every machine); keeps the best point evaluated (its cost:
+    half the sum of squared residuals), counts rollouts."""
 
     residual_fn: object
     seconds: float
+    rollouts: int | None = None
     clock: object = time.perf_counter
     started: float | None = None
     best: tuple = (np.inf, None)
@@ -226,7 +236,8 @@ class BudgetedResidual:
     def __call__(self, x, params, **kwargs):
         columns = 1 if np.ndim(x) == 1 else np.shape(x)[1]
         begun = self.clock()
-        late = begun + self.took.get(columns, 0.0) - self.started > self.seconds
+        late = (begun + self.took.get(columns, 0.0) - self.started > self.seconds
+                or self.rollouts is not None and self.evaluations + columns > self.rollouts)
         if late and self.best[1] is not None:  # the first point is evaluated whatever the budget
             raise Budget
         out = self.residual_fn(x, params, **kwargs)
@@ -265,23 +276,25 @@ class RolloutFit:
 
 
 def fit_peer(arm: Arm, t, q, qd, tau, windows: list[Windows], seconds: float,
-             start: np.ndarray | None = None) -> RolloutFit:
-    """The toolbox's fit (module docstring) of the arm's file (start: 13 dof standard
-    parameters instead of its own) on the log's windows, stopped at `seconds` of wall time."""
-    return fit_rollout(peer_spec(arm, arm.nominal.atom_parameters() if start is None
-                                 else start), t, q, qd, tau, windows, seconds, True)
+             rollouts: int | None = None) -> RolloutFit:
+    """The toolbox's fit (module docstring) of the arm's file on the log's windows, stopped
+    at `seconds` of wall time or `rollouts` (BudgetedResidual)."""
+    return fit_rollout(peer_spec(arm, arm.nominal.atom_parameters()), t, q, qd, tau, windows,
+                       seconds, True, rollouts)
 
 
 def fit_rollout(spec: mujoco.MjSpec, t, q, qd, tau, windows: list[Windows], seconds: float,
-                off_bounds: bool, threads: int = 2) -> RolloutFit:
+                off_bounds: bool, rollouts: int | None = None, threads: int = 2) -> RolloutFit:
     """The toolbox's fit (module docstring) of spec (drive_and_sense's) from its own values
-    (off_bounds: peer_parameters') on the log's windows, stopped at `seconds` of wall time."""
+    (off_bounds: peer_parameters') on the log's windows, stopped at `seconds` of wall time or
+    `rollouts` (BudgetedResidual)."""
     sysid = toolbox()
     model = spec.compile()
     params = peer_parameters(spec, model, off_bounds)
     sequences = model_sequences(spec, model, np.ravel(t), q, qd, tau, windows)
     residual = BudgetedResidual(sysid.build_residual_fn(models_sequences=[sequences],
-                                                        n_threads=threads), seconds)
+                                                        n_threads=threads), seconds,
+                                rollouts)
     x0 = params.as_vector()
     residual(x0, params.copy())
     cost_start = residual.best[0]
