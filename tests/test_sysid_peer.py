@@ -13,11 +13,8 @@ import numpy as np
 import pytest
 
 from harness.cli import main
-from harness.identify.rollout_fit import (
-    Budget,
-    BudgetedResidual,
-    Windows,
-    model_sequences,
+from harness.identify.rollout_fit import Budget, BudgetedResidual, Windows, model_sequences
+from harness.identify.rollout_model import (
     peer_parameters,
     peer_spec,
     toolbox,
@@ -271,7 +268,7 @@ def test_refine_refused_in_one_line(tmp_path, capsys, extra, words):
 def test_a_plate_past_the_edge_by_rounding_compiles():
     """A body whose moments break A + B >= C by rounding (3e-16 kg m^2, as the Panda's link 3
     came out of one of the optimizer's steps) is written at the edge, not refused."""
-    from harness.identify.rollout_fit import write_inertia
+    from harness.identify.rollout_model import write_inertia
 
     arm = Arm.of("panda")
     spec = peer_spec(arm, arm.nominal.atom_parameters())

@@ -22,7 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.identify.rollout_fit import RolloutFit, Windows, file_spec, fit_rollout
+from harness.identify.rollout_fit import RolloutFit, Windows, fit_rollout
+from harness.identify.rollout_model import file_spec
 from harness.robots.arm import Arm
 from harness.robots.export import export_model
 from harness.robots.mjcf_export import full_precision
@@ -72,7 +73,7 @@ def refine_command(args, payload: dict, arm: Arm, runs, result, holdout: float) 
     sampled, a budget that is not positive, or no toolbox."""
     from harness.data.runs import run_times
     from harness.errors import UserError
-    from harness.identify.rollout_fit import toolbox
+    from harness.identify.rollout_model import toolbox
     from harness.replay.rollout import log_step
     from harness.robots.inertials import model_standard_parameters
     from identification.closeloop.closed.offsets import held_out_offset
