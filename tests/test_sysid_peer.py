@@ -278,3 +278,13 @@ def test_a_plate_past_the_edge_by_rounding_compiles():
     model = spec.compile()
     a, b, c = np.sort(model.body_inertia[model.body("panda_link3").id])
     assert a + b >= c and c == pytest.approx(0.36995523, rel=1e-12)
+
+
+def test_refine_writes_the_refined_mjcf_and_its_record(tmp_path, capsys):
+    assert _identify(tmp_path, "--prior", "nominal", "--refine", "rollout",
+                     "--refine-seconds", "1") == 0
+    record = json.loads((tmp_path / "m.json").read_text())["refined"]
+    assert record["mjcf"] == str(tmp_path / "m.refined.xml") and record["windows"] > 0
+    assert record["cost"] <= record["cost_start"]
+    refined = mujoco.MjModel.from_xml_path(record["mjcf"])  # plain MuJoCo reads it
+    assert refined.nu == 3 and "refined by rollouts" in capsys.readouterr().out
