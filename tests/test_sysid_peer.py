@@ -200,6 +200,10 @@ def test_budget_refuses_a_call_that_would_end_past_it():
     budget(np.array([0.5]), None)  # a point: ends at 4 s
     with pytest.raises(Budget):
         budget(np.array([0.5]), None)
+    first = BudgetedResidual(slow, seconds=2.5, clock=lambda: now[0])
+    first(np.array([0.5]), None)  # 1 s: a Jacobian of 2 columns is expected to take 2 s more
+    with pytest.raises(Budget):
+        first(np.array([[1.0, 2.0]]), None)
     late = BudgetedResidual(slow, seconds=-1.0, clock=lambda: now[0])
     late(np.array([0.5]), None)  # the start is evaluated whatever the budget
 

@@ -12,7 +12,9 @@ they are stamped with by a timestep: the rollout's state is compared instead.
 
 from __future__ import annotations
 
+import contextlib
 import io
+import logging
 import time
 from dataclasses import dataclass, field
 
@@ -70,7 +72,8 @@ class Budget(Exception):
 @dataclass
 class BudgetedResidual:
     """The toolbox's residual function, stopped at `seconds` of wall time (a call that would
-    end past it, its time taken as the last call's with as many columns, raises Budget) or at
+    end past it, its time taken as the last call's with as many columns, else as many times a
+    point's, raises Budget) or at
     `rollouts` evaluations of every window (a finite-difference column counts one; None: no
     such limit, a limit the same on every machine); keeps the best point evaluated (its cost:
     half the sum of squared residuals), counts rollouts."""
@@ -91,7 +94,8 @@ class BudgetedResidual:
     def __call__(self, x, params, **kwargs):
         columns = 1 if np.ndim(x) == 1 else np.shape(x)[1]
         begun = self.clock()
-        late = (begun + self.took.get(columns, 0.0) - self.started > self.seconds
+        expected = self.took.get(columns, columns * self.took.get(1, 0.0))
+        late = (begun + expected - self.started > self.seconds
                 or self.rollouts is not None and self.evaluations + columns > self.rollouts)
         if late and self.best[1] is not None:  # the first point is evaluated whatever the budget
             raise Budget
@@ -155,8 +159,9 @@ def fit_rollout(spec: mujoco.MjSpec, t, q, qd, tau, windows: list[Windows], seco
     cost_start = residual.best[0]
     stopped = "converged"
     try:
-        fitted, _ = sysid.optimize(params, residual, optimizer="mujoco", verbose=False,
-                                   output=io.StringIO())  # its per-iteration table
+        with _quiet(not off_bounds):
+            fitted, _ = sysid.optimize(params, residual, optimizer="mujoco", verbose=False,
+                                       output=io.StringIO())  # its per-iteration table
         x = fitted.as_vector()
     except Budget:
         stopped, x = "budget", residual.best[1]
@@ -167,6 +172,20 @@ def fit_rollout(spec: mujoco.MjSpec, t, q, qd, tau, windows: list[Windows], seco
     return RolloutFit(standard_parameters(fitted, model), biases(fitted, model), final,
                       residual.clock() - residual.started, residual.evaluations, stopped,
                       cost_start, cost, x.size, len(sequences.measured_rollout))
+
+
+@contextlib.contextmanager
+def _quiet(start_at_bounds: bool):
+    """The toolbox's advice to move a start off its bounds (absl's warning) silenced where the
+    start is kept at them on purpose (a refinement's: refine's docstring)."""
+    logger = logging.getLogger("absl")
+    level = logger.level
+    if start_at_bounds:
+        logger.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
 
 
 def _cost(residual_fn, x, params) -> float:
