@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from harness.identify.rollout_fit import RolloutFit, Windows, fit_rollout
-from harness.identify.rollout_model import file_spec
+from harness.identify.rollout_model import NEAR, Region, file_spec
 from harness.robots.arm import Arm
 from harness.robots.export import export_model
 from harness.robots.mjcf_export import full_precision
@@ -43,7 +43,8 @@ def fitted_parts(labels, n_train: int) -> list[tuple[int, int]]:
 
 def refine_rollout(payload: dict, arm: Arm, t, q, qd, tau, parts: list[tuple[int, int]],
                    offset, seconds: float = SECONDS, out: Path | None = None,
-                   rollouts: int | None = None) -> tuple[RolloutFit, dict]:
+                   rollouts: int | None = None, region: Region = NEAR
+                   ) -> tuple[RolloutFit, dict]:
     """The model (MODEL.json's payload, a consistent fit) refined on the log's parts (module
     docstring), its sensor offset `offset` (dof,) in the start's bias, for `seconds` of wall
     time or `rollouts` (rollout_fit.BudgetedResidual); out: where to write the refined MJCF.
@@ -55,7 +56,7 @@ def refine_rollout(payload: dict, arm: Arm, t, q, qd, tau, parts: list[tuple[int
         start = Path(folder) / "start.xml"
         export_model(payload, arm, "mjcf", start, offset=offset)
         spec, bias = file_spec(start)
-    fit = fit_rollout(spec, t, q, qd, tau, windows, seconds, False, rollouts)
+    fit = fit_rollout(spec, t, q, qd, tau, windows, seconds, False, rollouts, region)
     record = {"method": "rollout", "window_s": WINDOW, "budget_s": seconds,
               "budget_rollouts": rollouts,
               "start_bias": bias.tolist(), **fit.to_json()}

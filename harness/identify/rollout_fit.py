@@ -22,6 +22,8 @@ import mujoco
 import numpy as np
 
 from harness.identify.rollout_model import (
+    WIDE,
+    Region,
     biases,
     joint_names,
     peer_parameters,
@@ -143,13 +145,14 @@ def fit_peer(arm: Arm, t, q, qd, tau, windows: list[Windows], seconds: float,
 
 
 def fit_rollout(spec: mujoco.MjSpec, t, q, qd, tau, windows: list[Windows], seconds: float,
-                off_bounds: bool, rollouts: int | None = None, threads: int = 2) -> RolloutFit:
+                off_bounds: bool, rollouts: int | None = None, region: Region = WIDE,
+                threads: int = 2) -> RolloutFit:
     """The toolbox's fit (module docstring) of spec (drive_and_sense's) from its own values
-    (off_bounds: peer_parameters') on the log's windows, stopped at `seconds` of wall time or
-    `rollouts` (BudgetedResidual)."""
+    within region (off_bounds: peer_parameters') on the log's windows, stopped at `seconds`
+    of wall time or `rollouts` (BudgetedResidual)."""
     sysid = toolbox()
     model = spec.compile()
-    params = peer_parameters(spec, model, off_bounds)
+    params = peer_parameters(spec, model, off_bounds, region)
     sequences = model_sequences(spec, model, np.ravel(t), q, qd, tau, windows)
     residual = BudgetedResidual(sysid.build_residual_fn(models_sequences=[sequences],
                                                         n_threads=threads), seconds,

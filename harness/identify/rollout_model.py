@@ -13,6 +13,8 @@ inertia as principal moments and axes (harness.robots.inertials.body_inertials),
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import mujoco
 import numpy as np
 
@@ -124,24 +126,56 @@ def write_pseudo_inertia(body_name: str):
     return modifier
 
 
-def peer_parameters(spec: mujoco.MjSpec, model: mujoco.MjModel, off_bounds: bool = True):
+@dataclass(frozen=True)
+class Region:
+    """Where the fit may move the parameters: each body's (the toolbox's body_inertia_param
+    arguments: mass x [low, high] of the start, principal stretches x [low, high], shear and
+    centre of mass (m) +- around it) and each joint term's (None: BOUNDS; else x [low, high]
+    of the start plus FLOOR, the motor's bias +- `bias` N m around its start)."""
+
+    mass: tuple[float, float] = (0.1, 10.0)
+    stretch: tuple[float, float] = (0.5, 2.0)
+    shear: tuple[float, float] = (-0.5, 0.5)
+    com: tuple[float, float] = (-0.5, 0.5)
+    joint: tuple[float, float] | None = None
+    bias: float | None = None
+
+    def joint_bounds(self, field_name: str, start: float) -> tuple[float, float]:
+        if self.joint is None:
+            return BOUNDS[field_name]
+        return self.joint[0] * start, self.joint[1] * start + FLOOR[field_name]
+
+    def bias_bounds(self, start: float) -> tuple[float, float]:
+        return BOUNDS["bias"] if self.bias is None else (start - self.bias, start + self.bias)
+
+
+WIDE = Region()  # the toolbox's defaults and BOUNDS: a user's fit from the robot's file
+NEAR = Region((0.8, 1.25), (0.8, 1.25), (-0.05, 0.05), (-0.02, 0.02), (0.5, 2.0), 1.0)
+FLOOR = {"armature": 0.01, "damping": 0.1, "frictionloss": 0.1}  # room a zero start may grow
+
+
+def peer_parameters(spec: mujoco.MjSpec, model: mujoco.MjModel, off_bounds: bool = True,
+                    region: Region = WIDE):
     """The toolbox's ParameterDict of spec (drive_and_sense's), compiled as model: per joint its
-    body's pseudo-inertia (the toolbox's default bounds), armature, damping, frictionloss and
-    its motor's bias (BOUNDS), started from the spec's values (off_bounds: those at a bound
-    moved OFF_BOUND of the range in, as the toolbox advises from a rough start)."""
+    body's pseudo-inertia, armature, damping, frictionloss and its motor's bias, within region,
+    started from the spec's values (off_bounds: those at a bound moved OFF_BOUND of the range
+    in, as the toolbox advises from a rough start)."""
     sysid = toolbox()
     params = sysid.ParameterDict()
     for j, name in enumerate(joint_names(model)):
         body = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, model.jnt_bodyid[j])
-        params.add(sysid.body_inertia_param(spec, model, body, sysid.InertiaType.Pseudo,
-                                            modifier=write_pseudo_inertia(body)))
+        params.add(sysid.body_inertia_param(
+            spec, model, body, sysid.InertiaType.Pseudo, mass_bound_mult=np.array(region.mass),
+            ipos_bound_off=np.array(region.com), stretch_bound_mult=np.array(region.stretch),
+            shear_bound_off=np.array(region.shear), modifier=write_pseudo_inertia(body)))
         for field_name in JOINT_FIELDS:
+            start = joint_value(spec.joint(name), field_name)
             params.add(sysid.Parameter(
-                f"{name}_{field_name}", joint_value(spec.joint(name), field_name),
-                *BOUNDS[field_name],
+                f"{name}_{field_name}", start, *region.joint_bounds(field_name, start),
                 modifier=lambda s, p, n=name, f=field_name: set_joint(s.joint(n), f, p.value[0])))
+        start = float(spec.actuator(f"torque_{name}").biasprm[0])
         params.add(sysid.Parameter(
-            f"{name}_bias", float(spec.actuator(f"torque_{name}").biasprm[0]), *BOUNDS["bias"],
+            f"{name}_bias", start, *region.bias_bounds(start),
             modifier=lambda s, p, n=name: _set_bias(s.actuator(f"torque_{n}"), p.value[0])))
     if off_bounds:
         params.move_off_bounds(fraction=OFF_BOUND)
