@@ -153,8 +153,10 @@ def _worse(ours: Scored, peer: Scored, seconds: float) -> int:
 def targets(name: str, ours: Scored, peer: Scored, refined: Scored) -> list[Target]:
     """Torque and 0.5 s rollout error at or below the peer's on every joint (the joints where
     not: the gap), the refinement's wall time on the Panda."""
-    note = ("the shipped Panda log, its last 25 %: nothing was chosen on it" if name == "panda"
-            else "plant drawn once (seeds in harness.studies.sysid_peer.plant)")
+    note = ("development data: the refinement's region (rollout_model.NEAR) was set after the "
+            "toolbox's wide bounds failed on this log" if name == "panda"
+            else "plant drawn once (seeds in harness.studies.sysid_peer.plant); the region was "
+            "set on the Panda log, not on this plant")
     out = [Target(f"{name}: joints where identify's held-out torque error is above "
                   "mujoco.sysid's", int(np.sum(ours.torque_error > peer.torque_error)), 0,
                   "joints", note=note),
