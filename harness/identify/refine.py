@@ -60,7 +60,8 @@ def refine_rollout(payload: dict, arm: Arm, t, q, qd, tau, parts: list[tuple[int
         export_model(payload, arm, "mjcf", start, offset=offset)
         spec, bias = file_spec(start)
     fit = fit_rollout(spec, t, q, qd, tau, windows, seconds, False, rollouts, region)
-    record = {"method": "rollout", "window_s": WINDOW, "budget_s": seconds,
+    record = {"method": "rollout", "window_s": WINDOW,
+              "budget_s": float(seconds) if np.isfinite(seconds) else None,
               "budget_rollouts": rollouts,
               "start_bias": bias.tolist(), **fit.to_json()}
     if out is not None:

@@ -38,8 +38,8 @@ class Scored:
         return {"name": self.name, "torque_error": listed(self.torque_error),
                 "rollout": self.rollout,
                 "min_pseudo_eigenvalues": listed(self.min_eigenvalues),
-                "masses": listed(self.masses), "seconds": self.seconds,
-                "command": self.command}
+                "masses": listed(self.masses), "command": self.command,
+                "timing": {"fit_seconds": self.seconds}}
 
 
 def held_slice(n: int, holdout: float) -> slice:

@@ -63,8 +63,7 @@ def run(ctx: Context) -> SectionResult:
             plant, truth, _ = plant_log(Path(folder))
             cases.append(("ur5", "simulated UR5 plant (bodies x [0.8, 1.2], friction)",
                           lambda: (plant, Arm.of("ur5")), truth))
-        out = SectionResult("")
-        md, results = [], {}
+        md, results, checks, goals = [], {}, [], []
         for name, words, load, truth in cases:
             arrays, arm = load()
             scored, fits = case(arm, arrays, ctx.quick)
@@ -73,14 +72,14 @@ def run(ctx: Context) -> SectionResult:
                              "truth_masses": None if truth is None
                              else truth[:10 * arm.dof:10].tolist()}
             md += [f"### {words}", "", *markdown(scored, fits, truth, ctx.quick), ""]
-            out.checks += [check(f"{name}: {s.name}: bodies physically consistent",
+            checks += [check(f"{name}: {s.name}: bodies physically consistent",
                                  bool(np.min(s.min_eigenvalues) >= -CONSISTENT_TOL),
                                  f"smallest pseudo-inertia eigenvalue "
                                  f"{np.min(s.min_eigenvalues):.3g}") for s in scored[2:]]
             if not ctx.quick:
-                out.targets += targets(name, *scored[1:])
+                goals += targets(name, *scored[1:])
     results["commands"] = COMMANDS
-    return SectionResult("\n".join(md).rstrip(), results, out.checks, out.targets)
+    return SectionResult("\n".join(md).rstrip(), results, checks, goals)
 
 
 def _panda() -> tuple[dict, Arm]:
