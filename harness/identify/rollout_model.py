@@ -84,14 +84,19 @@ def drive_and_sense(spec: mujoco.MjSpec, names: list[str], bias: np.ndarray) -> 
 
 def file_spec(path) -> tuple[mujoco.MjSpec, np.ndarray]:
     """The MJCF at path (`export --format mjcf`'s: its motors' bias holds the sensor offset)
-    driven and sensed for the toolbox, and that bias per joint (N m at the joint)."""
-    model = mujoco.MjModel.from_xml_path(str(path))
+    driven and sensed for the toolbox, and that bias per joint (N m at the joint); read by
+    harness.robots.files (the one parser)."""
+    from pathlib import Path
+
+    from harness.robots.files import mjcf_spec, plain_mujoco
+
+    model = plain_mujoco(Path(path))
     bias = np.zeros(model.njnt)
     for a in range(model.nu):
         if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:
             bias[model.actuator_trnid[a, 0]] += model.actuator_biasprm[a, 0] \
                 * model.actuator_gear[a, 0]
-    return drive_and_sense(mujoco.MjSpec.from_file(str(path)), joint_names(model), bias), bias
+    return drive_and_sense(mjcf_spec(Path(path)), joint_names(model), bias), bias
 
 
 def write_inertia(body, standard: np.ndarray) -> None:
