@@ -12,7 +12,7 @@ from identification.closeloop.candidates.effects import effect_torque
 
 FRICTION = ("viscous", "coulomb", "sigmoid")
 COLORS = {"nominal": "0.6", "least_squares": "tab:blue", "identified": "tab:green",
-          "rigid_body": "tab:orange", "closed_loop": "tab:red"}
+          "rigid_body": "tab:orange", "closed_loop": "tab:purple"}
 
 
 def error_figure(errors: dict[str, np.ndarray], reference: list[float], path: Path) -> Path:
@@ -47,10 +47,11 @@ def residual_time_figure(t, tau, torques: dict[str, np.ndarray], split: int, pat
     return save_figure(fig, path, dpi=100)
 
 
-def residual_velocity_figure(states, tau, before, after, terms, path: Path) -> Path:
+def residual_velocity_figure(states, tau, before, after, terms, path: Path,
+                             title: str = "") -> Path:
     """Per joint: the rigid-body identification's residual against the joint velocity, the
     named friction's torque on that joint drawn over it (shifted to the residual's mean), and
-    the residual after adding every named effect."""
+    the residual after adding every named effect; title: the robot and the log."""
     q, qd, qdd = states
     dof = tau.shape[1]
     cols = 4
@@ -73,7 +74,16 @@ def residual_velocity_figure(states, tau, before, after, terms, path: Path) -> P
             ax.plot(qd[order, j], effects[order, j] - np.mean(effects[:, j])
                     + np.mean(tau[:, j] - before[:, j]), "k", lw=1, label="named friction (mean aligned)")
         ax.set_title(f"joint {j + 1}: {', '.join(named) or 'none named'}", fontsize=8)
-        ax.set_xlabel("qd (rad/s)", fontsize=8)
+        ax.set_xlabel("joint velocity qd (rad/s)", fontsize=8)
+        if j % cols == 0:
+            ax.set_ylabel("residual torque (N m)", fontsize=8)
         ax.tick_params(labelsize=7)
-    axes.flat[0].legend(fontsize=6)
+    legend = {}
+    for ax in axes.flat:
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            legend.setdefault(label, handle)
+    fig.legend(list(legend.values()), list(legend), loc="lower right", fontsize=9, markerscale=8,
+               frameon=False)
+    fig.suptitle(title or "residual torque against joint velocity", fontsize=10)
+    fig.tight_layout()
     return save_figure(fig, path, dpi=100)

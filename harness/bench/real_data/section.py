@@ -151,7 +151,9 @@ def log_result(out_dir: Path) -> SectionResult:
             "closed_loop": after}, r.split, figures_dir / "real_data_residual_time.png"),
         residual_velocity_figure(tuple(x[:r.split] for x in states), tau[:r.split],
                                  before[:r.split], after[:r.split], r.terms,
-                                 figures_dir / "real_data_residual_velocity.png"),
+                                 figures_dir / "real_data_residual_velocity.png",
+                                 f"{ROBOT} ({LOG.name} log, its training part): the measured "
+                                 "torque's residual against each joint's velocity"),
     ]
     rollout = rollout_figures(Arm.of(ROBOT), identification, a, HOLDOUT)
     seconds = time.process_time() - start
