@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from identification.closeloop.closed.leftover import LEFT
+from identification.metrics import error_figures
 
 AT_LEVEL = float(np.sqrt(1.0 + LEFT**2))
 
@@ -42,10 +43,8 @@ def noise_line(error_after, floor, against: str) -> str | None:
     error_after, floor = np.asarray(error_after, float), np.asarray(floor, float)
     if not np.all(error_after <= AT_LEVEL * floor):
         return None
-    fmt = ", ".join
     return (f"    the leftover is at the sensor noise's level: error after "
-            f"[{fmt(f'{e:.3f}' for e in error_after)}] against [{fmt(f'{e:.3f}' for e in floor)}]"
-            f" {against}")
+            f"{error_figures(error_after)} against {error_figures(floor)} {against}")
 
 
 def runs_line(error_after, metas, taus, scored_tau, estimated_sigma) -> str | None:
