@@ -84,17 +84,23 @@ def test_toolbox_pseudo_inertia_writer_still_refused():
 
 
 def _made_log(arm: Arm, truth: np.ndarray, bias: np.ndarray, n: int = 101):
-    """A log plain MuJoCo makes with the peer's model at truth: motors driven by a torque
-    linear between 100 Hz samples (the toolbox's interpolation), q and qd recorded."""
+    """A log plain MuJoCo makes with the peer's model at truth (its motors' bias set)."""
     model = peer_spec(arm, truth).compile()
     model.actuator_biasprm[:, 0] = bias
+    return _stepped_log(model, n, bias)
+
+
+def _stepped_log(model, n: int = 101, bias=0.0):
+    """A log plain MuJoCo makes of model from the middle of its ranges: motors driven by a
+    torque (less bias) linear between 100 Hz samples (the toolbox's interpolation), q and qd
+    recorded."""
     data, dt = mujoco.MjData(model), 0.01
     lo, hi = model.jnt_range.T
     data.qpos[:] = (lo + hi) / 2
     t = np.arange(n) * dt
     tau = 0.3 * np.sin(2 * np.pi * np.outer(t, [0.7, 1.1, 1.7])) - bias
     sub = int(round(dt / model.opt.timestep))
-    q, qd = np.empty((n, arm.dof)), np.empty((n, arm.dof))
+    q, qd = np.empty((n, model.nv)), np.empty((n, model.nv))
     for i in range(n):
         q[i], qd[i] = data.qpos, data.qvel
         for s in range(sub):
@@ -211,21 +217,7 @@ def test_budget_refuses_a_call_that_would_end_past_it():
 def _file_log(path, n: int = 101):
     """A log plain MuJoCo makes of the MJCF at path: its motors' control (the torque the
     sensor reads) linear between 100 Hz samples, q and qd recorded."""
-    model = mujoco.MjModel.from_xml_path(str(path))
-    data, dt = mujoco.MjData(model), 0.01
-    lo, hi = model.jnt_range.T
-    data.qpos[:] = (lo + hi) / 2
-    t = np.arange(n) * dt
-    tau = 0.3 * np.sin(2 * np.pi * np.outer(t, [0.7, 1.1, 1.7]))
-    sub = int(round(dt / model.opt.timestep))
-    q, qd = np.empty((n, model.nv)), np.empty((n, model.nv))
-    for i in range(n):
-        q[i], qd[i] = data.qpos, data.qvel
-        for s in range(sub):
-            w = s / sub
-            data.ctrl[:] = tau[i] if i == n - 1 else (1 - w) * tau[i] + w * tau[i + 1]
-            mujoco.mj_step(model, data)
-    return t, q, qd, tau
+    return _stepped_log(mujoco.MjModel.from_xml_path(str(path)), n)
 
 
 def test_refinement_starts_from_the_exported_file(tmp_path):
