@@ -10,12 +10,14 @@ from harness.commands import SUMMARY, add_chain_option, chain_option
 from harness.data.runs import join, load_runs, split_files
 from harness.identify.drive_gains import current_or_torque, describe, gain_runs
 from harness.identify.fits import RIGID_BODY, arm_identification
+from harness.identify.readings import describe as describe_readings
 from harness.io import write_json
 from harness.robots.registry import DEFAULT_ROBOT
 from harness.robots.resolve import resolve_arm
 from identification.choice import LIBRARIES, METHODS, PRIORS
 from identification.errors import IdentificationError
 from identification.identify import identify
+from identification.intervals import BLOCKS
 from identification.model import model_payload
 from identification.physical import PRIOR_METRICS
 
@@ -87,6 +89,12 @@ def register(sub) -> None:
                    help="with --loaded: the link the load is fixed to (default: chosen by the "
                         "data among the bodies the last three joints move, by held-out "
                         "validation; MODEL.json drive_gains.load.body_choice)")
+    p.add_argument("--intervals", action=argparse.BooleanOptionalAction, default=True,
+                   help="each identified parameter printed with its 95 %% interval, the fit "
+                   "redone without each of 8 contiguous time blocks of every run (a "
+                   "delete-one-block jackknife: it holds on a coloured residual; MODEL.json "
+                   "parameter_intervals; a consistent fit's bodies: the readings the data "
+                   "determine); --no-intervals: one fit, no interval (8 fits fewer)")
     p.set_defaults(func=run)
 
 
@@ -125,13 +133,16 @@ def run(args) -> int:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         result = identify(data["q"], data["qd"], data["qdd"], data["tau"], library, holdout,
-                          data.get("tau_clean"), regressor, runs=runs.labels)
+                          data.get("tau_clean"), regressor, runs=runs.labels,
+                          interval_blocks=BLOCKS if args.intervals else 0)
     # every warning reaches the user, once each (a library's rank, a solver's convergence,
     # a numerical library's complaint alike)
     for line in dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught):
         print(f"torquebench identify: warning: {' '.join(line.split())}", file=sys.stderr)
     payload = model_payload(result, arm.record, held, "tau_clean" if "tau_clean" in data else "tau")
     payload["sensor_offsets"] = result.sensor_offsets()
+    if result.intervals:
+        payload["parameter_intervals"] = result.intervals
     if gains:
         payload["drive_gains"] = gains
         for line in describe(gains):
@@ -148,6 +159,8 @@ def run(args) -> int:
               f"{'yes' if p['consistent'] else 'NO'}{plausible}")
     else:
         print("physical consistency not imposed (sparse fit; --prior nominal or flat imposes it)")
+    for line in describe_readings(result.intervals):
+        print(line)
     rel = ", ".join(f"{x:.3e}" for x in result.heldout_rel_rmse)
     print(f"wrote {args.out}: held-out relative RMS error per joint [{rel}]")
     for scored in result.scored:  # a measured log: each held-out run's sensor offset
