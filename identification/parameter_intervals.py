@@ -43,7 +43,7 @@ def readings(fit) -> dict[str, np.ndarray]:
     if isinstance(model, KinematicModel):
         out["coefficients"] = np.asarray(model.coefficients, float)
         laws = np.full(model.dof, np.nan)
-        for j, law, c in model.law_terms():
+        for j, _, c in model.law_terms():
             laws[j] = c
         out["laws"] = laws
     else:  # a feature model: per joint, its kept features' coefficients
@@ -70,10 +70,11 @@ def identifiable(fold: np.ndarray, params: np.ndarray) -> tuple[np.ndarray, np.n
     """((dof, 13), (dof, 3)) True where a body reading (body_readings) or a joint's armature,
     viscous or Coulomb coefficient is determined by the data: its gradient in the candidate
     atoms' coefficients (numerical, central) lies in fold's row space (fold: the base
-    coefficients are fold @ x, (p, 13 dof); params: the fitted standard parameters)."""
+    coefficients are fold @ x, (p, 13 dof); params: the fitted standard parameters, 10 a body
+    first)."""
     _, s, vt = np.linalg.svd(fold, full_matrices=False)
     rows = vt[s > 1e-10 * s.max()]  # the row space, orthonormal
-    dof = len(params) // 10
+    dof = fold.shape[1] // 13
     out = np.zeros((dof, 13), bool)
     for b in range(dof):
         p = np.asarray(params[10 * b:10 * b + 10], float)
