@@ -17,8 +17,8 @@ from harness.robots.resolve import resolve_arm
 from identification.choice import LIBRARIES, METHODS, PRIORS
 from identification.errors import IdentificationError
 from identification.identify import identify
-from identification.intervals import BLOCKS
 from identification.model import model_payload
+from identification.parameter_intervals import PARAMETER_BLOCKS
 from identification.physical import PRIOR_METRICS
 
 
@@ -91,10 +91,10 @@ def register(sub) -> None:
                         "validation; MODEL.json drive_gains.load.body_choice)")
     p.add_argument("--intervals", action=argparse.BooleanOptionalAction, default=True,
                    help="each identified parameter printed with its 95 %% interval, the fit "
-                   "redone without each of 8 contiguous time blocks of every run (a "
+                   "redone without each of 4 contiguous time blocks of every run (a "
                    "delete-one-block jackknife: it holds on a coloured residual; MODEL.json "
                    "parameter_intervals; a consistent fit's bodies: the readings the data "
-                   "determine); --no-intervals: one fit, no interval (8 fits fewer)")
+                   "determine); --no-intervals: one fit, no interval (4 fits fewer)")
     p.set_defaults(func=run)
 
 
@@ -134,7 +134,7 @@ def run(args) -> int:
         warnings.simplefilter("always")
         result = identify(data["q"], data["qd"], data["qdd"], data["tau"], library, holdout,
                           data.get("tau_clean"), regressor, runs=runs.labels,
-                          interval_blocks=BLOCKS if args.intervals else 0)
+                          interval_blocks=PARAMETER_BLOCKS if args.intervals else 0)
     # every warning reaches the user, once each (a library's rank, a solver's convergence,
     # a numerical library's complaint alike)
     for line in dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught):
