@@ -5,6 +5,8 @@ gradient adds no rank to the base parameters' map."""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from scipy.stats import t as student
@@ -96,3 +98,44 @@ def test_identifiable_readings_add_no_rank(ur5):
             assert joints[j, i] == (np.linalg.matrix_rank(np.vstack([fold, e]), tol=1e-8) == rank)
     assert not bodies[:, 0].any()  # no UR5 body's mass alone: masses fold into base sums
     assert joints[:, 1].all()  # every viscous coefficient is its own base parameter
+
+
+def test_identify_prints_and_writes_each_reading_with_its_interval(tmp_path, capsys):
+    """`identify` prints `value +- interval` per base parameter and writes MODEL.json's
+    parameter_intervals; each half-width recomputed here through the front door
+    (identification.identify on the training samples less one of 4 contiguous blocks,
+    Student's t by scipy) agrees; --no-intervals writes none."""
+    from harness.cli import main
+    from identification.identify import identify
+    from identification.regression.torque import BaseAtomRegressor
+    from tests.helpers import lynxmotion_motion
+
+    arm = Arm.of("lynxmotion")
+    m = lynxmotion_motion(1600, seed=4)
+    rng = np.random.default_rng(5)
+    tau = arm.nominal.torque(m.q, m.qd, m.qdd)
+    tau = tau + 0.02 * tau.std(axis=0) * rng.normal(size=tau.shape)
+    data = tmp_path / "d.npz"
+    np.savez(data, t=m.t, q=m.q, qd=m.qd, qdd=m.qdd, tau=tau)
+    out = tmp_path / "MODEL.json"
+    assert main(["identify", "--data", str(data), "--out", str(out), "--library", "kinematic",
+                 "--robot", "lynxmotion"]) == 0
+    printed = capsys.readouterr().out
+    intervals = json.loads(out.read_text())["parameter_intervals"]
+    assert "value +- interval (95 %)" in printed and intervals["folds"] == 4
+    every = np.arange(1200)  # the training samples: the first 75 %
+    folds = [identify(m.q[rows], m.qd[rows], m.qdd[rows], tau[rows], arm.library, 0.0,
+                      regressor=BaseAtomRegressor()).model.coefficients
+             for rows in (np.setdiff1d(every, b) for b in np.array_split(every, 4))]
+    folds = np.array(folds)
+    spread = np.sqrt(3 / 4 * np.sum((folds - folds.mean(axis=0)) ** 2, axis=0))
+    expected = student.ppf(0.975, 3) * spread
+    for k, name in enumerate(arm.library.names):
+        if name in intervals["base_parameters"]:
+            e = intervals["base_parameters"][name]
+            assert f"{name} = {e['value']:.4g} +- {e['interval_95']:.2g}" in printed
+            np.testing.assert_allclose(e["interval_95"], expected[k], rtol=1e-6, atol=1e-12)
+    assert main(["identify", "--data", str(data), "--out", str(out), "--library", "kinematic",
+                 "--robot", "lynxmotion", "--no-intervals"]) == 0
+    assert "parameter_intervals" not in json.loads(out.read_text())
+    assert "+- interval" not in capsys.readouterr().out
