@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-HEADER = "identified parameters, value +- interval (95 %) ({rule}):"
+HEADER = "identified parameters, value +- interval (95 %); the interval: {rule}"
 
 
 def _pm(value: float, half: float, unit: str = "") -> str:
