@@ -29,7 +29,7 @@ currents').
 
 Several unloaded and loaded runs enter one system (each run its friction and offset, the
 load's parameters shared by the loaded runs). The white-noise standard errors understate a
-real log's spread (its residual is coloured by what the model lacks: issue #67), so each
+real log's spread (its residual is coloured by what the model lacks), so each
 gain's 95 % interval comes from a delete-one-block jackknife over every run
 (identification.intervals); the deleted blocks' currents, predicted by the fits without them,
 give a held-out error that chooses the body the load rides on (harness.identify.drive_gains).

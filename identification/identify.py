@@ -31,7 +31,7 @@ from identification.closeloop.closed.offsets import (
 )
 from identification.errors import IdentificationError
 from identification.library.base import Conditioning
-from identification.metrics import rel_error
+from identification.metrics import HELD_OUT, error_measure, error_reference, rel_error
 from identification.parameter_intervals import parameter_intervals
 from identification.regression.base import validation_mask
 from identification.regression.coupled import AtomBasis
@@ -55,6 +55,7 @@ class Identification:
     physical: dict = field(default_factory=dict)  # consistent: prior, weight, consistency
     scored: tuple = field(default=(), repr=False)  # ScoredRun per held-out run (a measured log)
     trained: tuple = field(default=(), repr=False)  # each training run's trained samples
+    reference: str = "measured"  # the held-out errors' (identification.metrics.REFERENCES)
     intervals: dict = field(default_factory=dict)  # the printed readings' 95 % intervals
     # (identification.parameter_intervals; empty when not asked for)
 
@@ -63,6 +64,7 @@ class Identification:
         out = {"method": self.method,
                "heldout_rel_rmse": _nullable(self.heldout_rel_rmse),
                "heldout_mse": _nullable(self.heldout_mse),
+               "error_measure": error_measure(self.reference, HELD_OUT),
                "library_size": self.conditioning.size,
                "library_rank": self.conditioning.rank,
                "library_condition": self.conditioning.condition,
@@ -178,7 +180,8 @@ def identify(q, qd, qdd, tau, library, holdout: float = 0.25, tau_clean=None,
                                          interval_blocks) if interval_blocks else {})
     return Identification(fit.model, rel, mse, fit.conditioning, seconds, fit.regressions,
                           fit.method, fit.basis, fit.physical,
-                          tuple(scored) if tau_clean is None else (), tuple(trained), intervals)
+                          tuple(scored) if tau_clean is None else (), tuple(trained),
+                          error_reference(tau_clean is not None), intervals)
 
 
 def _runs(regressor, runs, n: int) -> dict:

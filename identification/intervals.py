@@ -2,7 +2,7 @@
 delete-one-block jackknife over contiguous time blocks of every run.
 
 A real residual is coloured by what the model lacks, so the white-noise covariance of a
-least-squares fit understates its spread several times over (issue #67: drive gains printed
+least-squares fit understates its spread several times over (drive gains printed
 +- 0.3-1.7 % moved 1-19 % between runs). Deleting one contiguous block at a time keeps the
 residual's correlation inside each block: with B blocks and theta_(i) the fit without block
 i, var = (B - 1) / B sum (theta_(i) - mean)^2, and the half-width is Student's t(0.975, B - 1)

@@ -23,7 +23,7 @@ nominal's instead of the ridge, PRIOR_METRICS). lam and each joint's friction la
 chosen by validation inside the training data, never on a scored part: with one run on its
 last contiguous block; with several runs by leaving each run out in turn (a block of the
 same run shares its errors in the derivatives, offsets and temperature, a new run does
-not; issue #57). Several runs have an offset each. Solved by Clarabel (SCS if it fails).
+not). Several runs have an offset each. Solved by Clarabel (SCS if it fails).
 """
 
 from __future__ import annotations

@@ -199,6 +199,44 @@ def test_the_qp_without_rows_out_of_reach_is_the_full_qp(planner, monkeypatch, r
         assert np.allclose(ours, theirs, atol=1e-6 * (1 + np.max(np.abs(theirs))))
 
 
+def test_a_steps_merit_parts_and_frames_are_numpys(planner):
+    """What the SQP's loop reads from the compiled kernels: a point's violation (evaluated
+    with ubg) is numpy's L1 distance of its rows from their bounds, a step's largest row
+    multiplier and coefficient change are numpy's maxima of its output, and a solve's Frame,
+    kept per pattern of bounds, has the rows and columns built from that pattern here (a
+    pattern with clearance rows freed gets its own)."""
+    case, forecast = random_crossing(planner, seed=7)
+    nlp, p, lbg, ubg, start = _elastic_problem(planner, case, forecast)
+    layout = local_model.layout_of(nlp)
+    solver = sqp.AnytimeSQP(local_model.local_function(nlp, "local"), layout, nlp.lbx,
+                            nlp.g.numel())
+    freed = lbg.copy()
+    freed[layout.clearance][::2] = -np.inf  # every other clearance row free
+    for low in (lbg, freed):
+        frame = solver._frame(low, ubg)
+        assert solver._frame(low.copy(), ubg.copy()) is frame
+        rows = np.flatnonzero(np.isfinite(low) | np.isfinite(ubg))
+        v_free = np.arange(layout.v.start, layout.v.stop)[~np.isfinite(low[layout.clearance])]
+        cols = np.setdiff1d(np.arange(nlp.x.numel()), v_free)
+        assert np.array_equal(frame.rows, rows) and np.array_equal(frame.cols, cols)
+        assert np.array_equal(frame.equality, low[rows] == ubg[rows])
+    assert solver._frame(freed, ubg) is not solver._frame(lbg, ubg)
+    last = (np.zeros(nlp.g.numel()), np.zeros(nlp.x.numel()))
+    bumped = start.copy()
+    bumped[: layout.nc] += 0.01  # off the goal rows: a violation to compare
+    point = solver.evaluate(bumped, p, last[0], lbg, ubg)
+    assert point.violation > 1e-4
+    frame = solver._frame(lbg, ubg)
+    for _ in range(3):
+        distance = np.sum(np.maximum(lbg - point.g, 0.0) + np.maximum(point.g - ubg, 0.0))
+        assert point.violation == pytest.approx(distance, rel=1e-12, abs=1e-15)
+        d, lam_rows, lam_vars, _, _, (largest, reach) = elastic_qp.step(
+            point, lbg, ubg, frame, 0.5, 1e6, last, layout)
+        assert largest == np.max(np.abs(lam_rows)) and reach == np.max(np.abs(d[:layout.nc]))
+        last = lam_rows, lam_vars
+        point = solver.evaluate(point.x + d, p, lam_rows, lbg, ubg)
+
+
 def test_a_points_jacobian_with_its_constant_slack_columns_is_the_nlps(planner):
     """A Point keeps the rows' Jacobian in the coefficients only; with the slacks' constant
     columns (elastic_qp.slack_structure, linear_change) it is CasADi's Jacobian of every row

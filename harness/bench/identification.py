@@ -57,7 +57,7 @@ FRESH_SEED = 1005
 EXACT = 1e-6  # noise-free held-out relative error
 AGREEMENT = 1e-9  # Pinocchio vs MuJoCo, relative to the largest torque
 MEDIAN_TARGET, JOINT_TARGET = 1.1, 1.6  # x oracle on the other family's motion
-WORSE = 1.05  # several runs against the best single run on a run not fitted (issue #57; full only)
+WORSE = 1.05  # several runs against the best single run on a run not fitted (full only)
 
 
 def run(ctx: Context) -> SectionResult:

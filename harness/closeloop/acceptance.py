@@ -1,4 +1,4 @@
-"""Acceptance of one closed loop (issue #6), scored against the plant's true effects.
+"""Acceptance of one closed loop, scored against the plant's true effects.
 
 - named: the set of (effect, joint) named equals the plant's (nothing for a plant
   without undeclared effects); not checked when the plant carries an effect outside

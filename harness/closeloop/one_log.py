@@ -15,6 +15,7 @@ from functools import cache
 from pathlib import Path
 
 from harness.data.dataset import load_arrays
+from harness.data.derivatives import state_smoothing
 from harness.data.runs import run_times
 from harness.errors import UserError
 from harness.robots.arm import Arm
@@ -32,7 +33,7 @@ from identification.closeloop.selection.one_log import (
 )
 from identification.errors import IdentificationError
 from identification.library.kinematic import KinematicLibrary
-from identification.metrics import rel_error
+from identification.metrics import error_measure, rel_error
 
 
 @cache
@@ -85,6 +86,8 @@ class MeasuredRun:
                                      f"(> {STRUCTURE} noise sigmas RMS above the white noise) "
                                      f"and the effects remove < {EXPLAINED:.0%} of that "
                                      "structured power"},
+               "error_measure": error_measure(
+                   "measured", f"the last {self.holdout:.0%} of the samples (time order)"),
                "error_definition": "held-out relative RMS ||tau_hat - tau|| / ||tau|| per joint "
                                    f"on the last {self.holdout:.0%} of the samples (time order), "
                                    "against the measured torque",
@@ -111,7 +114,8 @@ def run_measured(data: str | Path, arm: Arm, holdout: float = 0.25) -> MeasuredR
     try:
         loop, kept, found = close_the_log(arm.nominal, library, tuple(arrays[k] for k in keys),
                                           run_times(data, arrays, meta), holdout, last_body(arm),
-                                          lambda runs: robot_scales(arm, runs))
+                                          lambda runs: robot_scales(arm, runs),
+                                          state_smoothing(meta))
     except IdentificationError as exc:
         raise UserError(f"{data}: {exc}") from None
     arrays = dict(zip(keys, kept, strict=True))

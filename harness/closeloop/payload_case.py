@@ -1,4 +1,4 @@
-"""The bench's payload case (issue #54): the arm carrying a load no model declares, closed on
+"""The bench's payload case: the arm carrying a load no model declares, closed on
 its data by `closeloop --data`'s loop (harness.closeloop.runs.run_runs), scored against the
 load the plant carries (its last body's inertia minus the arm's, never seen by the loop).
 

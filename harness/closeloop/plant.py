@@ -40,6 +40,7 @@ import numpy as np
 from harness.closeloop.arm_plants import arm_variant_xml
 from harness.closeloop.plants import Variant, true_effects
 from harness.data.dataset import Dataset
+from harness.data.derivatives import state_smoothing
 from harness.data.generate import generate
 from harness.errors import UserError
 from harness.robots.arm import Arm
@@ -56,6 +57,7 @@ from identification.closeloop.pipeline import close_the_plant
 from identification.closeloop.selection.plant import CloseLoopResult, is_unexplained
 from identification.library.base import Library
 from identification.library.prior_knowledge import prior_knowledge_library
+from identification.metrics import REFERENCES, error_measure
 from identification.torque_model import TorqueModel
 
 DECLARED_MODELS = ("pinocchio", "identified")  # both reported in closeloop.json
@@ -105,6 +107,8 @@ class CloseLoopRun:
             "declared": self.declared,
             "declared_models": {run.declared: run.summary() for run in (self, *self.others)},
             "plant": self.plant,
+            "error_measure": error_measure("clean", "the last 25 % of the samples (time "
+                                           "order); *_measured: against " + REFERENCES["measured"]),
             "error_definition": "held-out relative RMS ||tau_hat - tau_clean|| / ||tau_clean|| "
                                 "per joint on the last 25 % of samples (time order); *_measured: "
                                 "the same against the measured (noisy) torque tau",
@@ -181,7 +185,8 @@ def leave_out_events(data: Dataset, arm: Arm, declared: str) -> tuple[Dataset, E
     run = (data.q, data.qd, data.qdd, data.tau, data.tau_clean, data.t,
            *(data.truth[n] for n in names))
     (kept,), (found,) = pipeline.leave_out_events(model, [run], [data.t], last_body(arm),
-                                                  robot_scales(arm, [run[:4]]))
+                                                  robot_scales(arm, [run[:4]]),
+                                                  smoothing=[state_smoothing(data.meta)])
     if np.all(found.kept):
         return data, found
     q, qd, qdd, tau, tau_clean, t, *truth = kept

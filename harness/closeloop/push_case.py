@@ -1,4 +1,4 @@
-"""The world pushing a robot (issue #66): plants of any arm pushed at known times, alone and
+"""The world pushing a robot: plants of any arm pushed at known times, alone and
 beside a load and a joint effect, closed by `closeloop --data`'s loop
 (harness.closeloop.runs.run_runs) and scored against the pushes, which the loop never sees.
 
@@ -15,7 +15,9 @@ at the held pose, where the torque hardly moves, the moving arm's same-seed nois
 states estimated from the encoder. Two runs train, the third is held out.
 
 Scored: a push is found when an event overlaps it; its delay is the event's start minus the
-push's; an event overlapping no push is false; a push whose joint torque never reaches the
+push's, its onset error how far that start lies outside [the push's start, the first instant
+its joint torque reached the detection's threshold] (onset_error); an event overlapping no push
+is false; a push whose joint torque never reaches the
 detection's threshold on any joint is `below threshold` (the physics hides it, not the
 detector). The loaded plant's load and viscous friction named with the pushes against the
 same named without them, and the loop on the pushed runs without looking for events (what the
@@ -72,10 +74,24 @@ def draw_pushes(arm: Arm, rng: np.random.Generator, duration: float) -> tuple[Pu
     return tuple(out)
 
 
-def score_events(pushes, found, external: np.ndarray, t: np.ndarray) -> dict:
+def onset_error(found: float, start: float, visible: float) -> float:
+    """How far (s) an event's onset found lies outside [start, visible]: from a push's start
+    to the first instant its joint torque reached the detection's threshold (its end where
+    it never did). Before the start it is early (negative); within, no detector could tell
+    the moment better (a push's joint torque may stay under the noise for a while after it
+    starts, as the arm turns it toward the force), so 0; after, it is late by the time since
+    the push became visible."""
+    return min(found - start, 0.0) + max(found - visible, 0.0)
+
+
+def score_events(pushes, found, external: np.ndarray, t: np.ndarray,
+                 stops: np.ndarray | None = None) -> dict:
     """A run's events (identification.closeloop.events.Events) against its pushes and their
-    true joint torque external (n, dof) N m at times t."""
-    found_pushes, delays, below, latency = [], [], [], []
+    true joint torque external (n, dof) N m at times t; stops (n, dof) N m: the torque of the
+    plant's joint stops (MuJoCo's constraint force): an event no push overlaps where a stop
+    reached the threshold is the world too (a push drove the joint onto its stop), counted
+    apart, not as false."""
+    found_pushes, delays, below, latency, onset = [], [], [], [], []
     for push in pushes:
         inside = np.flatnonzero((t >= push.start) & (t <= push.start + push.duration))
         seen = np.max(np.abs(external[inside]) / found.threshold, axis=1) >= 1.0
@@ -85,11 +101,20 @@ def score_events(pushes, found, external: np.ndarray, t: np.ndarray) -> dict:
         below.append(not seen.any())
         delays.append(hit[0].start - push.start if hit else None)
         latency.append(hit[0].start - t[inside[np.argmax(seen)]] if hit and seen.any() else None)
-    false = [e for e in found.events if not any(
+        visible = t[inside[np.argmax(seen)]] if seen.any() else push.start + push.duration
+        onset.append(None if not hit else onset_error(hit[0].start, push.start, visible))
+    unpushed = [e for e in found.events if not any(
         e.start <= p.start + p.duration and e.end >= p.start for p in pushes)]
+
+    def at_stop(e) -> bool:
+        if stops is None:
+            return False
+        inside = (t >= e.start) & (t <= e.end)
+        return bool(inside.any() and np.any(np.abs(stops[inside]) >= found.threshold))
+    false = [e for e in unpushed if not at_stop(e)]
     return {"pushes": [p.to_json() for p in pushes], "found": found_pushes, "delay": delays,
-            "delay_from_threshold": latency, "below_threshold": below,
-            "false_events": len(false),
+            "delay_from_threshold": latency, "onset_error": onset, "below_threshold": below,
+            "false_events": len(false), "events_at_stops": len(unpushed) - len(false),
             "events": [e.to_json() for e in found.events]}
 
 
@@ -165,7 +190,7 @@ def push_case(arm: Arm, seed: int, directory: Path, samples: int = SAMPLES,
         train = _runs([d for d, _ in pushed[:-1]], "pushed")
         held = _runs([pushed[-1][0]], "pushed")
         loop = run_runs(train, arm, validate=held)
-        scores = [score_events(p, ev, d.truth["tau_external"], d.t)
+        scores = [score_events(p, ev, d.truth["tau_external"], d.t, d.truth["tau_constraint"])
                   for (d, p), ev in zip(pushed, loop.found, strict=True)]
         quiet = run_runs(_runs(calm[:-1], "calm"), arm, validate=_runs(calm[-1:], "calm"))
         blind = run_runs(train, arm, validate=held, detect=False)
@@ -194,8 +219,10 @@ def summary(cases: list[dict]) -> dict:
                if not b]
     delays = [d for r in runs for d in r["delay"] if d is not None]
     latency = [d for r in runs for d in r["delay_from_threshold"] if d is not None]
+    onsets = [d for r in runs for d in r["onset_error"] if d is not None]
     minutes = sum(p["minutes"] for c in cases for p in c["plants"].values())
     false = sum(r["false_events"] for r in runs)
+    stops = sum(r["events_at_stops"] for r in runs)
     quiet_false = sum(p["false_events_without_pushes"] for c in cases for p in c["plants"].values())
 
     def drift(key: str, which: str) -> list[float | None]:
@@ -213,12 +240,15 @@ def summary(cases: list[dict]) -> dict:
     return {"pushes": len(found), "found": sum(found), "above_threshold": len(visible),
             "found_above_threshold": sum(visible),
             "false_events": false, "false_per_minute": false / minutes if minutes else 0.0,
+            "events_at_stops": stops,
             "false_events_without_pushes": quiet_false,
             "false_per_minute_without_pushes": quiet_false / minutes if minutes else 0.0,
             "false_per_minute_all": (false + quiet_false) / (2 * minutes) if minutes else 0.0,
             "delay_median": float(np.median(delays)) if delays else None,
             "delay_max_abs": float(np.max(np.abs(delays))) if delays else None,
             "delay_from_threshold_max_abs": float(np.max(np.abs(latency))) if latency else None,
+            "onset_error_max_abs": float(np.max(np.abs(onsets))) if onsets else None,
+            "onset_within": sum(abs(d) <= ONSET for d in onsets), "onsets": len(onsets),
             "mass_drift": drift("mass", "pushed"), "viscous_drift": drift("viscous_2", "pushed"),
             "mass_drift_without_events": drift("mass", "pushed_without_events"),
             "viscous_drift_without_events": drift("viscous_2", "pushed_without_events"),
@@ -239,13 +269,18 @@ def push_targets(s: dict, where: str) -> list:
                    s["above_threshold"], "pushes", lower_is_better=False),
             Target(f"false events per minute, pushed and calm runs ({where})",
                    s["false_per_minute_all"], 0.0, "/min"),
-            Target(f"largest onset error of a found push, from its start ({where})",
-                   None if s["delay_max_abs"] is None else 1e3 * s["delay_max_abs"],
-                   1e3 * ONSET, "ms"),
-            Target(f"largest onset error of a found push, from when its joint torque first "
-                   f"reached the threshold ({where})",
-                   None if s["delay_from_threshold_max_abs"] is None
-                   else 1e3 * s["delay_from_threshold_max_abs"], 1e3 * ONSET, "ms"),
+            Target(f"largest onset error of a found push: before its start or after its joint "
+                   f"torque first reached the threshold ({where}; {s['onset_within']} of "
+                   f"{s['onsets']} within {1e3 * ONSET:.0f} ms)",
+                   None if s["onset_error_max_abs"] is None else 1e3 * s["onset_error_max_abs"],
+                   1e3 * ONSET, "ms",
+                   note=("from the push's start alone: "
+                         + ("-" if s["delay_max_abs"] is None
+                            else f"{1e3 * s['delay_max_abs']:.0f} ms") + "; from the first "
+                         "threshold crossing alone: "
+                         + ("-" if s["delay_from_threshold_max_abs"] is None
+                            else f"{1e3 * s['delay_from_threshold_max_abs']:.0f} ms")
+                         + " (each counts what the physics hides or an early detection)")),
             Target(f"load's mass named with the pushes against without, worst draw ({where})",
                    _worst(s["mass_drift"]), 100 * AGREE, "%"),
             Target(f"joint 2's viscous friction named with the pushes against without, worst "
@@ -257,9 +292,9 @@ def push_markdown(cases: list[dict], s: dict) -> str:
     def fig(v, scale=100, unit="%"):
         return "not named" if v is None else f"{scale * v:.2f} {unit}"
 
-    md = ["| arm | seed | plant | pushes found | onset errors (ms) | false events | named with "
-          "pushes | without pushes | pushed, no events looked for |", "|---|---|---|---|---|---|"
-          "---|---|---|"]
+    md = ["| arm | seed | plant | pushes found | onset from the push's start (ms) | false events "
+          "| named with pushes | without pushes | pushed, no events looked for |",
+          "|---|---|---|---|---|---|---|---|---|"]
     for c in cases:
         for name, p in c["plants"].items():
             found = sum(sum(r["found"]) for r in p["runs"])
@@ -276,9 +311,13 @@ def push_markdown(cases: list[dict], s: dict) -> str:
                       + " |")
     md += ["", f"Over {len(cases)} draws: {s['found']} of {s['pushes']} pushes found "
            f"({s['found_above_threshold']} of the {s['above_threshold']} whose joint torque "
-           f"reached the threshold); {s['false_events']} false events on pushed runs and "
-           f"{s['false_events_without_pushes']} on the same runs unpushed; onset error median "
-           f"{fig(s['delay_median'], 1e3, 'ms')}, largest {fig(s['delay_max_abs'], 1e3, 'ms')}; "
+           f"reached the threshold); {s['false_events']} false events on pushed runs (and "
+           f"{s['events_at_stops']} where no push acted but a push had driven a joint onto its "
+           "stop, whose torque reached the threshold: the world too, not counted false) and "
+           f"{s['false_events_without_pushes']} on the same runs unpushed; onset from the push's "
+           f"start median {fig(s['delay_median'], 1e3, 'ms')}, largest "
+           f"{fig(s['delay_max_abs'], 1e3, 'ms')}; outside [start, first threshold crossing] "
+           f"largest {fig(s['onset_error_max_abs'], 1e3, 'ms')}; "
            "the load's mass with the pushes against without: "
            + ", ".join(fig(v) for v in s["mass_drift"]) + " (without looking for events: "
            + ", ".join(fig(v) for v in s["mass_drift_without_events"]) + "); joint 2's viscous "

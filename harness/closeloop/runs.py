@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from harness.data.derivatives import state_smoothing
 from harness.data.runs import KEYS, Runs, load_runs, run_times, split_files
 from harness.errors import UserError
 from harness.robots.arm import Arm
@@ -41,6 +42,7 @@ from identification.closeloop.selection.runs import RunsLoop
 from identification.closeloop.verdicts.agreement import AGREE, MIN_GAIN
 from identification.closeloop.verdicts.ranges import ranges_json
 from identification.errors import IdentificationError
+from identification.metrics import HELD_OUT, error_measure
 
 
 def read_runs(data: str, validate: str | None = None) -> tuple[Runs, Runs | None]:
@@ -85,6 +87,7 @@ class RunsRun:
         out = {"effects": [n.to_json() for n in r.named],
                "error_before": self.error_before.tolist(),
                "error_after": self.error_after.tolist(),
+               "error_measure": error_measure("measured", HELD_OUT),
                "unexplained": bool(left.unexplained_joints),
                "unexplained_joints": list(left.unexplained_joints),
                "unexplained_detail": left.to_json(),
@@ -166,7 +169,8 @@ def run_runs(data: Runs, arm: Arm, declared: str = "pinocchio", validate: Runs |
             lambda r: robot_scales(arm, r),
             (lambda train: inertial_correction(arm.library, arm.nominal.atom_parameters(),
                                                  arm.ellipsoids, train)) if declared == "pinocchio" else None,
-            reach, detect)
+            reach, detect, [state_smoothing(m) for m in data.metas],
+            None if validate is None else [state_smoothing(m) for m in validate.metas])
     except IdentificationError as exc:
         raise UserError(f"{','.join(data.files)}: {exc}") from None
     loop = out.loop

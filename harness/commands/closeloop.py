@@ -14,6 +14,9 @@ from harness.robots.arm import Arm
 from harness.robots.registry import ROBOTS, chain_reference
 from harness.robots.resolve import resolve_arm, variant_of
 from identification.closeloop.closed.noise_level import noise_line, runs_line
+from identification.metrics import REFERENCES, error_figures, error_words
+
+HELD = "held-out samples"
 
 
 def register(sub) -> None:
@@ -69,10 +72,10 @@ def _print(run) -> None:
     fmt = ", ".join
     named = fmt(f"joint {t.joint} {t.effect} {t.coefficient:.5g}" for t in r.terms) or "none"
     print(f"  declared {run.declared}: named [{named}]")
-    print(f"    error before [{fmt(f'{e:.3e}' for e in r.error_before)}] "
-          f"after [{fmt(f'{e:.3e}' for e in r.error_after)}] unexplained {str(r.unexplained).lower()}")
-    print(f"    vs measured torque: before [{fmt(f'{e:.3e}' for e in r.error_before_measured)}] "
-          f"after [{fmt(f'{e:.3e}' for e in r.error_after_measured)}]")
+    print(f"    {error_words('clean', HELD)}: before {error_figures(r.error_before)} "
+          f"after {error_figures(r.error_after)}; unexplained {str(r.unexplained).lower()}")
+    print(f"    against {REFERENCES['measured']}: before {error_figures(r.error_before_measured)} "
+          f"after {error_figures(r.error_after_measured)}")
     if run.truth_error_measured is not None and not r.unexplained:
         line = noise_line(r.error_after_measured, run.truth_error_measured,
                           "that the plant's own model scores on the same samples (the sensor "
@@ -92,8 +95,8 @@ def _print_measured(run) -> None:
     r, fmt = run.loop, ", ".join
     named = fmt(f"joint {t.joint} {t.effect} {t.coefficient:.4g}" for t in r.terms) or "none"
     print(f"  robot {run.robot}, declared: its rigid-body identification; named [{named}]")
-    print(f"    held-out error vs measured torque: before [{fmt(f'{e:.3f}' for e in r.error_before)}]"
-          f" after [{fmt(f'{e:.3f}' for e in r.error_after)}]")
+    print(f"    {error_words('measured', HELD)}: before {error_figures(r.error_before)} "
+          f"after {error_figures(r.error_after)}")
     print(f"    unexplained joints: {list(r.unexplained_joints) or 'none'}")
     print(f"    {run.events.line()}")
     if not r.unexplained_joints:
@@ -210,8 +213,8 @@ def _run_data(args) -> int:
         f"named [{named}]" if named else "nothing named: the model is the declared one"))
     if r.loop.named:
         print("    (+- : 95 % intervals, a delete-one-block jackknife over time blocks of every run)")
-    print(f"    error (relative) before [{fmt(f'{e:.3f}' for e in r.error_before)}] "
-          f"after [{fmt(f'{e:.3f}' for e in r.error_after)}]")
+    print(f"    {error_words('measured', HELD)}: before {error_figures(r.error_before)} "
+          f"after {error_figures(r.error_after)}")
     print(f"    unexplained joints: {list(r.left.unexplained_joints) or 'none'}")
     print(f"    {r.events_line}")
     choice = r.loop.body_choice

@@ -9,6 +9,7 @@ from harness.data.excitation_file import read_trajectory
 from harness.data.generate import CONDITION_MEANING, CONDITION_WORDS, generate
 from harness.io import write_npz
 from harness.robots.resolve import resolve_arm
+from identification.metrics import error_figures, error_words
 
 SAMPLES = 4000  # without --excitation
 
@@ -51,9 +52,11 @@ def run(args) -> int:
             f"{meta['condition_number']:.3g} ({CONDITION_MEANING})")
     print(line)
     if args.mode == "measured":
-        print("  estimated-state error (rel RMS per joint): "
-              f"qd {_fmt(meta['qd_rel_rmse'])}, qdd {_fmt(meta['qdd_rel_rmse'])}, "
-              f"torque from states {_fmt(meta.get('tau_from_states_rel_rmse', []))}", file=sys.stdout)
+        print(f"  the estimated states' {error_words('states', 'all samples')}: "
+              f"qd {error_figures(meta['qd_rel_rmse'])}, qdd {error_figures(meta['qdd_rel_rmse'])}, "
+              f"the torque from them {error_figures(meta.get('tau_from_states_rel_rmse', []))} "
+              "(MuJoCo's qdd jitters step to step: the estimate is smoother than it)",
+              file=sys.stdout)
     return 0
 
 
@@ -61,6 +64,3 @@ def _library(meta: dict) -> str:
     return (f"{meta['library']} library rank {meta['library_rank']}/{meta['library_size']} "
             f"(its columns' condition {meta['library_condition']:.3g} on this motion)")
 
-
-def _fmt(values) -> str:
-    return "[" + ", ".join(f"{100 * v:.3f}%" for v in values) + "]"

@@ -17,6 +17,7 @@ from harness.robots.resolve import resolve_arm
 from identification.choice import LIBRARIES, METHODS, PRIORS
 from identification.errors import IdentificationError
 from identification.identify import identify
+from identification.metrics import error_figures, error_words
 from identification.model import model_payload
 from identification.parameter_intervals import PARAMETER_BLOCKS
 from identification.physical import PRIOR_METRICS
@@ -161,8 +162,8 @@ def run(args) -> int:
         print("physical consistency not imposed (sparse fit; --prior nominal or flat imposes it)")
     for line in describe_readings(result.intervals):
         print(line)
-    rel = ", ".join(f"{x:.3e}" for x in result.heldout_rel_rmse)
-    print(f"wrote {args.out}: held-out relative RMS error per joint [{rel}]")
+    print(f"wrote {args.out}: {error_words(result.reference, 'held-out samples')} "
+          f"{error_figures(result.heldout_rel_rmse)}")
     for scored in result.scored:  # a measured log: each held-out run's sensor offset
         print(f"  a held-out run's sensor offset: from {scored.source}")
     return 0

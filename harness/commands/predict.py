@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -29,7 +30,7 @@ from identification.closeloop.closed.offsets import (
     held_out_offset,
     residual_offset,
 )
-from identification.metrics import rel_error
+from identification.metrics import error_figures, error_measure, error_words, rel_error
 from identification.model import sensor_offsets
 
 
@@ -94,6 +95,9 @@ def run(args) -> int:
     scored = {}
     if "tau" in states:  # what the sensor read: against the torque the model says it reads
         scored["rel_error"] = rel_error(tau[start:], states["tau"][start:])
+        samples = f"samples {start}-{len(tau) - 1} (after the log's first rest)" if start else (
+            "all samples")
+        scored["error_measure"] = np.array(json.dumps(error_measure("measured", samples)))
     if args.offset_from_rest:
         scored["rest_samples"] = np.array(start)
     if args.rollout is None and args.rollout_holdout is not None:
@@ -106,9 +110,8 @@ def run(args) -> int:
     print(f"wrote {args.out}: tau {tau.shape}" + (
         f", the sensor offset from {source} included" if measured else ""))
     if "rel_error" in scored:
-        errors = ", ".join(f"{e:.4g}" for e in scored["rel_error"])
-        where = f" after its first rest (samples {start}-{len(tau) - 1})" if start else ""
-        print(f"relative error against the data's tau{where}, per joint: [{errors}]")
+        print(f"{error_words('measured', json.loads(str(scored['error_measure']))['samples'])}: "
+              f"{error_figures(scored['rel_error'])}")
     if rollout is not None:
         path, payload, figures = rollout
         write_json(path, payload)

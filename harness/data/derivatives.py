@@ -20,6 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import savgol_coeffs, savgol_filter, welch
 
+from identification.closeloop.events.smoothing import StateSmoothing
+
 BAND_POWER = 1e-3  # the band holds all but this fraction of the signal's power above the floor
 NOISE_BAND = 3.0  # the noise level within the band is read over this many band widths above it
 TAIL = 10.0  # above the band, a bin counts as noise up to this many times the noise level
@@ -155,3 +157,20 @@ def choose_window(x: np.ndarray, rate: float, polyorder: int, orders=(1, 2)) -> 
     best = min(scores)[1]
     return WindowChoice(best, rate, polyorder, edge.tolist(),
                         {d: e.tolist() for d, e in predicted(best).items()})
+
+
+def state_smoothing(meta: dict) -> StateSmoothing | None:
+    """How a dataset's velocity was estimated, from its meta: the Savitzky-Golay derivative of
+    the angles `generate --mode measured` simulates (meta `sensors`) or of the positions
+    `ingest` resampled (meta `derivatives`, when qd was estimated from q); None when the
+    velocity was logged, simulated exactly or the meta does not say."""
+    sensors = meta.get("sensors")
+    if isinstance(sensors, dict) and {"window", "polyorder", "sensing_rate"} <= sensors.keys():
+        return StateSmoothing(float(sensors["window"]), int(sensors["polyorder"]),
+                              float(sensors["sensing_rate"]))
+    described = meta.get("derivatives")
+    if (isinstance(described, dict) and described.get("method") == "savitzky-golay"
+            and described.get("source") == "q" and "qd" in described.get("estimated", ())):
+        return StateSmoothing(float(described["window_s"]), int(described["polyorder"]),
+                              described["window_samples"] / described["window_s"])
+    return None

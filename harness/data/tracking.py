@@ -21,7 +21,7 @@ from harness.data.sensors import SensorConfig, encoder, estimate_derivatives
 from harness.errors import UserError
 from harness.robots.arm import Arm
 from identification.excitation.fourier import FourierExcitation
-from identification.metrics import rel_error
+from identification.metrics import error_measure, rel_error
 
 OMEGA, ZETA = 30.0, 1.0  # rad/s, closed-loop bandwidth and damping of the tracking error
 
@@ -59,7 +59,8 @@ def simulate_measured(arm: Arm, exc: FourierExcitation, t_out: np.ndarray, rate:
                       cfg: SensorConfig, rng: np.random.Generator, pushes=()):
     """Simulate arm, sense, estimate; returns q, qd, qdd, tau_clean at t_out (sampled at rate
     Hz), truth, stats. pushes: external forces on its links (harness.data.pushes.Push); their
-    joint torque is in truth['tau_external']."""
+    joint torque is in truth['tau_external'], and the joint stops' and contacts' (MuJoCo's
+    qfrc_constraint: a push can drive a joint onto its stop) in truth['tau_constraint']."""
     model = copy.copy(arm.mujoco)  # its time step is refined below: the arm's is shared
     period = 1.0 / rate
     if abs(period / model.opt.timestep - round(period / model.opt.timestep)) > 1e-9:
@@ -81,6 +82,7 @@ def simulate_measured(arm: Arm, exc: FourierExcitation, t_out: np.ndarray, rate:
     q_read, tau_read = np.empty((n_sense, model.nv)), np.empty((n_sense, model.nv))
     q_true, qd_true, qdd_true = (np.empty((n_sense, model.nv)) for _ in range(3))
     external = np.zeros((n_sense, model.nv))
+    stops = np.zeros((n_sense, model.nv))  # the joint stops' and contacts' torque (pushed runs)
     for k in range(n_sense):
         ref_data.qpos[:], ref_data.qvel[:], ref_data.qacc[:] = q_ref[k], qd_ref[k], qdd_ref[k]
         mujoco.mj_inverse(model, ref_data)
@@ -95,6 +97,7 @@ def simulate_measured(arm: Arm, exc: FourierExcitation, t_out: np.ndarray, rate:
         if pushes:
             external[k] = apply_pushes(model, data, pushes, t_sense[k])
             mujoco.mj_forward(model, data)
+            stops[k] = data.qfrc_constraint
         q_true[k], qd_true[k], qdd_true[k] = data.qpos, data.qvel, data.qacc
         if sensors is not None:
             q_read[k], tau_read[k] = data.sensordata[sensors[0]], data.sensordata[sensors[1]]
@@ -110,6 +113,7 @@ def simulate_measured(arm: Arm, exc: FourierExcitation, t_out: np.ndarray, rate:
     truth = {"q": q_true[idx], "qd": qd_true[idx], "qdd": qdd_true[idx]}
     if pushes:
         truth["tau_external"] = external[idx]
+        truth["tau_constraint"] = stops[idx]
     stats = state_errors(arm, (q_est[idx], qd_est[idx], qdd_est[idx]),
                          (truth["q"], truth["qd"], truth["qdd"]))
     stats["tracking_rms"] = float(np.sqrt(np.mean((q_true - q_ref) ** 2)))
@@ -126,7 +130,8 @@ def _mass_matrix(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
 
 def state_errors(arm: Arm, est: tuple, true: tuple) -> dict:
     """Relative RMS errors of estimated qd, qdd and of the torque they imply."""
-    out = {"qd_rel_rmse": rel_error(est[1], true[1]).tolist(),
+    out = {"error_measure": error_measure("states", "all samples"),
+           "qd_rel_rmse": rel_error(est[1], true[1]).tolist(),
            "qdd_rel_rmse": rel_error(est[2], true[2]).tolist()}
     baseline = arm.nominal
     out["tau_from_states_rel_rmse"] = rel_error(baseline.torque(*est), baseline.torque(*true)).tolist()

@@ -9,7 +9,7 @@ residual (a delete-one-block jackknife, identification.intervals) and then used:
 unloaded run's current becomes torque (gain x current) and `identify` fits those runs as
 usual (the loaded runs carry a load the model does not: they fix the gains' scale and are not
 training data). The load's body is `--load-body`, else the body near the chain's end whose
-fits predict the held-out blocks' currents best: no rule on a joint's name (issue #67).
+fits predict the held-out blocks' currents best: no rule on a joint's name.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Identification on data not made by the project's excitation, judged on a fresh motion.
 
-The outside-style check of issue #42: a robot's data along a sum of random sines of another
+The outside-style check: a robot's data along a sum of random sines of another
 spectrum than the bench's judge (`OUTSIDE`: faster, up to 2 Hz, a narrower sweep, another
 seed stream), 5 % torque noise with a sensor bias (of each joint's torque std, or one sensor
 noise in N m on every joint: NOISE_MODELS), 4000 samples; the consistent fit given a

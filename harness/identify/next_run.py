@@ -161,7 +161,7 @@ def least_squares_on_runs(arm: Arm, runs: list[Run], which, designs=None) -> np.
 
 def runs_against_single(arm: Arm, seed: int) -> dict:
     """Three runs (several_runs): runs 1 + 2 fitted together and each alone, all scored on
-    run 3; per joint the ratio of the pair's error to the best single run's (issue #57), and
+    run 3; per joint the ratio of the pair's error to the best single run's, and
     the same ratio for least squares + friction on the same runs (least_squares_on_runs):
     where both miss, the noise draw decides, not the consistent fit's choices
     (docs/identification.md, 'Several runs against the best single run')."""

@@ -1,4 +1,4 @@
-"""The default identification on data made outside `identify`'s own path (issue #56 item 15).
+"""The default identification on data made outside `identify`'s own path.
 
 A robot's data along motions none of the project's code chose: sums of sines of another
 spectrum than the bench's judge (`multisine`) and a random Fourier series of other harmonics

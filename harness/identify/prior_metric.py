@@ -1,5 +1,5 @@
 """The consistent fit's prior metric, ridge against entropic (identify --prior-metric),
-re-decided on fresh draws (issue #56 item 3).
+re-decided on fresh draws.
 
 Per draw: `generate`'s excitation at a noise level (the bench's kind of draw), the first 75 %
 fitted by the consistent fit (plausible, identify's default) with each metric under two

@@ -5,7 +5,7 @@ A MuJoCo joint has armature, linear damping and dry friction (frictionloss); a c
 fit's MODEL.json gives them one to one (harness.robots.inertials). A joint whose friction law
 has a column of its own (Gaz et al.'s sigmoid, a Stribeck term: identification.friction) has
 no MuJoCo counterpart: left out, the plant did not spend that friction while the plan, on the
-model, paid for it (issue #56: on the Panda's log, a plan of 0.0812 J replayed at 0.8498 J,
+model, paid for it (on the Panda's log, a plan of 0.0812 J replayed at 0.8498 J,
 docs/planning.md, 'Replay'). Here it is a force -f(qd) on the joint (qfrc_applied), at the
 velocity of the step's start, as the tracking controller's torque is. Both laws saturate, so
 the explicit force stays bounded; moving its slope into MuJoCo's implicit damping did no

@@ -25,7 +25,7 @@ STUDIES = {
                  "section scores and re-scored on fresh ones (UR5, xArm7, SO-101)",
     "outside_default": "identify's defaults on data made outside its own path (multisines "
                        "and a Fourier series of other harmonics, 5 and 10 % noise), fresh "
-                       "draws, judged on fresh motions against the oracle (issue #56 item 15)",
+                       "draws, judged on fresh motions against the oracle",
     "identification_draws": "identification over many fresh draws of data the project did "
                             "not design (2, 5 and 10 % noise; Lynxmotion: default, held to "
                             "the rigid body or not, --library kinematic; UR5): per joint the "
@@ -33,7 +33,7 @@ STUDIES = {
                             "dropped and cost",
     "prior_metric": "the consistent fit's prior metric, ridge against entropic, under a "
                     "perturbed URDF prior and the URDF as truth, on fresh draws (Lynxmotion, "
-                    "UR5, Kinova; issue #56 item 3)",
+                    "UR5, Kinova)",
     "first_plan": "the first plan on a new 7-DOF robot (Panda), compilation included, the "
                   "second run's, a --realtime first plan's, and the same plan from the quick "
                   "and the optimized build",
@@ -49,15 +49,18 @@ STUDIES = {
                            "sparse and consistent fits): how often they cover it",
     "payload": "the load a robot carries named by closeloop --data: UR5 and Panda plants with a "
                "load on the flange, with and without friction that grows with the load, and "
-               "without a load (mass 3 %, centre of mass 1 cm; issue #54)",
-    "pushes": "the world pushing a robot (issue #66): Lynxmotion, UR5 and Panda plants pushed "
+               "without a load (mass 3 %, centre of mass 1 cm)",
+    "pushes": "the world pushing a robot: Lynxmotion, UR5 and Panda plants pushed "
               "three times a run on fresh draws, alone and beside a load and viscous friction: "
               "pushes found, false events per minute, onset errors, the load and the friction "
               "named with the pushes against without",
-    "offset_rule": "the sensor offset a held-out run is scored with (issue #67 item 4): "
+    "offset_rule": "the sensor offset a held-out run is scored with: "
                    "training runs', first rest's, none, both rests, a blend and the rule the "
                    "commands use, against the true offset on simulated UR5 and Panda runs with "
                    "static friction at rest, and on the real Panda log cut into runs",
+    "replan_profile": "an anytime-SQP iteration and a warm re-plan cut into their parts (the "
+                      "compiled evaluation, the QP's build, DAQP, the merit, the checks, the "
+                      "Python around them) on the Lynxmotion's and the README's UR5 scenarios",
     "closeloop_plants": "closing the loop on the Lynxmotion's hand-written plants, with both "
                         "declared models (Pinocchio and the identified one)",
 }

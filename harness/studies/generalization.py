@@ -2,7 +2,7 @@
 project's (harness.identify.generalization), judged on a fresh motion of the project's
 own family, against the oracle; the UR5 and the Panda (registered) and the xArm7 and the
 Unitree Z1 (example-robot-data's URDFs), with noise of each joint's torque std and with one
-sensor noise in N m on every joint (issue #57). Quick: the UR5 on one draw, the first.
+sensor noise in N m on every joint. Quick: the UR5 on one draw, the first.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Study `offset_rule`: which sensor offset a held-out run is scored with (issue #67 item 4).
+"""Study `offset_rule`: which sensor offset a held-out run is scored with.
 
 A run's torque sensor is re-zeroed between runs: its offset changes. A run at rest reads
 gravity + offset + the static friction holding each joint, anywhere in [-Fs, Fs]: the rest's

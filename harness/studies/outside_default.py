@@ -1,7 +1,7 @@
 """Study `outside_default`: the default identification on data made outside `identify`'s own
 path (multisines of another spectrum, a Fourier series of other harmonics; 5 % and 10 %
 torque noise), judged on fresh motions against the oracle (harness.identify.outside_default,
-issue #56 item 15). Scored on FRESH_SEEDS (drawn once, no setting chosen on them); the
+). Scored on FRESH_SEEDS (drawn once, no setting chosen on them); the
 development draws the issue was bisected on beside them. Quick: one fresh draw.
 """
 

@@ -1,5 +1,5 @@
 """Study `payload`: the load a robot carries, named by `closeloop --data` on simulated 6- and
-7-joint arms (issue #54's in-repo targets).
+7-joint arms (the in-repo targets).
 
 Per arm (UR5, Panda): the bench's payload case (harness.closeloop.payload_case: a 2.7 kg
 gripper-like load for an 18 kg arm on the flange, MuJoCo inverse dynamics with the friction

@@ -1,6 +1,6 @@
 """Study `prior_metric`: the consistent fit's prior metric, ridge (the default) against
 entropic, under a perturbed URDF prior and under the URDF as the truth, on fresh draws
-(harness.identify.prior_metric, issue #56 item 3). Robots: the Lynxmotion, the UR5 and
+(harness.identify.prior_metric). Robots: the Lynxmotion, the UR5 and
 example-robot-data's Kinova (the arm the entropic metric was added for). Quick: the
 Lynxmotion, one draw at 5 %.
 """

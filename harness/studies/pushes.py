@@ -1,5 +1,5 @@
 """Study `pushes`: the world pushing a robot, told from the robot by `closeloop --data`
-(issue #66): the Lynxmotion, the UR5 and the Panda, each pushed three times a run on three
+the Lynxmotion, the UR5 and the Panda, each pushed three times a run on three
 draws, alone and beside a load and viscous friction (harness.closeloop.push_case).
 
 Reports the detection rate, false events per minute (on the pushed runs and on the same runs

@@ -78,27 +78,30 @@ def no_events(runs: list[tuple], dof: int) -> list[Events]:
 
 
 def leave_out_events(declared, runs: list[tuple], times, body: LastBody | None = None,
-                     scales: Scales | None = None,
-                     detect: bool = True) -> tuple[list[tuple], list[Events]]:
+                     scales: Scales | None = None, detect: bool = True,
+                     smoothing=None) -> tuple[list[tuple], list[Events]]:
     """Step 1 of every path: the external torques on each run (q, qd, qdd, tau, ...) with its
     times (n,) s, found with the declared torque model (identification.closeloop.events;
-    body: the load's body, scales: the robot's), and each run's arrays (all of them, (n, ...))
-    without their samples; detect=False: every sample kept, no event looked for."""
-    found = (run_events(declared, runs, times, body, scales) if detect
+    body: the load's body, scales: the robot's; smoothing: each run's velocity estimate,
+    events.smoothing, or None), and each run's arrays (all of them, (n, ...)) without their
+    samples; detect=False: every sample kept, no event looked for."""
+    found = (run_events(declared, runs, times, body, scales, smoothing) if detect
              else no_events(runs, declared.dof))
     return [without_events(r, ev) for r, ev in zip(runs, found, strict=True)], found
 
 
 def close_the_log(nominal, library, run: tuple, times, holdout: float = 0.25,
                   body: LastBody | None = None,
-                  scales: Callable[[list[tuple]], Scales] | None = None
-                  ) -> tuple[MeasuredLoop, tuple, Events]:
+                  scales: Callable[[list[tuple]], Scales] | None = None,
+                  smoothing=None) -> tuple[MeasuredLoop, tuple, Events]:
     """One log (q, qd, qdd, tau[, tau_clean]) against its own rigid-body identification
     (library: the robot's rigid-body atoms) on its first 1 - holdout: the events found with the
     nominal model and left out, then identification.closeloop.selection.one_log on what is kept.
-    Returns the loop, the kept arrays and the events."""
+    smoothing: the log's velocity estimate (events.smoothing) or None. Returns the loop, the
+    kept arrays and the events."""
     (kept,), (found,) = leave_out_events(nominal, [run], [times], body,
-                                         None if scales is None else scales([run[:4]]))
+                                         None if scales is None else scales([run[:4]]),
+                                         smoothing=[smoothing])
     split = int(round(len(kept[0]) * (1.0 - holdout)))
     loop = close_loop_measured(library, *kept[:4], holdout,
                                scales=None if scales is None else scales(
@@ -126,18 +129,20 @@ def close_the_loop(declared, runs: list[tuple], times, held: list[tuple] | None 
                    body: LastBody | tuple[LastBody, ...] | None = None,
                    scales: Callable[[list[tuple]], Scales] | None = None,
                    inertial: Callable[[list[tuple]], object] | None = None,
-                   reach: float = REACH, detect: bool = True) -> LoopOutcome:
+                   reach: float = REACH, detect: bool = True, smoothing=None,
+                   held_smoothing=None) -> LoopOutcome:
     """The loop on runs [(q, qd, qdd, tau)] with their times [(n,)] s against the declared
     torque model; held: the scored runs (None: the last holdout of every run); body: the
     load's body, or candidates the data choose among; scales(runs) -> the robot's scales on
     those samples; inertial(train) -> the rigid-body correction candidate or None;
-    detect=False: no event looked for."""
+    detect=False: no event looked for; smoothing, held_smoothing: each run's velocity estimate
+    (events.smoothing) or None."""
     carrier = body[0] if isinstance(body, tuple) else body  # the last body's, for events
     robot = None if scales is None else scales(runs)
-    kept, found = leave_out_events(declared, runs, times, carrier, robot, detect)
+    kept, found = leave_out_events(declared, runs, times, carrier, robot, detect, smoothing)
     if held is not None:
         held_kept, held_found = leave_out_events(declared, held, held_times, carrier, robot,
-                                                 detect)
+                                                 detect, held_smoothing)
         train = kept
         scored = [whole_run(r, train) for r in held_kept]
         found = found + held_found

@@ -1,4 +1,4 @@
-"""pysindy peers tuned like our regression, for a like-for-like comparison (issue #3, item 4).
+"""pysindy peers tuned like our regression, for a like-for-like comparison.
 
 Each peer's hyper-parameter is swept over a grid and chosen on the same validation blocks
 inside the training data as SparseRegression (base.validation_mask), by the same rule:

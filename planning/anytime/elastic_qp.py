@@ -67,6 +67,7 @@ class Frame:
     def __init__(self, rows, cols, layout: Layout, equality, lbx_slacks):
         self.rows, self.cols, self.nc = rows, cols, layout.nc
         self.lbx, self.equality = np.asarray(lbx_slacks, float), np.asarray(equality, bool)
+        self.equal_rows = self.rows[self.equality]  # the equality rows' NLP indices
         # the power samples' epigraph rows (above, below: P - e, -P - e) and slacks (e), the
         # bounded clearance rows (D + v) and their slacks (v): their indices in the NLP and
         # their positions among the QP's rows and variables
@@ -122,8 +123,9 @@ def linear_change(point: Point, dx: np.ndarray, layout: Layout) -> np.ndarray:
 def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
          layout: Layout):
     """The step d (all variables), its multipliers (rows of g, variables) and the model's
-    decrease parts: (its value grad'd + d'Hd/2, the linearized hard violation), and the
-    CPU ms DAQP took; None if DAQP fails. frame:
+    decrease parts: (its value grad'd + d'Hd/2, the linearized hard violation), the
+    CPU ms DAQP took, and (the largest |row multiplier|, max |d| over the coefficients);
+    None if DAQP fails. frame:
     the rows with a bound and the variables the QP has (a clearance slack whose row is
     free stays 0), with the arrays every QP of the solve shares. last: the multipliers
     (rows, variables) of the last QP or of the warm start, DAQP's hot start.
@@ -140,21 +142,15 @@ def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
     The array work is compiled
     (planning.anytime.qp_kernels)."""
     nc, spent, g, jac, x = layout.nc, 0.0, point.g, point.jac, point.x
-    value, side, rate, slope, weight, held = kernels.branches(
-        g, jac, point.grad, x, lbg, frame.above, frame.below, frame.e, frame.clearance,
-        frame.v, nc, radius, HOLD, SIGN_FLOOR)
-    convexified = kernels.convex(point.hess, CURVATURE)
-    lam_rows_last, lam_vars_last = (np.asarray(v, float) for v in last)
+    lam_rows_last, lam_vars_last = np.asarray(last[0], float), np.asarray(last[1], float)
+    (h, f, a, upper, lower, sense, dual, rk, ck), branch, convexified = kernels.model(
+        g, jac, point.grad, x, point.hess, lbg, ubg, frame.above, frame.below, frame.e,
+        frame.clearance, frame.v, frame.rows_at, frame.second_at, frame.cols_at, frame.rows,
+        frame.cols, nc, frame.lbx, frame.equality, radius, nu, lam_rows_last, lam_vars_last,
+        frame.start, frame.slack_rows, frame.slack_sign, frame.slack_row, HOLD, SIGN_FLOOR,
+        CURVATURE, PROXIMAL, VIOLATED, _INF, DROP_UNREACHABLE)
+    value, side, rate, slope, weight, held = branch
     for _ in range(len(value) + 1):
-        keep_rows, keep_cols, extra_cost, extra_curvature = kernels.held_out(
-            held, rate, weight, slope, frame.rows_at, frame.second_at, frame.cols_at,
-            len(frame.rows), len(frame.cols), PROXIMAL)
-        h, f, a, upper, lower, sense, dual, rk, ck = kernels.assemble(
-            g, jac, point.grad, x, convexified, lbg, ubg, frame.rows, frame.cols, nc,
-            frame.lbx, frame.equality, keep_rows, keep_cols, extra_cost, extra_curvature,
-            radius, nu, lam_rows_last, lam_vars_last, frame.start, frame.slack_rows,
-            frame.slack_sign, frame.slack_row, PROXIMAL, VIOLATED, _INF,
-            DROP_UNREACHABLE)
         began = time.thread_time()
         solution, _, flag, info = daqp.solve(h, f, a, upper, lower, sense, dual_start=dual,
                                              primal_tol=QP_PRIMAL_TOLERANCE)
@@ -164,11 +160,20 @@ def step(point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last,
         spent += 1e3 * (time.thread_time() - began)
         if flag < 0:
             return None
-        d, lam_rows, lam_vars, model, violation, flipped = kernels.unpack(
+        d, lam_rows, lam_vars, model, violation, flipped, largest, reach = kernels.unpack(
             solution, info["lam"], h, f, len(ck), rk, ck, len(x), len(g), value, side, rate,
             slope, weight, held, frame.slack, frame.slack_rows, PROXIMAL)
         if not flipped.any():
-            return d, lam_rows, lam_vars, (model, violation), spent
-        held &= ~flipped
+            return d, lam_rows, lam_vars, (model, violation), spent, (largest, reach)
+        held &= ~flipped  # those items back in the QP, built again
+        keep_rows, keep_cols, extra_cost, extra_curvature = kernels.held_out(
+            held, rate, weight, slope, frame.rows_at, frame.second_at, frame.cols_at,
+            len(frame.rows), len(frame.cols), PROXIMAL)
+        h, f, a, upper, lower, sense, dual, rk, ck = kernels.assemble(
+            g, jac, point.grad, x, convexified, lbg, ubg, frame.rows, frame.cols, nc,
+            frame.lbx, frame.equality, keep_rows, keep_cols, extra_cost, extra_curvature,
+            radius, nu, lam_rows_last, lam_vars_last, frame.start, frame.slack_rows,
+            frame.slack_sign, frame.slack_row, PROXIMAL, VIOLATED, _INF,
+            DROP_UNREACHABLE)
     raise AssertionError("unreachable: with every slack back in the QP none can flip")
 

@@ -21,11 +21,12 @@ _JIT = {"cache": True, "nogil": True}
 # instead of compiling
 
 
-def _entry(signature: str):
+def entry(signature: str):
+    """A kernel compiled for this signature only (see above)."""
     return numba.njit(signature, **_JIT)
 
 
-@_entry("(f8[:], f8[:, :], f8[:], f8[:], f8[:], i8[:], i8[:], i8[:], i8[:], i8[:], i8, f8, f8, f8)")
+@entry("(f8[:], f8[:, :], f8[:], f8[:], f8[:], i8[:], i8[:], i8[:], i8[:], i8[:], i8, f8, f8, f8)")
 def branches(g, jac, grad, x, lbg, above, below, e, clearance, v, nc, radius, hold, floor):
     """Per item: its margin (P; D - lambda), the sign it keeps on its branch, the slack's
     change per unit of the row's linear change (e: sign P; v: -1 violated, 0 clear), the
@@ -60,7 +61,7 @@ def branches(g, jac, grad, x, lbg, above, below, e, clearance, v, nc, radius, ho
     return value, side, rate, slope, weight, held
 
 
-@_entry("(b1[:], f8[:], f8[:], f8[:, :], i8[:], i8[:], i8[:], i8, i8, f8)")
+@entry("(b1[:], f8[:], f8[:], f8[:, :], i8[:], i8[:], i8[:], i8, i8, f8)")
 def held_out(held, rate, weight, slope, rows_at, second_at, cols_at, rows, cols, proximal):
     """The QP's rows and columns kept (masks over the frame's) with the held items' out, and
     what the held moving slacks add to the coefficients' cost and Hessian: sum w rate grad,
@@ -128,7 +129,7 @@ def _working_set(g, x, rk, ck, k, m, nc, last_rows, last_vars, start):
     return dual
 
 
-@_entry("(f8[:], f8[:, :], f8[:], f8[:], f8[:, :], f8[:], f8[:], i8[:], i8[:], i8, f8[:], b1[:], "
+@entry("(f8[:], f8[:, :], f8[:], f8[:], f8[:, :], f8[:], f8[:], i8[:], i8[:], i8, f8[:], b1[:], "
         "b1[:], b1[:], f8[:], f8[:, :], f8, f8, f8[:], f8[:], UniTuple(i8[:], 4), i8[:, :], "
         "f8[:], b1[:], f8, f8, f8, b1)")
 def assemble(g, jac, grad, x, convexified, lbg, ubg, rows, cols, nc, col_lbx, equality,
@@ -192,14 +193,47 @@ def assemble(g, jac, grad, x, convexified, lbg, ubg, rows, cols, nc, col_lbx, eq
     return h, f, a, upper, lower, sense, dual, rk, ck
 
 
-@_entry("(f8[:], f8[:], f8[:, :], f8[:], i8, i8[:], i8[:], i8, i8, f8[:], f8[:], f8[:], "
+@entry("(f8[:, :], f8)")
+def convex(hessian, curvature):
+    """The symmetric part of hessian with its eigenvalues clipped below at curvature x
+    max(1, its largest |eigenvalue|)."""
+    w, vectors = np.linalg.eigh(0.5 * (hessian + hessian.T))  # ascending w
+    floor = curvature * max(1.0, abs(w[0]), abs(w[-1]))
+    return (vectors * np.maximum(w, floor)) @ vectors.T
+
+
+@entry("(f8[:], f8[:, :], f8[:], f8[:], f8[:, :], f8[:], f8[:], i8[:], i8[:], i8[:], i8[:], "
+        "i8[:], i8[:], i8[:], i8[:], i8[:], i8[:], i8, f8[:], b1[:], f8, f8, f8[:], f8[:], "
+        "UniTuple(i8[:], 4), i8[:, :], f8[:], b1[:], f8, f8, f8, f8, f8, f8, b1)")
+def model(g, jac, grad, x, hessian, lbg, ubg, above, below, e, clearance, v, rows_at, second_at,
+          cols_at, rows, cols, nc, col_lbx, equality, radius, nu, last_rows, last_vars, start,
+          slack_rows, slack_sign, slack_row, hold, floor, curvature, proximal, violated_tol,
+          inf, drop):
+    """One call for a QP's first build: branches, the Hessian convexified (convex), the
+    held items out (held_out) and DAQP's arrays (assemble); returns assemble's tuple, the
+    branches' tuple and the convexified Hessian (for a rebuild when a held branch flips)."""
+    branch = branches(g, jac, grad, x, lbg, above, below, e, clearance, v, nc, radius, hold,
+                      floor)
+    _, _, rate, slope, weight, held = branch
+    convexified = convex(hessian, curvature)
+    keep_rows, keep_cols, extra_cost, extra_curvature = held_out(
+        held, rate, weight, slope, rows_at, second_at, cols_at, len(rows), len(cols), proximal)
+    qp = assemble(g, jac, grad, x, convexified, lbg, ubg, rows, cols, nc, col_lbx, equality,
+                  keep_rows, keep_cols, extra_cost, extra_curvature, radius, nu, last_rows,
+                  last_vars, start, slack_rows, slack_sign, slack_row, proximal, violated_tol,
+                  inf, drop)
+    return qp, branch, convexified
+
+
+@entry("(f8[:], f8[:], f8[:, :], f8[:], i8, i8[:], i8[:], i8, i8, f8[:], f8[:], f8[:], "
         "f8[:, :], f8[:], b1[:], i8[:], i8[:, :], f8)")
 def unpack(solution, lam, h, f, k, rk, ck, n, rows_total, value, side, rate, slope, weight,
            held, slack, slack_rows, proximal):
     """The NLP's step and multipliers from DAQP's solution, the model's value and the
-    linearized hard violation, and which held items' branches the step flips (then nothing
-    else is meaningful: the QP is solved again without them). slack: each item's slack (an
-    NLP column); slack_rows: each slack's rows (elastic_qp.slack_structure)."""
+    linearized hard violation, which held items' branches the step flips (then nothing
+    else is meaningful: the QP is solved again without them), the largest |row multiplier|
+    and the step's largest coefficient change (max |d_j|, j < nc). slack: each item's slack
+    (an NLP column); slack_rows: each slack's rows (elastic_qp.slack_structure)."""
     nc = slope.shape[1]
     d, lam_rows, lam_vars = np.zeros(n), np.zeros(rows_total), np.zeros(n)
     for j in range(k):
@@ -224,7 +258,7 @@ def unpack(solution, lam, h, f, k, rk, ck, n, rows_total, value, side, rate, slo
     for i in range(len(value)):
         flipped[i] = held[i] and side[i] * (value[i] + change[i]) <= 0.0
     if flipped.any():
-        return d, lam_rows, lam_vars, model, linear, flipped
+        return d, lam_rows, lam_vars, model, linear, flipped, 0.0, 0.0
     for i in range(len(value)):
         if not held[i]:
             continue
@@ -239,46 +273,9 @@ def unpack(solution, lam, h, f, k, rk, ck, n, rows_total, value, side, rate, slo
             lam_rows[first] = -multiplier
         else:  # a clear row: the slack's bound v >= 0
             lam_rows[first], lam_vars[slack[i]] = 0.0, -multiplier
-    return d, lam_rows, lam_vars, model, linear, flipped
-
-
-@_entry("(f8[:], f8[:], f8[:], i8, i8, i8, i8[:], i8[:], i8[:], i8[:], i8[:])")
-def reset(out, x, lbg, n, rows, nc, above, below, e, clearance, v):
-    """A local evaluation's column (f, grad f, g, the Jacobian in the coefficients
-    row-major, their Hessian) unpacked into copies, at x with its slacks reset to the least values their
-    rows allow (e = |P|, v = max(0, lambda - D)) and f, g moved with them: f, grad, g, jac,
-    hess, x."""
-    grad, g = out[1:1 + n].copy(), out[1 + n:1 + n + rows].copy()
-    start = 1 + n + rows
-    jac = out[start:start + rows * nc].copy().reshape((rows, nc))
-    hess = out[start + rows * nc:start + rows * nc + nc * nc].copy().reshape((nc, nc))
-    x, f = x.copy(), out[0]
-    for i in range(len(e)):
-        power = 0.5 * (g[above[i]] - g[below[i]])
-        magnitude = abs(power)
-        f += grad[e[i]] * (magnitude - x[e[i]])
-        x[e[i]], g[above[i]], g[below[i]] = magnitude, power - magnitude, -power - magnitude
-    for i in range(len(v)):
-        distance = g[clearance[i]] - x[v[i]]
-        slack = max(0.0, lbg[clearance[i]] - distance)
-        f += grad[v[i]] * (slack - x[v[i]])
-        x[v[i]], g[clearance[i]] = slack, distance + slack
-    return f, grad, g, jac, hess, x
-
-
-@_entry("(f8[:], f8[:], f8[:])")
-def violation(g, lbg, ubg):
-    """L1 distance of the rows g from [lbg, ubg]."""
-    total = 0.0
-    for i in range(len(g)):
-        total += max(lbg[i] - g[i], 0.0) + max(g[i] - ubg[i], 0.0)
-    return total
-
-
-@_entry("(f8[:, :], f8)")
-def convex(hessian, curvature):
-    """The symmetric part of hessian with its eigenvalues clipped below at curvature x
-    max(1, its largest |eigenvalue|)."""
-    w, vectors = np.linalg.eigh(0.5 * (hessian + hessian.T))  # ascending w
-    floor = curvature * max(1.0, abs(w[0]), abs(w[-1]))
-    return (vectors * np.maximum(w, floor)) @ vectors.T
+    largest, reach = 0.0, 0.0
+    for r in range(rows_total):
+        largest = max(largest, abs(lam_rows[r]))
+    for j in range(nc):
+        reach = max(reach, abs(d[j]))
+    return d, lam_rows, lam_vars, model, linear, flipped, largest, reach

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from planning.anytime import qp_kernels as kernels
+from planning.anytime import point_kernels
 from planning.anytime.budget import RECENT, Clock
 from planning.anytime.elastic_qp import VIOLATED, Frame, Layout, Point, linear_change, step
 from planning.formulation import compiled
@@ -41,6 +41,7 @@ PRIMAL_TOLERANCE = 1e-8  # L1 violation of the hard rows at a converged point
 # the trust region's first radius (the box on the trajectory's coefficients) in a cold plan;
 # a warm re-plan starts from AnytimeOptions.warm_radius
 COLD_RADIUS = 0.5
+FRAMES = 64  # Frames kept per solver (a Frame is a few kB)
 HARD_WEIGHT = 1e6  # nu's floor: hard rows (goal, limits) weigh far above the clearance's L1
 
 
@@ -68,7 +69,7 @@ class AnytimeSQP:
         self.settled_share = settled_share  # 0: never settles (solved to convergence)
         n = len(self.lbx)
         self.sizes = (n, rows)  # variables, constraint rows
-        # the slacks' rows and columns (above, below, e, clearance, v), for kernels.reset
+        # the slacks' rows and columns (above, below, e, clearance, v), for point_kernels.reset
         self._slacks = tuple(np.arange(part.start, part.stop) for part in
                              (layout.above, layout.below, layout.e, layout.clearance, layout.v))
         self.spent_ms = 0.0  # CPU ms in the compiled evaluations and the QP solver, so far
@@ -78,6 +79,7 @@ class AnytimeSQP:
         # later re-plan's budget)
         self._recent: deque[float] = deque(maxlen=RECENT)
         self.loop_ms = 0.0
+        self._frames: dict[bytes, Frame] = {}
 
     @property
     def iteration_ms(self) -> float:
@@ -88,16 +90,18 @@ class AnytimeSQP:
         """Drop the recent iterations' costs (after the warm-up calls of prepare)."""
         self._recent.clear()
 
-    def evaluate(self, x, p, lam, lbg) -> Point:
-        """The point x with its slacks reset (see the module docstring)."""
+    def evaluate(self, x, p, lam, lbg, ubg=None) -> Point:
+        """The point x with its slacks reset (see the module docstring), and the L1
+        violation of its rows' bounds if ubg is given (else 0)."""
         began = time.thread_time()
         (out,) = self.local(x, p, lam)
         self.spent_ms += 1e3 * (time.thread_time() - began)
         n, rows = self.sizes
-        f, grad, g, jac, hess, x = kernels.reset(out, np.asarray(x, float),
-                                                 np.asarray(lbg, float), n, rows,
-                                                 self.layout.nc, *self._slacks)
-        return Point(x, f, g, grad, jac, hess, 0.0)
+        lbg = np.asarray(lbg, float)
+        f, grad, g, jac, hess, x, violation = point_kernels.reset(
+            out, np.asarray(x, float), lbg, lbg if ubg is None else ubg, n, rows,
+            self.layout.nc, *self._slacks)
+        return Point(x, f, g, grad, jac, hess, 0.0 if ubg is None else violation)
 
     def solve(self, x0, p, lbg, ubg, lam_g0, budget_ms: float, accept, max_iter: int = 200,
               radius: float = COLD_RADIUS, lam_x0=None, clock: Clock | None = None,
@@ -112,14 +116,9 @@ class AnytimeSQP:
         entered = time.thread_time()
         clock = Clock() if clock is None else clock
         lbg, ubg = np.asarray(lbg, float), np.asarray(ubg, float)
-        rows = np.flatnonzero(np.isfinite(lbg) | np.isfinite(ubg))
-        lay = self.layout
-        free = ~np.isfinite(lbg[lay.clearance])  # a clearance slack without its row
-        kept = np.ones(len(self.lbx), bool)
-        kept[lay.v][free] = False
-        cols = np.flatnonzero(kept)
-        frame = Frame(rows, cols, lay, lbg[rows] == ubg[rows], self.lbx[cols[lay.nc:]])
-        point = self._restored(self.evaluate(x0, p, lam_g0, lbg), p, lbg, ubg, lam_g0)
+        frame = self._frame(lbg, ubg)
+        point = self._restored(self.evaluate(x0, p, lam_g0, lbg, ubg), p, lbg, ubg, lam_g0,
+                               frame)
         accept(point)
         accepted = 1
         lam_x = np.zeros(len(point.x)) if lam_x0 is None else np.asarray(lam_x0, float)
@@ -138,8 +137,8 @@ class AnytimeSQP:
             if step is None:
                 status = STALLED
                 break
-            d, lam_rows, lam_vars, pred_parts = step
-            nu = max(nu, 10.0 * float(np.max(np.abs(lam_rows), initial=0.0)))
+            d, lam_rows, lam_vars, pred_parts, (largest, step_size) = step
+            nu = max(nu, 10.0 * largest)
             model, linear_violation = pred_parts
             pred = -model + nu * (point.violation - linear_violation)
             scale = 1.0 + abs(point.f)
@@ -147,11 +146,9 @@ class AnytimeSQP:
                     max(point.violation, linear_violation) <= PRIMAL_TOLERANCE:
                 lam_g, lam_x, status = lam_rows, lam_vars, CONVERGED
                 break
-            trial = self.evaluate(point.x + d, p, lam_rows, lbg)
-            trial.violation = _violation(trial.g, lbg, ubg)
+            trial = self.evaluate(point.x + d, p, lam_rows, lbg, ubg)
             actual = point.f + nu * point.violation - trial.f - nu * trial.violation
             ratio = actual / pred if pred > 0 else -1.0
-            step_size = float(np.max(np.abs(d[: self.layout.nc]), initial=0.0))
             # the rows' curvature spoiled the step (Maratos): correct it, if the correction
             # (a QP and an evaluation, about what the iteration cost so far) fits the budget
             if ratio < 1e-4 and clock.correction_fits(began, budget_ms):
@@ -192,30 +189,47 @@ class AnytimeSQP:
         return Solution(point.x, point.f, lam_g, lam_x, status, iterations,
                         point.violation), iterations
 
-    def _restored(self, point: Point, p, lbg, ubg, lam) -> Point:
+    def _frame(self, lbg: np.ndarray, ubg: np.ndarray) -> Frame:
+        """The solve's Frame (its rows with a bound, its variables: a clearance slack
+        without its row stays out), kept per pattern of bounds: the rounds of a re-plan
+        and the re-plans of one motion share a few."""
+        lay = self.layout
+        lower, upper, equal = np.isfinite(lbg), np.isfinite(ubg), lbg == ubg
+        key = lower.tobytes() + upper.tobytes() + equal.tobytes()
+        frame = self._frames.get(key)
+        if frame is None:
+            if len(self._frames) >= FRAMES:
+                self._frames.clear()
+            rows = np.flatnonzero(lower | upper)
+            kept = np.ones(len(self.lbx), bool)
+            kept[lay.v][~lower[lay.clearance]] = False  # a clearance slack without its row
+            cols = np.flatnonzero(kept)
+            frame = self._frames[key] = Frame(rows, cols, lay, equal[rows],
+                                              self.lbx[cols[lay.nc:]])
+        return frame
+
+    def _restored(self, point: Point, p, lbg, ubg, lam, frame: Frame) -> Point:
         """The point with its equality rows restored by one least-change Newton step in the
         coefficients where it leaves them (a cold start point with bumps reaches the goal but
         not at rest, which the trust region would take the whole budget to mend,
         (docs/realtime.md, 'planning.anytime.sqp')); the point as it is otherwise."""
-        point.violation = _violation(point.g, lbg, ubg)
-        equal = np.flatnonzero(lbg == ubg)
+        equal = frame.equal_rows
         residual = point.g[equal] - lbg[equal]
         if not len(equal) or np.max(np.abs(residual)) <= VIOLATED:
             return point
         nc = self.layout.nc
         step = np.zeros(len(point.x))
         step[:nc] = -np.linalg.lstsq(point.jac[equal, :nc], residual, rcond=None)[0]
-        restored = self.evaluate(point.x + step, p, lam, lbg)
-        restored.violation = _violation(restored.g, lbg, ubg)
+        restored = self.evaluate(point.x + step, p, lam, lbg, ubg)
         return restored if restored.violation < point.violation else point
 
     def _qp(self, point: Point, lbg, ubg, frame: Frame, radius: float, nu: float, last):
-        """planning.anytime.elastic_qp.step, its DAQP time counted in spent_ms."""
+        """planning.anytime.elastic_qp.step but its DAQP time, counted in spent_ms."""
         result = step(point, lbg, ubg, frame, radius, nu, last, self.layout)
         if result is None:
             return None
-        self.spent_ms += result[-1]
-        return result[:-1]
+        self.spent_ms += result[4]
+        return result[:4] + result[5:]
 
     def _corrected(self, point: Point, trial: Point, p, lbg, ubg, frame, radius, nu, last):
         """A second-order correction (Fletcher): the QP again with the rows' values at the
@@ -229,11 +243,6 @@ class AnytimeSQP:
         step = self._qp(shifted, lbg, ubg, frame, radius, nu, last)
         if step is None:
             return None
-        corrected = self.evaluate(point.x + step[0], p, step[1], lbg)
-        corrected.violation = _violation(corrected.g, lbg, ubg)
+        corrected = self.evaluate(point.x + step[0], p, step[1], lbg, ubg)
         return corrected, (step[1], step[2])
 
-
-def _violation(g: np.ndarray, lbg: np.ndarray, ubg: np.ndarray) -> float:
-    """L1 distance of the rows g from [lbg, ubg]."""
-    return kernels.violation(g, np.asarray(lbg, float), np.asarray(ubg, float))

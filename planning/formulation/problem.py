@@ -73,6 +73,13 @@ class ProblemNumbers:
     def goal_signs(self, goal) -> np.ndarray:
         """planning.formulation.limits.goal_limit_signs of a goal, kept per goal (read-only): a re-plan
         asks for them several times."""
+        return self._goal_entry(goal)[0]
+
+    def _goal_limits(self, goal) -> tuple[int, ...]:
+        """The joints whose goal is on a limit (kept with the goal's signs)."""
+        return self._goal_entry(goal)[1]
+
+    def _goal_entry(self, goal) -> tuple[np.ndarray, tuple[int, ...]]:
         cache = self.__dict__.setdefault("_goal_signs", {})
         key = tuple(np.asarray(goal, float).tolist())
         if key not in cache:
@@ -80,12 +87,8 @@ class ProblemNumbers:
                 cache.clear()
             signs = goal_limit_signs(goal, self.config.lower, self.config.upper)
             signs.flags.writeable = False
-            cache[key] = signs
+            cache[key] = signs, tuple(int(j) for j in np.flatnonzero(signs))
         return cache[key]
-
-    def _goal_limits(self, goal) -> tuple[int, ...]:
-        """The joints whose goal is on a limit."""
-        return tuple(int(j) for j in np.flatnonzero(self.goal_signs(goal)))
 
     def initial_guess(self, q0, qd0, duration: float, goal, bumps=None) -> np.ndarray:
         """A cubic that reaches the goal at rest, plus bumps (dof, degree - 2) in rad times

@@ -1,4 +1,4 @@
-"""The global search beside the real-time loop (GlobalSearchOptions, issue #46): a slower
+"""The global search beside the real-time loop (GlobalSearchOptions): a slower
 loop that solves the latest forecast from many starts to convergence and offers its best
 plan to the anytime SQP's re-plans, which adopt it when it wins on the current forecast.
 

@@ -1,4 +1,4 @@
-"""Where a warm re-plan's time goes (issue #15's speed bars), on the random scenarios.
+"""Where a warm re-plan's time goes (the speed bars), on the random scenarios.
 
     .venv/bin/python -m harness.studies.realtime.anatomy [--scenarios 20] [--seed 2026]
         [--split | --polish]

@@ -3,7 +3,7 @@ body near the chain's end (harness.robots.bodies.candidate_bodies) and scored by
 validation (leave one run out, or contiguous blocks of one run); the body whose payload
 predicts the held-out samples best carries it. No rule on a joint's name: on
 example-robot-data's finger_edu, whose joints are all named finger_..., the gripper rule put a
-0.02 kg load on the wrong link and read it as 277 kg (issue #67).
+0.02 kg load on the wrong link and read it as 277 kg.
 """
 
 from __future__ import annotations

@@ -114,7 +114,7 @@ def told_apart(detail: dict, mass: float, interval: float, payload: np.ndarray,
     (n, dof, k), both weighted and with the runs' offsets projected out (project), 1 / (1 -
     R^2) of the one regressed on the others. Past VIF_LIMIT a load's torque and friction
     growing with it look alike on these data, the two trade, and the reading is the mass's
-    95 % interval as a range, not a point (issue #67: one real load read 2.38 and 2.17 kg on
+    95 % interval as a range, not a point (one real load read 2.38 and 2.17 kg on
     two runs this way)."""
     if friction.shape[2] == 0:
         return detail

@@ -19,7 +19,10 @@ found with the declared model and left out of every fit and score of the loop.
    docs/closeloop.md). Its onset is the change point of that joint's rise: the step through
    the observer's lag that fits it best (change_point), not where it crossed a threshold,
    which comes late by the time the rise takes to reach it and early by any level left
-   before it.
+   before it. Where the log's velocity was smoothed (a Savitzky-Golay derivative of the
+   positions, as `ingest` and `generate --mode measured` estimate it), the step is fitted
+   through that smoothing too (events.smoothing): the smear shows a push up to a third of
+   the window early, and a fit of the lag alone put those onsets before the push.
 4. Its samples and MARGIN on each side are left out, the persistent fit is made again
    without them, and detection repeats until the events stop changing.
 """
@@ -35,6 +38,7 @@ from identification.closeloop.events.persistent import (
     persistent_residual,
     state_columns,
 )
+from identification.closeloop.events.smoothing import StateSmoothing, lag_response
 from identification.errors import IdentificationError
 
 ON = 8.0  # robust scales of the residual: an event starts where a joint exceeds it
@@ -76,6 +80,7 @@ class Events:
     t: np.ndarray | None = None  # (n,) s: the run's times
     residual: np.ndarray | None = None  # (n, dof) N m: the observer's estimate less the
     # persistent effects, about its median (what the threshold is compared with)
+    smoothing: StateSmoothing | None = None  # the log's velocity estimate, the onsets fit it
 
     def to_json(self) -> dict:
         return {"events": [e.to_json() for e in self.events],
@@ -87,8 +92,11 @@ class Events:
                          f"an event is found above {ON:g} robust scales (1.4826 x the median "
                          f"absolute deviation per joint) and lasts while above {OFF:g}, at least "
                          f"{MIN_DURATION * 1e3:.0f} ms; its onset the likelihood-ratio change "
-                         "point of a step through the observer's lag; its samples and "
-                         f"{MARGIN:g} s each side are left out of every fit and score")}
+                         "point of a step through the observer's lag"
+                         + (" and the log's velocity smoothing" if self.smoothing else "")
+                         + f"; its samples and {MARGIN:g} s each side are left out of every fit "
+                         "and score"),
+                "state_smoothing": None if self.smoothing is None else self.smoothing.to_json()}
 
     def line(self) -> str:
         """One line for the command's output."""
@@ -104,34 +112,41 @@ class Events:
                 "effects")
 
 
-def change_point(v: np.ndarray, t: np.ndarray, lo: int, k: int) -> float:
+def change_point(v: np.ndarray, t: np.ndarray, lo: int, k: int,
+                 smoothing: StateSmoothing | None = None) -> float:
     """When a rise of v (n,), robust scales, crossing ON at sample k began (s): the
     likelihood-ratio change point of a step through the observer's own lag (a matched
     filter): over onsets t0 from t[lo] to t[k] a quarter sample apart,
     the one whose response level + A (1 - exp(-GAIN (t - t0))), A > 0, fits v[lo:k + RISE]
     best in least squares. A level before the event (what the persistent fit left) is the
     fit's constant rather than part of the event; a noise sample does not move the onset as
-    the edge of a band would."""
+    the edge of a band would. smoothing: the log's velocity estimate, whose response to the
+    step replaces the lag's (events.smoothing), onsets then searched up to its lead after
+    t[k] (the smear crosses before the step)."""
     stop = min(len(v), k + int(np.ceil(RISE / max(t[k] - t[k - 1], 1e-12))) + 1)
     seg, at = v[lo:stop], t[lo:stop]
-    starts = np.arange(t[lo], t[k], (t[k] - t[k - 1]) / 4)
+    last = t[k] + (0.0 if smoothing is None else smoothing.lead)
+    starts = np.arange(t[lo], last, (t[k] - t[k - 1]) / 4)
     if len(starts) == 0:
         return float(t[k])
-    h = np.clip(1.0 - np.exp(-GAIN * (at[None, :] - starts[:, None])), 0.0, None)
+    response = lag_response if smoothing is None else smoothing.response
+    h = response(at[None, :] - starts[:, None])
     h -= h.mean(axis=1, keepdims=True)
     fit = h @ (seg - seg.mean())
     score = np.where(fit > 0, fit**2 / np.maximum(np.sum(h**2, axis=1), 1e-300), -np.inf)
     return float(starts[int(np.argmax(score))])
 
 
-def intervals(z: np.ndarray, t: np.ndarray) -> list[tuple[int, int, float]]:
+def intervals(z: np.ndarray, t: np.ndarray,
+              smoothing: StateSmoothing | None = None) -> list[tuple[int, int, float]]:
     """Events in z (n, dof), the signed residual in robust scales: [start, end) sample ranges
     and each one's onset (s). An event is found where a joint first exceeds ON in size, from
     where that joint, signed as its crossing, last rose above OFF, and lasts while any joint
     that exceeded ON in it exceeds OFF, at least MIN_DURATION long (never reaching into the
     event before: events a calm gap separates stay apart). Its onset is that joint's change
-    point (change_point, searched from LOOKBACK s before its rise above OFF), its samples
-    from there."""
+    point (change_point, searched from LOOKBACK s before its rise above OFF; smoothing: the
+    log's velocity estimate, whose side lobe before a large step is passed over for the
+    step's own crossing), its samples from there (or from the lobe's crossing, if earlier)."""
     n, size = len(z), np.abs(z)
     if not np.all(np.isfinite(z)):  # a NaN is never above ON nor below OFF: no event ends
         raise IdentificationError("the external-torque residual is not finite")
@@ -143,7 +158,15 @@ def intervals(z: np.ndarray, t: np.ndarray) -> list[tuple[int, int, float]]:
             continue
         j = int(np.argmax(size[k]))
         v = np.sign(z[k, j]) * z[:, j]
-        rise = k  # back while that joint exceeds OFF with the crossing's sign (hysteresis)
+        cross = k
+        if smoothing is not None:  # a large step's smear dips the other way before it rises
+            # (the window's side lobe): the joint and sign are the largest excursion's within
+            # half a window, its onset from where it crosses ON
+            ahead = min(n, k + int(np.ceil(smoothing.window_s / 2 / (t[k] - t[k - 1]))) + 1)
+            m, j = np.unravel_index(np.argmax(size[k:ahead]), size[k:ahead].shape)
+            v = np.sign(z[k + m, j]) * z[:, j]
+            cross = k + int(np.argmax(v[k:] > ON))
+        rise = cross  # back while that joint exceeds OFF with the crossing's sign (hysteresis)
         while rise > floor and v[rise - 1] > OFF:
             rise -= 1
         active = size[k] > ON
@@ -153,18 +176,19 @@ def intervals(z: np.ndarray, t: np.ndarray) -> list[tuple[int, int, float]]:
             b += 1
         if t[b - 1] - t[rise] >= MIN_DURATION:
             lo = max(floor, int(np.searchsorted(t, t[rise] - LOOKBACK)))
-            when = change_point(v, t, lo, k) if k > lo else float(t[k])
+            when = change_point(v, t, lo, cross, smoothing) if cross > lo else float(t[cross])
             out.append((min(int(np.searchsorted(t, when)), k), b, when))
             floor = b
         k = b
     return out
 
 
-def find_events(model, t, q, qd, qdd, tau, body=None, scales=None) -> Events:
+def find_events(model, t, q, qd, qdd, tau, body=None, scales=None,
+                smoothing: StateSmoothing | None = None) -> Events:
     """External-torque events of a log (t (n,) s; q, qd, qdd, tau (n, dof)) against the
     declared torque model; body: the load's body's regressor (state_columns), or None; scales:
     the robot's (identification.closeloop.verdicts.ranges), which bound the persistent effects (None:
-    unbounded)."""
+    unbounded); smoothing: how the log's velocity was estimated (None: logged or unknown)."""
     t = np.asarray(t, float)
     r = observer(model, t, q, qd, tau)
     dt = float(np.median(np.diff(t)))
@@ -182,7 +206,7 @@ def find_events(model, t, q, qd, qdd, tau, body=None, scales=None) -> Events:
         res, scale = persistent_residual(r, plain if rounds == 1 else full, kept)
         z = (res - np.median(res[kept], axis=0)) / scale
         z[~settle] = 0.0
-        spans = intervals(z, t)
+        spans = intervals(z, t, smoothing)
         new = settle.copy()
         for a, b, _ in spans:
             new &= ~((t >= t[a] - MARGIN) & (t <= t[b - 1] + MARGIN))
@@ -199,4 +223,4 @@ def find_events(model, t, q, qd, qdd, tau, body=None, scales=None) -> Events:
     for a, b, _ in found:
         kept_out &= ~((t >= t[a] - MARGIN) & (t <= t[b - 1] + MARGIN))
     return Events(tuple(events), ON * scale, scale, kept_out, rounds, t,
-                  res - np.median(res[kept], axis=0))
+                  res - np.median(res[kept], axis=0), smoothing)

@@ -7,10 +7,13 @@ from identification.closeloop.events.detect import Events, find_events
 from identification.closeloop.events.observer import GAIN
 
 
-def run_events(model, runs, times, body=None, scales=None) -> list[Events]:
-    """find_events on each run (q, qd, qdd, tau, ...) with its times (n,) s."""
-    return [find_events(model, t, *run[:4], body, scales)
-            for run, t in zip(runs, times, strict=True)]
+def run_events(model, runs, times, body=None, scales=None, smoothing=None) -> list[Events]:
+    """find_events on each run (q, qd, qdd, tau, ...) with its times (n,) s and how its
+    velocity was estimated (smoothing: one events.smoothing.StateSmoothing or None a run;
+    None: none known for any)."""
+    smoothing = [None] * len(runs) if smoothing is None else smoothing
+    return [find_events(model, t, *run[:4], body, scales, s)
+            for run, t, s in zip(runs, times, smoothing, strict=True)]
 
 
 def without_events(run: tuple, events: Events) -> tuple:

@@ -76,7 +76,7 @@ def robustness_markdown(rob: dict) -> list[str]:
 
 
 def acceptance(c5: dict, c0: dict, rob: dict | None = None) -> dict:
-    """Issue #3 checks on the default (coupled) method at 5 % (default data), and over draws."""
+    """Checks on the default (coupled) method at 5 % (default data), and over draws."""
     j5, j0 = c5["coupled"]["joints"], c0["coupled"]["joints"]
     rel = np.array([j["rel"] for j in j5])
     out = {
@@ -130,7 +130,7 @@ def expected_errors(ctx: dict, level: float = 0.05) -> dict:
 
 
 def why_joint3(expected: dict, rob: dict) -> list[str]:
-    """What the run shows about joint 3 against the oracle (issue #3): selection over the
+    """What the run shows about joint 3 against the oracle: selection over the
     draws, and the expected errors of the true terms of each atom set."""
     cp = rob["methods"]["coupled"]
     recall, precision = float(np.min(cp["recall_min"])), float(np.min(cp["precision_min"]))
@@ -142,7 +142,7 @@ def why_joint3(expected: dict, rob: dict) -> list[str]:
     tied = next(v for k, v in expected.items() if k.startswith("tied"))
     below = all(t < o for t, o in zip(tied, oracle, strict=True))
     agree = all(x < 1 for x in cp["rms_ratio"]) == below
-    return ["", f"Why joint 3 trailed the oracle (issue #3): {selection}. The earlier 15-atom "
+    return ["", f"Why joint 3 trailed the oracle: {selection}. The earlier 15-atom "
             "set wrote the chain in joint rates, so joint 3 carried coefficients no rigid arm "
             "has: qd3^2 free of qd2*qd3 (a rotor), qd2^2 cos q3 free of qd2*qd3 cos q3, and the "
             "base's reach product free of the chain's. Expected held-out error at 5 % of "
