@@ -37,7 +37,8 @@ from harness.closeloop.payload_case import (
 )
 from harness.closeloop.plant import run_closeloop
 from harness.closeloop.plants import Variant
-from harness.closeloop.push_case import push_case, push_markdown, push_targets, summary
+from harness.closeloop.push_case import push_case
+from harness.closeloop.push_scores import push_markdown, push_targets, summary
 from harness.report.results import Context, Row, SectionResult, Target, check
 from harness.robots.arm import Arm
 from harness.robots.bodies import PayloadTorque

@@ -16,7 +16,8 @@ from __future__ import annotations
 import tempfile
 from pathlib import Path
 
-from harness.closeloop.push_case import push_case, push_markdown, push_targets, summary
+from harness.closeloop.push_case import push_case
+from harness.closeloop.push_scores import push_markdown, push_targets, summary
 from harness.report.results import Context, SectionResult, check
 from harness.robots.arm import Arm
 
