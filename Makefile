@@ -26,11 +26,12 @@ $(UV_STAMP):
 	touch $(UV_STAMP)
 
 # exactly the versions in uv.lock (a package it lacks is removed; pip and uv stay), the project
-# editable with its dev extra; refused if uv.lock does not match pyproject.toml (make
-# lock-check). uv installs the wheels in parallel: about 25 s here against about 105 s for pip;
-# `pip install .` works as well, with pyproject.toml's ranges (make install-check)
+# editable with its dev and sysid extras (mujoco.sysid: study sysid_peer, identify --refine
+# rollout); refused if uv.lock does not match pyproject.toml (make lock-check). uv installs
+# the wheels in parallel: about 25 s here against about 105 s for pip; `pip install .` works
+# as well, with pyproject.toml's ranges (make install-check)
 $(STAMP): pyproject.toml uv.lock $(UV_STAMP)
-	UV_PROJECT_ENVIRONMENT=$(VENV) $(UV) sync --quiet --locked --extra dev
+	UV_PROJECT_ENVIRONMENT=$(VENV) $(UV) sync --quiet --locked --extra dev --extra sysid
 	touch $(STAMP)
 
 # fails when uv.lock no longer matches pyproject.toml (also in CI); `.venv/bin/uv lock`

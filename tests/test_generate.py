@@ -155,3 +155,18 @@ def test_malformed_data_names_the_bad_array(tmp_path):
     text.write_text("hello")
     res = run_cli("predict", "--model", "pinocchio", "--data", str(text), "--out", str(tmp_path / "p.npz"))
     assert res.returncode == 2 and "not an .npz archive" in res.stderr
+
+
+def test_a_robot_file_that_is_not_xml_is_one_line_naming_it(tmp_path, capsys):
+    """--robot given a file that is no robot description (a MODEL.json, a log) is refused
+    before any engine reads it: one line naming the file and what --robot takes, exit 2,
+    nothing written."""
+    from harness.cli import main
+
+    model = tmp_path / "MODEL.json"
+    model.write_text("{}")
+    out = tmp_path / "d.npz"
+    assert main(["generate", "--robot", str(model), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "is not XML (a .json file)" in err[0] and "MJCF" in err[0], err
+    assert "model_" not in err[0] and not out.exists()

@@ -70,7 +70,9 @@ def run(ctx: Context) -> SectionResult:
                             f"{1e3 * results[closed].min_clearance:.1f} mm (threshold "
                             f"{1e3 * results[closed].threshold:.0f} mm)"))
     figure_dir = ctx.figures_dir
-    figures = [power_figure(traces, figure_dir / "replay_power.png"),
+    replans = {name: list(plan.get("replan_times", [])) for name, plan in plans.items()
+               if isinstance(plan, dict)}
+    figures = [power_figure(traces, figure_dir / "replay_power.png", replans),
                tracking_figure(traces, figure_dir / "replay_tracking.png")]
     for name, trace in traces.items():
         if trace.clearance.size and results[name].threshold > 0:

@@ -11,6 +11,8 @@ from harness.data.runs import join, load_runs, split_files
 from harness.identify.drive_gains import current_or_torque, describe, gain_runs
 from harness.identify.fits import RIGID_BODY, arm_identification
 from harness.identify.readings import describe as describe_readings
+from harness.identify.refine import REFINEMENTS, refine_command
+from harness.identify.refine import SECONDS as REFINE_SECONDS
 from harness.io import write_json
 from harness.robots.registry import DEFAULT_ROBOT
 from harness.robots.resolve import resolve_arm
@@ -96,6 +98,16 @@ def register(sub) -> None:
                    "delete-one-block jackknife: it holds on a coloured residual; MODEL.json "
                    "parameter_intervals; a consistent fit's bodies: the readings the data "
                    "determine); --no-intervals: one fit, no interval (4 fits fewer)")
+    p.add_argument("--refine", choices=REFINEMENTS, default="none",
+                   help="rollout: the consistent fit's exported MJCF refined by rollouts "
+                        "against the fitted part's q and qd (mujoco.sysid's optimizer, the "
+                        "sysid extra; every body kept physically consistent), written to "
+                        "--refine-out, MODEL.json 'refined' says what it did")
+    p.add_argument("--refine-seconds", type=float, default=REFINE_SECONDS, metavar="S",
+                   help=f"with --refine rollout: its wall-time budget (default {REFINE_SECONDS:g})")
+    p.add_argument("--refine-out", default=None, metavar="MODEL.xml",
+                   help="with --refine rollout: the refined MJCF (default: --out with the "
+                        "suffix .refined.xml)")
     p.set_defaults(func=run)
 
 
@@ -144,6 +156,9 @@ def run(args) -> int:
     payload["sensor_offsets"] = result.sensor_offsets()
     if result.intervals:
         payload["parameter_intervals"] = result.intervals
+    if args.refine == "rollout":
+        for line in refine_command(args, payload, arm, runs, result, holdout):
+            print(line)
     if gains:
         payload["drive_gains"] = gains
         for line in describe(gains):

@@ -8,15 +8,21 @@ from harness.replay.simulate import ReplayTrace
 from harness.report.figures import plt, save_figure
 
 
-def power_figure(traces: dict[str, ReplayTrace], path: Path) -> Path:
+def power_figure(traces: dict[str, ReplayTrace], path: Path,
+                 replans: dict[str, list[float]] | None = None) -> Path:
     """|sum tau qd| over time, replayed (solid) and planned feedforward (dashed): one panel
-    per plan with its own y-axis, so one plan's power does not flatten the others."""
+    per plan with its own y-axis, so one plan's power does not flatten the others; replans:
+    per plan the instants (s) a re-plan took over, dotted (the plan followed changes there,
+    its acceleration and so its torque step: the spikes in the power)."""
     fig, axes = plt.subplots(len(traces), 1, figsize=(7, 2.2 * len(traces) + 0.6),
                              sharex=True, squeeze=False)
     for i, (ax, (name, tr)) in enumerate(zip(axes[:, 0], traces.items(), strict=True)):
         ax.plot(tr.t, abs(tr.power), color=f"C{i}", label="replayed")
         ax.plot(tr.t, abs(tr.power_reference), color="k", ls="--", lw=1,
                 label="planned (feedforward)")
+        for k, when in enumerate((replans or {}).get(name, [])):
+            ax.axvline(when, color="0.4", ls=":", lw=1,
+                       label="a re-plan takes over (its torque steps)" if k == 0 else None)
         ax.set_ylabel("|P| (W)")
         ax.set_title(name, fontsize=9)
         ax.grid(alpha=0.3)

@@ -74,7 +74,7 @@ def set_standard_parameters(model: mujoco.MjModel, parameters) -> mujoco.MjModel
         mass, c, moments, quat = body_inertials(parameters[10 * j:10 * j + 10])
         model.body_mass[body], model.body_ipos[body] = mass, c
         model.body_inertia[body], model.body_iquat[body] = moments, quat
-        for child in _fixed_children(model, body):  # their inertia is in the joint's body
+        for child in fixed_children(model, body):  # their inertia is in the joint's body
             model.body_mass[child], model.body_inertia[child] = MIN_MASS, MIN_MASS
         dof_address = model.jnt_dofadr[j]
         armature, viscous, coulomb = parameters[10 * dof + j::dof][:3]
@@ -85,10 +85,10 @@ def set_standard_parameters(model: mujoco.MjModel, parameters) -> mujoco.MjModel
     return model
 
 
-def _fixed_children(model: mujoco.MjModel, body: int) -> list[int]:
+def fixed_children(model: mujoco.MjModel, body: int) -> list[int]:
     """The bodies welded to body (no joint between them: a URDF's fixed links)."""
     out = []
     for child in range(model.nbody):
         if model.body_parentid[child] == body and child != body and model.body_jntnum[child] == 0:
-            out += [child, *_fixed_children(model, child)]
+            out += [child, *fixed_children(model, child)]
     return out

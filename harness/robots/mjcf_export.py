@@ -16,7 +16,7 @@ from harness.robots.inertials import set_standard_parameters
 from harness.robots.native_friction import inverse_gap, native_friction, set_native_friction
 
 
-def _full_precision(path: str, model: mujoco.MjModel) -> ET.ElementTree:
+def full_precision(path: str, model: mujoco.MjModel) -> ET.ElementTree:
     """The MJCF at path with every body's inertial and every joint's armature, damping and
     frictionloss (and its solreffriction, solimpfriction) rewritten from model at full
     precision. MuJoCo's writer keeps 6 significant digits: a consistent fit leaves thin links
@@ -63,7 +63,7 @@ def write_mjcf(path: str, payload: dict, params: np.ndarray, arm: Arm, offset, l
     offset = np.zeros(model.njnt) if offset is None else np.asarray(offset, float)
     bias = -(offset + np.array([f.constant for f in frictions]))
     mujoco.mj_saveLastXML(path, model)
-    tree = _full_precision(path, model)
+    tree = full_precision(path, model)
     root = tree.getroot()
     _bias_motors(root, model, bias)
     tree.write(path)

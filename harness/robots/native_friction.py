@@ -118,15 +118,20 @@ def set_native_friction(model: mujoco.MjModel, frictions: list[NativeFriction]) 
         model.dof_solimp[dof, 0] = float(np.clip(1 / (1 + ratio), *DMIN_RANGE))
 
 
-def inverse_gap(model: mujoco.MjModel, bias: np.ndarray, q, qd, qdd, sensor: np.ndarray
-                ) -> np.ndarray:
-    """Per joint RMS (N m) of the control model needs to follow (q, qd, qdd) (mj_inverse, its
-    friction constraints included, less its motors' bias) against the torque the model says
-    the sensor reads (sensor, (n, dof))."""
+def inverse_torque(model: mujoco.MjModel, bias: np.ndarray, q, qd, qdd) -> np.ndarray:
+    """(n, dof) N m: the control model needs to follow (q, qd, qdd): mj_inverse, its friction
+    constraints included, less its motors' bias (the torque its sensor would read)."""
     data = mujoco.MjData(model)
-    gap = np.empty_like(sensor)
+    out = np.empty((len(q), model.nv))
     for i in range(len(q)):
         data.qpos[:], data.qvel[:], data.qacc[:] = q[i], qd[i], qdd[i]
         mujoco.mj_inverse(model, data)
-        gap[i] = data.qfrc_inverse - bias - sensor[i]
-    return np.sqrt(np.mean(gap**2, axis=0))
+        out[i] = data.qfrc_inverse - bias
+    return out
+
+
+def inverse_gap(model: mujoco.MjModel, bias: np.ndarray, q, qd, qdd, sensor: np.ndarray
+                ) -> np.ndarray:
+    """Per joint RMS (N m) of inverse_torque against the torque the model says the sensor
+    reads (sensor, (n, dof))."""
+    return np.sqrt(np.mean((inverse_torque(model, bias, q, qd, qdd) - sensor) ** 2, axis=0))

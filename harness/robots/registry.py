@@ -156,8 +156,19 @@ def robot_entry(name_or_path: str | Path) -> Robot:
         get_robot(str(name_or_path)) if path.suffix == "" else None  # unknown-robot error
         raise UserError(f"robot file not found: {path}")
     urdf = path.suffix.lower() == ".urdf"
+    if path.suffix.lower() not in (".urdf", ".xml", ".mjcf") and not _looks_like_xml(path):
+        raise UserError(f"--robot takes a registered name or a robot file (URDF or MJCF, XML): "
+                        f"{path} is not XML" + (f" (a {path.suffix} file)" if path.suffix else ""))
     return Robot(name=str(path), urdf=path if urdf else None, mjcf=None if urdf else path,
                  source=str(path))
+
+
+def _looks_like_xml(path: Path) -> bool:
+    """Whether the file at path opens as XML does (its first character, past white space and a
+    byte-order mark, is '<')."""
+    with open(path, "rb") as f:
+        head = f.read(512).lstrip(b"\xef\xbb\xbf \t\r\n")
+    return head.startswith(b"<")
 
 
 def robot_reference(name_or_path: str | Path) -> str:

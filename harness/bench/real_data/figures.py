@@ -11,12 +11,15 @@ from harness.report.figures import plt, save_figure
 from identification.closeloop.candidates.effects import effect_torque
 
 FRICTION = ("viscous", "coulomb", "sigmoid")
-COLORS = {"nominal": "0.6", "least_squares": "tab:blue", "identified": "tab:green",
-          "rigid_body": "tab:orange", "closed_loop": "tab:red"}
+COLORS = {"nominal": "0.6", "least_squares": "tab:blue", "least_squares_lmi": "tab:cyan",
+          "identified": "tab:green",
+          "rigid_body": "tab:orange", "closed_loop": "tab:purple"}
 
 
-def error_figure(errors: dict[str, np.ndarray], reference: list[float], path: Path) -> Path:
-    """Held-out relative error per joint of every model (log scale), the reference dashed."""
+def error_figure(errors: dict[str, np.ndarray], reference: list[float], path: Path,
+                 title: str = "") -> Path:
+    """Held-out relative error per joint of every model (log scale), the reference dashed;
+    title: the robot and the log."""
     dof = len(reference)
     fig, ax = plt.subplots(figsize=(9, 3.6))
     width = 0.8 / len(errors)
@@ -26,13 +29,17 @@ def error_figure(errors: dict[str, np.ndarray], reference: list[float], path: Pa
                color=COLORS.get(name))
     ax.step(np.r_[x - 0.5, dof + 0.5], np.r_[reference, reference[-1]], where="post",
             color="k", ls="--", lw=1, label="least squares (source README)")
-    ax.set(yscale="log", xlabel="joint", ylabel="held-out rel. RMS error", xticks=x)
+    ax.set(yscale="log", xlabel="joint", xticks=x,
+           ylabel="relative RMS error (fraction)\nagainst the measured torque, held out")
+    ax.set_title(title, fontsize=9)
     ax.legend(fontsize=7, ncol=3)
     return save_figure(fig, path, dpi=110)
 
 
-def residual_time_figure(t, tau, torques: dict[str, np.ndarray], split: int, path: Path) -> Path:
-    """Per joint, measured minus model torque over time; the held-out part shaded."""
+def residual_time_figure(t, tau, torques: dict[str, np.ndarray], split: int, path: Path,
+                         title: str = "") -> Path:
+    """Per joint, measured minus model torque over time; the held-out part shaded; title: the
+    robot and the log."""
     dof = tau.shape[1]
     fig, axes = plt.subplots(dof, 1, figsize=(9, 1.5 * dof), sharex=True)
     for j, ax in enumerate(axes):
@@ -42,15 +49,17 @@ def residual_time_figure(t, tau, torques: dict[str, np.ndarray], split: int, pat
         ax.axvspan(t[split], t[-1], color="0.92", zorder=0)
         ax.set_ylabel(f"r{j + 1} (N m)", fontsize=8)
     axes[0].legend(fontsize=7, ncol=len(torques), loc="upper left")
-    axes[0].set_title("residual = measured - model torque (shaded: held out)", fontsize=9)
+    axes[0].set_title((f"{title}: " if title else "")
+                      + "residual = measured - model torque (shaded: held out)", fontsize=9)
     axes[-1].set_xlabel("t (s)")
     return save_figure(fig, path, dpi=100)
 
 
-def residual_velocity_figure(states, tau, before, after, terms, path: Path) -> Path:
+def residual_velocity_figure(states, tau, before, after, terms, path: Path,
+                             title: str = "") -> Path:
     """Per joint: the rigid-body identification's residual against the joint velocity, the
     named friction's torque on that joint drawn over it (shifted to the residual's mean), and
-    the residual after adding every named effect."""
+    the residual after adding every named effect; title: the robot and the log."""
     q, qd, qdd = states
     dof = tau.shape[1]
     cols = 4
@@ -73,7 +82,16 @@ def residual_velocity_figure(states, tau, before, after, terms, path: Path) -> P
             ax.plot(qd[order, j], effects[order, j] - np.mean(effects[:, j])
                     + np.mean(tau[:, j] - before[:, j]), "k", lw=1, label="named friction (mean aligned)")
         ax.set_title(f"joint {j + 1}: {', '.join(named) or 'none named'}", fontsize=8)
-        ax.set_xlabel("qd (rad/s)", fontsize=8)
+        ax.set_xlabel("joint velocity qd (rad/s)", fontsize=8)
+        if j % cols == 0:
+            ax.set_ylabel("residual torque (N m)", fontsize=8)
         ax.tick_params(labelsize=7)
-    axes.flat[0].legend(fontsize=6)
+    legend = {}
+    for ax in axes.flat:
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            legend.setdefault(label, handle)
+    fig.legend(list(legend.values()), list(legend), loc="lower right", fontsize=9, markerscale=8,
+               frameon=False)
+    fig.suptitle(title or "residual torque against joint velocity", fontsize=10)
+    fig.tight_layout()
     return save_figure(fig, path, dpi=100)

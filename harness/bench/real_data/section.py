@@ -145,13 +145,17 @@ def log_result(out_dir: Path) -> SectionResult:
               "least_squares_lmi": models["least_squares_lmi"].heldout, "identified": identified,
               "rigid_body": r.error_before, "closed_loop": r.error_after}
     figures = [
-        error_figure(errors, reference, figures_dir / "real_data_errors.png"),
+        error_figure(errors, reference, figures_dir / "real_data_errors.png",
+                     f"{ROBOT} ({LOG.name} log): each model's error on the held-out part"),
         residual_time_figure(a["t"] - a["t"][0], tau, {
             "identified": models["identified"].torque, "rigid_body": before,
-            "closed_loop": after}, r.split, figures_dir / "real_data_residual_time.png"),
+            "closed_loop": after}, r.split, figures_dir / "real_data_residual_time.png",
+            f"{ROBOT} ({LOG.name} log)"),
         residual_velocity_figure(tuple(x[:r.split] for x in states), tau[:r.split],
                                  before[:r.split], after[:r.split], r.terms,
-                                 figures_dir / "real_data_residual_velocity.png"),
+                                 figures_dir / "real_data_residual_velocity.png",
+                                 f"{ROBOT} ({LOG.name} log, its training part): the measured "
+                                 "torque's residual against each joint's velocity"),
     ]
     rollout = rollout_figures(Arm.of(ROBOT), identification, a, HOLDOUT)
     seconds = time.process_time() - start
