@@ -21,7 +21,7 @@ AT_COM = ("the centre of mass, along the joint frame's axes (the standard parame
 JOINT_DYNAMICS = (("armature", "kg m^2"), ("viscous", "N m s/rad"), ("coulomb", "N m"))
 
 
-def _inertials(p) -> tuple[float, np.ndarray, np.ndarray]:
+def inertials(p) -> tuple[float, np.ndarray, np.ndarray]:
     """Mass, centre of mass and inertia about it of one body's 10 standard parameters."""
     m, hx, hy, hz, ixx, ixy, iyy, ixz, iyz, izz = (float(v) for v in p)
     c = np.array([hx, hy, hz]) / m if m > 0 else np.zeros(3)
@@ -38,8 +38,8 @@ def bodies_payload(physical: dict) -> dict:
     eig = physical.get("min_pseudo_eigenvalues", [0.0] * dof)
     bodies = []
     for j in range(dof):
-        m, c, inertia = _inertials(params[10 * j:10 * j + 10])
-        m0, c0, inertia0 = _inertials(nominal[10 * j:10 * j + 10])
+        m, c, inertia = inertials(params[10 * j:10 * j + 10])
+        m0, c0, inertia0 = inertials(nominal[10 * j:10 * j + 10])
         bodies.append({"joint": j + 1,
                        "mass": {"value": m, "unit": "kg", "nominal": m0},
                        "com": {"value": c.tolist(), "unit": "m", "nominal": c0.tolist(),

@@ -32,6 +32,7 @@ from identification.closeloop.closed.offsets import (
 from identification.errors import IdentificationError
 from identification.library.base import Conditioning
 from identification.metrics import HELD_OUT, error_measure, error_reference, rel_error
+from identification.parameter_intervals import parameter_intervals
 from identification.regression.base import validation_mask
 from identification.regression.coupled import AtomBasis
 from identification.regression.torque import TorqueRegressor
@@ -55,6 +56,8 @@ class Identification:
     scored: tuple = field(default=(), repr=False)  # ScoredRun per held-out run (a measured log)
     trained: tuple = field(default=(), repr=False)  # each training run's trained samples
     reference: str = "measured"  # the held-out errors' (identification.metrics.REFERENCES)
+    intervals: dict = field(default_factory=dict)  # the printed readings' 95 % intervals
+    # (identification.parameter_intervals; empty when not asked for)
 
     def metrics(self) -> dict:
         """JSON metrics; the held-out errors are null when nothing was held out (holdout 0)."""
@@ -150,14 +153,16 @@ def _score(pred, truth) -> tuple[np.ndarray, np.ndarray]:
 
 def identify(q, qd, qdd, tau, library, holdout: float = 0.25, tau_clean=None,
              regressor: TorqueRegressor | None = None, method: str | None = None,
-             runs=None) -> Identification:
+             runs=None, interval_blocks: int = 0) -> Identification:
     """Fit `regressor` (by default the library's, identification.choice.choose_regressor with
     `method`) on the first 1 - holdout of the samples, score on the rest.
 
     holdout 0 fits on all samples (closed-loop re-identification) and scores nothing: the
     held-out errors are NaN, never a training-data error under a held-out name. runs: (n,)
     labels of the runs the samples come from (several logs): each run fitted with its own
-    sensor offset where the regressor can (per_run_offsets), warned where it cannot."""
+    sensor offset where the regressor can (per_run_offsets), warned where it cannot.
+    interval_blocks > 0: each printed reading's 95 % interval, the fit redone without each of
+    that many contiguous blocks of every training run (identification.parameter_intervals)."""
     regressor = choose_regressor(library, method) if regressor is None else regressor
     n_features = regressor.min_samples(library)
     # thousands of rows by tens of columns: one BLAS thread is faster (no thread contention;
@@ -170,10 +175,13 @@ def identify(q, qd, qdd, tau, library, holdout: float = 0.25, tau_clean=None,
         seconds = time.perf_counter() - start
         trained, scored = split_runs((q, qd, qdd, tau), n, runs)
         rel, mse = heldout_errors(fit.model, q, qd, qdd, tau, tau_clean, n, scored)
+        intervals = (parameter_intervals(regressor, library, q[:n], qd[:n], qdd[:n], tau[:n],
+                                         fit, None if runs is None else np.asarray(runs)[:n],
+                                         interval_blocks) if interval_blocks else {})
     return Identification(fit.model, rel, mse, fit.conditioning, seconds, fit.regressions,
                           fit.method, fit.basis, fit.physical,
                           tuple(scored) if tau_clean is None else (), tuple(trained),
-                          error_reference(tau_clean is not None))
+                          error_reference(tau_clean is not None), intervals)
 
 
 def _runs(regressor, runs, n: int) -> dict:

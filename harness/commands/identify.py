@@ -10,6 +10,7 @@ from harness.commands import SUMMARY, add_chain_option, chain_option
 from harness.data.runs import join, load_runs, split_files
 from harness.identify.drive_gains import current_or_torque, describe, gain_runs
 from harness.identify.fits import RIGID_BODY, arm_identification
+from harness.identify.readings import describe as describe_readings
 from harness.identify.refine import REFINEMENTS, refine_command
 from harness.identify.refine import SECONDS as REFINE_SECONDS
 from harness.io import write_json
@@ -20,6 +21,7 @@ from identification.errors import IdentificationError
 from identification.identify import identify
 from identification.metrics import error_figures, error_words
 from identification.model import model_payload
+from identification.parameter_intervals import PARAMETER_BLOCKS
 from identification.physical import PRIOR_METRICS
 
 
@@ -90,6 +92,12 @@ def register(sub) -> None:
                    help="with --loaded: the link the load is fixed to (default: chosen by the "
                         "data among the bodies the last three joints move, by held-out "
                         "validation; MODEL.json drive_gains.load.body_choice)")
+    p.add_argument("--intervals", action=argparse.BooleanOptionalAction, default=True,
+                   help="each identified parameter printed with its 95 %% interval, the fit "
+                   "redone without each of 4 contiguous time blocks of every run (a "
+                   "delete-one-block jackknife: it holds on a coloured residual; MODEL.json "
+                   "parameter_intervals; a consistent fit's bodies: the readings the data "
+                   "determine); --no-intervals: one fit, no interval (4 fits fewer)")
     p.add_argument("--refine", choices=REFINEMENTS, default="none",
                    help="rollout: the consistent fit's exported MJCF refined by rollouts "
                         "against the fitted part's q and qd (mujoco.sysid's optimizer, the "
@@ -138,13 +146,16 @@ def run(args) -> int:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         result = identify(data["q"], data["qd"], data["qdd"], data["tau"], library, holdout,
-                          data.get("tau_clean"), regressor, runs=runs.labels)
+                          data.get("tau_clean"), regressor, runs=runs.labels,
+                          interval_blocks=PARAMETER_BLOCKS if args.intervals else 0)
     # every warning reaches the user, once each (a library's rank, a solver's convergence,
     # a numerical library's complaint alike)
     for line in dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in caught):
         print(f"torquebench identify: warning: {' '.join(line.split())}", file=sys.stderr)
     payload = model_payload(result, arm.record, held, "tau_clean" if "tau_clean" in data else "tau")
     payload["sensor_offsets"] = result.sensor_offsets()
+    if result.intervals:
+        payload["parameter_intervals"] = result.intervals
     if args.refine == "rollout":
         for line in refine_command(args, payload, arm, runs, result, holdout):
             print(line)
@@ -164,6 +175,8 @@ def run(args) -> int:
               f"{'yes' if p['consistent'] else 'NO'}{plausible}")
     else:
         print("physical consistency not imposed (sparse fit; --prior nominal or flat imposes it)")
+    for line in describe_readings(result.intervals):
+        print(line)
     print(f"wrote {args.out}: {error_words(result.reference, 'held-out samples')} "
           f"{error_figures(result.heldout_rel_rmse)}")
     for scored in result.scored:  # a measured log: each held-out run's sensor offset

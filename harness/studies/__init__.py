@@ -43,6 +43,10 @@ STUDIES = {
     "drive_gains": "motor drive gains identified with the dynamics (identify --loaded "
                    "--load-mass) on simulated logs of currents: UR5 and Panda, unloaded and "
                    "loaded runs, 5 % noise, each gain's error (target 3 %)",
+    "parameter_intervals": "identify's printed 95 % intervals on the identified parameters "
+                           "(base parameters, the bodies the data determine) against the truth "
+                           "over 20 fresh draws with a spring the model lacks (Lynxmotion, UR5; "
+                           "sparse and consistent fits): how often they cover it",
     "payload": "the load a robot carries named by closeloop --data: UR5 and Panda plants with a "
                "load on the flange, with and without friction that grows with the load, and "
                "without a load (mass 3 %, centre of mass 1 cm)",

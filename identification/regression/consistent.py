@@ -52,6 +52,7 @@ class ConsistentRegressor:
     choose_friction: bool = True
     ellipsoids: tuple[Ellipsoid | None, ...] | None = None
     prior_metric: str = "ridge"  # identification.physical.PRIOR_METRICS
+    lambdas: tuple[float, ...] | None = None  # the prior weights tried (None: LAMBDAS)
     per_run_offsets = True  # fit(runs=...) gives each run its own sensor offset
 
     def min_samples(self, library: KinematicLibrary) -> int:
@@ -70,7 +71,7 @@ class ConsistentRegressor:
                             library.names)
         bounds = self.bounds(dof)
         fit = fit_physical(atoms, qd, tau, np.zeros(13 * dof) if nominal is None else nominal,
-                           lambdas=(FLAT,) if nominal is None else LAMBDAS,
+                           lambdas=(FLAT,) if nominal is None else (self.lambdas or LAMBDAS),
                            choose_friction=self.choose_friction, runs=runs,
                            bounds=None if bounds is None else [b and b.matrix for b in bounds],
                            metric=self.prior_metric)
