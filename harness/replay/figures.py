@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from harness.replay.simulate import ReplayTrace
 from harness.report.figures import plt, save_figure
 
@@ -20,9 +22,11 @@ def power_figure(traces: dict[str, ReplayTrace], path: Path,
         ax.plot(tr.t, abs(tr.power), color=f"C{i}", label="replayed")
         ax.plot(tr.t, abs(tr.power_reference), color="k", ls="--", lw=1,
                 label="planned (feedforward)")
-        for k, when in enumerate((replans or {}).get(name, [])):
-            ax.axvline(when, color="0.4", ls=":", lw=1,
-                       label="a re-plan takes over (its torque steps)" if k == 0 else None)
+        when = (replans or {}).get(name, [])
+        if len(when):  # ticks on the time axis: the power's steps fall on them
+            ax.plot(when, np.zeros(len(when)), "|", color="0.25", ms=9, mew=1,
+                    transform=ax.get_xaxis_transform(), clip_on=False,
+                    label="a re-plan takes over (its torque steps there)")
         ax.set_ylabel("|P| (W)")
         ax.set_title(name, fontsize=9)
         ax.grid(alpha=0.3)
