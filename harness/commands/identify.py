@@ -94,10 +94,11 @@ def register(sub) -> None:
                         "validation; MODEL.json drive_gains.load.body_choice)")
     p.add_argument("--intervals", action=argparse.BooleanOptionalAction, default=True,
                    help="each identified parameter printed with its 95 %% interval, the fit "
-                   "redone without each of 4 contiguous time blocks of every run (a "
+                   f"redone without each of {PARAMETER_BLOCKS} contiguous time blocks of every run (a "
                    "delete-one-block jackknife: it holds on a coloured residual; MODEL.json "
                    "parameter_intervals; a consistent fit's bodies: the readings the data "
-                   "determine); --no-intervals: one fit, no interval (4 fits fewer)")
+                   f"determine); --no-intervals: one fit, no interval ({PARAMETER_BLOCKS} fits "
+                   "fewer)")
     p.add_argument("--refine", choices=REFINEMENTS, default="none",
                    help="rollout: the consistent fit's exported MJCF refined by rollouts "
                         "against the fitted part's q and qd (mujoco.sysid's optimizer, the "
