@@ -10,7 +10,16 @@ from harness.identify.outside_default import datasets, judges
 from harness.identify.scoring import HOLDOUT, fixed_fit, score_draw
 from harness.identify.selection import ceiling_errors, selection
 from harness.robots.arm import Arm
-from harness.studies.identification_draws import DEV_JUDGE, DEV_SEEDS, FRESH_JUDGE, FRESH_SEEDS
+from harness.studies.identification_draws import (
+    DECISION_JUDGE,
+    DECISION_SEEDS,
+    DEV_JUDGE,
+    DEV_SEEDS,
+    FIRST_FRESH_JUDGE,
+    FIRST_FRESH_SEEDS,
+    FRESH_JUDGE,
+    FRESH_SEEDS,
+)
 from identification.regression.coupled import AtomBasis
 
 
@@ -24,8 +33,12 @@ def test_fresh_seeds_are_apart_from_development_and_every_scored_seed():
             | set(FRESH_DRAWS) | {s for seeds in LEVELS.values() for s in seeds}
             | set(outside_default.DEV_SEEDS) | set(outside_default.FRESH_SEEDS)
             | {outside_default.DEV_JUDGE, outside_default.FRESH_JUDGE})
+    # the sets a default was decided on (the first fresh set, the decision's) score nothing
+    decided = set(FIRST_FRESH_SEEDS) | set(DECISION_SEEDS) | {FIRST_FRESH_JUDGE, DECISION_JUDGE}
     assert len(set(FRESH_SEEDS)) == len(FRESH_SEEDS) >= 10
-    assert not (set(FRESH_SEEDS) | {FRESH_JUDGE}) & used
+    assert len(set(DECISION_SEEDS)) == len(DECISION_SEEDS) >= 10
+    assert not (set(FRESH_SEEDS) | {FRESH_JUDGE}) & (used | decided)
+    assert not (set(DECISION_SEEDS) | {DECISION_JUDGE}) & (used | set(FIRST_FRESH_SEEDS))
 
 
 def test_the_selection_record_of_a_free_coupled_fit_on_a_lynxmotion_draw():
