@@ -180,7 +180,9 @@ class CoupledRegression(Regressor):
 
     selector: the SparseRegression whose settings choose alpha and pass rate (a copy is fitted;
     None: the defaults). shrink: multiply each kept coefficient by shrink_factors (prediction
-    over unbiasedness; stderr_ and cov_ stay the unshrunk refit's). fit(design (n, dof, p) atom
+    over unbiasedness; stderr_ and cov_ stay the unshrunk refit's). required: a mask (p,) of
+    atoms kept out of the sparsity (always in the support, never shrunk: the terms a structure
+    requires), None: none. fit(design (n, dof, p) atom
     signatures, tau (n, dof)) sets coef_ (p,),
     intercept_ (dof,) per-joint offsets (also offsets_), sigma_, support_, base_, folded_,
     alpha_, pass_rate_, candidates_, path_, and the refit's covariance cov_ (p, p) and
@@ -190,11 +192,13 @@ class CoupledRegression(Regressor):
     stacked = True
 
     def __init__(self, familywise: float = 0.01, selector: SparseRegression | None = None,
-                 t_bound: float | np.ndarray | None = None, shrink: bool = False):
+                 t_bound: float | np.ndarray | None = None, shrink: bool = False,
+                 required: np.ndarray | None = None):
         self.familywise = familywise
         self.t_bound = t_bound
         self.selector = selector
         self.shrink = shrink
+        self.required = required
 
     @property
     def offsets_(self) -> np.ndarray:
@@ -232,15 +236,24 @@ class CoupledRegression(Regressor):
         self.candidates_ = selector.candidates_
         self.path_ = self._path(xs, yc, val)
         support = self.base_[list(chosen.support)]
+        required = self._required(p)
+        support = np.union1d(support, np.intersect1d(self.base_, np.flatnonzero(required)))
         support, (coef, self.intercept_, _, cov) = self._stepwise(design, tau, support)
         self.cov_ = np.zeros((p, p))
         self.cov_[np.ix_(support, support)] = cov
         self.stderr_ = np.sqrt(np.maximum(np.diag(self.cov_), 0.0))
         if self.shrink:
-            coef = coef * shrink_factors(coef, self.stderr_[support])
+            factors = shrink_factors(coef, self.stderr_[support])
+            coef = coef * np.where(required[support], 1.0, factors)
             # the offsets follow the shrunk atoms (they stay each joint's mean residual)
             self.intercept_ = (tau - design[:, :, support] @ coef).mean(axis=0)
         self._set_coef(p, support, coef)
+
+    def _required(self, n_atoms: int) -> np.ndarray:
+        """The atoms kept out of the sparsity (n_atoms,) bool."""
+        if self.required is None:
+            return np.zeros(n_atoms, bool)
+        return np.broadcast_to(np.asarray(self.required, bool), (n_atoms,))
 
     def _bound(self, n_atoms: int) -> np.ndarray:
         """|t| each atom must reach (n_atoms,): t_bound if set (a number or one per atom),
@@ -275,10 +288,12 @@ class CoupledRegression(Regressor):
         """Backward elimination of atoms with |t| below their bound (`_bound`), the weakest
         relative to its bound first; returns the support and its refit."""
         bound = self._bound(design.shape[-1])
+        required = self._required(design.shape[-1])
         while True:
             fit = weighted_lstsq(design, tau, support, self.sigma_)
             stderr = np.sqrt(np.maximum(np.diag(fit[3]), 0.0))
             ratio = np.abs(fit[0]) / np.where(stderr > 0, stderr, np.inf) / bound[support]
+            ratio[required[support]] = np.inf
             if len(support) == 1 or ratio.min() >= 1.0:
                 return support, fit
             support = np.delete(support, int(np.argmin(ratio)))

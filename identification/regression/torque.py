@@ -158,6 +158,13 @@ class JointwiseRegressor(_FeatureRegressor):
 KEEP_T = 1.0
 FAMILYWISE = 0.01
 SHRINK = True
+# The atoms selected (by name prefix); every other base atom is kept out of the sparsity:
+# fitted by weighted least squares, neither dropped nor shrunk. On the development draws the
+# selection of the rigid body's and the drives' atoms lost up to 25x the oracle's error on a
+# judge motion exciting an atom the training barely did (docs/identification.md, 'The base
+# atoms kept out of the sparsity'). EVERY_ATOM selects them all (the rule before).
+SELECTED_ATOMS = ("coulomb",)
+EVERY_ATOM = ("",)
 
 
 @dataclass(frozen=True)
@@ -166,6 +173,7 @@ class BaseAtomRegressor:
     by every joint it acts on)."""
 
     selector: SparseRegression | None = None
+    selected: tuple[str, ...] = SELECTED_ATOMS  # name prefixes of the atoms selected
     per_run_offsets = True  # fit(runs=...) gives each run its own sensor offset
 
     def min_samples(self, library: KinematicLibrary) -> int:
@@ -181,12 +189,17 @@ class BaseAtomRegressor:
         strict = float(norm.isf(FAMILYWISE / (2 * len(library))))
         return np.array([strict if n.startswith("coulomb") else KEEP_T for n in library.names])
 
+    def required(self, library: KinematicLibrary) -> np.ndarray:
+        """The atoms kept out of the sparsity (len(library),) bool: those `selected` does not name."""
+        return np.array([not n.startswith(self.selected) for n in library.names])
+
     def fit(self, library: KinematicLibrary, q, qd, qdd, tau, runs=None) -> TorqueFit:
         design = library.evaluate(q, qd, qdd)
         cond = _conditioned(design.reshape(-1, len(library)), library.names)
         several, centred = run_centring(runs)
         reg = CoupledRegression(selector=self.selector, t_bound=self.bounds(library),
-                                shrink=SHRINK).fit(centred(design), centred(tau))
+                                shrink=SHRINK, required=self.required(library)).fit(
+            centred(design), centred(tau))
         # several runs: fitted within each run; the model's offset is the runs' mean
         offsets = np.mean(tau - design @ reg.coef_, axis=0) if several else reg.intercept_
         model = KinematicModel(library, reg.coef_.copy(), np.asarray(offsets, float).copy())
