@@ -15,7 +15,8 @@ import numpy as np
 
 from identification.identify import identify
 from identification.metrics import rel_error
-from identification.regression.coupled import CoupledRegression, weighted_lstsq
+from identification.regression.coupled import CoupledRegression
+from identification.regression.weighted import weighted_lstsq
 
 
 def kept_terms(result) -> list[str] | None:

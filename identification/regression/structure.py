@@ -17,7 +17,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.stats import f as fisher
 
-from identification.regression.coupled import CoupledRegression, weighted_lstsq
+from identification.regression.coupled import CoupledRegression
+from identification.regression.weighted import weighted_lstsq
 
 PVALUE = 0.01  # the restriction is kept unless the data reject it at this level
 RTOL = 1e-8  # a singular value below RTOL x the largest is a shared direction

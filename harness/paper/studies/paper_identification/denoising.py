@@ -7,8 +7,8 @@ import numpy as np
 
 from harness.paper.studies.paper_identification.study import HOLDOUT, n_train, scores
 from identification.identify import identify
-from identification.regression.coupled import weighted_lstsq
 from identification.regression.denoise import denoise
+from identification.regression.weighted import weighted_lstsq
 
 
 def denoise_markdown(res: dict, ctx: dict, d5) -> list[str]:

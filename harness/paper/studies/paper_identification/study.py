@@ -15,9 +15,10 @@ from harness.robots.arm import Arm
 from identification.identify import identify
 from identification.library.prior_knowledge import prior_knowledge_library
 from identification.metrics import rel_error
-from identification.regression.coupled import AtomBasis, CoupledRegression, weighted_lstsq
+from identification.regression.coupled import AtomBasis, CoupledRegression
 from identification.regression.oracle import fit_base_parameters
 from identification.regression.peers import tune
+from identification.regression.weighted import weighted_lstsq
 
 LEVELS = (0.0, 0.01, 0.05, 0.10)
 
