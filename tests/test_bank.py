@@ -63,6 +63,35 @@ def test_one_way_round_is_no_link_on_opposite_sides():
     assert same_class((), ()) and not same_class((), above)
 
 
+def _swing(base_angles: list[float], samples: int = 201) -> np.ndarray:
+    """Poses (samples, 3) of the paper's arm, its base through base_angles (piecewise
+    linear, evenly in time), shoulder and elbow at zero: the forearm level at z = 0.086 m."""
+    s = np.linspace(0.0, 1.0, samples)
+    q = np.zeros((samples, 3))
+    q[:, 0] = np.interp(s, np.linspace(0.0, 1.0, len(base_angles)), base_angles)
+    return q
+
+
+def test_a_base_turned_away_is_another_way_than_one_going_straight():
+    """Two motions of the base from -0.4 to +0.4 rad past an obstacle 9 cm above the
+    forearm's middle at q = 0 (both at q = 0 at their closest approach: the forearm passes
+    below it in both): one goes straight, one first backs off to -1.0 rad (0.6 rad against
+    its way) and comes back. The sides alone read them alike; the class tells them apart,
+    and a millimetre's change (every angle 7 mrad on, the obstacle 1 mm aside) changes
+    neither's class."""
+    centre = np.array([0.24, 0.0, 0.086 + 0.09])
+    straight = _swing([-0.4, 0.0, 0.4])
+    away = _swing([-0.4, -1.0, -0.5, 0.0, 0.2, 0.4])
+    centres = np.repeat(centre[None], len(straight), axis=0)
+    one, other = (sides(ARM, q, centres, THRESHOLD) for q in (straight, away))
+    assert [entry for entry in other if entry[0] != "base"] == list(one) == [(1, "below")]
+    assert not same_class(one, other) and not same_class(other, one)
+    assert label(one) == "link 2 below" and label(other) == "link 2 below, base turned away"
+    moved = centres + [0.0, 0.001, 0.0]
+    for q, found in ((straight, one), (away, other)):
+        assert same_class(sides(ARM, q + [0.007, 0.0, 0.0], moved, THRESHOLD), found)
+
+
 def test_one_check_per_plan_gives_the_objective_class_and_stale_test():
     """planning.bank.scoring on random Lynxmotion motions and forecasts (obstacles passing
     within 2-12 cm of the links): the objective of multistart.objective, the class of
@@ -91,6 +120,30 @@ def test_one_check_per_plan_gives_the_objective_class_and_stale_test():
                                                          config.threshold, t)
         assert scores.dips(plan) == stale(config, plan, forecast)
         assert scores.checked == 1
+
+
+def test_the_bank_check_reads_the_base_way_as_the_class_does():
+    """Scores.motion_class (joint 1's angles from the plan's polynomial) against
+    classes.motion_class (from the poses) on random Lynxmotion motions whose base swings
+    wide, an obstacle standing by a link half-way: the same class, the base turned away in
+    some and not in others."""
+    config = lynx_default_config()
+    check = SafetyCheck(Arm.of("lynxmotion").nominal, config, compile_code=False)
+    rng = np.random.default_rng(71)
+    times = np.round(np.arange(0.01, 2.0 + 1e-9, 0.01), 9)
+    seen = set()
+    for trial in range(16):
+        motion = PolynomialTrajectory(0.0, 2.0, rng.normal(size=(3, 5)) * [[1.5], [0.3], [0.3]])
+        middle = config.geometry.link_ends(motion.position(times[99:100]))[1][0, trial % 2]
+        forecast = ObstacleForecast(times, np.repeat((middle + [0, 0, 0.09])[None], len(times), 0))
+        plan = SegmentPlan(motion, energy=0.0, penalty=0.0, success=True, status="",
+                           iterations=0, solve_ms=0.0, solve_cpu_ms=0.0, penalty_weight=0.0,
+                           x=np.zeros(0), multipliers=(np.zeros(0), np.zeros(0)))
+        problem = Segment(np.zeros(3), np.zeros(3), 0.0, 2.0, np.zeros(3), forecast)
+        found = Scores(check, config, problem).motion_class(plan)
+        assert found == motion_class(config.geometry, motion, forecast, config.threshold)
+        seen.add(("base", "turned away") in found)
+    assert seen == {True, False}
 
 
 def test_the_checks_count_on_the_nominal_clock():

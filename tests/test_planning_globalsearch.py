@@ -271,3 +271,24 @@ def test_the_clearance_that_launches_a_search_is_numpys(baseline, config):
         for seen in (forecast, later):
             assert planner.check.clearance(motion, seen.times, seen.centres) == pytest.approx(
                 predicted_clearance(config.geometry, motion, seen), abs=1e-9)
+
+
+@pytest.mark.parametrize("qd0", [(0.0, 0.0, 0.0), (0.4, -0.2, 0.1)])
+def test_the_turned_away_start_backs_the_base_off_against_its_way(baseline, config, qd0):
+    """The bank's extra start (starts.turned_away): its motion, read back from the NLP's
+    point (ProblemNumbers.trajectory), starts at the arm's state, ends at the goal and at
+    s = 2/3 has the base detour_rad on the far side of where it started from the goal; the
+    other joints as the initial guess has them."""
+    from planning.globalsearch.starts import turned_away
+
+    numbers = MultiStart(baseline, config).solver
+    q0, goal, duration = np.array([0.1, 1.2, -1.0]), np.array([0.9, 1.0, -0.6]), 2.0
+    x = turned_away(numbers, q0, np.asarray(qd0), duration, goal, config)
+    motion = numbers.trajectory(x, q0, np.asarray(qd0), 0.0, duration)
+    guess = numbers.trajectory(numbers.initial_guess(q0, np.asarray(qd0), duration, goal),
+                               q0, np.asarray(qd0), 0.0, duration)
+    at = motion.position(np.array([0.0, 2 * duration / 3, duration]))
+    assert at[0] == pytest.approx(q0) and at[2] == pytest.approx(goal)
+    assert at[1, 0] == pytest.approx(q0[0] - config.global_search.detour_rad)
+    assert at[1, 1:] == pytest.approx(guess.position(np.array([2 * duration / 3]))[0, 1:])
+    assert motion.state(np.array([0.0]))[1][0] == pytest.approx(qd0)

@@ -71,7 +71,8 @@ class Scores:
         links = self._entry(plan)[1]
         return near_sides(self.config.geometry, links,
                           lambda k: trajectory.position(self.times[k : k + 1])[0],
-                          self.centres, self.config.threshold)
+                          self.centres, self.config.threshold,
+                          angles=lambda: trajectory.position(self.times)[:, 0])
 
     def dips(self, plan: SegmentPlan) -> bool:
         """replanning.stale of the plan on the forecast (its motion from the segment's start

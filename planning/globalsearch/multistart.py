@@ -40,8 +40,8 @@ class MultiStart:
     @collection_deferred
     def search(self, segment: Segment, warm: SegmentPlan | None = None,
                found: Callable[[SegmentPlan, bool], None] | None = None,
-               screen: int = SCREEN_ITERATIONS, finalists: int = FINALISTS
-               ) -> tuple[SegmentPlan, list[SegmentPlan]]:
+               screen: int = SCREEN_ITERATIONS, finalists: int = FINALISTS,
+               away: bool = False) -> tuple[SegmentPlan, list[SegmentPlan]]:
         """The best plan (objective) of the segment from the warm plan's shape (if any) and
         every start point, its times those of the whole search, and every plan (each solved
         to convergence, whatever segment.budget_ms). found(plan, better), if given, sees
@@ -53,7 +53,7 @@ class MultiStart:
             segment.forecast)
         self.prepare(goal)
         segment = dataclasses.replace(segment, budget_ms=math.inf)
-        points = all_starts(solver, q0, qd0, duration, goal, self.config)
+        points = all_starts(solver, q0, qd0, duration, goal, self.config, away)
         if warm is not None:
             points.insert(0, shape_of(warm, t_begin, duration))
         plans, scores = [], []
@@ -116,4 +116,4 @@ def bank_search(config: PlannerConfig) -> dict:
     """How a search runs for a bank of plans (planning.bank): each start screened
     BankOptions.screen_iterations and no finalists (the bank re-plans every plan it takes to
     convergence itself), so the classes reach it sooner and the next search starts sooner."""
-    return {"screen": config.bank.screen_iterations, "finalists": 0}
+    return {"screen": config.bank.screen_iterations, "finalists": 0, "away": True}
