@@ -186,14 +186,39 @@ def least_squares_draws(arm: Arm, seed: int, draws: int = 200, samples: int = SA
     when only the noise changes (docs/identification.md, 'Several runs against the best
     single run')."""
     runs, _ = several_runs(arm, seed, samples=samples, noise=noise)
-    rng, spread = np.random.default_rng([seed, 6013]), runs[0].motion.tau_clean.std(axis=0)
     designs, out = _designs(arm, runs), []
-    for _ in range(draws):
-        drawn = [Run(r.motion, r.truth + noise * spread * rng.normal(size=r.tau.shape), r.truth)
-                 for r in runs]
+    for drawn in noise_draws(runs, np.random.default_rng([seed, 6013]), draws, noise):
         single = [least_squares_on_runs(arm, drawn, [k], designs) for k in (0, 1)]
         out.append(least_squares_on_runs(arm, drawn, [0, 1], designs) / np.minimum(*single))
     return np.array(out)
+
+
+def noise_draws(runs: list[Run], rng, draws: int, noise: float = NOISE):
+    """The runs again `draws` times, each with a fresh draw of the sensor noise (the motions,
+    the friction and the offset kept): noise x the first run's clean torque std per joint."""
+    spread = runs[0].motion.tau_clean.std(axis=0)
+    for _ in range(draws):
+        yield [Run(r.motion, r.truth + noise * spread * rng.normal(size=r.tau.shape), r.truth)
+               for r in runs]
+
+
+def pair_against_first(arm: Arm, seed: int, draws: int) -> dict:
+    """Runs 1 + 2 fitted together against run 1 alone (`identify --prior nominal`, as
+    fit_runs), both scored on run 3, over `draws` draws of the noise (several_runs(arm, seed)'s
+    motions, friction and perturbed URDF; numpy's generator seeded [seed, 6017]): per draw
+    and joint the pair's error over run 1's, and the median over draws per joint. Run 1 is
+    named before run 3 is seen, so no choice after the fact enters (the best single run per
+    joint did); least squares + friction on the same draws beside it."""
+    runs, nominal = several_runs(arm, seed)
+    designs, ratios, peer = _designs(arm, runs), [], []
+    for drawn in noise_draws(runs, np.random.default_rng([seed, 6017]), draws):
+        first = error_on(fit_runs(arm, drawn, nominal, [0]), drawn[2])
+        ratios.append(error_on(fit_runs(arm, drawn, nominal, [0, 1]), drawn[2]) / first)
+        peer.append(least_squares_on_runs(arm, drawn, [0, 1], designs)
+                    / least_squares_on_runs(arm, drawn, [0], designs))
+    return {"seed": seed, "draws": draws, "ratio": np.array(ratios).tolist(),
+            "median_ratio": np.median(ratios, axis=0).tolist(),
+            "least_squares_median_ratio": np.median(peer, axis=0).tolist()}
 
 
 def next_run(arm: Arm, seed: int, samples: int = SAMPLES, noise: float = NOISE) -> dict:
