@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from harness.identify.fits import RIGID_BODY, arm_identification
 from harness.identify.outside_default import JUDGES, datasets, judges, summarize
-from harness.identify.scoring import HOLDOUT, fixed_fit, score_draw
+from harness.identify.scoring import HOLDOUT, Fit, fixed_fit, perturbed_prior_fit, score_draw
 from harness.identify.selection import selection
 from harness.report.results import Context, SectionResult, Target
 from harness.robots.arm import Arm
@@ -37,12 +37,31 @@ FRESH_JUDGE = 6626
 DEV_SEEDS, DEV_JUDGE = tuple(range(3001, 3011)), 3050  # where the loss was diagnosed
 SAMPLES = 4000
 MEDIAN_TARGET, WORST_TARGET = 1.1, 2.0  # x oracle, per joint, over draws and judges
-# arm -> (fit name, arm_identification's options: identify's), the noise levels studied
+# arm -> (fit name, arm_identification's options: identify's), the noise levels studied;
+# PERTURBED among the options: the prior is the URDF perturbed per draw (named_fit)
+PERTURBED = "perturbed_urdf"
 ARMS = {"lynxmotion": ((("default", {}),
                         ("--no-rigid-body" if RIGID_BODY else "--rigid-body",
                          {"rigid_body": not RIGID_BODY}),
                         ("--library kinematic", {"library": "kinematic"})), NOISES),
-        "ur5": ((("default", {}),), NOISES)}
+        "ur5": ((("default", {}),
+                 ("--prior nominal (perturbed URDF)", {"prior": "nominal", PERTURBED: True})),
+                NOISES),
+        "panda": ((("default", {}),
+                   ("--prior nominal (perturbed URDF)", {"prior": "nominal", PERTURBED: True})),
+                  NOISES)}
+
+
+def named_fit(arm: Arm, options: dict) -> Fit:
+    """The fit ARMS names: arm_identification's (identify's) options; with PERTURBED its
+    consistent fit's prior is the URDF perturbed per draw as a real robot's is wrong
+    (harness.identify.scoring.perturbed_nominal, seeded by the draw), not the URDF that made
+    the data."""
+    options = dict(options)
+    perturbed = options.pop(PERTURBED, False)
+    library, regressor = arm_identification(arm, **options)
+    return (perturbed_prior_fit(library, arm.nominal, regressor=regressor) if perturbed
+            else fixed_fit(library, regressor))
 
 
 def by_noise(draw: dict) -> str:
@@ -126,7 +145,7 @@ def run(ctx: Context) -> SectionResult:
     for robot, (named, noises) in arms.items():
         arm = Arm.of(robot)
         named = named[:1] if ctx.quick else named
-        fits = {name: fixed_fit(*arm_identification(arm, **options)) for name, options in named}
+        fits = {name: named_fit(arm, options) for name, options in named}
         r = study(arm, fits, FRESH_SEEDS[:1] if ctx.quick else FRESH_SEEDS, FRESH_JUDGE,
                   (0.05,) if ctx.quick else noises)
         results[robot] = r
@@ -152,7 +171,7 @@ def development(robot: str = "lynxmotion") -> dict:
     """study() of robot's fits on the development draws (DEV_SEEDS, DEV_JUDGE)."""
     arm = Arm.of(robot)
     named, noises = ARMS[robot]
-    fits = {name: fixed_fit(*arm_identification(arm, **options)) for name, options in named}
+    fits = {name: named_fit(arm, options) for name, options in named}
     return study(arm, fits, DEV_SEEDS, DEV_JUDGE, noises)
 
 
