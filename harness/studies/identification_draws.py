@@ -175,7 +175,20 @@ def development(robot: str = "lynxmotion") -> dict:
     return study(arm, fits, DEV_SEEDS, DEV_JUDGE, noises)
 
 
-if __name__ == "__main__":  # python -m harness.studies.identification_draws [ROBOT]: dev draws
+def scored(robot: str) -> dict:
+    """study() of robot's fits on the scored draws (FRESH_SEEDS, FRESH_JUDGE): the full
+    study's figures for one arm."""
+    arm = Arm.of(robot)
+    named, noises = ARMS[robot]
+    return study(arm, {name: named_fit(arm, options) for name, options in named}, FRESH_SEEDS,
+                 FRESH_JUDGE, noises)
+
+
+if __name__ == "__main__":  # python -m harness.studies.identification_draws [ROBOT] [--fresh]
     import sys
 
-    print("\n".join(markdown(development(*sys.argv[1:2]), "development draws")))
+    robot = [a for a in sys.argv[1:] if not a.startswith("--")][:1]
+    if "--fresh" in sys.argv:
+        print("\n".join(markdown(scored(*robot), "fresh draws")))
+    else:
+        print("\n".join(markdown(development(*robot), "development draws")))
