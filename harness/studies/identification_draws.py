@@ -13,8 +13,10 @@ ceiling's (harness.identify.selection: least squares on exactly the noise-free t
 Arms and fits: the Lynxmotion, `identify`'s default (the prior-knowledge library, the coupled
 sparse fit), `--rigid-body` or `--no-rigid-body` (the other side of identify's default:
 that fit held to the robot's rigid-body structure, identification.regression.structure) and
-`--library kinematic` (its base atoms from its kinematics); with the full study the UR5, its
-default (the kinematic base atoms). Scored on FRESH_SEEDS and FRESH_JUDGE (drawn once, no
+`--library kinematic` (its base atoms from its kinematics); with the full study the UR5 and
+the Panda (6 and 7 joints), each its default (the kinematic base atoms) and `--prior nominal`
+with, as prior, the URDF perturbed per draw as a real robot's is wrong (named_fit; the data
+and the oracle from the URDF itself). Scored on FRESH_SEEDS and FRESH_JUDGE (drawn once, no
 setting chosen on them); DEV_SEEDS and DEV_JUDGE are the draws the loss was diagnosed on
 (docs/identification.md, 'Over many draws', with the run time). Quick: the Lynxmotion's
 default, one fresh draw of each family at 5 %.
