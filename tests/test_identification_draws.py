@@ -61,3 +61,24 @@ def test_the_selection_record_of_a_free_coupled_fit_on_a_lynxmotion_draw():
     atoms = AtomBasis.from_atoms(fit.library.atoms, 3, fit.library.name)
     exact = ceiling_errors(atoms, clean, 1500, record["needed"], motions)
     assert max(max(e) for e in exact.values()) <= 1e-8
+
+
+def test_the_study_s_prior_fit_is_identify_s_with_a_urdf_perturbed_per_draw():
+    """`--prior nominal (perturbed URDF)`: identify's consistent fit (its bounds, metric and
+    weights) whose prior is, on each draw, not the URDF that made the data: every body's mass
+    off by at most 30 % (read from Pinocchio's model), and another prior on another draw."""
+    from harness.studies.identification_draws import ARMS, PERTURBED, named_fit
+
+    arm = Arm.of("ur5")
+    options = dict(ARMS["ur5"][0])["--prior nominal (perturbed URDF)"]
+    assert options[PERTURBED]
+    fit = named_fit(arm, options)
+    _, identify_s = arm_identification(arm, prior="nominal")
+    first, second = fit.regressor(DEV_SEEDS[0]), fit.regressor(DEV_SEEDS[1])
+    for setting in ("ellipsoids", "prior_metric", "lambdas", "choose_friction"):
+        assert getattr(first, setting) == getattr(identify_s, setting)
+    truth = np.array([arm.pinocchio.inertias[j].mass for j in range(1, arm.pinocchio.njoints)])
+    for prior in (first.nominal, second.nominal):
+        masses = prior[0:10 * arm.dof:10]
+        assert np.all(np.abs(masses / truth - 1) <= 0.3) and np.any(np.abs(masses / truth - 1) > 0.01)
+    assert not np.allclose(first.nominal, second.nominal)

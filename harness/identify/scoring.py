@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -131,12 +131,14 @@ def fixed_fit(library, regressor: TorqueRegressor) -> Fit:
 
 
 def perturbed_prior_fit(library: KinematicLibrary, baseline: PinocchioModel,
-                        ellipsoids=None) -> Fit:
+                        ellipsoids=None, regressor: ConsistentRegressor | None = None) -> Fit:
     """The physically consistent fit on a robot's atoms with the nominal prior, its inertias
     perturbed per draw (perturbed_nominal, seeded by the draw), so that no figure comes from
-    reading the truth; ellipsoids: the bodies' bounds (plausible, as identify's default)."""
-    return Fit(library, lambda seed: ConsistentRegressor(perturbed_nominal(baseline, seed),
-                                                         ellipsoids=ellipsoids))
+    reading the truth; ellipsoids: the bodies' bounds (plausible, as identify's default).
+    regressor: the consistent fit to give the perturbed prior (`identify --prior nominal`'s,
+    arm_identification; its own ellipsoids then), by default ConsistentRegressor's."""
+    regressor = regressor or ConsistentRegressor(ellipsoids=ellipsoids)
+    return Fit(library, lambda seed: replace(regressor, nominal=perturbed_nominal(baseline, seed)))
 
 
 def score_draw(data, fits: dict[str, Fit], baseline: PinocchioModel, judges: list[Motion]) -> dict:

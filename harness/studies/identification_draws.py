@@ -13,8 +13,11 @@ ceiling's (harness.identify.selection: least squares on exactly the noise-free t
 Arms and fits: the Lynxmotion, `identify`'s default (the prior-knowledge library, the coupled
 sparse fit), `--rigid-body` or `--no-rigid-body` (the other side of identify's default:
 that fit held to the robot's rigid-body structure, identification.regression.structure) and
-`--library kinematic` (its base atoms from its kinematics); with the full study the UR5, its
-default (the kinematic base atoms). Scored on FRESH_SEEDS and FRESH_JUDGE (drawn once, no
+`--library kinematic` (its base atoms from its kinematics); with the full study the UR5 and
+the Panda (6 and 7 joints), each its default (the kinematic base atoms; the UR5's also with
+the selection on every atom, the rule before) and `--prior nominal`
+with, as prior, the URDF perturbed per draw as a real robot's is wrong (named_fit; the data
+and the oracle from the URDF itself). Scored on FRESH_SEEDS and FRESH_JUDGE (drawn once, no
 setting chosen on them); DEV_SEEDS and DEV_JUDGE are the draws the loss was diagnosed on
 (docs/identification.md, 'Over many draws', with the run time). Quick: the Lynxmotion's
 default, one fresh draw of each family at 5 %.
@@ -22,12 +25,15 @@ default, one fresh draw of each family at 5 %.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from harness.identify.fits import RIGID_BODY, arm_identification
 from harness.identify.outside_default import JUDGES, datasets, judges, summarize
-from harness.identify.scoring import HOLDOUT, fixed_fit, score_draw
+from harness.identify.scoring import HOLDOUT, Fit, fixed_fit, perturbed_prior_fit, score_draw
 from harness.identify.selection import selection
 from harness.report.results import Context, SectionResult, Target
 from harness.robots.arm import Arm
+from identification.regression.torque import EVERY_ATOM
 
 NOISES = (0.02, 0.05, 0.10)
 # drawn once (numpy.random.default_rng().integers(10_000, size=11), 2026-12-07), after the
@@ -46,12 +52,37 @@ DECISION_SEEDS = (3377, 1374, 9483, 238, 3099, 6691, 1842, 9506, 2670, 6889)
 DECISION_JUDGE = 349
 SAMPLES = 4000
 MEDIAN_TARGET, WORST_TARGET = 1.1, 2.0  # x oracle, per joint, over draws and judges
-# arm -> (fit name, arm_identification's options: identify's), the noise levels studied
+# arm -> (fit name, arm_identification's options: identify's), the noise levels studied;
+# PERTURBED among the options: the prior is the URDF perturbed per draw (named_fit)
+PERTURBED = "perturbed_urdf"
+# EVERY among the options: the base atoms' regressor selects every atom (the rule before the
+# base atoms were kept out of the sparsity: identification.regression.torque.SELECTED_ATOMS)
+EVERY = "selection_on_every_atom"
 ARMS = {"lynxmotion": ((("default", {}),
                         ("--no-rigid-body" if RIGID_BODY else "--rigid-body",
                          {"rigid_body": not RIGID_BODY}),
                         ("--library kinematic", {"library": "kinematic"})), NOISES),
-        "ur5": ((("default", {}),), NOISES)}
+        "ur5": ((("default", {}),
+                 ("selection on every atom (before)", {EVERY: True}),
+                 ("--prior nominal (perturbed URDF)", {"prior": "nominal", PERTURBED: True})),
+                NOISES),
+        "panda": ((("default", {}),
+                   ("--prior nominal (perturbed URDF)", {"prior": "nominal", PERTURBED: True})),
+                  NOISES)}
+
+
+def named_fit(arm: Arm, options: dict) -> Fit:
+    """The fit ARMS names: arm_identification's (identify's) options; with PERTURBED its
+    consistent fit's prior is the URDF perturbed per draw as a real robot's is wrong
+    (harness.identify.scoring.perturbed_nominal, seeded by the draw), not the URDF that made
+    the data."""
+    options = dict(options)
+    perturbed, every = options.pop(PERTURBED, False), options.pop(EVERY, False)
+    library, regressor = arm_identification(arm, **options)
+    if every:
+        regressor = replace(regressor, selected=EVERY_ATOM)
+    return (perturbed_prior_fit(library, arm.nominal, regressor=regressor) if perturbed
+            else fixed_fit(library, regressor))
 
 
 def by_noise(draw: dict) -> str:
@@ -135,7 +166,7 @@ def run(ctx: Context) -> SectionResult:
     for robot, (named, noises) in arms.items():
         arm = Arm.of(robot)
         named = named[:1] if ctx.quick else named
-        fits = {name: fixed_fit(*arm_identification(arm, **options)) for name, options in named}
+        fits = {name: named_fit(arm, options) for name, options in named}
         r = study(arm, fits, FRESH_SEEDS[:1] if ctx.quick else FRESH_SEEDS, FRESH_JUDGE,
                   (0.05,) if ctx.quick else noises)
         results[robot] = r
@@ -161,7 +192,7 @@ def development(robot: str = "lynxmotion") -> dict:
     """study() of robot's fits on the development draws (DEV_SEEDS, DEV_JUDGE)."""
     arm = Arm.of(robot)
     named, noises = ARMS[robot]
-    fits = {name: fixed_fit(*arm_identification(arm, **options)) for name, options in named}
+    fits = {name: named_fit(arm, options) for name, options in named}
     return study(arm, fits, DEV_SEEDS, DEV_JUDGE, noises)
 
 
@@ -170,14 +201,26 @@ def decision() -> dict:
     (DECISION_SEEDS, DECISION_JUDGE), at every noise level."""
     arm = Arm.of("lynxmotion")
     named, noises = ARMS["lynxmotion"]
-    fits = {name: fixed_fit(*arm_identification(arm, **options)) for name, options in named[:2]}
+    fits = {name: named_fit(arm, options) for name, options in named[:2]}
     return study(arm, fits, DECISION_SEEDS, DECISION_JUDGE, noises)
 
 
-if __name__ == "__main__":  # python -m harness.studies.identification_draws [ROBOT | decision]
-    import sys
+def scored(robot: str) -> dict:
+    """study() of robot's fits on the scored draws (FRESH_SEEDS, FRESH_JUDGE): the full
+    study's figures for one arm."""
+    arm = Arm.of(robot)
+    named, noises = ARMS[robot]
+    return study(arm, {name: named_fit(arm, options) for name, options in named}, FRESH_SEEDS,
+                 FRESH_JUDGE, noises)
 
-    if sys.argv[1:2] == ["decision"]:
+
+if __name__ == "__main__":  # python -m harness.studies.identification_draws [ROBOT] [--fresh]
+    import sys  # ... decision: the Lynxmotion's decision draws
+
+    robot = [a for a in sys.argv[1:] if not a.startswith("--")][:1]
+    if robot == ["decision"]:
         print("\n".join(markdown(decision(), "the decision's draws")))
+    elif "--fresh" in sys.argv:
+        print("\n".join(markdown(scored(*robot), "fresh draws")))
     else:
-        print("\n".join(markdown(development(*sys.argv[1:2]), "development draws")))
+        print("\n".join(markdown(development(*robot), "development draws")))
