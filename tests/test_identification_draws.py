@@ -82,3 +82,23 @@ def test_the_study_s_prior_fit_is_identify_s_with_a_urdf_perturbed_per_draw():
         masses = prior[0:10 * arm.dof:10]
         assert np.all(np.abs(masses / truth - 1) <= 0.3) and np.any(np.abs(masses / truth - 1) > 0.01)
     assert not np.allclose(first.nominal, second.nominal)
+
+
+def test_the_largest_error_ratio_is_a_worst_case_against_a_worst_case():
+    """summarize's largest_error_ratio_per_joint: the fit's largest error over draws and judges
+    over the oracle's largest, per joint (computed here apart); never above the worst per-draw
+    ratio (max f / max o <= f_k / o_k at the fit's largest), and below it where the oracle
+    had a lucky draw."""
+    from harness.identify.outside_default import JUDGES, summarize
+
+    rng = np.random.default_rng(3)
+    draws = [{"noise": 0.05, "fit": {j: rng.uniform(0.5, 2.0, 3).tolist() for j in JUDGES},
+              "oracle": {j: rng.uniform(0.5, 2.0, 3).tolist() for j in JUDGES}} for _ in range(6)]
+    draws[0]["oracle"][JUDGES[0]][2] = 0.01  # a lucky oracle on joint 3
+    s = summarize(draws, "fit", "oracle", lambda d: "all")["all"]
+    fit = np.array([[d["fit"][j] for j in JUDGES] for d in draws])
+    oracle = np.array([[d["oracle"][j] for j in JUDGES] for d in draws])
+    expected = fit.max(axis=(0, 1)) / oracle.max(axis=(0, 1))
+    np.testing.assert_allclose(s["largest_error_ratio_per_joint"], expected, rtol=1e-12)
+    assert np.all(np.array(s["largest_error_ratio_per_joint"]) <= np.array(s["worst_per_joint"]))
+    assert s["worst_per_joint"][2] > 20 > 2 > s["largest_error_ratio_per_joint"][2]

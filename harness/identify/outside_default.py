@@ -106,17 +106,23 @@ def summarize(draws: list[dict], fit: str = "default", reference: str = "oracle"
               group=family_and_noise) -> dict:
     """Per group (by default 'family noise'): the ratio of fit's judge errors to reference's
     per joint, its median over draws and judges, the worst over them, and the median and
-    worst of all; fit's relative error per joint, median over draws and judges."""
+    worst of all; fit's relative error per joint, median over draws and judges; and fit's
+    largest error per joint over draws and judges over the reference's largest (a worst case
+    against a worst case: the worst ratio falls where the reference's own error was lucky)."""
     groups: dict[str, list] = {}
     for d in draws:
         groups.setdefault(group(d), []).append(
-            [[np.array(d[fit][j]) / np.array(d[reference][j]), d[fit][j]] for j in JUDGES])
+            [[np.array(d[fit][j]) / np.array(d[reference][j]), d[fit][j], d[reference][j]]
+             for j in JUDGES])
     out = {}
     for key, both in groups.items():
-        r, errors = np.array(both)[:, :, 0], np.array(both)[:, :, 1]  # draws, judges, dof
+        both = np.array(both)  # draws, judges, (ratio, fit's error, reference's), dof
+        r, errors, reference_errors = both[:, :, 0], both[:, :, 1], both[:, :, 2]
         out[key] = {"median_per_joint": np.median(r, axis=(0, 1)).tolist(),
                     "error_median_per_joint": np.median(errors, axis=(0, 1)).tolist(),
                     "worst_per_joint": r.max(axis=(0, 1)).tolist(),
+                    "largest_error_ratio_per_joint": (errors.max(axis=(0, 1))
+                                                      / reference_errors.max(axis=(0, 1))).tolist(),
                     "median": float(np.median(r)), "worst": float(r.max())}
     return out
 
