@@ -192,30 +192,30 @@ def run(ctx: Context) -> SectionResult:
     return SectionResult("\n".join(intro + md), {"robots": results}, [], targets)
 
 
-def development(robot: str = "lynxmotion") -> dict:
-    """study() of robot's fits on the development draws (DEV_SEEDS, DEV_JUDGE)."""
+def on_draws(robot: str, seeds, judge: int, fits: int | None = None) -> dict:
+    """study() of robot's fits in ARMS (the first `fits` of them; None: all) on the draws of
+    `seeds` judged on `judge`'s motions, at every noise level ARMS studies."""
     arm = Arm.of(robot)
     named, noises = ARMS[robot]
-    fits = {name: named_fit(arm, options) for name, options in named}
-    return study(arm, fits, DEV_SEEDS, DEV_JUDGE, noises)
+    return study(arm, {name: named_fit(arm, options) for name, options in named[:fits]},
+                 seeds, judge, noises)
+
+
+def development(robot: str = "lynxmotion") -> dict:
+    """on_draws on the development draws (DEV_SEEDS, DEV_JUDGE)."""
+    return on_draws(robot, DEV_SEEDS, DEV_JUDGE)
 
 
 def decision() -> dict:
-    """study() of the Lynxmotion's two sides of --rigid-body on the decision draws
-    (DECISION_SEEDS, DECISION_JUDGE), at every noise level."""
-    arm = Arm.of("lynxmotion")
-    named, noises = ARMS["lynxmotion"]
-    fits = {name: named_fit(arm, options) for name, options in named[:2]}
-    return study(arm, fits, DECISION_SEEDS, DECISION_JUDGE, noises)
+    """The Lynxmotion's two sides of --rigid-body on the decision draws (DECISION_SEEDS,
+    DECISION_JUDGE)."""
+    return on_draws("lynxmotion", DECISION_SEEDS, DECISION_JUDGE, fits=2)
 
 
 def scored(robot: str) -> dict:
-    """study() of robot's fits on the scored draws (FRESH_SEEDS, FRESH_JUDGE): the full
-    study's figures for one arm."""
-    arm = Arm.of(robot)
-    named, noises = ARMS[robot]
-    return study(arm, {name: named_fit(arm, options) for name, options in named}, FRESH_SEEDS,
-                 FRESH_JUDGE, noises)
+    """on_draws on the scored draws (FRESH_SEEDS, FRESH_JUDGE): the full study's figures for
+    one arm."""
+    return on_draws(robot, FRESH_SEEDS, FRESH_JUDGE)
 
 
 if __name__ == "__main__":  # python -m harness.studies.identification_draws [ROBOT] [--fresh]
