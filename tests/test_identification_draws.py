@@ -102,3 +102,25 @@ def test_the_largest_error_ratio_is_a_worst_case_against_a_worst_case():
     np.testing.assert_allclose(s["largest_error_ratio_per_joint"], expected, rtol=1e-12)
     assert np.all(np.array(s["largest_error_ratio_per_joint"]) <= np.array(s["worst_per_joint"]))
     assert s["worst_per_joint"][2] > 20 > 2 > s["largest_error_ratio_per_joint"][2]
+
+
+def test_the_twin_is_the_oracle_on_the_same_law_of_noise_drawn_again():
+    """The reference row: the same motion and clean torque, the noise of the draw's law (each
+    joint's std within 10 % of the draw's) but not the draw's (correlation below 0.1); with no
+    noise the twin's oracle is the oracle (judge errors equal)."""
+    from harness.studies.identification_draws import twin, twin_errors
+
+    arm = Arm.of("lynxmotion")
+    data = datasets(arm, DEV_SEEDS[:1], 2000, ("fourier",), (0.05,))[0]
+    other = twin(data)
+    np.testing.assert_array_equal(other.q, data.q)
+    np.testing.assert_array_equal(other.tau_clean, data.tau_clean)
+    drawn, again = data.tau - data.tau_clean, other.tau - other.tau_clean
+    for j in range(arm.dof):
+        assert 0.9 <= np.std(again[:, j]) / np.std(drawn[:, j]) <= 1.1
+        assert abs(np.corrcoef(drawn[:, j], again[:, j])[0, 1]) < 0.1
+    motions = judges(arm, DEV_JUDGE, 2000)
+    clean = datasets(arm, DEV_SEEDS[:1], 2000, ("fourier",), (0.0,))[0]
+    oracle = score_draw(clean, {}, arm.nominal, motions)["oracle"]
+    for judge, errors in twin_errors(arm, clean, motions).items():
+        np.testing.assert_allclose(errors, oracle[judge], rtol=1e-6, atol=1e-12)

@@ -11,7 +11,10 @@ Checks (must hold): Pinocchio's RNEA and MuJoCo's inverse dynamics agree on the 
 (two implementations of one model); noise-free data are identified exactly by the robot's
 default library and by the oracle. Targets: the default library's error within 1.1 x the
 oracle's at the median over joints and 1.6 x on every joint, on the motion of the other
-family. The model of the default library on the first draw is handed to planning.
+family. Over many draws: the study identification_draws' targets (median <= 1.1 x and worst
+draw-joint <= 2 x the oracle per joint) on its scored draws, the oracle on another noise draw
+beside as a reference. The model of the default library on the first draw is handed to
+planning.
 """
 
 from __future__ import annotations
@@ -47,6 +50,7 @@ from harness.identify.scoring import (
 )
 from harness.report.results import Context, Row, SectionResult, Target, check
 from harness.robots.extras import extra as load_extra
+from harness.studies import identification_draws as over_draws
 from identification.identify import identify
 
 # draws (seeds) per torque noise level; the paper's level, 5 %, gets the most. Seeds from
@@ -127,6 +131,8 @@ def run(ctx: Context) -> SectionResult:
                               f"median over {PAIR_DRAWS} noise draws (worst of seeds "
                               f"{', '.join(map(str, PAIR_SEEDS))}, fresh)",
                               max(max(p["median_ratio"]) for p in pairs), 1.0, "x"))
+    draws_study = _over_draws(arm, ctx.quick)
+    targets += over_draws.study_targets(arm.reference, draws_study)
     excitation_targets, excitation = excitation_comparison(
         arm, fits[default], default, baseline, ctx.quick)
     targets += excitation_targets
@@ -145,7 +151,7 @@ def run(ctx: Context) -> SectionResult:
                "draws": {f"{level:g}": [{k: v for k, v in d.items() if k != "models"} for d in ds]
                          for level, ds in by_level.items()},
                "summary": summary, "next_run": runs, "pair_against_first": pairs,
-               "excitation": excitation}
+               "excitation": excitation, "over_draws": draws_study}
     note = []
     if "paper" in fits and hasattr(exact.model, "features"):  # why the paper's rows miss
         gap = library_gap(fits["paper"].library, exact.model, fits[default].library, judges,
@@ -153,12 +159,24 @@ def run(ctx: Context) -> SectionResult:
         oracles = {j.name: np.median([d["oracle"][j.name] for d in draws], axis=0) for j in judges}
         results["paper_library_gap"], note = gap, ["", gap_markdown(gap, oracles, NOISE)]
     md = "\n".join([_markdown(results, fits), *note, "", *next_run_markdown(runs), "",
-                    *_pairs_markdown(pairs), *excitation_markdown(excitation)])
+                    *_pairs_markdown(pairs),
+                    *over_draws.markdown(draws_study, "Over many draws (`torquebench study "
+                                         "identification_draws`, the default fit)"), "",
+                    *excitation_markdown(excitation)])
     out = SectionResult(md, results, checks, targets, headline,
                         outputs={"model": model, "draws": draws})
     for extra in arm.entry.extras:
         out.extend(load_extra(extra).identification(ctx), extra)
     return out
+
+
+def _over_draws(arm, quick: bool) -> dict:
+    """The study identification_draws' default fit on this arm (its data, judges and oracle)
+    on the study's scored draws (FRESH_SEEDS, FRESH_JUDGE, every noise level; quick: one seed
+    at 5 %), the twin oracle beside: the bench's targets over many draws are the study's."""
+    return over_draws.study(arm, {"default": over_draws.named_fit(arm, {})},
+                            over_draws.FRESH_SEEDS[:1] if quick else over_draws.FRESH_SEEDS,
+                            over_draws.FRESH_JUDGE, (NOISE,) if quick else over_draws.NOISES)
 
 
 def _pairs_markdown(pairs: list[dict]) -> list[str]:
