@@ -245,9 +245,10 @@ def run(ctx: Context) -> SectionResult:
 
 def on_draws(robot: str, seeds, judge: int, fits: int | None = None) -> dict:
     """study() of robot's fits in ARMS (the first `fits` of them; None: all) on the draws of
-    `seeds` judged on `judge`'s motions, at every noise level ARMS studies."""
+    `seeds` judged on `judge`'s motions, at every noise level ARMS studies; an arm ARMS does
+    not name (a URDF path: an arm no setting was chosen on) by the Panda's fits."""
     arm = Arm.of(robot)
-    named, noises = ARMS[robot]
+    named, noises = ARMS.get(robot, ARMS["panda"])
     return study(arm, {name: named_fit(arm, options) for name, options in named[:fits]},
                  seeds, judge, noises)
 
@@ -269,7 +270,7 @@ def scored(robot: str) -> dict:
     return on_draws(robot, FRESH_SEEDS, FRESH_JUDGE)
 
 
-if __name__ == "__main__":  # python -m harness.studies.identification_draws [ROBOT] [--fresh]
+if __name__ == "__main__":  # python -m harness.studies.identification_draws [ROBOT|URDF] [--fresh]
     import sys  # ... decision: the Lynxmotion's decision draws
 
     robot = [a for a in sys.argv[1:] if not a.startswith("--")][:1]
