@@ -202,17 +202,19 @@ def study_targets(robot: str, result: dict) -> list[Target]:
     """Per fit and noise level of study()'s result (TWIN, a reference, aside): the worst
     joint's median ratio to the oracle (<= MEDIAN_TARGET) and the worst draw-joint's
     (<= WORST_TARGET), on the draws of result's seeds."""
-    targets = []
+    targets, twin = [], result["summary"].get(TWIN, {}).get("oracle", {})
     for fit, s in result["summary"].items():
         if fit == TWIN:
             continue
         for key, o in s["oracle"].items():
+            note = (f"the oracle on another noise draw, the same draws: worst "
+                    f"{max(twin[key]['worst_per_joint']):.2f}x" if key in twin else "")
             label = f"{robot} {fit} at {float(key):.0%} noise"
             draws = f"seeds {', '.join(map(str, result['seeds']))}, judge {result['judge']}"
             targets += [Target(f"{label}: worst joint's median ratio to the oracle ({draws})",
                                max(o["median_per_joint"]), MEDIAN_TARGET, "x"),
                         Target(f"{label}: worst draw-joint's ratio to the oracle ({draws})",
-                               max(o["worst_per_joint"]), WORST_TARGET, "x")]
+                               max(o["worst_per_joint"]), WORST_TARGET, "x", note=note)]
     return targets
 
 
