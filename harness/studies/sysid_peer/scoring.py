@@ -69,3 +69,16 @@ def _bodies(parameters, dof: int) -> tuple:
         return None, None
     inertial = np.asarray(parameters[:10 * dof])
     return min_pseudo_eigenvalues(inertial), inertial[::10]
+
+
+def window(s: Scored, seconds: float) -> dict:
+    return next(w for w in s.rollout if abs(w["seconds"] - seconds) < 1e-9)
+
+
+def joints_worse(ours: Scored, peer: Scored, seconds: float) -> int:
+    """Joints where ours rolls out worse than the peer over windows of seconds (every joint
+    when either has no window that did not diverge)."""
+    q_ours, q_peer = window(ours, seconds)["q_rms"], window(peer, seconds)["q_rms"]
+    if q_ours is None or q_peer is None:
+        return len(ours.torque_error)
+    return int(np.sum(np.asarray(q_ours) > np.asarray(q_peer)))
