@@ -284,3 +284,21 @@ def test_refine_writes_the_refined_mjcf_and_its_record(tmp_path, capsys):
     assert record["cost"] <= record["cost_start"]
     refined = mujoco.MjModel.from_xml_path(record["mjcf"])  # plain MuJoCo reads it
     assert refined.nu == 3 and "refined by rollouts" in capsys.readouterr().out
+
+
+def test_no_model_row_is_the_constant_velocity_closed_form():
+    """Under a constant acceleration a, continuing each window at its first velocity misses
+    q by a t^2 / 2 and qd by a t: the RMS over a window's samples in closed form."""
+    from harness.studies.sysid_peer.scoring import WINDOWS, constant_velocity
+
+    dt, a, v = 0.01, np.array([2.0, -0.5]), np.array([0.3, 1.0])
+    t = np.arange(401) * dt
+    arrays = {"t": t, "q": 0.5 * np.outer(t ** 2, a) + np.outer(t, v),
+              "qd": np.outer(t, a) + v}
+    for w in constant_velocity(arrays, 0.5):
+        s = dt * np.arange(1, int(round(w["seconds"] / dt)) + 1)
+        assert w["seconds"] in WINDOWS and w["diverged"] == 0
+        np.testing.assert_allclose(w["q_rms"], np.abs(a) / 2 * np.sqrt(np.mean(s ** 4)),
+                                   rtol=1e-9)
+        np.testing.assert_allclose(w["qd_rms"], np.abs(a) * np.sqrt(np.mean(s ** 2)),
+                                   rtol=1e-9)

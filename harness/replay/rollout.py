@@ -145,10 +145,10 @@ def fidelity(model: mujoco.MjModel, t, q, qd, tau, seconds: float) -> WindowFide
             continue
         q_err.append(eq)
         qd_err.append(eqd)
-    return WindowFidelity(float(seconds), samples, count, diverged, _rms(q_err), _rms(qd_err))
+    return WindowFidelity(float(seconds), samples, count, diverged, window_rms(q_err), window_rms(qd_err))
 
 
-def _rms(errors: list[np.ndarray]) -> np.ndarray | None:
+def window_rms(errors: list[np.ndarray]) -> np.ndarray | None:
     """Per joint RMS over every sample of the windows, None when there are none."""
     return np.sqrt(np.mean(np.concatenate(errors) ** 2, axis=0)) if errors else None
 

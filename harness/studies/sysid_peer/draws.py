@@ -12,14 +12,17 @@ from harness.studies.sysid_peer.scoring import Scored, joints_worse, window
 JUDGED = 0.5  # s, the rollout window the targets judge
 
 
-def draw_figures(seeds: tuple[int, int], ours: Scored, peer: Scored, refined: Scored) -> dict:
+def draw_figures(seeds: tuple[int, int], ours: Scored, peer: Scored, refined: Scored,
+                 still: list[dict]) -> dict:
     """One draw's figures: its seeds, per joint the 0.5 s rollout q RMS and torque error of
-    identify, the peer and the refinement, and the joints where each of ours is above the
-    peer's."""
+    identify, the peer and the refinement (and the rollout of no model, scoring.
+    constant_velocity's), and the joints where each of ours is above the peer's."""
     def q(s: Scored):
         return window(s, JUDGED)["q_rms"]
     return {"seeds": list(seeds),
-            "rollout_q_rms": {"identify": q(ours), "peer": q(peer), "refined": q(refined)},
+            "rollout_q_rms": {"identify": q(ours), "peer": q(peer), "refined": q(refined),
+                              "constant_velocity": next(
+                                  w["q_rms"] for w in still if w["seconds"] == JUDGED)},
             "torque_error": {"identify": ours.torque_error.tolist(),
                              "peer": peer.torque_error.tolist(),
                              "refined": refined.torque_error.tolist()},

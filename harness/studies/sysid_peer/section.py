@@ -37,7 +37,13 @@ from harness.report.results import Context, SectionResult, Target, check
 from harness.robots.arm import Arm
 from harness.studies.sysid_peer.draws import draw_figures, draws_markdown, draws_targets
 from harness.studies.sysid_peer.plant import DRAWS, plant_log
-from harness.studies.sysid_peer.scoring import Scored, held_slice, joints_worse, score_mujoco
+from harness.studies.sysid_peer.scoring import (
+    Scored,
+    constant_velocity,
+    held_slice,
+    joints_worse,
+    score_mujoco,
+)
 from identification.closeloop.closed.offsets import held_out_offset
 from identification.identify import identify
 from identification.metrics import rel_error
@@ -70,11 +76,13 @@ def run(ctx: Context) -> SectionResult:
         for name, words, load, seeds in cases:
             arrays, arm, truth = load()
             scored, fits = case(arm, arrays, ctx.quick)
+            still = constant_velocity(arrays, HOLDOUT)
             results[name] = {"peer": fits[0].to_json(), "refined": fits[1],
                              "models": [s.to_json() for s in scored],
+                             "constant_velocity": still,
                              "truth_masses": None if truth is None
                              else truth[:10 * arm.dof:10].tolist()}
-            md += [f"### {words}", "", *markdown(scored, fits, truth, ctx.quick), ""]
+            md += [f"### {words}", "", *markdown(scored, fits, truth, ctx.quick, still), ""]
             checks += [check(f"{name}: {s.name}: bodies physically consistent",
                                  bool(np.min(s.min_eigenvalues) >= -CONSISTENT_TOL),
                                  f"smallest pseudo-inertia eigenvalue "
@@ -82,7 +90,7 @@ def run(ctx: Context) -> SectionResult:
             if not ctx.quick and name in ("panda", "ur5"):
                 goals += targets(name, *scored[1:])
             if seeds is not None:
-                draws.append(draw_figures(seeds, *scored[1:]))
+                draws.append(draw_figures(seeds, *scored[1:], still))
         if draws:
             results["ur5_draws"] = draws
             md += [f"### the UR5 plant on {len(draws)} draws", "", *draws_markdown(draws), ""]
@@ -179,7 +187,8 @@ def targets(name: str, ours: Scored, peer: Scored, refined: Scored) -> list[Targ
     return out
 
 
-def markdown(scored: list[Scored], fits: tuple, truth, quick: bool) -> list[str]:
+def markdown(scored: list[Scored], fits: tuple, truth, quick: bool, still: list[dict]
+             ) -> list[str]:
     dof = len(scored[0].torque_error)
     peer, _, refined = fits
 
@@ -208,4 +217,7 @@ def markdown(scored: list[Scored], fits: tuple, truth, quick: bool) -> list[str]
                          f"{w['diverged']}/{w['windows']} diverged | {joints(w['q_rms'])} | |")
         lines.append(f"| {s.name} | body mass (kg), total {np.sum(s.masses):.2f} | "
                      f"{joints(s.masses, '{:.2f}')} | |")
+    for w in still:
+        lines.append(f"| no model: q0 + qd0 t | rollout {w['seconds']:g} s q RMS (rad) | "
+                     f"{joints(w['q_rms'])} | |")
     return lines
