@@ -302,3 +302,44 @@ def test_no_model_row_is_the_constant_velocity_closed_form():
                                    rtol=1e-9)
         np.testing.assert_allclose(w["qd_rms"], np.abs(a) * np.sqrt(np.mean(s ** 2)),
                                    rtol=1e-9)
+
+
+def _stepped_rms(model, t, q, qd, tau, seconds: float) -> np.ndarray:
+    """Per joint q RMS of plain MuJoCo stepping model with its own motors on (control: the
+    logged torque, linear between samples) from the log's state at the start of each window
+    tiling the log, over every sample of the windows."""
+    step = t[1] - t[0]
+    sub, samples = int(round(step / model.opt.timestep)), int(round(seconds / step))
+    assert abs(sub * model.opt.timestep - step) < 1e-12
+    data, errors = mujoco.MjData(model), []
+    for k in range(0, len(t) - samples, samples):
+        mujoco.mj_resetData(model, data)
+        data.qpos[:], data.qvel[:] = q[k], qd[k]
+        for i in range(k, k + samples):
+            for s in range(sub):
+                data.ctrl[:] = (1 - s / sub) * tau[i] + s / sub * tau[i + 1]
+                mujoco.mj_step(model, data)
+            errors.append(data.qpos - q[i + 1])
+    return np.sqrt(np.mean(np.square(errors), axis=0))
+
+
+def test_predict_rolls_out_the_refined_mjcf_as_plain_mujoco_steps_it(tmp_path):
+    """MODEL.json of `identify --refine rollout` (moved with its MJCF to another folder):
+    `predict --rollout` gives the figures of plain MuJoCo stepping the refined file, its own
+    motors driven by the logged torque (their bias the refined sensor offset)."""
+    assert _identify(tmp_path, "--prior", "nominal", "--refine", "rollout",
+                     "--refine-seconds", "1") == 0
+    moved = tmp_path / "moved"
+    moved.mkdir()
+    for name in ("m.json", "m.refined.xml"):
+        (tmp_path / name).rename(moved / name)
+    assert main(["predict", "--model", str(moved / "m.json"), "--data", str(tmp_path / "lx.npz"),
+                 "--rollout", "0.1,0.25", "--out", str(tmp_path / "p.npz")]) == 0
+    windows = json.loads((tmp_path / "p.rollout.json").read_text())["windows"]
+    log = np.load(tmp_path / "lx.npz")
+    model = mujoco.MjModel.from_xml_path(str(moved / "m.refined.xml"))
+    assert np.any(model.actuator_biasprm[:, 0] != 0)
+    for w in windows:
+        expected = _stepped_rms(model, np.ravel(log["t"]), log["q"], log["qd"], log["tau"],
+                                w["seconds"])
+        np.testing.assert_allclose(w["q_rms"], expected, rtol=1e-6)
