@@ -343,3 +343,16 @@ def test_predict_rolls_out_the_refined_mjcf_as_plain_mujoco_steps_it(tmp_path):
         expected = _stepped_rms(model, np.ravel(log["t"]), log["q"], log["qd"], log["tau"],
                                 w["seconds"])
         np.testing.assert_allclose(w["q_rms"], expected, rtol=1e-6)
+
+
+def test_predict_refuses_a_refined_mjcf_gone_in_one_line(tmp_path, capsys):
+    assert _identify(tmp_path, "--prior", "nominal", "--refine", "rollout",
+                     "--refine-seconds", "1") == 0
+    (tmp_path / "m.refined.xml").unlink()
+    capsys.readouterr()
+    assert main(["predict", "--model", str(tmp_path / "m.json"), "--data",
+                 str(tmp_path / "lx.npz"), "--rollout", "0.1", "--out",
+                 str(tmp_path / "p.npz")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "refined MJCF" in err[0] and "not found" in err[0]
+    assert not (tmp_path / "p.npz").exists() and not (tmp_path / "p.rollout.json").exists()
