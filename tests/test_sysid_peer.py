@@ -356,3 +356,23 @@ def test_predict_refuses_a_refined_mjcf_gone_in_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "refined MJCF" in err[0] and "not found" in err[0]
     assert not (tmp_path / "p.npz").exists() and not (tmp_path / "p.rollout.json").exists()
+
+
+def test_draws_judge_the_worst_draw_joint_by_joint():
+    """Two plants: the refinement above the peer on no joint of the first and on joints 2 and
+    3 of the second (a rollout), its torque above on joint 1 of the first: the targets read
+    the worst draw's count, 2 and 1."""
+    from harness.studies.sysid_peer.draws import draw_figures, draws_targets
+    from harness.studies.sysid_peer.scoring import Scored
+
+    def scored(torque, q):
+        return Scored("m", np.array(torque), [{"seconds": 0.5, "q_rms": q}], None, None, None)
+    still = [{"seconds": 0.5, "q_rms": [1.0, 1.0, 1.0]}]
+    peer = scored([0.1, 0.1, 0.1], [0.2, 0.2, 0.2])
+    draws = [draw_figures((1, 2), peer, peer, scored([0.2, 0.1, 0.05], [0.1, 0.2, 0.1]), still),
+             draw_figures((3, 4), peer, peer, scored([0.1, 0.1, 0.1], [0.1, 0.3, 0.25]), still)]
+    assert [d["joints_above_peer"]["refined_rollout"] for d in draws] == [0, 2]
+    measured = {t.name.split("where ")[1]: t.measured for t in draws_targets(draws)}
+    assert measured["identify --refine rollout's 0.5 s rollout q RMS is above mujoco.sysid's"] == 2
+    assert measured["identify --refine rollout's held-out torque error is above "
+                    "mujoco.sysid's"] == 1

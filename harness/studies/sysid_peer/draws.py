@@ -41,6 +41,10 @@ def _ratio(draw: dict, ours: str, kind: str) -> float:
     return float(np.max(np.asarray(figures[ours]) / np.asarray(figures["peer"])))
 
 
+def _joints(n: int) -> str:
+    return f"{n} joint" + ("" if n == 1 else "s")
+
+
 def draws_markdown(draws: list[dict]) -> list[str]:
     """Per draw: the joints where identify and the refinement are above the peer, and the
     largest per-joint ratio to the peer's figure; the worst case across draws."""
@@ -51,8 +55,7 @@ def draws_markdown(draws: list[dict]) -> list[str]:
              "|---|---|---|---|---|"]
 
     def cell(d: dict, ours: str, kind: str, key: str) -> str:
-        return (f"{d['joints_above_peer'][key]} joints, "
-                f"x{_ratio(d, ours, kind):.3g}")
+        return f"{_joints(d['joints_above_peer'][key])}, x{_ratio(d, ours, kind):.3g}"
     columns = (("refined", "rollout_q_rms", "refined_rollout"),
                ("refined", "torque_error", "refined_torque"),
                ("identify", "rollout_q_rms", "identify_rollout"),
@@ -60,7 +63,7 @@ def draws_markdown(draws: list[dict]) -> list[str]:
     for d in draws:
         lines.append(f"| {d['seeds'][0]}, {d['seeds'][1]} | "
                      + " | ".join(cell(d, *c) for c in columns) + " |")
-    worst = [f"{max(d['joints_above_peer'][key] for d in draws)} joints, "
+    worst = [f"{_joints(max(d['joints_above_peer'][key] for d in draws))}, "
              f"x{max(_ratio(d, ours, kind) for d in draws):.3g}" for ours, kind, key in columns]
     lines.append("| worst | " + " | ".join(worst) + " |")
     return lines
