@@ -376,3 +376,27 @@ def test_draws_judge_the_worst_draw_joint_by_joint():
     assert measured["identify --refine rollout's 0.5 s rollout q RMS is above mujoco.sysid's"] == 2
     assert measured["identify --refine rollout's held-out torque error is above "
                     "mujoco.sysid's"] == 1
+
+
+def test_rollouts_repeat_bit_for_bit():
+    """The toolbox's residual at a point, and a finite-difference Jacobian's columns, come out
+    bit for bit the same on repeated calls across threads (what differs between runs of a fit
+    is the optimizer's path, not the rollouts: docs/identification.md)."""
+    arm = Arm.of("lynxmotion")
+    truth = arm.nominal.atom_parameters().copy()
+    truth[30:] = [2e-4, 1e-4, 5e-5, 0.01, 0.005, 0.004, 0.02, 0.01, 0.005]
+    t, q, qd, tau = _made_log(arm, truth, np.array([0.03, -0.02, 0.01]), n=201)
+    spec = peer_spec(arm, truth)
+    model = spec.compile()
+    params = peer_parameters(spec, model)
+    residual = sysid.build_residual_fn(
+        models_sequences=[model_sequences(spec, model, t, q, qd, tau, [Windows(0, len(t), 25)])],
+        n_threads=2)
+    x = params.as_vector()
+    columns = np.tile(x[:, None], (1, 6)) + 1e-3 * np.eye(x.size, 6)
+
+    def flat(v):
+        return np.concatenate([np.ravel(r) for r in residual(v, params.copy())[0]])
+    first, jacobian = flat(x), flat(columns)
+    assert np.array_equal(flat(columns), jacobian) and np.array_equal(flat(x), first)
+    assert not np.array_equal(flat(columns[:, ::-1]), jacobian)  # the columns do matter
