@@ -284,3 +284,119 @@ def test_refine_writes_the_refined_mjcf_and_its_record(tmp_path, capsys):
     assert record["cost"] <= record["cost_start"]
     refined = mujoco.MjModel.from_xml_path(record["mjcf"])  # plain MuJoCo reads it
     assert refined.nu == 3 and "refined by rollouts" in capsys.readouterr().out
+
+
+def test_no_model_row_is_the_constant_velocity_closed_form():
+    """Under a constant acceleration a, continuing each window at its first velocity misses
+    q by a t^2 / 2 and qd by a t: the RMS over a window's samples in closed form."""
+    from harness.studies.sysid_peer.scoring import WINDOWS, constant_velocity
+
+    dt, a, v = 0.01, np.array([2.0, -0.5]), np.array([0.3, 1.0])
+    t = np.arange(401) * dt
+    arrays = {"t": t, "q": 0.5 * np.outer(t ** 2, a) + np.outer(t, v),
+              "qd": np.outer(t, a) + v}
+    for w in constant_velocity(arrays, 0.5):
+        s = dt * np.arange(1, int(round(w["seconds"] / dt)) + 1)
+        assert w["seconds"] in WINDOWS and w["diverged"] == 0
+        np.testing.assert_allclose(w["q_rms"], np.abs(a) / 2 * np.sqrt(np.mean(s ** 4)),
+                                   rtol=1e-9)
+        np.testing.assert_allclose(w["qd_rms"], np.abs(a) * np.sqrt(np.mean(s ** 2)),
+                                   rtol=1e-9)
+
+
+def _stepped_rms(model, t, q, qd, tau, seconds: float) -> np.ndarray:
+    """Per joint q RMS of plain MuJoCo stepping model with its own motors on (control: the
+    logged torque, linear between samples) from the log's state at the start of each window
+    tiling the log, over every sample of the windows."""
+    step = t[1] - t[0]
+    sub, samples = int(round(step / model.opt.timestep)), int(round(seconds / step))
+    assert abs(sub * model.opt.timestep - step) < 1e-12
+    data, errors = mujoco.MjData(model), []
+    for k in range(0, len(t) - samples, samples):
+        mujoco.mj_resetData(model, data)
+        data.qpos[:], data.qvel[:] = q[k], qd[k]
+        for i in range(k, k + samples):
+            for s in range(sub):
+                data.ctrl[:] = (1 - s / sub) * tau[i] + s / sub * tau[i + 1]
+                mujoco.mj_step(model, data)
+            errors.append(data.qpos - q[i + 1])
+    return np.sqrt(np.mean(np.square(errors), axis=0))
+
+
+def test_predict_rolls_out_the_refined_mjcf_as_plain_mujoco_steps_it(tmp_path):
+    """MODEL.json of `identify --refine rollout` (moved with its MJCF to another folder):
+    `predict --rollout` gives the figures of plain MuJoCo stepping the refined file, its own
+    motors driven by the logged torque (their bias the refined sensor offset)."""
+    assert _identify(tmp_path, "--prior", "nominal", "--refine", "rollout",
+                     "--refine-seconds", "1") == 0
+    moved = tmp_path / "moved"
+    moved.mkdir()
+    for name in ("m.json", "m.refined.xml"):
+        (tmp_path / name).rename(moved / name)
+    assert main(["predict", "--model", str(moved / "m.json"), "--data", str(tmp_path / "lx.npz"),
+                 "--rollout", "0.1,0.25", "--out", str(tmp_path / "p.npz")]) == 0
+    windows = json.loads((tmp_path / "p.rollout.json").read_text())["windows"]
+    log = np.load(tmp_path / "lx.npz")
+    model = mujoco.MjModel.from_xml_path(str(moved / "m.refined.xml"))
+    assert np.any(model.actuator_biasprm[:, 0] != 0)
+    for w in windows:
+        expected = _stepped_rms(model, np.ravel(log["t"]), log["q"], log["qd"], log["tau"],
+                                w["seconds"])
+        np.testing.assert_allclose(w["q_rms"], expected, rtol=1e-6)
+
+
+def test_predict_refuses_a_refined_mjcf_gone_in_one_line(tmp_path, capsys):
+    assert _identify(tmp_path, "--prior", "nominal", "--refine", "rollout",
+                     "--refine-seconds", "1") == 0
+    (tmp_path / "m.refined.xml").unlink()
+    capsys.readouterr()
+    assert main(["predict", "--model", str(tmp_path / "m.json"), "--data",
+                 str(tmp_path / "lx.npz"), "--rollout", "0.1", "--out",
+                 str(tmp_path / "p.npz")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "refined MJCF" in err[0] and "not found" in err[0]
+    assert not (tmp_path / "p.npz").exists() and not (tmp_path / "p.rollout.json").exists()
+
+
+def test_draws_judge_the_worst_draw_joint_by_joint():
+    """Two plants: the refinement above the peer on no joint of the first and on joints 2 and
+    3 of the second (a rollout), its torque above on joint 1 of the first: the targets read
+    the worst draw's count, 2 and 1."""
+    from harness.studies.sysid_peer.draws import draw_figures, draws_targets
+    from harness.studies.sysid_peer.scoring import Scored
+
+    def scored(torque, q):
+        return Scored("m", np.array(torque), [{"seconds": 0.5, "q_rms": q}], None, None, None)
+    still = [{"seconds": 0.5, "q_rms": [1.0, 1.0, 1.0]}]
+    peer = scored([0.1, 0.1, 0.1], [0.2, 0.2, 0.2])
+    draws = [draw_figures((1, 2), peer, peer, scored([0.2, 0.1, 0.05], [0.1, 0.2, 0.1]), still),
+             draw_figures((3, 4), peer, peer, scored([0.1, 0.1, 0.1], [0.1, 0.3, 0.25]), still)]
+    assert [d["joints_above_peer"]["refined_rollout"] for d in draws] == [0, 2]
+    measured = {t.name.split("where ")[1]: t.measured for t in draws_targets(draws)}
+    assert measured["identify --refine rollout's 0.5 s rollout q RMS is above mujoco.sysid's"] == 2
+    assert measured["identify --refine rollout's held-out torque error is above "
+                    "mujoco.sysid's"] == 1
+
+
+def test_rollouts_repeat_bit_for_bit():
+    """The toolbox's residual at a point, and a finite-difference Jacobian's columns, come out
+    bit for bit the same on repeated calls across threads (what differs between runs of a fit
+    is the optimizer's path, not the rollouts: docs/identification.md)."""
+    arm = Arm.of("lynxmotion")
+    truth = arm.nominal.atom_parameters().copy()
+    truth[30:] = [2e-4, 1e-4, 5e-5, 0.01, 0.005, 0.004, 0.02, 0.01, 0.005]
+    t, q, qd, tau = _made_log(arm, truth, np.array([0.03, -0.02, 0.01]), n=201)
+    spec = peer_spec(arm, truth)
+    model = spec.compile()
+    params = peer_parameters(spec, model)
+    residual = sysid.build_residual_fn(
+        models_sequences=[model_sequences(spec, model, t, q, qd, tau, [Windows(0, len(t), 25)])],
+        n_threads=2)
+    x = params.as_vector()
+    columns = np.tile(x[:, None], (1, 6)) + 1e-3 * np.eye(x.size, 6)
+
+    def flat(v):
+        return np.concatenate([np.ravel(r) for r in residual(v, params.copy())[0]])
+    first, jacobian = flat(x), flat(columns)
+    assert np.array_equal(flat(columns), jacobian) and np.array_equal(flat(x), first)
+    assert not np.array_equal(flat(columns[:, ::-1]), jacobian)  # the columns do matter

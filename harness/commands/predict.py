@@ -16,6 +16,7 @@ from harness.replay.rollout import (
     DIVERGED,
     WINDOWS,
     held_model,
+    refined_model,
     roll_out,
     table,
 )
@@ -61,7 +62,9 @@ def register(sub) -> None:
     p.add_argument("--rollout", nargs="?", const=",".join(f"{w:g}" for w in WINDOWS),
                    default=None, metavar="SECONDS[,...]",
                    help="also roll the model out in MuJoCo (the robot's own file for "
-                   "'pinocchio', else the MJCF `export --format mjcf` writes): from the log's "
+                   "'pinocchio', the refined MJCF a MODEL.json of `identify --refine rollout` "
+                   "names, driven with its motors' bias, else the MJCF `export --format mjcf` "
+                   "writes): from the log's "
                    "q, qd at the start of each window of these lengths (default "
                    f"{','.join(f'{w:g}' for w in WINDOWS)}), driven by the log's tau (less "
                    "the sensor offset added to the prediction), against the log's q and qd; "
@@ -127,7 +130,12 @@ def _rollout(args, read, arm, model, states: dict, meta: dict, offset) -> tuple:
     if missing:
         raise UserError(f"{args.data}: --rollout needs the log's {' and '.join(missing)}")
     approximated: list[str] = []
-    held, words = held_model(read.payload, arm, approximated)
+    refined = refined_model(read.payload, args.model)
+    if refined is None:
+        held, words = held_model(read.payload, arm, approximated)
+    else:  # the refined MJCF is the model: its motors' bias holds its sensor offset
+        held, bias, words = refined
+        offset = -bias
     tau = states["tau"] - (0.0 if offset is None else offset)
     done = roll_out(held, states["t"], states["q"], states["qd"], tau, seconds,
                     args.rollout_holdout)

@@ -15,11 +15,14 @@ torque error of 22.8 on joint 1, 0.118 unrefined: docs/identification.md), the s
 not moved off them;
 stopped at a wall-time budget, the best point evaluated kept. What the MJCF cannot hold (a
 sigmoid's shape) stays approximated as the export approximates it; the refined model is the
-MJCF, not the torque law in MODEL.json.
+MJCF, not the torque law in MODEL.json: MODEL.json's 'refined' names it (its path as written and
+from MODEL.json's folder), `predict --rollout` rolls it out (harness.replay.rollout.
+refined_model), `predict`'s torque stays the torque law's.
 """
 
 from __future__ import annotations
 
+import os
 import tempfile
 from pathlib import Path
 
@@ -104,6 +107,7 @@ def refine_command(args, payload: dict, arm: Arm, runs, result, holdout: float) 
     offset = held_out_offset(result.model, np.asarray(result.sensor_offsets()["new_run"], float))
     fit, record = refine_rollout(payload, arm, t, data["q"], data["qd"], data["tau"],
                                  parts, offset, args.refine_seconds, out)
+    record["mjcf_from_model"] = os.path.relpath(out.resolve(), Path(args.out).resolve().parent)
     payload["refined"] = record
     return [f"refined by rollouts ({fit.windows} windows of {WINDOW:g} s, {fit.count} "
             f"parameters): cost {fit.cost_start:.4g} -> {fit.cost:.4g}, {fit.stopped} after "

@@ -89,13 +89,10 @@ def file_spec(path) -> tuple[mujoco.MjSpec, np.ndarray]:
     from pathlib import Path
 
     from harness.robots.files import mjcf_spec, plain_mujoco
+    from harness.robots.mjcf_export import motor_bias
 
     model = plain_mujoco(Path(path))
-    bias = np.zeros(model.njnt)
-    for a in range(model.nu):
-        if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:
-            bias[model.actuator_trnid[a, 0]] += model.actuator_biasprm[a, 0] \
-                * model.actuator_gear[a, 0]
+    bias = motor_bias(model)
     return drive_and_sense(mjcf_spec(Path(path)), joint_names(model), bias), bias
 
 

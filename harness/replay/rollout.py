@@ -70,6 +70,27 @@ def held_model(payload: dict | None, arm: Arm, report: list[str] | None = None
         return plain_mujoco(path), "its exported MJCF (export --format mjcf)"
 
 
+def refined_model(payload: dict | None, model_path: str
+                  ) -> tuple[mujoco.MjModel, np.ndarray, str] | None:
+    """The refined MJCF a MODEL.json names (`identify --refine rollout`'s record 'refined':
+    its path from MODEL.json's folder, else as written), read by plain MuJoCo, its motors'
+    bias (N m per joint: the force on the joint is the torque the sensor reads + bias) and its
+    words; None when the model names none; UserError when the file is not found."""
+    from harness.robots.mjcf_export import motor_bias
+
+    record = (payload or {}).get("refined") or {}
+    if "mjcf" not in record:
+        return None
+    paths = [Path(model_path).parent / record["mjcf_from_model"]] \
+        if "mjcf_from_model" in record else []
+    path = next((p for p in [*paths, Path(record["mjcf"])] if p.is_file()), None)
+    if path is None:
+        raise UserError(f"{model_path}: its refined MJCF {record['mjcf']} is not found (identify "
+                        "--refine rollout wrote it; keep it beside MODEL.json)")
+    model = plain_mujoco(path)
+    return model, motor_bias(model), f"its refined MJCF {path} (identify --refine rollout)"
+
+
 def log_step(t: np.ndarray) -> float:
     """The log's sample step (s); UserError unless evenly sampled within REGULAR."""
     t = np.ravel(t)
@@ -145,10 +166,11 @@ def fidelity(model: mujoco.MjModel, t, q, qd, tau, seconds: float) -> WindowFide
             continue
         q_err.append(eq)
         qd_err.append(eqd)
-    return WindowFidelity(float(seconds), samples, count, diverged, _rms(q_err), _rms(qd_err))
+    return WindowFidelity(float(seconds), samples, count, diverged, window_rms(q_err),
+                          window_rms(qd_err))
 
 
-def _rms(errors: list[np.ndarray]) -> np.ndarray | None:
+def window_rms(errors: list[np.ndarray]) -> np.ndarray | None:
     """Per joint RMS over every sample of the windows, None when there are none."""
     return np.sqrt(np.mean(np.concatenate(errors) ** 2, axis=0)) if errors else None
 

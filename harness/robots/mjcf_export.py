@@ -94,6 +94,18 @@ def approximation_lines(frictions, bias: np.ndarray) -> list[str]:
     return lines
 
 
+def motor_bias(model: mujoco.MjModel) -> np.ndarray:
+    """Each joint's motors' bias (N m at the joint: biasprm[0] x gear, summed over the
+    actuators on the joint), what _bias_motors wrote: the force on the joint is the torque the
+    sensor reads + this."""
+    bias = np.zeros(model.njnt)
+    for a in range(model.nu):
+        if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:
+            bias[model.actuator_trnid[a, 0]] += model.actuator_biasprm[a, 0] \
+                * model.actuator_gear[a, 0]
+    return bias
+
+
 def _bias_motors(root: ET.Element, model: mujoco.MjModel, bias: np.ndarray) -> None:
     """Each joint's motor given the bias (N m at the joint): the file's own motor on the joint
     where it has one (_motor_of), its bias made affine, else a new motor

@@ -25,6 +25,10 @@ SAMPLES = 2000  # at generate's 200 Hz: 10 s
 # drawn once on 2026-12-07 (numpy default_rng().integers(10_000, size=2)); no setting of the
 # study was chosen on them (developed on perturbation seed 1, data seed 11)
 PERTURBATION_SEED, DATA_SEED = 8226, 1908
+# more plants, (perturbation seed, data seed) each, drawn once on 2026-12-08 (numpy
+# default_rng().integers(10_000, size=8)); no setting of the study or the refinement was chosen
+# on them (development: perturbation seed 1, data seed 11, and the real Panda log)
+DRAWS = ((PERTURBATION_SEED, DATA_SEED), (1289, 4488), (6490, 4231), (8451, 8570), (289, 2048))
 
 
 def plant_parameters(arm: Arm, seed: int = PERTURBATION_SEED) -> np.ndarray:
@@ -36,12 +40,13 @@ def plant_parameters(arm: Arm, seed: int = PERTURBATION_SEED) -> np.ndarray:
                            np.full(dof, COULOMB)])
 
 
-def plant_log(folder: Path) -> tuple[dict, np.ndarray, Arm]:
-    """The plant's log arrays (t, q, qd, qdd, tau), its true standard parameters and the
-    robot the models are fitted for."""
+def plant_log(folder: Path, seeds: tuple[int, int] = DRAWS[0]
+              ) -> tuple[dict, np.ndarray, Arm]:
+    """The plant of seeds (perturbation, data): its log arrays (t, q, qd, qdd, tau), its true
+    standard parameters and the robot the models are fitted for."""
     robot = Arm.of(ROBOT)
-    truth = plant_parameters(robot)
-    path = Path(folder) / "plant.xml"
+    truth = plant_parameters(robot, seeds[0])
+    path = Path(folder) / f"plant_{seeds[0]}_{seeds[1]}.xml"
     export_model({"body_parameters": truth.tolist()}, robot, "mjcf", path)
-    data = generate(Arm.of(path), SAMPLES, TORQUE_NOISE, DATA_SEED, "measured", robot=robot)
+    data = generate(Arm.of(path), SAMPLES, TORQUE_NOISE, seeds[1], "measured", robot=robot)
     return data.arrays(), truth, robot

@@ -12,7 +12,13 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from harness.replay.rollout import roll_out
+from harness.replay.rollout import (
+    WindowFidelity,
+    log_step,
+    roll_out,
+    window_rms,
+    window_samples,
+)
 from harness.robots.native_friction import inverse_torque
 from identification.metrics import rel_error
 from identification.physical import min_pseudo_eigenvalues
@@ -64,8 +70,42 @@ def score_mujoco(name: str, model: mujoco.MjModel, bias: np.ndarray, arrays: dic
                   *_bodies(parameters, model.njnt), seconds, command)
 
 
+def constant_velocity(arrays: dict, holdout: float) -> list[dict]:
+    """No model: each window of the held-out part (harness.replay.rollout's windows) continued
+    from its first sample at that sample's velocity, q0 + qd0 t; its q and qd RMS per joint
+    (WindowFidelity.to_json's), per window length in WINDOWS. What a rollout has to beat to
+    predict anything of the torque."""
+    start = held_slice(len(arrays["q"]), holdout).start
+    t, q, qd = np.ravel(arrays["t"])[start:], arrays["q"][start:], arrays["qd"][start:]
+    step, out = log_step(t), []
+    for seconds in WINDOWS:
+        samples = window_samples(seconds, step, len(q))
+        count = (len(q) - 1) // samples
+        q_err, qd_err = [], []
+        for k in range(count):
+            w = slice(k * samples, (k + 1) * samples + 1)
+            q_err.append(q[w][0] + np.outer(t[w][1:] - t[w][0], qd[w][0]) - q[w][1:])
+            qd_err.append(qd[w][0] - qd[w][1:])
+        out.append(WindowFidelity(float(seconds), samples, count, 0, window_rms(q_err),
+                                  window_rms(qd_err)).to_json())
+    return out
+
+
 def _bodies(parameters, dof: int) -> tuple:
     if parameters is None:
         return None, None
     inertial = np.asarray(parameters[:10 * dof])
     return min_pseudo_eigenvalues(inertial), inertial[::10]
+
+
+def window(s: Scored, seconds: float) -> dict:
+    return next(w for w in s.rollout if abs(w["seconds"] - seconds) < 1e-9)
+
+
+def joints_worse(ours: Scored, peer: Scored, seconds: float) -> int:
+    """Joints where ours rolls out worse than the peer over windows of seconds (every joint
+    when either has no window that did not diverge)."""
+    q_ours, q_peer = window(ours, seconds)["q_rms"], window(peer, seconds)["q_rms"]
+    if q_ours is None or q_peer is None:
+        return len(ours.torque_error)
+    return int(np.sum(np.asarray(q_ours) > np.asarray(q_peer)))

@@ -1,5 +1,5 @@
 """Study `sysid_peer`: mujoco.sysid (harness.identify.rollout_fit) beside the project's
-`identify`, and `identify --refine rollout` (harness.identify.refine), on two logs, each
+`identify`, and `identify --refine rollout` (harness.identify.refine), on logs each
 fitted on its first part and judged on its last HOLDOUT (harness.studies.sysid_peer.scoring):
 torque error per joint, rollout error at 0.1 and 0.5 s, each body's physical consistency and
 mass, the fit's wall time.
@@ -7,7 +7,8 @@ mass, the fit's wall time.
 - the shipped real Panda log (data/panda_gaz2019), ingested as the bench's real-data section
   ingests it;
 - a simulated UR5 plant with a ground truth (harness.studies.sysid_peer.plant), its bodies'
-  true masses beside the fitted ones.
+  true masses beside the fitted ones, on each of the plant's draws (plant.DRAWS), the worst
+  case across them judged (harness.studies.sysid_peer.draws).
 
 The peer is the toolbox's fit of the robot's file on 0.5 s rollout windows tiling the fitted
 part, stopped after PEER_ROLLOUTS rollouts of a window (a budget the same on every machine;
@@ -34,8 +35,15 @@ from harness.identify.refine import WINDOW, refine_rollout
 from harness.identify.rollout_fit import RolloutFit, Windows, fit_peer
 from harness.report.results import Context, SectionResult, Target, check
 from harness.robots.arm import Arm
-from harness.studies.sysid_peer.plant import plant_log
-from harness.studies.sysid_peer.scoring import Scored, held_slice, score_mujoco
+from harness.studies.sysid_peer.draws import draw_figures, draws_markdown, draws_targets
+from harness.studies.sysid_peer.plant import DRAWS, plant_log
+from harness.studies.sysid_peer.scoring import (
+    Scored,
+    constant_velocity,
+    held_slice,
+    joints_worse,
+    score_mujoco,
+)
 from identification.closeloop.closed.offsets import held_out_offset
 from identification.identify import identify
 from identification.metrics import rel_error
@@ -57,34 +65,54 @@ COMMANDS = {"panda": ("torquebench ingest --csv data/panda_gaz2019/panda_gaz2019
 
 
 def run(ctx: Context) -> SectionResult:
-    cases = [("panda", "real Panda log (data/panda_gaz2019)", _panda, None)]
     with tempfile.TemporaryDirectory() as folder:
+        cases = [("panda", "real Panda log (data/panda_gaz2019)", _panda, None)]
         if not ctx.quick:
-            plant, truth, _ = plant_log(Path(folder))
-            cases.append(("ur5", "simulated UR5 plant (bodies x [0.8, 1.2], friction)",
-                          lambda: (plant, Arm.of("ur5")), truth))
-        md, results, checks, goals = [], {}, [], []
-        for name, words, load, truth in cases:
-            arrays, arm = load()
+            cases += [(_draw_name(k, seeds), f"simulated UR5 plant (bodies x [0.8, 1.2], "
+                       f"friction), seeds {seeds[0]}, {seeds[1]}",
+                       lambda seeds=seeds: _plant(Path(folder), seeds), seeds)
+                      for k, seeds in enumerate(DRAWS)]
+        md, results, checks, goals, draws = [], {}, [], [], []
+        for name, words, load, seeds in cases:
+            arrays, arm, truth = load()
             scored, fits = case(arm, arrays, ctx.quick)
+            still = constant_velocity(arrays, HOLDOUT)
             results[name] = {"peer": fits[0].to_json(), "refined": fits[1],
                              "models": [s.to_json() for s in scored],
+                             "constant_velocity": still,
                              "truth_masses": None if truth is None
                              else truth[:10 * arm.dof:10].tolist()}
-            md += [f"### {words}", "", *markdown(scored, fits, truth, ctx.quick), ""]
+            md += [f"### {words}", "", *markdown(scored, fits, truth, ctx.quick, still), ""]
             checks += [check(f"{name}: {s.name}: bodies physically consistent",
                                  bool(np.min(s.min_eigenvalues) >= -CONSISTENT_TOL),
                                  f"smallest pseudo-inertia eigenvalue "
                                  f"{np.min(s.min_eigenvalues):.3g}") for s in scored[2:]]
-            if not ctx.quick:
+            if not ctx.quick and name in ("panda", "ur5"):
                 goals += targets(name, *scored[1:])
+            if seeds is not None:
+                draws.append(draw_figures(seeds, *scored[1:], still))
+        if draws:
+            results["ur5_draws"] = draws
+            md += [f"### the UR5 plant on {len(draws)} draws", "", *draws_markdown(draws), ""]
+            goals += draws_targets(draws)
     results["commands"] = COMMANDS
     return SectionResult("\n".join(md).rstrip(), results, checks, goals)
 
 
-def _panda() -> tuple[dict, Arm]:
+def _draw_name(k: int, seeds: tuple[int, int]) -> str:
+    """The results' key of plant draw k: 'ur5' for the first (the study's one plant before
+    more were drawn), 'ur5_<perturbation seed>_<data seed>' for the others."""
+    return "ur5" if k == 0 else f"ur5_{seeds[0]}_{seeds[1]}"
+
+
+def _plant(folder: Path, seeds: tuple[int, int]) -> tuple[dict, Arm, np.ndarray]:
+    arrays, truth, robot = plant_log(folder, seeds)
+    return arrays, robot, truth
+
+
+def _panda() -> tuple[dict, Arm, None]:
     arm = Arm.of("panda")
-    return ingest(LOG, arm, RATE, None).arrays, arm
+    return ingest(LOG, arm, RATE, None).arrays, arm, None
 
 
 def case(arm: Arm, a: dict, quick: bool) -> tuple[list[Scored], tuple]:
@@ -136,19 +164,6 @@ def nominal_and_identified(arm: Arm, a: dict) -> tuple[list[Scored], object]:
             for name in ("nominal", "identified")], result
 
 
-def _window(s: Scored, seconds: float) -> dict:
-    return next(w for w in s.rollout if abs(w["seconds"] - seconds) < 1e-9)
-
-
-def _worse(ours: Scored, peer: Scored, seconds: float) -> int:
-    """Joints where ours rolls out worse than the peer over windows of seconds (every joint
-    when either has no window that did not diverge)."""
-    q_ours, q_peer = _window(ours, seconds)["q_rms"], _window(peer, seconds)["q_rms"]
-    if q_ours is None or q_peer is None:
-        return len(ours.torque_error)
-    return int(np.sum(np.asarray(q_ours) > np.asarray(q_peer)))
-
-
 def targets(name: str, ours: Scored, peer: Scored, refined: Scored) -> list[Target]:
     """Torque and 0.5 s rollout error at or below the peer's on every joint (the joints where
     not: the gap), the refinement's wall time on the Panda."""
@@ -163,16 +178,17 @@ def targets(name: str, ours: Scored, peer: Scored, refined: Scored) -> list[Targ
                   "above mujoco.sysid's", int(np.sum(refined.torque_error > peer.torque_error)),
                   0, "joints", note=note),
            Target(f"{name}: joints where identify --refine rollout's 0.5 s rollout q RMS is "
-                  "above mujoco.sysid's", _worse(refined, peer, 0.5), 0, "joints", note=note),
+                  "above mujoco.sysid's", joints_worse(refined, peer, 0.5), 0, "joints", note=note),
            Target(f"{name}: joints where identify's exported MJCF (unrefined) rolls out worse "
-                  "than mujoco.sysid at 0.5 s", _worse(ours, peer, 0.5), 0, "joints", note=note)]
+                  "than mujoco.sysid at 0.5 s", joints_worse(ours, peer, 0.5), 0, "joints", note=note)]
     if name == "panda":
         out.append(Target("panda: identify + its refinement, wall time (REFINE_ROLLOUTS "
                           "rollouts)", refined.seconds, 60.0, "s", timing=True))
     return out
 
 
-def markdown(scored: list[Scored], fits: tuple, truth, quick: bool) -> list[str]:
+def markdown(scored: list[Scored], fits: tuple, truth, quick: bool, still: list[dict]
+             ) -> list[str]:
     dof = len(scored[0].torque_error)
     peer, _, refined = fits
 
@@ -201,4 +217,7 @@ def markdown(scored: list[Scored], fits: tuple, truth, quick: bool) -> list[str]
                          f"{w['diverged']}/{w['windows']} diverged | {joints(w['q_rms'])} | |")
         lines.append(f"| {s.name} | body mass (kg), total {np.sum(s.masses):.2f} | "
                      f"{joints(s.masses, '{:.2f}')} | |")
+    for w in still:
+        lines.append(f"| no model: q0 + qd0 t | rollout {w['seconds']:g} s q RMS (rad) | "
+                     f"{joints(w['q_rms'])} | |")
     return lines
