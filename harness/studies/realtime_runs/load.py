@@ -4,13 +4,14 @@ block runs."""
 from __future__ import annotations
 
 import contextlib
+import os
 import subprocess
 import sys
 from collections.abc import Iterator
 
-# a pure-Python busy loop that ends itself once its parent is gone (re-parented: its parent
-# id changes), so a study killed outright leaves no spinning process behind
-SPIN = ("import os\nparent = os.getppid()\nwhile os.getppid() == parent:\n"
+# a pure-Python busy loop that ends itself once its parent (the process id it is given) is
+# gone, re-parented, so a study killed outright leaves no spinning process behind
+SPIN = ("import os, sys\nwhile os.getppid() == int(sys.argv[1]):\n"
         "    for _ in range(200_000):\n        pass\n")
 
 
@@ -21,7 +22,7 @@ def busy(count: int) -> Iterator[list[int]]:
     spinning: list[subprocess.Popen] = []
     try:
         for _ in range(count):
-            spinning.append(subprocess.Popen([sys.executable, "-c", SPIN],
+            spinning.append(subprocess.Popen([sys.executable, "-c", SPIN, str(os.getpid())],
                                              stdin=subprocess.DEVNULL))
         yield [p.pid for p in spinning]
     finally:
