@@ -23,7 +23,8 @@ def busy(count: int) -> Iterator[list[int]]:
     try:
         for _ in range(count):
             spinning.append(subprocess.Popen([sys.executable, "-c", SPIN, str(os.getpid())],
-                                             stdin=subprocess.DEVNULL))
+                                             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                             stderr=subprocess.DEVNULL))
         yield [p.pid for p in spinning]
     finally:
         for process in spinning:
