@@ -159,9 +159,11 @@ def register(sub) -> None:
     p.add_argument("--realtime", action="store_true",
                    help="real CPU clocks, as on a robot: budgets and --deadline-ms count the "
                         "planning thread's CPU, a re-plan past its deadline is dropped (the arm "
-                        "follows its last plan; deadline_misses in PLAN.json) and the first "
-                        "plan shares the cold budget; default: nominal clocks, and the first "
-                        "plan solved to convergence, by the other method if need be")
+                        "follows its last plan; deadline_misses in PLAN.json), the first "
+                        "plan shares the cold budget, and the motion runs in real time (each "
+                        "obstacle sample taken at its time: the command takes at least "
+                        "--duration); default: nominal clocks, and the first plan solved to "
+                        "convergence, by the other method if need be")
     p.add_argument("--bank", type=int, default=None, metavar="N",
                    help="anytime: keep a plan on each way round the obstacle (a bank of at "
                         "most N homotopy classes: which side each link passes it), every "
