@@ -83,13 +83,14 @@ def executed(model: TorqueModel, config: PlannerConfig, scenario: Scenario,
     too and kept if that one is: found wherever either method finds one (its forecast at
     t = 0, the obstacle standing still, can hide what the motion meets); so is an execution
     with re-plans if `either` (the method not asked for by name). The budgets count CPU if
-    realtime, else SQP iterations of the arm's nominal cost (nominal_iteration_ms)."""
+    realtime, and the motion then runs in real time (execute's paced), else SQP iterations
+    of the arm's nominal cost (nominal_iteration_ms)."""
     config = config.with_anytime(iteration_ms=None if realtime else
                                  nominal_iteration_ms(config.geometry.dof))
     solver = Planner(model, config) if solver is None else solver
     make = segment_planner if realtime else offline_planner
-    result = evaluate(execute(make(model, config, solver), scenario, replan=replan), scenario,
-                      model, config)
+    result = evaluate(execute(make(model, config, solver), scenario, replan=replan,
+                              paced=realtime), scenario, model, config)
     other = other_method(config)
     if result.feasible or (replan and not either) or realtime or other is None:
         return config, result

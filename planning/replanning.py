@@ -21,6 +21,7 @@ it is.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -74,12 +75,15 @@ def check_start(planner: SegmentPlanner, scenario: Scenario) -> None:
 
 def execute(planner: SegmentPlanner, scenario: Scenario, replan: bool = True,
             avoid: bool = True, starts: int | None = None,
-            first_start: np.ndarray | None = None) -> Execution:
+            first_start: np.ndarray | None = None, paced: bool = False) -> Execution:
     """Run Algorithm 2 on the scenario.
 
     replan=False follows the first plan throughout; avoid=False ignores the obstacle
     (the energy-optimal motion without obstacle, paper Fig. 9 red line); starts: of the
     first plan (default config.starts, planning.starts), or first_start: its one start point.
+    paced: each obstacle sample is taken no sooner than its time after the first plan, on
+    the wall clock, as a robot's motion runs (what another process does meanwhile, the
+    global search, then has the motion's time, not the re-plans' alone).
     """
     scenario.validate(planner.config)
     obstacle, goal, T = scenario.obstacle if avoid else None, scenario.goal, scenario.duration
@@ -98,7 +102,10 @@ def execute(planner: SegmentPlanner, scenario: Scenario, replan: bool = True,
                          first_plan_fallback=getattr(planner, "first_plan_fallback", None))
     planned_with, latest = forecast, plan  # latest: the newest successful solve (converged
     # or a real-time iterate, planning.penalty.realtime_iteration.ITERATE), the next re-plan's warm start
+    motion = time.perf_counter()  # the motion starts once its first plan is made
     for t in obstacle.sample_times[:-1]:
+        if paced:  # the sample is seen at its time (docs/realtime.md, 'planning.replanning')
+            time.sleep(max(0.0, motion + t - time.perf_counter()))
         forecast = forecast_at(obstacle, t)
         # it stopped short: go on from it, unless too near the end to gain but a harder stop
         iterating = plan.status.startswith(ITERATE) and \

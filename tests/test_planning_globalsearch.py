@@ -292,3 +292,62 @@ def test_the_turned_away_start_backs_the_base_off_against_its_way(baseline, conf
     assert at[1, 0] == pytest.approx(q0[0] - config.global_search.detour_rad)
     assert at[1, 1:] == pytest.approx(guess.position(np.array([2 * duration / 3]))[0, 1:])
     assert motion.state(np.array([0.0]))[1][0] == pytest.approx(qd0)
+
+
+def _worker_prepared() -> int:
+    """In the worker: how many goals its search has prepared (-1: no search built)."""
+    search = background._SEARCH
+    return -1 if search is None else len(search.solver._prepared)
+
+
+def test_the_worker_is_ready_when_the_motion_starts(baseline, config, monkeypatch):
+    """Under CPU clocks the other process builds its search and the goal's NLPs during the
+    first plan, and the first plan returns (the motion starts) once it has: a search
+    submitted at the first re-plan starts at once (built at that search, its first plans had
+    come ~1.3 s into a Lynxmotion's 2-s motion: docs/realtime.md, 'planning.replanning')."""
+    from planning.globalsearch import planner as search_planner
+    from planning.replanning import forecast_at
+
+    monkeypatch.setattr(search_planner, "cores", lambda: 2)  # the search in another process
+    live = config.with_anytime(iteration_ms=None)
+    front = GlobalSearchPlanner(AnytimePlanner(baseline, live), baseline, live, bank=True)
+    assert front.mode == "process"
+    case = lynx_scenario()
+    try:
+        front.plan_cold(Segment.of(case, forecast_at(case.obstacle, 0.0)))
+        assert not front._background.busy()
+        assert front._background._pool.submit(_worker_prepared).result() == 1
+    finally:
+        front._background.close()
+
+
+class _Watched:
+    """A segment planner whose offers(t) calls are timed from its first plan's end (s)."""
+
+    def __init__(self, inner):
+        self.inner, self.config, self.seen = inner, inner.config, []
+
+    def plan_cold(self, problem, starts=None):
+        found = self.inner.plan_cold(problem, starts)
+        self.motion = time.perf_counter()
+        return found
+
+    def offers(self, t):
+        self.seen.append((t, time.perf_counter() - self.motion))
+        return self.inner.offers(t)
+
+    def __getattr__(self, name):
+        return getattr(self.inner, name)
+
+
+def test_a_paced_motion_takes_each_sample_at_its_time(baseline, config):
+    """execute(paced=True), as plan --realtime runs: no obstacle sample is looked at before
+    its time after the first plan (the loop ran the 2-s motion in a fraction of that, and the
+    other process's search fell behind the motion)."""
+    from planning.replanning import execute
+
+    live = config.with_anytime(iteration_ms=None)
+    watched = _Watched(AnytimePlanner(baseline, live))
+    execute(watched, lynx_scenario(), paced=True)
+    assert len(watched.seen) > 100
+    assert all(wall >= t - 1e-4 for t, wall in watched.seen)

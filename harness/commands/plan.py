@@ -13,6 +13,7 @@ import argparse
 import logging
 import re
 import sys
+from typing import NamedTuple
 
 from harness.commands import SUMMARY, add_chain_option, chain_option
 from harness.io import write_json
@@ -34,7 +35,15 @@ from harness.plan.options import config_from_options, scenario_from_options
 from harness.plan.trajectory_csv import DEFAULT_RATE, write_trajectory
 from harness.robots.resolve import Arm, resolve_arm
 from harness.robots.torque_models import read_model, torque_model
-from planning.config import ALIASES, REPLANNERS, TRUE_ENERGY, PenaltyOptions, PlannerConfig
+from identification.torque_model import TorqueModel
+from planning.config import (
+    ALIASES,
+    REPLANNERS,
+    TRUE_ENERGY,
+    PenaltyOptions,
+    PlannerConfig,
+    Scenario,
+)
 from planning.control import control_trajectory
 from planning.errors import PlanningError
 from planning.formulation import compiled
@@ -42,7 +51,7 @@ from planning.formulation.quadrature import RULES
 from planning.penalty.backends import SOLVERS
 from planning.penalty.solver import Planner
 from planning.planners import executed
-from planning.result import closest_link, to_json
+from planning.result import PlanResult, closest_link, to_json
 
 OBSTACLE = default_obstacle()  # the default path (the Lynxmotion paper scenario's)
 # every option's default is None, left out: the arm's planner_config's, or as its help says
@@ -150,9 +159,11 @@ def register(sub) -> None:
     p.add_argument("--realtime", action="store_true",
                    help="real CPU clocks, as on a robot: budgets and --deadline-ms count the "
                         "planning thread's CPU, a re-plan past its deadline is dropped (the arm "
-                        "follows its last plan; deadline_misses in PLAN.json) and the first "
-                        "plan shares the cold budget; default: nominal clocks, and the first "
-                        "plan solved to convergence, by the other method if need be")
+                        "follows its last plan; deadline_misses in PLAN.json), the first "
+                        "plan shares the cold budget, and the motion runs in real time (each "
+                        "obstacle sample taken at its time: the command takes at least "
+                        "--duration); default: nominal clocks, and the first plan solved to "
+                        "convergence, by the other method if need be")
     p.add_argument("--bank", type=int, default=None, metavar="N",
                    help="anytime: keep a plan on each way round the obstacle (a bank of at "
                         "most N homotopy classes: which side each link passes it), every "
@@ -210,10 +221,31 @@ def run(args) -> int:
         logger.removeHandler(notice)
 
 
-def _run(args, arm: Arm, model_file, notice: BuildNotice) -> int:
+def parse(argv) -> argparse.Namespace:
+    """`plan`'s options from its arguments (argv without the command's name)."""
+    parser = argparse.ArgumentParser(prog="torquebench")
+    register(parser.add_subparsers())
+    return parser.parse_args(["plan", *argv])
+
+
+class Planned(NamedTuple):
+    """What `plan` executed: the configuration that planned it, its scenario, the torque
+    model, the penalty loop's solver, the checked result (feasible or not)."""
+
+    config: PlannerConfig
+    scenario: Scenario
+    model: TorqueModel
+    planner: Planner
+    result: PlanResult
+
+
+def planned(args, arm: Arm, model_file, notice: BuildNotice | None = None) -> Planned:
+    """What `plan args` executes, checked but not written, feasible or not. PlanningError
+    where the scenario cannot be planned (an unreachable goal, a search that must fail)."""
     config = config_from_options(args, arm)
     scenario = scenario_from_options(args, arm, config)
-    notice.joints = config.geometry.dof
+    if notice is not None:
+        notice.joints = config.geometry.dof
     model = torque_model(model_file, arm)  # checks its joints against the arm's
     planner = Planner(model, config)
     defaulted = args.obstacle_from is None and args.obstacle_to is None
@@ -224,16 +256,25 @@ def _run(args, arm: Arm, model_file, notice: BuildNotice) -> int:
     note = default_obstacle_notice(arm, defaulted)  # before the search: a failure has it too
     if note:
         print(note, file=sys.stderr)
-    either = not args.realtime and (args.replanner is None or args.no_replan)  # both methods
     config, result = executed(model, config, scenario, planner, replan=not args.no_replan,
-                              realtime=args.realtime, either=either)
+                              realtime=args.realtime, either=_either(args))
+    return Planned(config, scenario, model, planner, result)
+
+
+def _either(args) -> bool:
+    """Whether `plan` tries both methods (neither asked for by name, nor real time)."""
+    return not args.realtime and (args.replanner is None or args.no_replan)
+
+
+def _run(args, arm: Arm, model_file, notice: BuildNotice) -> int:
+    config, scenario, model, planner, result = planned(args, arm, model_file, notice)
     notice.finish()
     fallback_note(planner.config.replanner, config.replanner, args.no_replan)
     search_failure_note(result.execution.search_failures)
     first_plan_note(result.execution.first_plan_fallback)
     if not result.feasible:  # the torque limits' diagnosis builds IPOPT's NLP: only now
         raise PlanningError((torque_diagnosis(planner, scenario)
-                             or infeasible(result.problems, config, scenario, either))
+                             or infeasible(result.problems, config, scenario, _either(args)))
                             + notice.compiled_note())
     write_json(args.out, {**to_json(result, scenario, config, args.model),  # links whose
                           "unread_geometry": [u._asdict() for u in arm.unread_geometry]})  # mesh failed

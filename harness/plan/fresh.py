@@ -27,3 +27,13 @@ def arm_scenarios(arm: Arm, count: int, seed: int, span: float | None = None) ->
         lower, upper = np.maximum(lower, -span), np.minimum(upper, span)
     return random_scenarios(count, seed, free_motion, config.geometry, lower, upper,
                             config.threshold)
+
+
+def plan_options(scenario) -> tuple[str, ...]:
+    """`torquebench plan`'s options that give the scenario (its start, goal, and swaying
+    obstacle path), each number to 6 significant digits as a user would type it."""
+    obstacle = scenario.obstacle
+    vec = lambda v: ",".join(f"{x:.6g}" for x in v)  # noqa: E731
+    return ("--start", vec(scenario.start), "--goal", vec(scenario.goal), "--obstacle-from",
+            vec(obstacle.start), "--obstacle-to", vec(obstacle.end), "--obstacle-sway",
+            vec(obstacle.sway), "--sway-periods", f"{obstacle.periods:.6g}")

@@ -61,6 +61,9 @@ STUDIES = {
     "replan_profile": "an anytime-SQP iteration and a warm re-plan cut into their parts (the "
                       "compiled evaluation, the QP's build, DAQP, the merit, the checks, the "
                       "Python around them) on the Lynxmotion's and the README's UR5 scenarios",
+    "realtime_runs": "plan --realtime run 20 times on each of 5 fresh Lynxmotion scenarios, "
+                     "quiet and under a load the study makes (a busy loop per core): runs "
+                     "refused, each run's smallest clearance, the executed energy's spread",
     "sysid_peer": "MuJoCo's system-identification toolbox (mujoco.sysid, its rollout residual, "
                   "a wall-time budget) beside identify on the real Panda log's held-out part: "
                   "torque error, rollout error at 0.1 and 0.5 s, bodies' consistency, fit time",

@@ -34,7 +34,7 @@ from harness.bench.planning.section import CAUSAL_STARTS
 from harness.cli import main
 from harness.plan.arm_config import planner_config
 from harness.plan.causal import against_causal
-from harness.plan.fresh import arm_scenarios
+from harness.plan.fresh import arm_scenarios, plan_options
 from harness.report.results import Context, SectionResult, Target, check
 from harness.robots.arm import Arm
 
@@ -94,12 +94,8 @@ def scenario_text(scenario) -> dict:
 def planned(robot: str, scenario, extra: tuple, out: Path) -> dict:
     """`plan` on the scenario: executed energy (J), smallest clearance (m), re-plan CPU and
     clock (ms); {"refused": why} when plan exits 2."""
-    text = scenario_text(scenario)
-    vec = lambda v: ",".join(f"{x:.6g}" for x in v)  # noqa: E731
-    argv = ["plan", "--robot", robot, "--model", "pinocchio", "--start", vec(text["start"]),
-            "--goal", vec(text["goal"]), "--obstacle-from", vec(text["obstacle_from"]),
-            "--obstacle-to", vec(text["obstacle_to"]), "--obstacle-sway", vec(text["sway"]),
-            "--sway-periods", f"{text['periods']:.6g}", *extra, "--out", str(out)]
+    argv = ["plan", "--robot", robot, "--model", "pinocchio", *plan_options(scenario), *extra,
+            "--out", str(out)]
     errors = io.StringIO()
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(errors):
         code = main(argv)

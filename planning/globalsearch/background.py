@@ -6,6 +6,7 @@ taken when ready."""
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
 import queue
@@ -55,6 +56,25 @@ class Background:
             self._pool.submit(int).result()  # process then wrote were copied in a re-plan
         except BrokenProcessPool:
             self._broken, self.failures = True, 1
+
+    def prepare(self, goal) -> None:
+        """Have the worker build its search and the goal's NLPs now, before the motion (at
+        its first search they took about a second of a Lynxmotion's 2-s motion: its plans came
+        after the obstacle had passed); a search submitted meanwhile is refused (busy)."""
+        if self._broken or self.busy():
+            return
+        try:
+            self._future, self._future_number = self._pool.submit(_prepare, goal), self._number
+        except BrokenProcessPool:
+            self._broken, self._future = True, None
+            self.failures += 1
+
+    def wait(self) -> None:
+        """Wait for the worker's preparation or search under way (a failure counted)."""
+        if self._future is not None:
+            with contextlib.suppress(Exception):  # counted by busy
+                self._future.result()
+            self.busy()
 
     def submit(self, segment: Segment, warm: SegmentPlan | None) -> bool:
         """Start a search unless one is running or a plan is still on offer; whether it
@@ -131,11 +151,24 @@ def _start(model, config: PlannerConfig, found, every: bool = False) -> None:
     found.cancel_join_thread()  # the worker exits whatever the planning process left unread
 
 
+def _built() -> MultiStart:
+    """The worker's search, built at its first use (a preparation or a search): the planning
+    process has compiled its code by then, and the worker loads it from the cache."""
+    global _SEARCH
+    if _SEARCH is None:
+        _SEARCH = MultiStart(*_PLANNER)
+    return _SEARCH
+
+
+def _prepare(goal) -> int:
+    """The search and the goal's NLPs built (no plan sent)."""
+    _built().prepare(goal)
+    return 0
+
+
 def _search(number: int, segment: Segment, warm: SegmentPlan | None) -> int:
     """The search; how many plans it sent."""
-    global _SEARCH
-    if _SEARCH is None:  # built at the first search: the planning process has compiled its
-        _SEARCH = MultiStart(*_PLANNER)  # code by then, and the worker loads it from the cache
+    search = _built()
     sent = [0]
 
     def found(plan: SegmentPlan, better: bool) -> None:
@@ -144,7 +177,7 @@ def _search(number: int, segment: Segment, warm: SegmentPlan | None) -> int:
             sent[0] += 1
 
     if _EVERY:  # a bank's: it holds the plan followed, and wants the classes soon
-        _SEARCH.search(segment, None, found=found, **bank_search(_SEARCH.config))
+        search.search(segment, None, found=found, **bank_search(search.config))
     else:
-        _SEARCH.search(segment, warm, found=found)
+        search.search(segment, warm, found=found)
     return sent[0]

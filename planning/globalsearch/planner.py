@@ -83,7 +83,12 @@ class GlobalSearchPlanner:
     def plan_cold(self, problem: Segment, starts: int | None = None
                   ) -> tuple[SegmentPlan, list[SegmentPlan]]:
         self._forget()  # a new motion
-        return self.inner.plan_cold(problem, starts)
+        if self._background is None:
+            return self.inner.plan_cold(problem, starts)
+        self._background.prepare(problem.goal)  # the other process readies its search
+        found = self.inner.plan_cold(problem, starts)
+        self._background.wait()  # the motion starts with both ready (not plan time)
+        return found
 
     def plan(self, problem: Segment, warm: SegmentPlan | None = None) -> SegmentPlan:
         if warm is None:

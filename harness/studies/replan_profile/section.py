@@ -14,7 +14,6 @@ The quick form (the smoke test) runs the Lynxmotion's scenario with 40 obstacle 
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import os
 
@@ -113,9 +112,7 @@ def profiled(argv: tuple[str, ...], overhead_ns: float) -> dict:
 def _planned(argv: tuple[str, ...]) -> tuple[dict, object]:
     """PLAN.json's payload of `plan argv` with the optimized build (the nominal clock),
     and the configuration that planned it."""
-    parser = argparse.ArgumentParser(prog="torquebench")
-    plan_command.register(parser.add_subparsers())
-    args = parser.parse_args(["plan", *argv, "--out", "unused"])
+    args = plan_command.parse([*argv, "--out", "unused"])
     model_file = read_model(args.model)
     arm = resolve_arm(args.robot, model=model_file.recorded)
     config = dataclasses.replace(config_from_options(args, arm), quick_build=False)
