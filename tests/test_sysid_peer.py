@@ -164,47 +164,6 @@ def test_budget_stops_and_keeps_the_best_point():
         counted(np.array([1.0]), None)
 
 
-def test_early_stopping_keeps_the_path_point_best_on_the_kept_out_windows():
-    """BudgetedResidual's check (refine's windows kept out of the fit): scored at each point
-    that improves the fit, never at others or at a Jacobian's columns; the point kept is the
-    path's best on the kept-out cost (here (x - 1.8)^2 / 2 while the fit's optimum is 1),
-    with its fit cost; the start is such a point."""
-    checked = []
-
-    def check(x, params):
-        checked.append(float(np.ravel(x)[0]))
-        return 0.5 * (float(np.ravel(x)[0]) - 1.8) ** 2
-
-    def residual_fn(x, params):
-        return [np.atleast_1d(np.ravel(x) - 1.0)], None, None
-    budget = BudgetedResidual(residual_fn, seconds=3600, clock=lambda: 0.0, check=check)
-    for x in (3.0, 4.0, 2.5, 1.5, 1.0):  # 4.0 fits worse than 3.0: not a path point
-        budget(np.array([[x]]), None)
-    budget(np.array([[0.0, 5.0]]), None)  # a Jacobian's columns
-    assert checked == [3.0, 2.5, 1.5, 1.0]
-    kept_out, fit, x = budget.checked
-    assert x.tolist() == [1.5] and fit == pytest.approx(0.125) and kept_out == pytest.approx(0.045)
-    assert budget.best[1].tolist() == [1.0]  # the fit's own best is another point
-    start_best = BudgetedResidual(residual_fn, seconds=3600, clock=lambda: 0.0,
-                                  check=lambda x, p: abs(float(np.ravel(x)[0]) - 3.0))
-    for x in (3.0, 2.0, 1.0):
-        start_best(np.array([x]), None)
-    assert start_best.checked[2].tolist() == [3.0]
-
-
-def test_every_fourth_window_is_kept_out_of_the_refinement():
-    """refine.split_windows tiles the parts as model_sequences does (no window across two
-    parts) and keeps every CHECK_EVERY-th out; fewer windows than that: none kept out."""
-    from harness.identify.refine import CHECK_EVERY, split_windows
-
-    fitted, kept_out = split_windows([(0, 1000), (1000, 1500)], 100)
-    starts = [w.start for w in fitted + kept_out]
-    assert sorted(starts) == [*range(0, 900, 100), *range(1000, 1400, 100)]
-    assert [w.start for w in kept_out] == sorted(starts)[CHECK_EVERY - 1::CHECK_EVERY]
-    assert all(w.stop - w.start == 101 and w.samples == 100 for w in fitted + kept_out)
-    assert split_windows([(0, 350)], 100) == (split_windows([(0, 350)], 100)[0], [])
-
-
 def test_scoring_applies_the_motor_bias():
     """A log made with a motor bias rolls out exactly with its bias added to the logged
     torque (the sign the scoring uses), not without it."""

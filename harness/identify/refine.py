@@ -13,8 +13,7 @@ mass +-2 cm, joint terms x [0.5, 2] plus a floor, bias +-1 N m; the toolbox's wi
 the peer's, let the real Panda log's refinement reach 34.9 kg of a 16.8 kg arm and a held-out
 torque error of 22.8 on joint 1, 0.118 unrefined: docs/identification.md), the start itself
 not moved off them;
-stopped at a wall-time budget; every CHECK_EVERY-th window is kept out of the fit, and the
-point kept is the one of the optimizer's path (the start included) that rolls those out best. What the MJCF cannot hold (a
+stopped at a wall-time budget, the best point evaluated kept. What the MJCF cannot hold (a
 sigmoid's shape) stays approximated as the export approximates it; the refined model is the
 MJCF, not the torque law in MODEL.json: MODEL.json's 'refined' names it (its path as written and
 from MODEL.json's folder), `predict --rollout` rolls it out (harness.replay.rollout.
