@@ -35,11 +35,6 @@ from harness.robots.export import export_model
 from harness.robots.mjcf_export import full_precision
 
 WINDOW = 0.5  # s, the rollouts compared (the window the fidelity target is judged on)
-# every CHECK_EVERY-th window of the fitted part is kept out of the fit: the refined point is
-# the one of the optimizer's path (the start included) that rolls those out best (early
-# stopping; rollout_fit.fit_rollout's check), so a refinement that only fits its own windows
-# better is not kept
-CHECK_EVERY = 4
 SECONDS = 60.0  # s of wall time by default (the target: within a minute on a 7-joint arm)
 REFINEMENTS = ("none", "rollout")  # identify --refine
 
@@ -52,20 +47,6 @@ def fitted_parts(labels, n_train: int) -> list[tuple[int, int]]:
     return [(a, b) for a, b in zip(cuts[:-1], cuts[1:], strict=True) if b > a]
 
 
-def split_windows(parts: list[tuple[int, int]], samples: int
-                  ) -> tuple[list[Windows], list[Windows]]:
-    """The parts' windows of `samples` steps (rollout_fit.model_sequences' tiling), each its
-    own Windows: those fitted and every CHECK_EVERY-th kept out (none kept out of fewer than
-    CHECK_EVERY)."""
-    tiles = [Windows(k, k + samples + 1, samples) for a, b in parts
-             for k in range(a, b - samples, samples)]
-    if len(tiles) < CHECK_EVERY:
-        return tiles, []
-    kept_out = set(range(CHECK_EVERY - 1, len(tiles), CHECK_EVERY))
-    return ([w for i, w in enumerate(tiles) if i not in kept_out],
-            [w for i, w in enumerate(tiles) if i in kept_out])
-
-
 def refine_rollout(payload: dict, arm: Arm, t, q, qd, tau, parts: list[tuple[int, int]],
                    offset, seconds: float = SECONDS, out: Path | None = None,
                    rollouts: int | None = None, region: Region = NEAR
@@ -76,13 +57,12 @@ def refine_rollout(payload: dict, arm: Arm, t, q, qd, tau, parts: list[tuple[int
     Returns the fit and its record for MODEL.json."""
     t = np.ravel(t)
     samples = int(round(WINDOW / np.median(np.diff(t))))
-    windows, check = split_windows(parts, samples)
+    windows = [Windows(a, b, samples) for a, b in parts if b - a > samples]
     with tempfile.TemporaryDirectory() as folder:
         start = Path(folder) / "start.xml"
         export_model(payload, arm, "mjcf", start, offset=offset)
         spec, bias = file_spec(start)
-    fit = fit_rollout(spec, t, q, qd, tau, windows, seconds, False, rollouts, region,
-                      check=check)
+    fit = fit_rollout(spec, t, q, qd, tau, windows, seconds, False, rollouts, region)
     record = {"method": "rollout", "window_s": WINDOW,
               "budget_s": float(seconds) if np.isfinite(seconds) else None,
               "budget_rollouts": rollouts,

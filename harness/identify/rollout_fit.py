@@ -88,11 +88,6 @@ class BudgetedResidual:
     best: tuple = (np.inf, None)
     evaluations: int = 0
     took: dict = field(default_factory=dict)  # columns -> seconds of the last such call
-    # the windows kept out of the fit: a cost of x (half the sum of squared residuals on
-    # them), called at each point that improves the fit; the point they score best is kept
-    # (its check cost, its fit cost, x): early stopping along the optimizer's path
-    check: object = None
-    checked: tuple = (np.inf, np.inf, None)
 
     def __post_init__(self) -> None:
         if self.started is None:
@@ -114,10 +109,6 @@ class BudgetedResidual:
             cost = 0.5 * float(r @ r) if np.all(np.isfinite(r)) else np.inf
             if cost < self.best[0]:
                 self.best = (cost, np.array(x, float).ravel())
-                if self.check is not None:
-                    kept_out = self.check(self.best[1], params)
-                    if kept_out < self.checked[0]:
-                        self.checked = (kept_out, cost, self.best[1])
         return out
 
 
@@ -136,17 +127,13 @@ class RolloutFit:
     cost: float
     count: int  # parameters fitted
     windows: int
-    # the windows kept out of the fit (fit_rollout's check): how many, their cost at the start
-    # and at the point kept, whether that point is the start; None: no such windows
-    checked: dict | None = None
 
     def to_json(self) -> dict:
         return {"parameters_fitted": self.count, "windows": self.windows,
                 "evaluations": self.evaluations, "stopped": self.stopped,
                 "cost_start": self.cost_start, "cost": self.cost,
                 "standard_parameters": self.parameters.tolist(), "bias": self.bias.tolist(),
-                "timing": {"seconds": self.seconds},
-                **({"kept_out": self.checked} if self.checked is not None else {})}
+                "timing": {"seconds": self.seconds}}
 
 
 def fit_peer(arm: Arm, t, q, qd, tau, windows: list[Windows], seconds: float,
@@ -159,29 +146,20 @@ def fit_peer(arm: Arm, t, q, qd, tau, windows: list[Windows], seconds: float,
 
 def fit_rollout(spec: mujoco.MjSpec, t, q, qd, tau, windows: list[Windows], seconds: float,
                 off_bounds: bool, rollouts: int | None = None, region: Region = WIDE,
-                threads: int = 2, check: list[Windows] | None = None) -> RolloutFit:
+                threads: int = 2) -> RolloutFit:
     """The toolbox's fit (module docstring) of spec (drive_and_sense's) from its own values
     within region (off_bounds: peer_parameters') on the log's windows, stopped at `seconds`
-    of wall time or `rollouts` (BudgetedResidual). check: windows kept out of the fit; then
-    the point kept is the one of the optimizer's path (the start included) that rolls them
-    out best, not the one that fits `windows` best (early stopping)."""
+    of wall time or `rollouts` (BudgetedResidual)."""
     sysid = toolbox()
     model = spec.compile()
     params = peer_parameters(spec, model, off_bounds, region)
     sequences = model_sequences(spec, model, np.ravel(t), q, qd, tau, windows)
-    judge = None
-    if check:
-        kept_out = sysid.build_residual_fn(models_sequences=[model_sequences(
-            spec, model, np.ravel(t), q, qd, tau, check)], n_threads=threads)
-
-        def judge(x, p):
-            return _cost(kept_out, x, p)
     residual = BudgetedResidual(sysid.build_residual_fn(models_sequences=[sequences],
                                                         n_threads=threads), seconds,
-                                rollouts, check=judge)
+                                rollouts)
     x0 = params.as_vector()
     residual(x0, params.copy())
-    cost_start, check_start = residual.best[0], residual.checked[0]
+    cost_start = residual.best[0]
     stopped = "converged"
     try:
         with _quiet(not off_bounds):
@@ -192,20 +170,11 @@ def fit_rollout(spec: mujoco.MjSpec, t, q, qd, tau, windows: list[Windows], seco
         stopped, x = "budget", residual.best[1]
     fitted = params.copy()
     fitted.update_from_vector(x)
-    cost = residual.best[0] if stopped == "budget" else _cost(residual.residual_fn, x, fitted)
-    checked = None
-    if judge is not None:
-        if stopped == "converged" and judge(x, fitted) < residual.checked[0]:
-            residual.checked = (judge(x, fitted), cost, np.asarray(x, float))
-        check_cost, cost, x = residual.checked
-        fitted = params.copy()
-        fitted.update_from_vector(x)
-        checked = {"windows": len(check), "cost_start": check_start, "cost": check_cost,
-                   "start_kept": bool(np.array_equal(x, x0))}
     final = sysid.apply_param_modifiers(fitted, spec)
+    cost = residual.best[0] if stopped == "budget" else _cost(residual.residual_fn, x, fitted)
     return RolloutFit(standard_parameters(fitted, model), biases(fitted, model), final,
                       residual.clock() - residual.started, residual.evaluations, stopped,
-                      cost_start, cost, x.size, len(sequences.measured_rollout), checked)
+                      cost_start, cost, x.size, len(sequences.measured_rollout))
 
 
 @contextlib.contextmanager
