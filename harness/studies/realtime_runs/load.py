@@ -31,3 +31,12 @@ def busy(count: int) -> Iterator[list[int]]:
             process.kill()
         for process in spinning:
             process.wait()
+
+
+def running(pid: int) -> bool:
+    """Whether a process of this id exists (one of busy's, while its block runs)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return True

@@ -48,7 +48,7 @@ def run(ctx: Context) -> SectionResult:
         else:
             with load.busy(spinners) as pids:
                 found = _runs(commands, repeats)
-                alive = all(_running(pid) for pid in pids)
+                alive = all(load.running(pid) for pid in pids)
         loads[name] = (before, os.getloadavg()[0])
         conditions[name] = found
     _keep_lost(ctx, conditions)
@@ -77,14 +77,6 @@ def _runs(commands, repeats: int) -> list[list[dict]]:
         for i, argv in enumerate(commands):
             found[i].append(runs.run(argv))
     return found
-
-
-def _running(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    return True
 
 
 def _keep_lost(ctx: Context, conditions: dict) -> None:
